@@ -1,10 +1,42 @@
-//! The device: modes, power cycle, model — the one sans-IO entry point.
-//! (API contract; being implemented.)
+//! The device: modes, power cycle, model — the one sans-IO entry point
+//! (ICD 5.1, 5.3, section 6; DESIGN.md "One entry point").
+//!
+//! ```text
+//! let mut dev = Device::power_on(product, flash, now);
+//! dev.on_rx(bytes, now);          // host → device bytes, any chunking
+//! dev.on_tick(now);               // every internal-rate tick (2 or 4 kHz)
+//! dev.on_pin(Pin::Pps, Level::High, at);
+//! let n = dev.poll_tx(&mut buf);  // device → host bytes
+//! dev.poll_event();               // line-rate switches
+//! dev.power_cycle(now);
+//! ```
+
+use core::fmt::Write as _;
 
 use embedded_storage::nor_flash::NorFlash;
+use heapless::Deque;
 
-use crate::model::Product;
+use crate::kernel::command::Command;
+use crate::kernel::fields::{self, Field, OutputCtx};
+use crate::kernel::formats::{self, UDD};
+use crate::kernel::frame::{self, Decoder, TYPE_COMMAND, TYPE_DATA};
+use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
+use crate::kernel::{rate, udd};
+use crate::model::{Capability, Product};
+use crate::sensor::Sample;
+use crate::store::ParamStore;
 use crate::time::Instant;
+
+/// Largest host → device frame: a UDD config message `96 N` + 255 types.
+pub const RX_FRAME_CAP: usize = frame::OVERHEAD + 2 + 255;
+/// Device TX queue (the UART buffer): frames that do not fit are dropped
+/// whole, as a device whose line is too slow would.
+pub const TX_CAP: usize = 2048;
+/// An incomplete frame with no new byte for this long is abandoned and the
+/// decoder resyncs on the bytes after its first byte (a frame cut short).
+pub const RX_IDLE_ABANDON_NS: u64 = 100_000_000;
+/// Where the parameter store lives in the device's flash.
+pub const STORE_BASE: u32 = 0;
 
 /// Logic level of an input pin.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -18,7 +50,7 @@ pub enum Level {
 /// Input pins of the KERNEL connector (ICD Table 4.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pin {
-    /// 1PPS input (pin 3).
+    /// 1PPS input (pin 3); a rising edge marks the second.
     Pps,
     /// External trigger input (pin 8).
     Extrig,
@@ -29,7 +61,7 @@ pub enum Pin {
 pub enum Mode {
     /// Waiting for commands.
     Idle,
-    /// Initial alignment before an orientation/quaternion format streams.
+    /// Initial alignment before a format with orientation streams (5.3.1).
     Aligning,
     /// Streaming a data format.
     Continuous,
@@ -40,8 +72,10 @@ pub enum Mode {
 /// Something the board must act on, from [`Device::poll_event`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Event {
-    /// Switch the UART to this line rate (bit/s) now: every byte queued before
-    /// the switch has already been handed out by [`Device::poll_tx`].
+    /// Set the UART to this line rate (bit/s) now. Every byte queued before
+    /// the switch has already been handed out by [`Device::poll_tx`]; bytes
+    /// after it are held back until this event is taken. Raised at power-on
+    /// and on CommitBaudRate (5.3.9).
     LineRate(u32),
 }
 
@@ -50,55 +84,612 @@ pub enum Event {
 pub struct PowerOn {
     /// The emulated product.
     pub product: Product,
-    /// Level of the BOOT input at power-on (model decides the active level).
+    /// Level of the BOOT input at power-on; `None` = floating (not
+    /// asserted). The model decides the active level (Table 4.1 notes 4–5).
     pub boot: Option<Level>,
-    /// Seed of every random process.
+    /// Seed of every random process (and of the serial number).
     pub seed: u64,
+}
+
+#[derive(Debug, Clone)]
+struct Stream {
+    /// Data command code (Table 5.16).
+    code: u8,
+    /// Output every `divisor` ticks.
+    divisor: u32,
+    /// Ticks since output began (after alignment).
+    ticks: u64,
+    /// Alignment ticks still to run.
+    align_left: u64,
 }
 
 /// An emulated KERNEL IMU owning its flash.
 pub struct Device<F: NorFlash> {
     flash: F,
-    product: Product,
+    store: ParamStore,
+    cfg: PowerOn,
+    rx: Decoder<RX_FRAME_CAP>,
+    last_rx: Instant,
+    tx: Deque<u8, TX_CAP>,
+    tx_dropped: u32,
+    /// Live parameters (what ReadRAM answers and the device runs with).
+    ram: Block,
+    /// The flash copy (what SaveFlash wrote).
+    saved: Block,
+    firmware_update: bool,
+    stream: Option<Stream>,
+    udd_pending: bool,
+    powered_at: Instant,
+    ticks: u64,
+    line_rate: u32,
+    /// Line-rate switch waiting for the bytes queued before it: (rate, bytes).
+    line_switch: Option<(u32, usize)>,
+    events: Deque<Event, 4>,
+    last_pps: Option<Instant>,
+    pps_since_frame: bool,
+}
+
+impl<F: NorFlash> core::fmt::Debug for Device<F> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Device")
+            .field("product", &self.cfg.product.code())
+            .field("mode", &self.mode())
+            .field("line_rate", &self.line_rate)
+            .field("tx_len", &self.tx.len())
+            .finish()
+    }
 }
 
 impl<F: NorFlash> Device<F> {
     /// Powers the device on with BOOT floating and seed 0.
     pub fn power_on(product: Product, flash: F, now: Instant) -> Self {
-        Self::power_on_with(PowerOn { product, boot: None, seed: 0 }, flash, now)
+        Self::power_on_with(
+            PowerOn {
+                product,
+                boot: None,
+                seed: 0,
+            },
+            flash,
+            now,
+        )
     }
-    /// Powers the device on.
-    pub fn power_on_with(cfg: PowerOn, flash: F, _now: Instant) -> Self {
-        Device { flash, product: cfg.product }
+
+    /// Powers the device on: parameters load from flash (factory defaults
+    /// if it holds none), BOOT is checked, AutoStart runs (section 6).
+    pub fn power_on_with(cfg: PowerOn, flash: F, now: Instant) -> Self {
+        let factory = params::factory_block(&cfg.product);
+        let mut dev = Device {
+            flash,
+            store: ParamStore::new(STORE_BASE),
+            cfg,
+            rx: Decoder::new(),
+            last_rx: now,
+            tx: Deque::new(),
+            tx_dropped: 0,
+            ram: factory,
+            saved: factory,
+            firmware_update: false,
+            stream: None,
+            udd_pending: false,
+            powered_at: now,
+            ticks: 0,
+            line_rate: 115_200,
+            line_switch: None,
+            events: Deque::new(),
+            last_pps: None,
+            pps_since_frame: false,
+        };
+        dev.boot(now);
+        dev
     }
-    /// Host → device bytes, any chunking.
-    pub fn on_rx(&mut self, _bytes: &[u8], _now: Instant) {}
-    /// One internal-rate tick (every 1/internal_rate s).
-    pub fn on_tick(&mut self, _now: Instant) {}
-    /// An input pin edge at time `at`.
-    pub fn on_pin(&mut self, _pin: Pin, _level: Level, _at: Instant) {}
-    /// Device → host bytes: copies up to `buf.len()` queued bytes into `buf`.
-    pub fn poll_tx(&mut self, _buf: &mut [u8]) -> usize { 0 }
+
+    /// Power cycle with BOOT floating: RAM reloads from flash, the queues
+    /// empty, output stops (and AutoStart applies again).
+    pub fn power_cycle(&mut self, now: Instant) {
+        self.power_cycle_with(None, now);
+    }
+
+    /// Power cycle with the BOOT input at `boot`.
+    pub fn power_cycle_with(&mut self, boot: Option<Level>, now: Instant) {
+        self.cfg.boot = boot;
+        self.rx = Decoder::new();
+        self.last_rx = now;
+        self.tx.clear();
+        self.stream = None;
+        self.udd_pending = false;
+        self.powered_at = now;
+        self.ticks = 0;
+        self.line_switch = None;
+        self.events.clear();
+        self.last_pps = None;
+        self.pps_since_frame = false;
+        self.boot(now);
+    }
+
+    fn boot(&mut self, _now: Instant) {
+        let product = self.cfg.product;
+        let mut block = [0u8; BLOCK_LEN];
+        if let Ok(true) = self.store.load(&mut self.flash, &mut block) {
+            params::sanitize(&mut block, &product);
+        } else {
+            block = params::factory_block(&product);
+        }
+        self.saved = block;
+        self.ram = block;
+        self.line_rate = params::baud_rate(params::BAUD_RATE.read_int(&self.ram) as u8);
+        let _ = self.events.push_back(Event::LineRate(self.line_rate));
+        let active = if product.model.boot_active_low {
+            Level::Low
+        } else {
+            Level::High
+        };
+        self.firmware_update = self.cfg.boot == Some(active);
+        if self.firmware_update {
+            return;
+        }
+        let auto = params::AUTO_START.read_int(&self.ram) as u8;
+        if auto != 0 && product.model.supports_format(auto) {
+            self.send(0x00, &formats::AUTOSTART_PAYLOAD);
+            self.start_stream(auto);
+        }
+    }
+
+    /// Host → device bytes, any chunking. Complete frames are executed at
+    /// once; replies are queued for [`Device::poll_tx`].
+    pub fn on_rx(&mut self, mut bytes: &[u8], now: Instant) {
+        if self.firmware_update {
+            return;
+        }
+        if !bytes.is_empty() {
+            self.last_rx = now;
+        }
+        while let Some(f) = self.rx.next_frame(&mut bytes) {
+            if f.msg_type != TYPE_COMMAND || f.id != 0 {
+                continue;
+            }
+            // Copy out of the decoder so it can be borrowed again.
+            let mut payload = [0u8; RX_FRAME_CAP];
+            let n = f.payload.len();
+            payload[..n].copy_from_slice(f.payload);
+            let checksum = f.checksum;
+            self.execute(&payload[..n], checksum);
+        }
+    }
+
+    /// One internal-rate tick (every 1/internal rate; 2 kHz, 4 kHz on K201):
+    /// alignment runs, output frames are produced at the data rate.
+    pub fn on_tick(&mut self, now: Instant) {
+        if self.firmware_update {
+            return;
+        }
+        self.ticks = self.ticks.wrapping_add(1);
+        if self.rx.has_partial() && now.since(self.last_rx) > RX_IDLE_ABANDON_NS {
+            self.rx.abandon();
+            self.last_rx = now;
+            self.on_rx(&[], now);
+        }
+        let Some(s) = self.stream.as_mut() else {
+            return;
+        };
+        if s.align_left > 0 {
+            s.align_left -= 1;
+            return;
+        }
+        s.ticks += 1;
+        if s.ticks % u64::from(s.divisor) == 0 {
+            let code = s.code;
+            self.emit(code, now);
+        }
+    }
+
+    /// An input pin edge at time `at`. 1PPS: the rising edge marks the
+    /// second (5.2.3.1, Table 4.1 note 6).
+    pub fn on_pin(&mut self, pin: Pin, level: Level, at: Instant) {
+        if self.firmware_update {
+            return;
+        }
+        if let (Pin::Pps, Level::High) = (pin, level) {
+            self.last_pps = Some(at);
+            self.pps_since_frame = true;
+        }
+    }
+
+    /// Device → host bytes: moves up to `buf.len()` queued bytes into `buf`
+    /// and returns how many. Stops at a pending line-rate switch until
+    /// [`Device::poll_event`] hands it out.
+    pub fn poll_tx(&mut self, buf: &mut [u8]) -> usize {
+        let limit = match self.line_switch {
+            Some((_, before)) => before,
+            None => usize::MAX,
+        };
+        let mut n = 0;
+        while n < buf.len() && n < limit {
+            match self.tx.pop_front() {
+                Some(b) => {
+                    buf[n] = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        if let Some((_, before)) = self.line_switch.as_mut() {
+            *before -= n;
+        }
+        n
+    }
+
     /// Bytes queued for transmission.
-    pub fn tx_len(&self) -> usize { 0 }
+    pub fn tx_len(&self) -> usize {
+        self.tx.len()
+    }
+
+    /// Frames dropped because the TX queue was full (line too slow).
+    pub fn tx_dropped(&self) -> u32 {
+        self.tx_dropped
+    }
+
     /// The next board action, if any.
-    pub fn poll_event(&mut self) -> Option<Event> { None }
-    /// Power cycle: RAM reloads from flash, output stops (AutoStart applies).
-    pub fn power_cycle(&mut self, _now: Instant) {}
-    /// Power cycle with a new BOOT level.
-    pub fn power_cycle_with(&mut self, _boot: Option<Level>, _now: Instant) {}
-    /// Current line rate in bit/s.
-    pub fn line_rate(&self) -> u32 { 115_200 }
+    pub fn poll_event(&mut self) -> Option<Event> {
+        if let Some((rate, 0)) = self.line_switch {
+            self.line_switch = None;
+            return Some(Event::LineRate(rate));
+        }
+        self.events.pop_front()
+    }
+
+    /// The line rate the device runs at now, bit/s (Formula 5.1 uses it).
+    pub fn line_rate(&self) -> u32 {
+        self.line_rate
+    }
+
     /// Tick period in nanoseconds (1e9 / internal rate).
-    pub fn tick_period_ns(&self) -> u64 { 1_000_000_000 / u64::from(self.product.model.internal_rate_hz) }
+    pub fn tick_period_ns(&self) -> u64 {
+        1_000_000_000 / u64::from(self.cfg.product.model.internal_rate_hz)
+    }
+
     /// The current mode.
-    pub fn mode(&self) -> Mode { Mode::Idle }
+    pub fn mode(&self) -> Mode {
+        match (&self.stream, self.firmware_update) {
+            (_, true) => Mode::FirmwareUpdate,
+            (None, false) => Mode::Idle,
+            (Some(s), false) if s.align_left > 0 => Mode::Aligning,
+            (Some(_), false) => Mode::Continuous,
+        }
+    }
+
+    /// The running output rate in Hz (after Formula 5.1), if streaming.
+    pub fn output_rate(&self) -> Option<u32> {
+        self.stream
+            .as_ref()
+            .map(|s| self.cfg.product.model.internal_rate_hz / s.divisor)
+    }
+
     /// The emulated product.
-    pub fn product(&self) -> Product { self.product }
+    pub fn product(&self) -> Product {
+        self.cfg.product
+    }
+
+    /// The live value of a parameter (what ReadRAM answers), if the ID is
+    /// one of Table 5.24.
+    pub fn param_ram(&self, id: u16) -> Option<&[u8]> {
+        params::find(id).map(|p| p.bytes(&self.ram))
+    }
+
     /// The flash (e.g. to persist its image).
-    pub fn flash(&self) -> &F { &self.flash }
-    /// The flash, mutably.
-    pub fn flash_mut(&mut self) -> &mut F { &mut self.flash }
+    pub fn flash(&self) -> &F {
+        &self.flash
+    }
+
+    /// The flash, mutably (e.g. a test double's power-cut switch).
+    pub fn flash_mut(&mut self) -> &mut F {
+        &mut self.flash
+    }
+
     /// Takes the flash back.
-    pub fn into_flash(self) -> F { self.flash }
+    pub fn into_flash(self) -> F {
+        self.flash
+    }
+
+    // ----- commands -----
+
+    fn execute(&mut self, payload: &[u8], checksum: u16) {
+        let parsed = Command::parse(payload);
+        if core::mem::take(&mut self.udd_pending) {
+            // The message after User_Def_Data_config is the configuration,
+            // unless it is itself a command (5.3.5, NOTES.md).
+            match parsed {
+                Ok(Command::Unknown(_)) | Err(_) => return self.udd_config(payload, checksum),
+                _ => {}
+            }
+        }
+        let Ok(cmd) = parsed else {
+            return;
+        };
+        match cmd {
+            Command::Data(code) => {
+                if self.cfg.product.model.supports_format(code) {
+                    self.send(code, &checksum.to_le_bytes());
+                    self.apply_saved();
+                    self.start_stream(code);
+                }
+            }
+            Command::Stop => {
+                self.stream = None;
+                self.apply_saved();
+            }
+            Command::GetDevInfo => {
+                let info = self.dev_info();
+                self.send(crate::kernel::command::GET_DEV_INFO, &info);
+            }
+            Command::GetBit => {
+                self.send(crate::kernel::command::GET_BIT, &[0; 4]);
+            }
+            Command::UddConfig => self.udd_pending = true,
+            Command::UddConfigMessage(list) => self.udd_config(list, checksum),
+            Command::GetUddStruct => {
+                let mut p = [0u8; 1 + params::UDD_MAX_TYPES];
+                let config = self.udd_config_now();
+                p[0] = config.len() as u8;
+                p[1..1 + config.len()].copy_from_slice(&config);
+                self.send(
+                    crate::kernel::command::GET_UDD_STRUCT,
+                    &p[..1 + config.len()],
+                );
+            }
+            Command::CommitBaudRate => self.commit_baud_rate(),
+            Command::DeviceParameters => {
+                let p = self.device_parameters();
+                self.send(crate::kernel::command::DEVICE_PARAMETERS, &p);
+            }
+            Command::SaveFlash { id, len, value } => self.save_flash(id, len, value, checksum),
+            Command::ReadRam { id, len } => {
+                if let Some(p) = params::find(id).filter(|p| p.byte_len() == len) {
+                    let mut v = [0u8; 12];
+                    let n = usize::from(p.byte_len());
+                    v[..n].copy_from_slice(p.bytes(&self.ram));
+                    self.send(0xB1, &v[..n]);
+                }
+            }
+            Command::Unknown(_) => {}
+        }
+    }
+
+    /// SaveFlash (5.3.7): a wrong ID, wrong length, read-only parameter or
+    /// bad value changes nothing and gets no answer; a valid one is written
+    /// to flash (power-fail safe), acknowledged, and reaches RAM per
+    /// [`Apply`].
+    fn save_flash(&mut self, id: u16, len: u16, value: &[u8], checksum: u16) {
+        let product = self.cfg.product;
+        let Some(p) = params::find(id) else {
+            return;
+        };
+        if p.byte_len() != len || p.validate(value, &product, &self.saved).is_err() {
+            return;
+        }
+        let mut next = self.saved;
+        next[p.range()].copy_from_slice(value);
+        if self.store.save(&mut self.flash, &next).is_err() {
+            return;
+        }
+        self.saved = next;
+        self.send(0xB2, &checksum.to_le_bytes());
+        if p.apply == Apply::NextStream && self.stream.is_none() {
+            self.ram[p.range()].copy_from_slice(value);
+        }
+    }
+
+    /// Copies every saved [`Apply::NextStream`] parameter into RAM.
+    fn apply_saved(&mut self) {
+        for p in params::PARAMS
+            .iter()
+            .filter(|p| p.apply == Apply::NextStream)
+        {
+            let r = p.range();
+            self.ram[r.clone()].copy_from_slice(&self.saved[r]);
+        }
+    }
+
+    /// CommitBaudRate (5.3.9): the saved Baud_Rate takes effect after the
+    /// bytes already queued have left at the old rate. No reply (the ICD
+    /// documents none).
+    fn commit_baud_rate(&mut self) {
+        let p: &ParamSpec = &params::BAUD_RATE;
+        let r = p.range();
+        self.ram[r.clone()].copy_from_slice(&self.saved[r]);
+        let rate = params::baud_rate(p.read_int(&self.ram) as u8);
+        self.line_rate = rate;
+        self.line_switch = Some((rate, self.tx.len()));
+        if let Some(code) = self.stream.as_ref().map(|s| s.code) {
+            let divisor = self.divisor_for(code);
+            if let Some(s) = self.stream.as_mut() {
+                s.divisor = divisor;
+            }
+        }
+    }
+
+    fn udd_config_now(&self) -> udd::Config {
+        udd::read_config(&self.ram, &self.cfg.product)
+            .unwrap_or_else(|| udd::Config::from_slice(udd::DEFAULT_CONFIG).unwrap_or_default())
+    }
+
+    /// The configuration message after User_Def_Data_config (5.3.5):
+    /// checked, answered with Table 5.20, persisted when accepted.
+    fn udd_config(&mut self, payload: &[u8], checksum: u16) {
+        let product = self.cfg.product;
+        let internal = product.model.internal_rate_hz;
+        match udd::check(payload, &product) {
+            udd::Checked::Ok(config) => {
+                let max = rate::max_rate(self.line_rate, udd::payload_len(&config), internal);
+                let requested = params::DATA_RATE.read_int(&self.ram);
+                let errors = if requested > max { udd::ERR_RATE } else { 0 };
+                udd::write_config(&mut self.ram, &config);
+                udd::write_config(&mut self.saved, &config);
+                // Persist; a flash failure leaves the new config in RAM only.
+                let _ = self.store.save(&mut self.flash, &self.saved);
+                if self.stream.as_ref().is_some_and(|s| s.code == UDD) {
+                    let divisor = self.divisor_for(UDD);
+                    if let Some(s) = self.stream.as_mut() {
+                        s.divisor = divisor;
+                    }
+                }
+                let reply = udd::config_reply(checksum, errors, 0, max as u16);
+                self.send(crate::kernel::command::UDD_CONFIG, &reply);
+            }
+            udd::Checked::Refused {
+                errors,
+                wrong_types,
+            } => {
+                let current = self.udd_config_now();
+                let max = rate::max_rate(self.line_rate, udd::payload_len(&current), internal);
+                let reply = udd::config_reply(0, errors, wrong_types, max as u16);
+                self.send(crate::kernel::command::UDD_CONFIG, &reply);
+            }
+        }
+    }
+
+    // ----- output -----
+
+    fn payload_len(&self, code: u8) -> usize {
+        match formats::find(code) {
+            Some(f) => f.payload_len(),
+            None => udd::payload_len(&self.udd_config_now()),
+        }
+    }
+
+    fn divisor_for(&self, code: u8) -> u32 {
+        let internal = self.cfg.product.model.internal_rate_hz;
+        let requested = params::DATA_RATE.read_int(&self.ram);
+        let eff = rate::effective_rate(requested, self.line_rate, self.payload_len(code), internal);
+        internal / eff.max(1)
+    }
+
+    fn start_stream(&mut self, code: u8) {
+        let orientation = match formats::find(code) {
+            Some(f) => f.orientation,
+            None => self
+                .udd_config_now()
+                .iter()
+                .any(|&c| udd::find(c).is_some_and(|t| t.orientation)),
+        };
+        let align_s = u64::from(params::INITIAL_ALIGNMENT_TIME.read_int(&self.ram));
+        let internal = u64::from(self.cfg.product.model.internal_rate_hz);
+        self.stream = Some(Stream {
+            code,
+            divisor: self.divisor_for(code),
+            ticks: 0,
+            align_left: if orientation { align_s * internal } else { 0 },
+        });
+    }
+
+    fn sample(&self) -> Sample {
+        let mut s = Sample::STATIC_LEVEL;
+        if !self.cfg.product.model.has(Capability::AuxAccel) {
+            s.aux_acc = [0.0; 3];
+            s.aux_acc_filtered = [0.0; 3];
+        }
+        s
+    }
+
+    fn emit(&mut self, code: u8, now: Instant) {
+        let sample = self.sample();
+        let product = self.cfg.product;
+        let since_ref = now.since(self.last_pps.unwrap_or(self.powered_at));
+        let mut time_flags = 0;
+        if self.pps_since_frame {
+            time_flags |= 0x0001;
+        }
+        if since_ref > 1_000_000_000 {
+            time_flags |= 0x0008;
+        }
+        let ctx = OutputCtx {
+            sample: &sample,
+            product: &product,
+            counter: (self.ticks * 2000 / u64::from(product.model.internal_rate_hz)) as u16,
+            usw: 0,
+            usw_ext: 0x0001,
+            time_flags,
+            second_fraction_ns: (since_ref % 1_000_000_000) as u32,
+            imu_time_ns: now.since(self.powered_at),
+        };
+        let mut payload = [0u8; 1 + params::UDD_MAX_TYPES * 13];
+        let n = match formats::find(code) {
+            Some(f) => fields::write_all(f.fields, &ctx, &mut payload),
+            None => {
+                let config = self.udd_config_now();
+                payload[0] = config.len() as u8;
+                payload[1..1 + config.len()].copy_from_slice(&config);
+                let mut list: heapless::Vec<Field, { params::UDD_MAX_TYPES }> =
+                    heapless::Vec::new();
+                for t in config.iter().filter_map(|&c| udd::find(c)) {
+                    let _ = list.push(t.field);
+                }
+                let at = 1 + config.len();
+                fields::write_all(&list, &ctx, &mut payload[at..]).map(|n| at + n)
+            }
+        };
+        if let Some(n) = n {
+            if self.send(code, &payload[..n]) {
+                self.pps_since_frame = false;
+            }
+        }
+    }
+
+    /// Queues a device frame (`type 1`); drops it whole if it does not fit.
+    fn send(&mut self, id: u8, payload: &[u8]) -> bool {
+        let mut buf = [0u8; frame::OVERHEAD + 1 + params::UDD_MAX_TYPES * 13];
+        let Some(n) = frame::encode(TYPE_DATA, id, payload, &mut buf) else {
+            return false;
+        };
+        if TX_CAP - self.tx.len() < n {
+            self.tx_dropped = self.tx_dropped.wrapping_add(1);
+            return false;
+        }
+        for &b in &buf[..n] {
+            let _ = self.tx.push_back(b);
+        }
+        true
+    }
+
+    // ----- identification -----
+
+    /// GetDevInfo payload (Table 5.17): serial, firmware string, IMU_type,
+    /// both duplicated; 166 bytes.
+    fn dev_info(&self) -> [u8; 166] {
+        let mut p = [0u8; 166];
+        let mut sn: heapless::String<16> = heapless::String::new();
+        let _ = write!(sn, "{:08}", 10_000_000 + self.cfg.seed % 90_000_000);
+        let mut fw: heapless::String<64> = heapless::String::new();
+        let _ = write!(
+            fw,
+            "{} imu-emu {}",
+            self.cfg.product.code(),
+            env!("CARGO_PKG_VERSION")
+        );
+        let copy = |dst: &mut [u8], s: &str| {
+            let n = s.len().min(dst.len());
+            dst[..n].copy_from_slice(&s.as_bytes()[..n]);
+        };
+        copy(&mut p[0..8], &sn);
+        copy(&mut p[8..48], &fw);
+        p[49] = self.cfg.product.model.imu_type;
+        copy(&mut p[50..58], &sn);
+        copy(&mut p[58..98], &fw);
+        p
+    }
+
+    /// Reply to the vendor INS SDK's 0x41 request (NOTES.md): 60 bytes.
+    fn device_parameters(&self) -> [u8; 60] {
+        let mut p = [0u8; 60];
+        let rate = params::DATA_RATE.read_int(&self.ram) as u16;
+        let iat = params::INITIAL_ALIGNMENT_TIME.read_int(&self.ram) as u16;
+        p[0..2].copy_from_slice(&rate.to_le_bytes());
+        p[2..4].copy_from_slice(&iat.to_le_bytes());
+        for i in 0..3 {
+            let a = params::ALIGNMENT_ANGLES.read_f32(&self.ram, i);
+            let v = fields::sat_i16(f64::from(a) * 100.0);
+            p[23 + 2 * i..25 + 2 * i].copy_from_slice(&v.to_le_bytes());
+        }
+        p[50..56].copy_from_slice(b"KERNEL");
+        p
+    }
 }

@@ -170,15 +170,114 @@ use Capability::*;
 
 /// The model table (ICD section 2.1 models, in its order).
 pub static MODELS: &[ModelSpec] = &[
-    ModelSpec { short: "K100", number: "100", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[SupplyVoltage, Extrig], lpf_codes: ALL_LPF, products: G2000_A40, boot_active_low: true, imu_type: 100 },
-    ModelSpec { short: "K102", number: "102", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[SupplyVoltage], lpf_codes: ALL_LPF, products: G2000_A40, boot_active_low: false, imu_type: 102 },
-    ModelSpec { short: "K108", number: "108", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, Extrig], lpf_codes: ALL_LPF, products: LISTED_3_2_2, boot_active_low: false, imu_type: 108 },
-    ModelSpec { short: "K110", number: "110", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, Extrig], lpf_codes: ALL_LPF, products: LISTED_3_2_2, boot_active_low: false, imu_type: 110 },
-    ModelSpec { short: "K110M", number: "110M", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, Extrig], lpf_codes: ALL_LPF, products: LISTED_3_2_2, boot_active_low: true, imu_type: 111 },
-    ModelSpec { short: "K120", number: "120", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, AuxAccel, Extrig], lpf_codes: ALL_LPF, products: LISTED_3_2_2, boot_active_low: false, imu_type: 120 },
-    ModelSpec { short: "K201", number: "201", internal_rate_hz: 4000, formats: K201_FORMATS, udd_starred_only: true, caps: &[], lpf_codes: K201_LPF, products: G2000_A40, boot_active_low: false, imu_type: 201 },
-    ModelSpec { short: "K210", number: "210", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, Extrig], lpf_codes: ALL_LPF, products: G2000_A40, boot_active_low: false, imu_type: 210 },
-    ModelSpec { short: "K220", number: "220", internal_rate_hz: 2000, formats: ALL_FORMATS, udd_starred_only: false, caps: &[GyroBiasOutput, AuxAccel, Extrig], lpf_codes: ALL_LPF, products: G2000_A40, boot_active_low: false, imu_type: 220 },
+    ModelSpec {
+        short: "K100",
+        number: "100",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[SupplyVoltage, Extrig],
+        lpf_codes: ALL_LPF,
+        products: G2000_A40,
+        boot_active_low: true,
+        imu_type: 100,
+    },
+    ModelSpec {
+        short: "K102",
+        number: "102",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[SupplyVoltage],
+        lpf_codes: ALL_LPF,
+        products: G2000_A40,
+        boot_active_low: false,
+        imu_type: 102,
+    },
+    ModelSpec {
+        short: "K108",
+        number: "108",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, Extrig],
+        lpf_codes: ALL_LPF,
+        products: LISTED_3_2_2,
+        boot_active_low: false,
+        imu_type: 108,
+    },
+    ModelSpec {
+        short: "K110",
+        number: "110",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, Extrig],
+        lpf_codes: ALL_LPF,
+        products: LISTED_3_2_2,
+        boot_active_low: false,
+        imu_type: 110,
+    },
+    ModelSpec {
+        short: "K110M",
+        number: "110M",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, Extrig],
+        lpf_codes: ALL_LPF,
+        products: LISTED_3_2_2,
+        boot_active_low: true,
+        imu_type: 111,
+    },
+    ModelSpec {
+        short: "K120",
+        number: "120",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, AuxAccel, Extrig],
+        lpf_codes: ALL_LPF,
+        products: LISTED_3_2_2,
+        boot_active_low: false,
+        imu_type: 120,
+    },
+    ModelSpec {
+        short: "K201",
+        number: "201",
+        internal_rate_hz: 4000,
+        formats: K201_FORMATS,
+        udd_starred_only: true,
+        caps: &[],
+        lpf_codes: K201_LPF,
+        products: G2000_A40,
+        boot_active_low: false,
+        imu_type: 201,
+    },
+    ModelSpec {
+        short: "K210",
+        number: "210",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, Extrig],
+        lpf_codes: ALL_LPF,
+        products: G2000_A40,
+        boot_active_low: false,
+        imu_type: 210,
+    },
+    ModelSpec {
+        short: "K220",
+        number: "220",
+        internal_rate_hz: 2000,
+        formats: ALL_FORMATS,
+        udd_starred_only: false,
+        caps: &[GyroBiasOutput, AuxAccel, Extrig],
+        lpf_codes: ALL_LPF,
+        products: G2000_A40,
+        boot_active_low: false,
+        imu_type: 220,
+    },
 ];
 
 /// One configured device: a model plus its product-code options.
@@ -293,11 +392,26 @@ mod tests {
 
     #[test]
     fn bare_names_take_the_first_product_code_of_3_2_2() {
-        assert_eq!(Product::parse("K120").unwrap().code(), "KERNEL-120-G2000-A40A90");
-        assert_eq!(Product::parse("K110").unwrap().code(), "KERNEL-110-G2000-A40");
-        assert_eq!(Product::parse("K201").unwrap().code(), "KERNEL-201-G2000-A40");
-        assert_eq!(Product::parse("K220").unwrap().code(), "KERNEL-220-G2000-A40A90");
-        assert_eq!(Product::parse("KERNEL-110M").unwrap().code(), "KERNEL-110M-G2000-A40");
+        assert_eq!(
+            Product::parse("K120").unwrap().code(),
+            "KERNEL-120-G2000-A40A90"
+        );
+        assert_eq!(
+            Product::parse("K110").unwrap().code(),
+            "KERNEL-110-G2000-A40"
+        );
+        assert_eq!(
+            Product::parse("K201").unwrap().code(),
+            "KERNEL-201-G2000-A40"
+        );
+        assert_eq!(
+            Product::parse("K220").unwrap().code(),
+            "KERNEL-220-G2000-A40A90"
+        );
+        assert_eq!(
+            Product::parse("KERNEL-110M").unwrap().code(),
+            "KERNEL-110M-G2000-A40"
+        );
     }
 
     #[test]
@@ -307,10 +421,19 @@ mod tests {
         assert_eq!(p.measurement_range(), 0x93); // the 5.3.8.1 example
         let p = Product::parse("KERNEL-100-G450-A15").unwrap();
         assert_eq!(p.measurement_range(), 0x65);
-        assert_eq!(Product::parse("KERNEL-110-G2000-A40A90"), Err(ProductError::AuxMismatch));
-        assert_eq!(Product::parse("KERNEL-120-G2000-A40"), Err(ProductError::AuxMismatch));
+        assert_eq!(
+            Product::parse("KERNEL-110-G2000-A40A90"),
+            Err(ProductError::AuxMismatch)
+        );
+        assert_eq!(
+            Product::parse("KERNEL-120-G2000-A40"),
+            Err(ProductError::AuxMismatch)
+        );
         assert_eq!(Product::parse("K999"), Err(ProductError::UnknownModel));
-        assert_eq!(Product::parse("KERNEL-110-G300-A40"), Err(ProductError::UnknownGyroRange));
+        assert_eq!(
+            Product::parse("KERNEL-110-G300-A40"),
+            Err(ProductError::UnknownGyroRange)
+        );
         assert_eq!(Product::parse("x"), Err(ProductError::Syntax));
     }
 }

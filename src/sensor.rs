@@ -15,6 +15,14 @@ pub struct Sample {
     pub euler: [f32; 3],
     /// Orientation quaternion q0..q3 (Appendix C.3).
     pub quat: [f32; 4],
+    /// Bias-compensated, cascade-filtered angular rates, deg/s (UDD 0x2D).
+    pub gyro_filtered: [f32; 3],
+    /// Estimated gyro bias, deg/s (UDD 0x2E).
+    pub gyro_bias: [f32; 3],
+    /// Cascade-filtered main accelerometer, g (UDD 0x91).
+    pub acc_filtered: [f32; 3],
+    /// Cascade-filtered aux accelerometer, g (UDD 0x92).
+    pub aux_acc_filtered: [f32; 3],
     /// Average gyro temperature, °C.
     pub temperature: f32,
     /// Supply voltage, V.
@@ -27,6 +35,10 @@ impl Sample {
         gyro: [0.0; 3],
         acc: [0.0, 0.0, 1.0],
         aux_acc: [0.0, 0.0, 1.0],
+        gyro_filtered: [0.0; 3],
+        gyro_bias: [0.0; 3],
+        acc_filtered: [0.0, 0.0, 1.0],
+        aux_acc_filtered: [0.0, 0.0, 1.0],
         euler: [0.0; 3],
         quat: [1.0, 0.0, 0.0, 0.0],
         temperature: 25.0,

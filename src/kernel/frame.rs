@@ -225,7 +225,10 @@ mod tests {
     fn encode_matches_the_stop_command() {
         let mut out = [0u8; 16];
         let n = encode(0, 0, &[0xFE], &mut out).unwrap();
-        assert_eq!(&out[..n], &[0xAA, 0x55, 0x00, 0x00, 0x07, 0x00, 0xFE, 0x05, 0x01]);
+        assert_eq!(
+            &out[..n],
+            &[0xAA, 0x55, 0x00, 0x00, 0x07, 0x00, 0xFE, 0x05, 0x01]
+        );
         assert_eq!(encode(0, 0, &[0; 9], &mut out), None);
     }
 

@@ -1,3 +1,9 @@
 //! The KERNEL protocol personality (ICD section 5, Appendix A).
 
+pub mod command;
+pub mod fields;
+pub mod formats;
 pub mod frame;
+pub mod params;
+pub mod rate;
+pub mod udd;

@@ -1,0 +1,212 @@
+//! Output fields — the building blocks shared by the fixed formats (ICD
+//! Tables 5.5–5.12) and the UDD types (Table 5.15). A format is a list of
+//! fields; a UDD type is one field. Scaling and saturation live here, once.
+
+use crate::model::Product;
+use crate::sensor::Sample;
+
+/// Everything an output frame can carry at one output instant.
+#[derive(Debug, Clone, Copy)]
+pub struct OutputCtx<'a> {
+    /// The measured (and processed) data.
+    pub sample: &'a Sample,
+    /// The product (KG/KA scale factors, Table 5.6).
+    pub product: &'a Product,
+    /// 2 kHz computation counter (Tables 5.7, 5.10, note 3), wrapping.
+    pub counter: u16,
+    /// Unit Status Word (5.4, Table 5.26).
+    pub usw: u16,
+    /// Extended Unit Status Word (Table 5.27).
+    pub usw_ext: u16,
+    /// GAm/GAAm time flags (0x0001 1PPS since last frame, 0x0008 no 1PPS > 1 s).
+    pub time_flags: u16,
+    /// Second fraction, ns (5.2.3.1).
+    pub second_fraction_ns: u32,
+    /// IMU time, ns since power-on (UDD 0x02).
+    pub imu_time_ns: u64,
+}
+
+/// One field of an output payload.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Field {
+    /// Heading u16, pitch i16, roll i16 in deg·100 (Tables 5.5, 5.9; UDD 0x07).
+    Euler,
+    /// Heading, pitch, roll as 32-bit deg·1000 (Table 5.10; UDD 0x08).
+    EulerHr,
+    /// q0..q3 as i16 ·10⁴ (Table 5.9; UDD 0x09).
+    Quat,
+    /// Gyro X/Y/Z as i16 deg/s·KG (Table 5.5; UDD 0x20).
+    Gyro,
+    /// Gyro X/Y/Z as i32 deg/s·10⁵ (Tables 5.7–5.12; UDD 0x21).
+    GyroHr,
+    /// Accel X/Y/Z as i16 g·KA (Table 5.5; UDD 0x22).
+    Acc,
+    /// Accel X/Y/Z as i32 g·10⁶ (Tables 5.7–5.12; UDD 0x23).
+    AccHr,
+    /// Aux accel X/Y/Z as i32 g·10⁶ (Tables 5.11, 5.12; UDD 0x2F).
+    AuxAccHr,
+    /// Bias-compensated, cascade-filtered gyro, i32 deg/s·10⁵ (UDD 0x2D).
+    GyroBiasCompHr,
+    /// Estimated gyro bias, i32 deg/s·10⁵ (UDD 0x2E).
+    GyroBiasHr,
+    /// Cascade-filtered low-g accel, i32 g·10⁶ (UDD 0x91).
+    FilteredAccHr,
+    /// Cascade-filtered high-g accel, i32 g·10⁶ (UDD 0x92).
+    FilteredAuxAccHr,
+    /// `n` zero bytes (reserved fields, magnetometer "always 0").
+    Zero(u8),
+    /// Unit Status Word, u16 (5.4; UDD 0x53).
+    Usw,
+    /// Extended USW, u16 (Table 5.27; UDD 0x5B).
+    UswExt,
+    /// 2 kHz counter, u16.
+    Counter,
+    /// Temperature, i16 °C·10 (UDD 0x52).
+    Temperature,
+    /// Time flags, u16 (Table 5.8 note 2).
+    TimeFlags,
+    /// Second fraction, u32 ns (5.2.3.1; UDD 0x05).
+    SecondFraction,
+    /// IMU time, u64 ns since power-on (UDD 0x02).
+    ImuTime,
+    /// Supply voltage, u16 VDC·100 (UDD 0x50).
+    SupplyVoltage,
+}
+
+/// Rounds to nearest and saturates at the i32 limits (NaN → 0).
+pub fn sat_i32(x: f64) -> i32 {
+    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
+}
+
+/// Rounds to nearest and saturates at the i16 limits (NaN → 0).
+pub fn sat_i16(x: f64) -> i16 {
+    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i16
+}
+
+/// Rounds to nearest and saturates at the u16 limits (NaN → 0).
+pub fn sat_u16(x: f64) -> u16 {
+    (x + 0.5) as u16
+}
+
+/// Heading in [0, 360) degrees.
+fn heading_0_360(h: f32) -> f64 {
+    let h = f64::from(h) % 360.0;
+    if h < 0.0 {
+        h + 360.0
+    } else {
+        h
+    }
+}
+
+fn put3_i32(out: &mut [u8], v: [f32; 3], scale: f64) {
+    for (c, x) in out.chunks_exact_mut(4).zip(v) {
+        c.copy_from_slice(&sat_i32(f64::from(x) * scale).to_le_bytes());
+    }
+}
+
+fn put3_i16(out: &mut [u8], v: [f32; 3], scale: f64) {
+    for (c, x) in out.chunks_exact_mut(2).zip(v) {
+        c.copy_from_slice(&sat_i16(f64::from(x) * scale).to_le_bytes());
+    }
+}
+
+impl Field {
+    /// Size in bytes (Table 5.15 "Size").
+    pub const fn size(self) -> usize {
+        match self {
+            Field::Euler => 6,
+            Field::EulerHr => 12,
+            Field::Quat => 8,
+            Field::Gyro | Field::Acc => 6,
+            Field::GyroHr
+            | Field::AccHr
+            | Field::AuxAccHr
+            | Field::GyroBiasCompHr
+            | Field::GyroBiasHr
+            | Field::FilteredAccHr
+            | Field::FilteredAuxAccHr => 12,
+            Field::Zero(n) => n as usize,
+            Field::Usw
+            | Field::UswExt
+            | Field::Counter
+            | Field::Temperature
+            | Field::TimeFlags
+            | Field::SupplyVoltage => 2,
+            Field::SecondFraction => 4,
+            Field::ImuTime => 8,
+        }
+    }
+
+    /// Writes the field into `out[..self.size()]`; returns the size, or 0
+    /// if `out` is too short (nothing written).
+    pub fn write(self, ctx: &OutputCtx<'_>, out: &mut [u8]) -> usize {
+        let n = self.size();
+        let Some(out) = out.get_mut(..n) else {
+            return 0;
+        };
+        let s = ctx.sample;
+        let kg = f64::from(ctx.product.gyro.kg());
+        let ka = f64::from(ctx.product.accel.ka());
+        match self {
+            Field::Euler => {
+                out[0..2]
+                    .copy_from_slice(&sat_u16(heading_0_360(s.euler[0]) * 100.0).to_le_bytes());
+                out[2..4].copy_from_slice(&sat_i16(f64::from(s.euler[1]) * 100.0).to_le_bytes());
+                out[4..6].copy_from_slice(&sat_i16(f64::from(s.euler[2]) * 100.0).to_le_bytes());
+            }
+            Field::EulerHr => {
+                out[0..4]
+                    .copy_from_slice(&sat_i32(heading_0_360(s.euler[0]) * 1000.0).to_le_bytes());
+                out[4..8].copy_from_slice(&sat_i32(f64::from(s.euler[1]) * 1000.0).to_le_bytes());
+                out[8..12].copy_from_slice(&sat_i32(f64::from(s.euler[2]) * 1000.0).to_le_bytes());
+            }
+            Field::Quat => {
+                for (c, q) in out.chunks_exact_mut(2).zip(s.quat) {
+                    c.copy_from_slice(&sat_i16(f64::from(q) * 1e4).to_le_bytes());
+                }
+            }
+            Field::Gyro => put3_i16(out, s.gyro, kg),
+            Field::GyroHr => put3_i32(out, s.gyro, 1e5),
+            Field::Acc => put3_i16(out, s.acc, ka),
+            Field::AccHr => put3_i32(out, s.acc, 1e6),
+            Field::AuxAccHr => put3_i32(out, s.aux_acc, 1e6),
+            Field::GyroBiasCompHr => put3_i32(out, s.gyro_filtered, 1e5),
+            Field::GyroBiasHr => put3_i32(out, s.gyro_bias, 1e5),
+            Field::FilteredAccHr => put3_i32(out, s.acc_filtered, 1e6),
+            Field::FilteredAuxAccHr => put3_i32(out, s.aux_acc_filtered, 1e6),
+            Field::Zero(_) => out.fill(0),
+            Field::Usw => out.copy_from_slice(&ctx.usw.to_le_bytes()),
+            Field::UswExt => out.copy_from_slice(&ctx.usw_ext.to_le_bytes()),
+            Field::Counter => out.copy_from_slice(&ctx.counter.to_le_bytes()),
+            Field::Temperature => {
+                out.copy_from_slice(&sat_i16(f64::from(s.temperature) * 10.0).to_le_bytes())
+            }
+            Field::TimeFlags => out.copy_from_slice(&ctx.time_flags.to_le_bytes()),
+            Field::SecondFraction => out.copy_from_slice(&ctx.second_fraction_ns.to_le_bytes()),
+            Field::ImuTime => out.copy_from_slice(&ctx.imu_time_ns.to_le_bytes()),
+            Field::SupplyVoltage => {
+                out.copy_from_slice(&sat_u16(f64::from(s.supply_voltage) * 100.0).to_le_bytes())
+            }
+        }
+        n
+    }
+}
+
+/// Total size of a field list.
+pub fn payload_len(fields: &[Field]) -> usize {
+    fields.iter().map(|f| f.size()).sum()
+}
+
+/// Writes a field list into `out`; returns the bytes written, or `None` if
+/// `out` is too short.
+pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
+    let mut at = 0;
+    for f in fields {
+        let n = f.write(ctx, out.get_mut(at..)?);
+        if n != f.size() {
+            return None;
+        }
+        at += n;
+    }
+    Some(at)
+}
