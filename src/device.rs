@@ -77,6 +77,15 @@ pub enum Event {
     /// after it are held back until this event is taken. Raised at power-on
     /// and on CommitBaudRate (5.3.9).
     LineRate(u32),
+    /// Drive the TOV output (ICD 4.1.4) to `level` at time `at` (which may
+    /// lie in the future: the falling edge comes when the frame's last bit
+    /// has left the line). Only with TOV_Control = 1.
+    Tov {
+        /// New pin level.
+        level: Level,
+        /// When.
+        at: Instant,
+    },
 }
 
 /// Board-side facts fixed at power-on.
@@ -124,7 +133,14 @@ pub struct Device<F: NorFlash> {
     line_rate: u32,
     /// Line-rate switch waiting for the bytes queued before it: (rate, bytes).
     line_switch: Option<(u32, usize)>,
-    events: Deque<Event, 4>,
+    events: Deque<Event, 16>,
+    /// Latest time the board told us (every entry point carries one).
+    clock: Instant,
+    /// When the UART will have sent everything queued so far, at the
+    /// current line rate (10 bit times per byte).
+    line_free_at: Instant,
+    /// Last accepted EXTRIG edge (hold-off reference, 4.1.3).
+    last_trigger: Option<Instant>,
     last_pps: Option<Instant>,
     pps_since_frame: bool,
 }
@@ -176,6 +192,9 @@ impl<F: NorFlash> Device<F> {
             line_rate: 115_200,
             line_switch: None,
             events: Deque::new(),
+            clock: now,
+            line_free_at: now,
+            last_trigger: None,
             last_pps: None,
             pps_since_frame: false,
         };
@@ -201,6 +220,9 @@ impl<F: NorFlash> Device<F> {
         self.ticks = 0;
         self.line_switch = None;
         self.events.clear();
+        self.clock = now;
+        self.line_free_at = now;
+        self.last_trigger = None;
         self.last_pps = None;
         self.pps_since_frame = false;
         self.boot(now);
@@ -240,6 +262,7 @@ impl<F: NorFlash> Device<F> {
         if self.firmware_update {
             return;
         }
+        self.clock = self.clock.max(now);
         if !bytes.is_empty() {
             self.last_rx = now;
         }
@@ -262,12 +285,14 @@ impl<F: NorFlash> Device<F> {
         if self.firmware_update {
             return;
         }
+        self.clock = self.clock.max(now);
         self.ticks = self.ticks.wrapping_add(1);
         if self.rx.has_partial() && now.since(self.last_rx) > RX_IDLE_ABANDON_NS {
             self.rx.abandon();
             self.last_rx = now;
             self.on_rx(&[], now);
         }
+        let triggered = self.triggered();
         let Some(s) = self.stream.as_mut() else {
             return;
         };
@@ -276,22 +301,57 @@ impl<F: NorFlash> Device<F> {
             return;
         }
         s.ticks += 1;
-        if s.ticks % u64::from(s.divisor) == 0 {
+        if !triggered && s.ticks.is_multiple_of(u64::from(s.divisor)) {
             let code = s.code;
             self.emit(code, now);
         }
     }
 
-    /// An input pin edge at time `at`. 1PPS: the rising edge marks the
-    /// second (5.2.3.1, Table 4.1 note 6).
+    /// An input pin edge at time `at` (the new level).
+    ///
+    /// * 1PPS: the rising edge marks the second (5.2.3.1, Table 4.1 note 6).
+    /// * EXTRIG (4.1.3): with Trigger_Control = 1 on a model with EXTRIG,
+    ///   each edge of the Polarity parameter's sense (0 negative: falling,
+    ///   1 positive: rising) sends one frame of the running format with the
+    ///   latest data at once; edges within Hold-off_Time ms of the last
+    ///   accepted one are ignored. Periodic output is off while triggering.
     pub fn on_pin(&mut self, pin: Pin, level: Level, at: Instant) {
         if self.firmware_update {
             return;
         }
-        if let (Pin::Pps, Level::High) = (pin, level) {
-            self.last_pps = Some(at);
-            self.pps_since_frame = true;
+        self.clock = self.clock.max(at);
+        match (pin, level) {
+            (Pin::Pps, Level::High) => {
+                self.last_pps = Some(at);
+                self.pps_since_frame = true;
+            }
+            (Pin::Pps, Level::Low) => {}
+            (Pin::Extrig, level) => {
+                let want = match params::POLARITY.read_int(&self.ram) {
+                    0 => Level::Low,
+                    _ => Level::High,
+                };
+                let streaming = self.mode() == Mode::Continuous;
+                if !self.triggered() || !streaming || level != want {
+                    return;
+                }
+                let hold_off_ns = u64::from(params::HOLD_OFF_TIME.read_int(&self.ram)) * 1_000_000;
+                if self.last_trigger.is_some_and(|t| at.since(t) < hold_off_ns) {
+                    return;
+                }
+                self.last_trigger = Some(at);
+                if let Some(code) = self.stream.as_ref().map(|s| s.code) {
+                    self.emit(code, at);
+                }
+            }
         }
+    }
+
+    /// Whether output is EXTRIG-triggered (Trigger_Control = 1 on a model
+    /// with EXTRIG).
+    fn triggered(&self) -> bool {
+        self.cfg.product.model.has(Capability::Extrig)
+            && params::TRIGGER_CONTROL.read_int(&self.ram) == 1
     }
 
     /// Device → host bytes: moves up to `buf.len()` queued bytes into `buf`
@@ -628,26 +688,39 @@ impl<F: NorFlash> Device<F> {
             }
         };
         if let Some(n) = n {
-            if self.send(code, &payload[..n]) {
+            if let Some(end) = self.send(code, &payload[..n]) {
                 self.pps_since_frame = false;
+                if params::TOV_CONTROL.read_int(&self.ram) == 1 {
+                    let _ = self.events.push_back(Event::Tov {
+                        level: Level::High,
+                        at: now,
+                    });
+                    let _ = self.events.push_back(Event::Tov {
+                        level: Level::Low,
+                        at: end,
+                    });
+                }
             }
         }
     }
 
     /// Queues a device frame (`type 1`); drops it whole if it does not fit.
-    fn send(&mut self, id: u8, payload: &[u8]) -> bool {
+    /// Returns when its last bit will have left the line, assuming the UART
+    /// sends the queue back to back at the current line rate.
+    fn send(&mut self, id: u8, payload: &[u8]) -> Option<Instant> {
         let mut buf = [0u8; frame::OVERHEAD + 1 + params::UDD_MAX_TYPES * 13];
-        let Some(n) = frame::encode(TYPE_DATA, id, payload, &mut buf) else {
-            return false;
-        };
+        let n = frame::encode(TYPE_DATA, id, payload, &mut buf)?;
         if TX_CAP - self.tx.len() < n {
             self.tx_dropped = self.tx_dropped.wrapping_add(1);
-            return false;
+            return None;
         }
         for &b in &buf[..n] {
             let _ = self.tx.push_back(b);
         }
-        true
+        let start = self.line_free_at.max(self.clock);
+        let wire_ns = (n as u64) * 10 * 1_000_000_000 / u64::from(self.line_rate.max(1));
+        self.line_free_at = start.plus_nanos(wire_ns);
+        Some(self.line_free_at)
     }
 
     // ----- identification -----
