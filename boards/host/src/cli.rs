@@ -1,0 +1,163 @@
+//! Command line and program setup.
+//!
+//! ```text
+//! imu-emu [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
+//!         [--flash FILE] [--seed N]
+//! ```
+//!
+//! The first stdout line tells where the device listens —
+//! `listening on tcp 127.0.0.1:7000` (the bound address, so `--tcp …:0`
+//! reveals the port it got) or `listening on pty /dev/pts/5` — and is
+//! flushed at once. Diagnostics go to stderr. SIGINT/SIGTERM stop the
+//! program cleanly (exit 0; a second signal exits at once with status 1).
+
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use anyhow::Context as _;
+use clap::Parser;
+use embedded_storage::nor_flash::NorFlash;
+use imu_emu::device::{Device, PowerOn};
+use imu_emu::model::Product;
+use imu_emu::time::Instant;
+
+use crate::flash::{FileNor, MemNor};
+use crate::runner::Runner;
+use crate::transport::{PtyTransport, TcpTransport, Transport};
+
+/// Default TCP address.
+pub const DEFAULT_TCP: &str = "127.0.0.1:7000";
+
+/// A virtual Inertial Labs KERNEL IMU on a TCP port or a pseudo-terminal.
+#[derive(Parser, Debug, Clone)]
+#[command(name = "imu-emu", version, about)]
+pub struct Args {
+    /// Model name or product code: K100 K102 K108 K110 K110M K120 K201 K210
+    /// K220, or e.g. KERNEL-110-G2000-A8 (a bare name takes the model's
+    /// first product code).
+    #[arg(long, value_name = "MODEL", default_value = "K110", value_parser = parse_product)]
+    pub model: Product,
+
+    /// Serve the UART on this TCP address (one client at a time; port 0
+    /// picks a free port) [default: 127.0.0.1:7000].
+    #[arg(long, value_name = "ADDR", conflicts_with = "pty")]
+    pub tcp: Option<String>,
+
+    /// Serve the UART on a pseudo-terminal (raw mode) instead of TCP.
+    #[arg(long)]
+    pub pty: bool,
+
+    /// With --pty: also symlink the pty's slave at PATH (an existing
+    /// symlink is replaced; removed at exit).
+    #[arg(long, value_name = "PATH", requires = "pty")]
+    pub link: Option<PathBuf>,
+
+    /// Keep the device's 8 KiB flash image in FILE (created erased if
+    /// missing): restarting the program is a power cycle that keeps saved
+    /// parameters. Without it the flash lives in memory only.
+    #[arg(long, value_name = "FILE")]
+    pub flash: Option<PathBuf>,
+
+    /// Seed of the device's random processes (sensor noise, …).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+}
+
+fn parse_product(s: &str) -> Result<Product, String> {
+    Product::parse(s).map_err(|e| e.to_string())
+}
+
+/// Runs the program: sets up signals, the flash and the transport, powers
+/// the device on and serves it until SIGINT/SIGTERM.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // A second signal while shutting down exits at once.
+        signal_hook::flag::register_conditional_shutdown(sig, 1, Arc::clone(&stop))
+            .context("installing signal handlers")?;
+        signal_hook::flag::register(sig, Arc::clone(&stop))
+            .context("installing signal handlers")?;
+    }
+    match &args.flash {
+        Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
+        None => with_flash(MemNor::new(), &args, &stop),
+    }
+}
+
+fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+    if args.pty {
+        let t = PtyTransport::open(115_200, args.link.as_deref())?;
+        serve(flash, t, args, stop)
+    } else {
+        let t = TcpTransport::bind(args.tcp.as_deref().unwrap_or(DEFAULT_TCP))?;
+        serve(flash, t, args, stop)
+    }
+}
+
+fn serve<F: NorFlash, T: Transport>(
+    flash: F,
+    mut transport: T,
+    args: &Args,
+    stop: &AtomicBool,
+) -> anyhow::Result<()> {
+    let epoch = std::time::Instant::now();
+    let cfg = PowerOn {
+        product: args.model,
+        boot: None,
+        seed: args.seed,
+    };
+    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
+    transport.set_line_rate(dev.line_rate())?;
+
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "listening on {}", transport.describe())?;
+    out.flush()?;
+    drop(out);
+    eprintln!(
+        "imu-emu: {} at {} bit/s, internal rate {} Hz, flash {}",
+        args.model.code(),
+        dev.line_rate(),
+        args.model.model.internal_rate_hz,
+        args.flash
+            .as_ref()
+            .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string()),
+    );
+
+    let mut runner = Runner::new(dev, transport, epoch);
+    runner.run(stop)?;
+    eprintln!("imu-emu: stopped");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults() {
+        let a = Args::try_parse_from(["imu-emu"]).unwrap();
+        assert_eq!(a.model.code(), "KERNEL-110-G2000-A40");
+        assert_eq!(a.tcp, None);
+        assert!(!a.pty);
+        assert_eq!(a.seed, 0);
+    }
+
+    #[test]
+    fn model_takes_names_and_product_codes() {
+        let a = Args::try_parse_from(["imu-emu", "--model", "K120"]).unwrap();
+        assert_eq!(a.model.code(), "KERNEL-120-G2000-A40A90");
+        let a = Args::try_parse_from(["imu-emu", "--model", "KERNEL-110-G2000-A8"]).unwrap();
+        assert_eq!(a.model.measurement_range(), 0x93);
+        assert!(Args::try_parse_from(["imu-emu", "--model", "K999"]).is_err());
+    }
+
+    #[test]
+    fn transports_exclude_each_other() {
+        assert!(Args::try_parse_from(["imu-emu", "--pty", "--tcp", "127.0.0.1:1"]).is_err());
+        assert!(Args::try_parse_from(["imu-emu", "--link", "/tmp/x"]).is_err());
+        let a = Args::try_parse_from(["imu-emu", "--pty", "--link", "/tmp/x"]).unwrap();
+        assert!(a.pty);
+    }
+}

@@ -1,0 +1,22 @@
+//! # imu-emu-host — the host runner board
+//!
+//! Runs one virtual KERNEL IMU ([`imu_emu::device::Device`]) in real time
+//! and exposes its UART on a TCP port or a pseudo-terminal:
+//!
+//! * [`runner`] — the loop: ticks on absolute deadlines, line-rate pacing,
+//!   input, sleeping;
+//! * [`pacer`] — the byte credit that models the UART line rate;
+//! * [`transport`] — TCP ([`transport::TcpTransport`]) and pty
+//!   ([`transport::PtyTransport`]) with a bounded [`backlog`];
+//! * [`flash`] — the device's NOR flash, optionally written through to a
+//!   file so a restart is a power cycle;
+//! * [`cli`] — the command line and [`cli::run`], what `main` calls.
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod backlog;
+pub mod cli;
+pub mod flash;
+pub mod pacer;
+pub mod runner;
+pub mod transport;

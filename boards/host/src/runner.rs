@@ -1,0 +1,183 @@
+//! The real-time loop: one virtual device driven by the wall clock.
+//!
+//! * **Ticks** run on absolute deadlines `deadline_k = epoch + k × period`
+//!   (`period = dev.tick_period_ns()`, k = 1, 2, …), each called with its own
+//!   deadline as `now`, so sleep error never accumulates; when the loop is
+//!   late it runs every due tick (catching up).
+//! * **Output** leaves the device's TX queue only as fast as the emulated
+//!   line carries it ([`crate::pacer`]). Before each tick the line is
+//!   advanced to that tick's deadline and drained, so a late wakeup catches
+//!   up output and ticks in their real order and the device's queue holds
+//!   what a real UART's would.
+//! * **Input** is fed with `dev.on_rx(bytes, now)` as soon as the transport
+//!   wakes the loop (`ppoll`), after the ticks due by then.
+//! * **Sleeping**: while the device streams or has bytes queued, the loop
+//!   wakes every [`BUSY_WAKE`] (running the two or four ticks due); when it
+//!   is idle with nothing queued, every [`IDLE_WAKE`]. Input wakes it at
+//!   once either way.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use embedded_storage::nor_flash::NorFlash;
+use imu_emu::device::{Device, Event, Mode};
+use imu_emu::time::Instant;
+
+use crate::pacer::Pacer;
+use crate::transport::Transport;
+
+/// Wake interval while the device streams or has output queued.
+pub const BUSY_WAKE: Duration = Duration::from_millis(1);
+/// Wake interval while the device is idle with nothing queued.
+pub const IDLE_WAKE: Duration = Duration::from_millis(10);
+
+/// The board: a device, its line pacer and a transport.
+pub struct Runner<F: NorFlash, T: Transport> {
+    dev: Device<F>,
+    transport: T,
+    pacer: Pacer,
+    epoch: std::time::Instant,
+    period_ns: u64,
+    /// Ticks run so far; the next deadline is `(ticks + 1) × period`.
+    ticks: u64,
+    buf: Box<[u8; 4096]>,
+    /// Device frames dropped (TX queue full) already reported on stderr.
+    reported_drops: u32,
+    /// When drops were last reported, ns since the epoch.
+    reported_at_ns: u64,
+}
+
+impl<F: NorFlash, T: Transport> Runner<F, T> {
+    /// Wraps a device powered on at `Instant::ZERO` = `epoch`.
+    pub fn new(dev: Device<F>, transport: T, epoch: std::time::Instant) -> Self {
+        let pacer = Pacer::new(dev.line_rate(), 0);
+        let period_ns = dev.tick_period_ns().max(1);
+        Runner {
+            dev,
+            transport,
+            pacer,
+            epoch,
+            period_ns,
+            ticks: 0,
+            buf: Box::new([0; 4096]),
+            reported_drops: 0,
+            reported_at_ns: 0,
+        }
+    }
+
+    /// The device.
+    pub fn device(&self) -> &Device<F> {
+        &self.dev
+    }
+
+    /// The transport.
+    pub fn transport(&self) -> &T {
+        &self.transport
+    }
+
+    /// Gives the device back (e.g. to inspect its flash).
+    pub fn into_device(self) -> Device<F> {
+        self.dev
+    }
+
+    /// Nanoseconds since the epoch.
+    fn now_ns(&self) -> u64 {
+        u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX)
+    }
+
+    fn next_deadline(&self) -> u64 {
+        (self.ticks + 1).saturating_mul(self.period_ns)
+    }
+
+    /// Runs until `stop` is set (by SIGINT/SIGTERM).
+    pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
+        while !stop.load(Ordering::Relaxed) {
+            self.step()?;
+            let now = self.now_ns();
+            self.report_drops(now);
+            let busy = self.dev.tx_len() > 0
+                || matches!(self.dev.mode(), Mode::Continuous | Mode::Aligning);
+            let interval = if busy { BUSY_WAKE } else { IDLE_WAKE };
+            // Wake at the first tick deadline at least one interval away:
+            // still on the absolute schedule, just batched.
+            let wake = self
+                .next_deadline()
+                .max(now.saturating_add(interval.as_nanos() as u64));
+            self.transport
+                .wait(Duration::from_nanos(wake.saturating_sub(now)))?;
+        }
+        Ok(())
+    }
+
+    /// Tells stderr, at most once a second, that the device dropped frames
+    /// because its TX queue overflowed (the line is too slow for the
+    /// output, e.g. after a catch-up or with EXTRIG bursts).
+    fn report_drops(&mut self, now_ns: u64) {
+        let dropped = self.dev.tx_dropped();
+        if dropped != self.reported_drops && now_ns >= self.reported_at_ns + 1_000_000_000 {
+            eprintln!(
+                "imu-emu: device TX queue overflowed: {} frames dropped so far",
+                dropped
+            );
+            self.reported_drops = dropped;
+            self.reported_at_ns = now_ns;
+        }
+    }
+
+    /// One pass: due ticks (with output paced up to each), output up to
+    /// now, input, output again.
+    pub fn step(&mut self) -> anyhow::Result<()> {
+        let now = self.now_ns();
+        while self.next_deadline() <= now {
+            let deadline = self.next_deadline();
+            self.pump_tx(deadline)?;
+            self.dev.on_tick(Instant::from_nanos(deadline));
+            self.ticks += 1;
+        }
+        self.pump_tx(now)?;
+
+        let t = Instant::from_nanos(now);
+        let dev = &mut self.dev;
+        self.transport.receive(&mut |bytes| dev.on_rx(bytes, t))?;
+        self.pump_tx(now)?;
+        self.transport.flush()
+    }
+
+    /// Moves bytes the line can carry by `at_ns` from the device to the
+    /// transport, then acts on device events.
+    fn pump_tx(&mut self, at_ns: u64) -> anyhow::Result<()> {
+        self.pacer.advance(at_ns);
+        loop {
+            let room = self.pacer.available().min(self.buf.len());
+            if room == 0 {
+                break;
+            }
+            let n = self.dev.poll_tx(&mut self.buf[..room]);
+            if n == 0 {
+                break;
+            }
+            self.pacer.consume(n);
+            self.transport.send(&self.buf[..n])?;
+            // A line-rate switch restarts the credit: the bytes after it go
+            // at the new rate.
+            self.handle_events(at_ns)?;
+        }
+        self.handle_events(at_ns)
+    }
+
+    /// Acts on pending device events.
+    fn handle_events(&mut self, at_ns: u64) -> anyhow::Result<()> {
+        while let Some(ev) = self.dev.poll_event() {
+            match ev {
+                Event::LineRate(bps) => {
+                    eprintln!("imu-emu: line rate {bps} bit/s");
+                    self.pacer.set_rate(bps, at_ns);
+                    self.transport.set_line_rate(bps)?;
+                }
+                // The host board has no TOV output pin: the pulse is dropped.
+                Event::Tov { .. } => {}
+            }
+        }
+        Ok(())
+    }
+}

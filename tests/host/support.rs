@@ -1,0 +1,388 @@
+//! Test support: start the real `imu-emu` binary, talk to it as a client,
+//! and read KERNEL frames with timeouts (no test can hang).
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::{mpsc, Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Upper bound of every wait in these tests.
+pub const TIMEOUT: Duration = Duration::from_secs(5);
+
+/// Parses `"AA 55 00 …"`.
+pub fn hex(s: &str) -> Vec<u8> {
+    s.split_whitespace()
+        .map(|b| u8::from_str_radix(b, 16).expect("hex byte"))
+        .collect()
+}
+
+/// Wrapping u16 sum (ICD Table 5.2), computed independently of the core.
+pub fn sum16(bytes: &[u8]) -> u16 {
+    bytes
+        .iter()
+        .fold(0u16, |s, &b| s.wrapping_add(u16::from(b)))
+}
+
+/// A complete frame: `AA 55 type id len payload sum`.
+pub fn frame(msg_type: u8, id: u8, payload: &[u8]) -> Vec<u8> {
+    let len = u16::try_from(payload.len() + 6).unwrap();
+    let mut f = vec![0xAA, 0x55, msg_type, id];
+    f.extend_from_slice(&len.to_le_bytes());
+    f.extend_from_slice(payload);
+    let s = sum16(&f[2..]);
+    f.extend_from_slice(&s.to_le_bytes());
+    f
+}
+
+/// A one-byte command (`type 0, id 0, payload = code`).
+pub fn command(code: u8) -> Vec<u8> {
+    frame(0, 0, &[code])
+}
+
+/// SaveFlash of parameter `id` (ICD 5.3.7).
+pub fn save_flash(id: u16, value: &[u8]) -> Vec<u8> {
+    let mut p = vec![0xB2, 0xFF];
+    p.extend_from_slice(&id.to_le_bytes());
+    p.extend_from_slice(&u16::try_from(value.len()).unwrap().to_le_bytes());
+    p.extend_from_slice(value);
+    frame(0, 0, &p)
+}
+
+/// ReadRAM of `len` bytes of parameter `id` (ICD 5.3.8).
+pub fn read_ram(id: u16, len: u16) -> Vec<u8> {
+    let mut p = vec![0xB1, 0xFF];
+    p.extend_from_slice(&id.to_le_bytes());
+    p.extend_from_slice(&len.to_le_bytes());
+    frame(0, 0, &p)
+}
+
+/// The acknowledgement of `cmd` (a data command or SaveFlash): a frame with
+/// `id` whose payload is the command's checksum field.
+pub fn ack_of(id: u8, cmd: &[u8]) -> Vec<u8> {
+    frame(1, id, &cmd[cmd.len() - 2..])
+}
+
+/// A frame read from the device.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// All its bytes, header to checksum.
+    pub bytes: Vec<u8>,
+}
+
+impl Frame {
+    /// Message type.
+    pub fn msg_type(&self) -> u8 {
+        self.bytes[2]
+    }
+    /// KERNEL data identifier.
+    pub fn id(&self) -> u8 {
+        self.bytes[3]
+    }
+    /// The payload.
+    pub fn payload(&self) -> &[u8] {
+        &self.bytes[6..self.bytes.len() - 2]
+    }
+}
+
+/// Frames longer than this are taken as garbage (resync).
+const MAX_FRAME: usize = 2048;
+
+trait Port: Read + Write + Send {}
+impl<T: Read + Write + Send> Port for T {}
+
+/// A client connection (TCP socket or pty) with a frame reader.
+pub struct Conn {
+    port: Box<dyn Port>,
+    buf: Vec<u8>,
+    /// Candidates dropped for a bad length or checksum.
+    pub bad: usize,
+    /// Bytes skipped while looking for `AA 55`.
+    pub skipped: usize,
+    /// Bytes received in total.
+    pub received: usize,
+}
+
+impl Conn {
+    /// Connects to the emulator's TCP port.
+    pub fn tcp(addr: SocketAddr) -> Conn {
+        let s = TcpStream::connect_timeout(&addr, TIMEOUT).expect("connect");
+        s.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+        s.set_write_timeout(Some(TIMEOUT)).unwrap();
+        s.set_nodelay(true).unwrap();
+        Conn::new(Box::new(s))
+    }
+
+    /// Opens a serial port (the pty slave or its link) in raw mode with
+    /// reads timing out after 0.1 s.
+    pub fn serial(path: &Path) -> Conn {
+        use nix::sys::termios::{self, SetArg, SpecialCharacterIndices as Cc};
+        use std::os::unix::fs::OpenOptionsExt;
+        let f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
+            .open(path)
+            .unwrap_or_else(|e| panic!("open {}: {e}", path.display()));
+        let mut t = termios::tcgetattr(&f).unwrap();
+        termios::cfmakeraw(&mut t);
+        t.control_chars[Cc::VMIN as usize] = 0;
+        t.control_chars[Cc::VTIME as usize] = 1;
+        termios::tcsetattr(&f, SetArg::TCSANOW, &t).unwrap();
+        Conn::new(Box::new(f))
+    }
+
+    fn new(port: Box<dyn Port>) -> Conn {
+        Conn {
+            port,
+            buf: Vec::new(),
+            bad: 0,
+            skipped: 0,
+            received: 0,
+        }
+    }
+
+    /// Sends bytes.
+    pub fn send(&mut self, bytes: &[u8]) {
+        self.port.write_all(bytes).expect("send");
+        self.port.flush().unwrap();
+    }
+
+    /// Reads once (up to a short read timeout); whether bytes came.
+    fn fill(&mut self) -> bool {
+        let mut b = [0u8; 4096];
+        match self.port.read(&mut b) {
+            Ok(0) => {
+                // pty: VTIME expired; tcp: peer closed. Either way, wait.
+                std::thread::sleep(Duration::from_millis(5));
+                false
+            }
+            Ok(n) => {
+                self.buf.extend_from_slice(&b[..n]);
+                self.received += n;
+                true
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                false
+            }
+            Err(e) => panic!("read: {e}"),
+        }
+    }
+
+    /// Exactly `n` raw bytes (what is buffered first), or panics after
+    /// [`TIMEOUT`].
+    pub fn read_bytes(&mut self, n: usize) -> Vec<u8> {
+        let deadline = Instant::now() + TIMEOUT;
+        while self.buf.len() < n {
+            assert!(
+                Instant::now() < deadline,
+                "timeout: wanted {n} bytes, got {:02X?}",
+                self.buf
+            );
+            self.fill();
+        }
+        self.buf.drain(..n).collect()
+    }
+
+    /// Takes the next complete valid frame from the buffer, if any.
+    fn parse(&mut self) -> Option<Frame> {
+        loop {
+            let start = self.buf.windows(2).position(|w| w == [0xAA, 0x55]);
+            let skip = match start {
+                Some(i) => i,
+                // Keep a trailing AA: it may be a header's first byte.
+                None => self.buf.len() - usize::from(self.buf.last() == Some(&0xAA)),
+            };
+            self.skipped += skip;
+            self.buf.drain(..skip);
+            if self.buf.len() < 6 {
+                return None;
+            }
+            let len = usize::from(u16::from_le_bytes([self.buf[4], self.buf[5]]));
+            let total = len + 2;
+            if len < 6 || total > MAX_FRAME {
+                self.bad += 1;
+                self.buf.remove(0);
+                continue;
+            }
+            if self.buf.len() < total {
+                return None;
+            }
+            let sum = sum16(&self.buf[2..total - 2]);
+            if sum.to_le_bytes() != self.buf[total - 2..total] {
+                self.bad += 1;
+                self.buf.remove(0);
+                continue;
+            }
+            return Some(Frame {
+                bytes: self.buf.drain(..total).collect(),
+            });
+        }
+    }
+
+    /// The next valid frame arriving before `deadline`.
+    pub fn frame_before(&mut self, deadline: Instant) -> Option<Frame> {
+        loop {
+            if let Some(f) = self.parse() {
+                return Some(f);
+            }
+            if Instant::now() >= deadline {
+                return None;
+            }
+            self.fill();
+        }
+    }
+
+    /// The next valid frame, or panics after [`TIMEOUT`].
+    pub fn frame(&mut self) -> Frame {
+        self.frame_before(Instant::now() + TIMEOUT)
+            .expect("timeout waiting for a frame")
+    }
+
+    /// The next frame with `id`, skipping others, or panics after
+    /// [`TIMEOUT`].
+    pub fn frame_with_id(&mut self, id: u8) -> Frame {
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            let f = self
+                .frame_before(deadline)
+                .unwrap_or_else(|| panic!("timeout waiting for a frame with id {id:02X}"));
+            if f.id() == id {
+                return f;
+            }
+        }
+    }
+
+    /// Reads and discards whatever arrives during `d`; bytes read.
+    pub fn drain_for(&mut self, d: Duration) -> usize {
+        let end = Instant::now() + d;
+        let mut n = std::mem::take(&mut self.buf).len();
+        while Instant::now() < end {
+            self.fill();
+            n += self.buf.len();
+            self.buf.clear();
+        }
+        n
+    }
+}
+
+/// A running emulator; killed on drop (its stderr is printed if the test
+/// is failing).
+pub struct Emu {
+    child: Child,
+    /// What follows `listening on ` on the first stdout line.
+    pub listening: String,
+    stderr: Arc<Mutex<String>>,
+}
+
+impl Emu {
+    /// Starts `imu-emu` with `args` and waits for its first stdout line.
+    pub fn start(args: &[&str]) -> Emu {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn imu-emu");
+        let stdout = child.stdout.take().unwrap();
+        let stderr_pipe = child.stderr.take().unwrap();
+        let stderr = Arc::new(Mutex::new(String::new()));
+        let sink = Arc::clone(&stderr);
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr_pipe).lines().map_while(Result::ok) {
+                let mut s = sink.lock().unwrap();
+                s.push_str(&line);
+                s.push('\n');
+            }
+        });
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            // Keep draining stdout so the emulator never writes to a
+            // closed pipe.
+            let mut lines = BufReader::new(stdout).lines();
+            if let Some(Ok(first)) = lines.next() {
+                let _ = tx.send(first);
+            }
+            for _ in lines {}
+        });
+        let mut emu = Emu {
+            child,
+            listening: String::new(),
+            stderr,
+        };
+        let line = rx
+            .recv_timeout(TIMEOUT)
+            .unwrap_or_else(|_| panic!("no `listening on` line; stderr:\n{}", emu.stderr()));
+        emu.listening = line
+            .strip_prefix("listening on ")
+            .unwrap_or_else(|| panic!("unexpected first line {line:?}"))
+            .to_owned();
+        emu
+    }
+
+    /// Starts on a free TCP port with extra `args`.
+    pub fn tcp(args: &[&str]) -> Emu {
+        let mut all = vec!["--tcp", "127.0.0.1:0"];
+        all.extend_from_slice(args);
+        Emu::start(&all)
+    }
+
+    /// The TCP address it listens on.
+    pub fn addr(&self) -> SocketAddr {
+        self.listening
+            .strip_prefix("tcp ")
+            .expect("a tcp emulator")
+            .parse()
+            .expect("socket address")
+    }
+
+    /// The pty slave path it listens on.
+    pub fn pty_path(&self) -> PathBuf {
+        PathBuf::from(self.listening.strip_prefix("pty ").expect("a pty emulator"))
+    }
+
+    /// A new TCP client connection.
+    pub fn connect(&self) -> Conn {
+        Conn::tcp(self.addr())
+    }
+
+    /// What the emulator wrote to stderr so far.
+    pub fn stderr(&self) -> String {
+        self.stderr.lock().unwrap().clone()
+    }
+
+    /// Sends SIGTERM and waits (bounded) for the exit status.
+    pub fn terminate(&mut self) -> ExitStatus {
+        use nix::sys::signal::{kill, Signal};
+        use nix::unistd::Pid;
+        let pid = Pid::from_raw(i32::try_from(self.child.id()).unwrap());
+        kill(pid, Signal::SIGTERM).expect("kill -TERM");
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            if let Some(st) = self.child.try_wait().unwrap() {
+                return st;
+            }
+            assert!(Instant::now() < deadline, "no exit after SIGTERM");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+impl Drop for Emu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        if std::thread::panicking() {
+            eprintln!("--- imu-emu stderr ---\n{}", self.stderr());
+        }
+    }
+}
