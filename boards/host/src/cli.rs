@@ -60,6 +60,17 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub flash: Option<PathBuf>,
 
+    /// Serve the control socket on this TCP address: inject 1PPS/EXTRIG
+    /// edges, power-cycle with BOOT, read TOV edges (see the `control`
+    /// module). Its address is the second stdout line:
+    /// `control on tcp ADDR`.
+    #[arg(long, value_name = "ADDR")]
+    pub control: Option<String>,
+
+    /// Generate a 1PPS rising edge every second from the host clock.
+    #[arg(long)]
+    pub pps: bool,
+
     /// Seed of the device's random processes (sensor noise, …).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
@@ -111,8 +122,15 @@ fn serve<F: NorFlash, T: Transport>(
     let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
     transport.set_line_rate(dev.line_rate())?;
 
+    let control = match &args.control {
+        Some(addr) => Some(crate::control::Control::bind(addr)?),
+        None => None,
+    };
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
+    if let Some(c) = &control {
+        writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
     out.flush()?;
     drop(out);
     eprintln!(
@@ -126,6 +144,12 @@ fn serve<F: NorFlash, T: Transport>(
     );
 
     let mut runner = Runner::new(dev, transport, epoch);
+    if let Some(c) = control {
+        runner = runner.with_control(c);
+    }
+    if args.pps {
+        runner = runner.with_pps();
+    }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())

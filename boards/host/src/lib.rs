@@ -10,12 +10,15 @@
 //!   ([`transport::PtyTransport`]) with a bounded [`backlog`];
 //! * [`flash`] — the device's NOR flash, optionally written through to a
 //!   file so a restart is a power cycle;
+//! * [`control`] — the control socket: 1PPS/EXTRIG edges, power cycle
+//!   with BOOT, TOV edges reported back;
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
 pub mod backlog;
 pub mod cli;
+pub mod control;
 pub mod flash;
 pub mod pacer;
 pub mod runner;

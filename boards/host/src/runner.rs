@@ -20,9 +20,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
-use imu_emu::device::{Device, Event, Mode};
+use imu_emu::device::{Device, Event, Level, Mode, Pin};
 use imu_emu::time::Instant;
 
+use crate::control::{self, Control};
 use crate::pacer::Pacer;
 use crate::transport::Transport;
 
@@ -45,6 +46,10 @@ pub struct Runner<F: NorFlash, T: Transport> {
     reported_drops: u32,
     /// When drops were last reported, ns since the epoch.
     reported_at_ns: u64,
+    /// The control socket (`--control`), if any.
+    control: Option<Control>,
+    /// Next 1PPS edge of the `--pps` generator, ns since the epoch.
+    next_pps_ns: Option<u64>,
 }
 
 impl<F: NorFlash, T: Transport> Runner<F, T> {
@@ -62,7 +67,22 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             buf: Box::new([0; 4096]),
             reported_drops: 0,
             reported_at_ns: 0,
+            control: None,
+            next_pps_ns: None,
         }
+    }
+
+    /// Serves the control socket (pin edges, power cycle, TOV reports).
+    pub fn with_control(mut self, control: Control) -> Self {
+        self.control = Some(control);
+        self
+    }
+
+    /// Generates a 1PPS rising edge at every whole second since the epoch
+    /// (`--pps`, from the host clock).
+    pub fn with_pps(mut self) -> Self {
+        self.next_pps_ns = Some(1_000_000_000);
+        self
     }
 
     /// The device.
@@ -130,6 +150,11 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
         let now = self.now_ns();
         while self.next_deadline() <= now {
             let deadline = self.next_deadline();
+            while let Some(pps) = self.next_pps_ns.filter(|&p| p <= deadline) {
+                self.dev
+                    .on_pin(Pin::Pps, Level::High, Instant::from_nanos(pps));
+                self.next_pps_ns = Some(pps + 1_000_000_000);
+            }
             self.pump_tx(deadline)?;
             self.dev.on_tick(Instant::from_nanos(deadline));
             self.ticks += 1;
@@ -139,6 +164,16 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
         let t = Instant::from_nanos(now);
         let dev = &mut self.dev;
         self.transport.receive(&mut |bytes| dev.on_rx(bytes, t))?;
+        if let Some(ctl) = self.control.as_mut() {
+            let dev = &mut self.dev;
+            ctl.poll(&mut |cmd| {
+                match cmd {
+                    control::Command::Edge(pin, level) => dev.on_pin(pin, level, t),
+                    control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, t),
+                }
+                Ok(())
+            })?;
+        }
         self.pump_tx(now)?;
         self.transport.flush()
     }
@@ -174,8 +209,14 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                     self.pacer.set_rate(bps, at_ns);
                     self.transport.set_line_rate(bps)?;
                 }
-                // The host board has no TOV output pin: the pulse is dropped.
-                Event::Tov { .. } => {}
+                // The host board has no TOV pin: edges go to the control
+                // client, if any.
+                Event::Tov { level, at } => {
+                    if let Some(ctl) = self.control.as_mut() {
+                        let l = if level == Level::High { "high" } else { "low" };
+                        ctl.say(&format!("tov {l} {}\n", at.as_nanos()));
+                    }
+                }
             }
         }
         Ok(())

@@ -1,0 +1,395 @@
+//! End-to-end tests of the output engine through the real `imu-emu` binary
+//! over TCP (issue "Output engine"): frames per second on the wire for every
+//! format at several data rates and baud rates (ICD 5.5, Table 5.28), and
+//! the pins driven through the control socket (1PPS, EXTRIG, TOV, BOOT).
+
+mod support;
+
+use std::io::{BufRead, BufReader, Write};
+use std::net::{TcpListener, TcpStream};
+use std::time::{Duration, Instant};
+
+use support::{command, read_ram, save_flash, Conn, Emu, TIMEOUT};
+
+const DATA_RATE: u16 = 0x0012;
+const ALIGN_TIME: u16 = 0x0014;
+const BAUD_RATE: u16 = 0x03B2;
+const TOV_CONTROL: u16 = 0x0499;
+const TRIGGER_CONTROL: u16 = 0x05FA;
+
+/// Sends a SaveFlash and waits for its acknowledgement.
+fn save(c: &mut Conn, id: u16, value: &[u8]) {
+    let cmd = save_flash(id, value);
+    c.send(&cmd);
+    let ack = c.frame_with_id(0xB2);
+    assert_eq!(
+        ack.payload(),
+        &cmd[cmd.len() - 2..],
+        "SaveFlash {id:#06x} acknowledged"
+    );
+}
+
+/// Sets the baud rate code and commits it; waits until it took effect.
+fn set_baud(c: &mut Conn, code: u8) {
+    save(c, BAUD_RATE, &[code]);
+    c.send(&command(0xC2));
+    // ReadRAM answers the live value once the commit went through.
+    c.send(&read_ram(BAUD_RATE, 1));
+    assert_eq!(c.frame_with_id(0xB1).payload(), &[code]);
+}
+
+/// Counts frames with `id` (checking their payload length) arriving in a
+/// window of `secs` after `settle`, and the bytes received in the window.
+fn measure(
+    c: &mut Conn,
+    id: u8,
+    payload_len: usize,
+    settle: Duration,
+    secs: f64,
+) -> (usize, usize) {
+    let start = Instant::now() + settle;
+    while Instant::now() < start {
+        let _ = c.frame_before(start);
+    }
+    let bytes0 = c.received;
+    let end = start + Duration::from_secs_f64(secs);
+    let mut n = 0;
+    while let Some(f) = c.frame_before(end) {
+        assert_eq!(f.id(), id);
+        assert_eq!(f.payload().len(), payload_len, "frame length of {id:02X}");
+        n += 1;
+    }
+    (n, c.received - bytes0)
+}
+
+struct Case {
+    model: &'static str,
+    code: u8,
+    payload: usize,
+    baud_code: u8,
+    baud: u32,
+    data_rate: u16,
+    /// Frames per second expected on the wire (Table 5.28 / Formula 5.1).
+    expect: usize,
+}
+
+#[test]
+fn every_format_streams_at_the_icd_rate_for_its_baud_rate() {
+    // Table 5.28 cells (Data_Rate 2000 lowered to the maximum) and a
+    // Data_Rate below the maximum.
+    let cases = [
+        Case {
+            model: "K110",
+            code: 0x33,
+            payload: 34,
+            baud_code: 0x05,
+            baud: 38_400,
+            data_rate: 2000,
+            expect: 80,
+        },
+        Case {
+            model: "K110",
+            code: 0x8F,
+            payload: 32,
+            baud_code: 0x00,
+            baud: 115_200,
+            data_rate: 2000,
+            expect: 250,
+        },
+        Case {
+            model: "K110",
+            code: 0x9B,
+            payload: 32,
+            baud_code: 0x09,
+            baud: 460_800,
+            data_rate: 2000,
+            expect: 1000,
+        },
+        Case {
+            model: "K110",
+            code: 0x82,
+            payload: 34,
+            baud_code: 0x00,
+            baud: 115_200,
+            data_rate: 2000,
+            expect: 200,
+        },
+        Case {
+            model: "K110",
+            code: 0x81,
+            payload: 52,
+            baud_code: 0x05,
+            baud: 38_400,
+            data_rate: 2000,
+            expect: 50,
+        },
+        Case {
+            model: "K120",
+            code: 0xA5,
+            payload: 44,
+            baud_code: 0x09,
+            baud: 460_800,
+            data_rate: 2000,
+            expect: 500,
+        },
+        Case {
+            model: "K120",
+            code: 0xA6,
+            payload: 44,
+            baud_code: 0x0B,
+            baud: 2_000_000,
+            data_rate: 2000,
+            expect: 2000,
+        },
+        Case {
+            model: "K120",
+            code: 0x8F,
+            payload: 32,
+            baud_code: 0x0B,
+            baud: 2_000_000,
+            data_rate: 400,
+            expect: 400,
+        },
+        // UDD, factory config: 1 + 5 + 8 + 12 + 12 + 2 + 2 = 42 bytes.
+        Case {
+            model: "K110",
+            code: 0x95,
+            payload: 42,
+            baud_code: 0x00,
+            baud: 115_200,
+            data_rate: 100,
+            expect: 100,
+        },
+        Case {
+            model: "K201",
+            code: 0x8F,
+            payload: 32,
+            baud_code: 0x10,
+            baud: 4_000_000,
+            data_rate: 4000,
+            expect: 4000,
+        },
+    ];
+    // Run in batches of a few emulators at a time (2 cores).
+    for batch in cases.chunks(4) {
+        let handles: Vec<_> = batch
+            .iter()
+            .map(|case| {
+                let (model, code, payload, baud_code, baud, rate, expect) = (
+                    case.model, case.code, case.payload, case.baud_code, case.baud, case.data_rate, case.expect,
+                );
+                std::thread::spawn(move || {
+                    let emu = Emu::tcp(&["--model", model]);
+                    let mut c = emu.connect();
+                    save(&mut c, ALIGN_TIME, &[0, 0]);
+                    save(&mut c, DATA_RATE, &rate.to_le_bytes());
+                    set_baud(&mut c, baud_code);
+                    c.send(&command(code));
+                    let ack = c.frame_with_id(code);
+                    assert_eq!(ack.payload(), &command(code)[7..9]);
+                    let (frames, bytes) = measure(&mut c, code, payload, Duration::from_millis(300), 1.0);
+                    let tol = (expect / 20).max(2);
+                    assert!(
+                        frames.abs_diff(expect) <= tol,
+                        "{model} {code:02X} at {baud} bps, Data_Rate {rate}: {frames} frames/s, expected {expect}\n{}",
+                        emu.stderr()
+                    );
+                    assert!(bytes as u32 <= baud / 10 + 128, "{bytes} B/s exceeds the line at {baud} bps");
+                })
+            })
+            .collect();
+        for h in handles {
+            h.join().expect("case passed");
+        }
+    }
+}
+
+#[test]
+fn a_slow_baud_rate_really_limits_the_line() {
+    // GA at 9600 bps: Formula 5.1 gives 9600 / (11 × 40) = 21.8 → 20 Hz;
+    // 20 × 40 = 800 B/s, within the 960 B/s of the line.
+    let emu = Emu::tcp(&["--model", "K110"]);
+    let mut c = emu.connect();
+    save(&mut c, DATA_RATE, &1000u16.to_le_bytes());
+    set_baud(&mut c, 0x02);
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    let (frames, bytes) = measure(&mut c, 0x8F, 32, Duration::from_millis(300), 2.0);
+    assert!(frames.abs_diff(40) <= 2, "{frames} frames in 2 s");
+    assert!(bytes <= 2 * 960 + 64, "{bytes} bytes in 2 s");
+}
+
+/// A free local port for `--control`.
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// Starts an emulator with a control socket; returns it, a UART client and
+/// the control connection.
+fn with_control(args: &[&str]) -> (Emu, Conn, Ctl) {
+    let port = free_port();
+    let addr = format!("127.0.0.1:{port}");
+    let mut all = vec!["--control", addr.as_str()];
+    all.extend_from_slice(args);
+    let emu = Emu::tcp(&all);
+    let c = emu.connect();
+    let ctl = Ctl::connect(&addr);
+    (emu, c, ctl)
+}
+
+struct Ctl {
+    w: TcpStream,
+    r: BufReader<TcpStream>,
+}
+
+impl Ctl {
+    fn connect(addr: &str) -> Ctl {
+        let s = TcpStream::connect(addr).expect("control socket");
+        s.set_read_timeout(Some(TIMEOUT)).unwrap();
+        Ctl {
+            w: s.try_clone().unwrap(),
+            r: BufReader::new(s),
+        }
+    }
+    fn line(&mut self) -> String {
+        let mut l = String::new();
+        self.r.read_line(&mut l).expect("control line");
+        l.trim().to_owned()
+    }
+    /// Sends a command and returns its answer, skipping TOV reports.
+    fn cmd(&mut self, c: &str) -> String {
+        writeln!(self.w, "{c}").unwrap();
+        loop {
+            let l = self.line();
+            if !l.starts_with("tov ") {
+                return l;
+            }
+        }
+    }
+}
+
+fn u16_at(p: &[u8], i: usize) -> u16 {
+    u16::from_le_bytes([p[i], p[i + 1]])
+}
+fn u32_at(p: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]])
+}
+
+#[test]
+fn pps_through_the_control_socket_sets_the_gam_time_flag_and_realigns_the_second() {
+    let (_emu, mut c, mut ctl) = with_control(&["--model", "K110"]);
+    c.send(&command(0x9B));
+    c.frame_with_id(0x9B);
+    // Well over 1 s without 1PPS: flag 0x0008.
+    std::thread::sleep(Duration::from_millis(1200));
+    c.drain_for(Duration::from_millis(50));
+    let f = c.frame_with_id(0x9B);
+    assert_eq!(u16_at(f.payload(), 24) & 0x0008, 0x0008);
+    assert_eq!(ctl.cmd("pps"), "ok");
+    // The frame after the edge: 0x0001, second fraction since the edge
+    // below one frame period plus scheduling slack.
+    let mut seen = false;
+    for _ in 0..20 {
+        let f = c.frame_with_id(0x9B);
+        let flags = u16_at(f.payload(), 24);
+        if flags & 0x0001 != 0 {
+            assert_eq!(flags & 0x0008, 0);
+            assert!(
+                u32_at(f.payload(), 26) < 30_000_000,
+                "second fraction after 1PPS"
+            );
+            seen = true;
+            break;
+        }
+    }
+    assert!(seen, "a frame with the 1PPS flag");
+}
+
+#[test]
+fn pps_generator_flags_one_frame_each_second() {
+    let emu = Emu::tcp(&["--model", "K110", "--pps"]);
+    let mut c = emu.connect();
+    c.send(&command(0x9B));
+    c.frame_with_id(0x9B);
+    let end = Instant::now() + Duration::from_millis(2600);
+    let mut flagged = 0;
+    let mut frames = 0;
+    while let Some(f) = c.frame_before(end) {
+        frames += 1;
+        if u16_at(f.payload(), 24) & 0x0001 != 0 {
+            flagged += 1;
+        }
+    }
+    assert!(frames > 200);
+    assert!(
+        (2..=3).contains(&flagged),
+        "{flagged} frames flagged with 1PPS in 2.6 s"
+    );
+}
+
+#[test]
+fn extrig_through_the_control_socket_sends_one_frame_per_edge() {
+    let (_emu, mut c, mut ctl) = with_control(&["--model", "K110"]);
+    save(&mut c, TRIGGER_CONTROL, &[1]);
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    assert_eq!(
+        c.drain_for(Duration::from_millis(300)),
+        0,
+        "no periodic output"
+    );
+    for _ in 0..3 {
+        assert_eq!(ctl.cmd("extrig high"), "ok");
+        assert_eq!(ctl.cmd("extrig low"), "ok");
+    }
+    for _ in 0..3 {
+        assert_eq!(c.frame().id(), 0x8F);
+    }
+    assert!(c
+        .frame_before(Instant::now() + Duration::from_millis(300))
+        .is_none());
+}
+
+#[test]
+fn tov_edges_are_reported_on_the_control_socket() {
+    let (_emu, mut c, mut ctl) = with_control(&["--model", "K110"]);
+    save(&mut c, TOV_CONTROL, &[1]);
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    let mut edges = Vec::new();
+    while edges.len() < 20 {
+        let l = ctl.line();
+        let mut w = l.split_whitespace();
+        assert_eq!(w.next(), Some("tov"));
+        let level = w.next().unwrap().to_owned();
+        let at: u64 = w.next().unwrap().parse().unwrap();
+        edges.push((level, at));
+    }
+    for pair in edges.chunks(2) {
+        assert_eq!(pair[0].0, "high");
+        assert_eq!(pair[1].0, "low");
+        // GA frame at 115200 bps: 40 bytes × 10 bit times = 3.47 ms.
+        assert_eq!(pair[1].1 - pair[0].1, 40 * 10 * 1_000_000_000 / 115_200);
+    }
+    // 100 Hz: rising edges 10 ms apart.
+    assert_eq!(edges[2].1 - edges[0].1, 10_000_000);
+}
+
+#[test]
+fn boot_high_at_power_on_silences_the_device_until_the_next_power_cycle() {
+    let (_emu, mut c, mut ctl) = with_control(&["--model", "K110"]);
+    c.send(&command(0x1A));
+    assert_eq!(c.frame().id(), 0x1A);
+    assert_eq!(ctl.cmd("power-cycle boot=high"), "ok");
+    c.send(&command(0x1A));
+    assert!(c
+        .frame_before(Instant::now() + Duration::from_millis(400))
+        .is_none());
+    assert_eq!(ctl.cmd("power-cycle"), "ok");
+    c.send(&command(0x1A));
+    assert_eq!(c.frame().id(), 0x1A);
+}
