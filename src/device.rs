@@ -424,6 +424,20 @@ impl<F: NorFlash> Device<F> {
             .map(|s| self.cfg.product.model.internal_rate_hz / s.divisor)
     }
 
+    /// Ticks from now until the next tick that produces periodic output
+    /// (1 = the very next tick), or `None` when no periodic output is due
+    /// (idle, firmware update, EXTRIG-triggered). Lets a board sleep
+    /// through ticks that change nothing visible (it must still call
+    /// [`Device::on_tick`] for each of them, late is fine).
+    pub fn ticks_to_next_output(&self) -> Option<u64> {
+        let s = self.stream.as_ref()?;
+        if self.firmware_update || self.triggered() {
+            return None;
+        }
+        let d = u64::from(s.divisor);
+        Some(s.align_left + (d - s.ticks % d))
+    }
+
     /// The emulated product.
     pub fn product(&self) -> Product {
         self.cfg.product

@@ -11,16 +11,17 @@
 //!   what a real UART's would.
 //! * **Input** is fed with `dev.on_rx(bytes, now)` as soon as the transport
 //!   wakes the loop (`ppoll`), after the ticks due by then.
-//! * **Sleeping**: while the device streams or has bytes queued, the loop
-//!   wakes every [`BUSY_WAKE`] (running the two or four ticks due); when it
-//!   is idle with nothing queued, every [`IDLE_WAKE`]. Input wakes it at
-//!   once either way.
+//! * **Sleeping**: while bytes are queued the loop wakes every
+//!   [`BUSY_WAKE`]; otherwise it sleeps until the deadline of the next tick
+//!   that produces output ([`Device::ticks_to_next_output`]), the next
+//!   `--pps` edge, or [`IDLE_WAKE`], whichever is first, then runs every
+//!   tick due in one batch. UART input wakes it at once.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
-use imu_emu::device::{Device, Event, Level, Mode, Pin};
+use imu_emu::device::{Device, Event, Level, Pin};
 use imu_emu::time::Instant;
 
 use crate::control::{self, Control};
@@ -115,18 +116,36 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             self.step()?;
             let now = self.now_ns();
             self.report_drops(now);
-            let busy = self.dev.tx_len() > 0
-                || matches!(self.dev.mode(), Mode::Continuous | Mode::Aligning);
-            let interval = if busy { BUSY_WAKE } else { IDLE_WAKE };
-            // Wake at the first tick deadline at least one interval away:
-            // still on the absolute schedule, just batched.
-            let wake = self
-                .next_deadline()
-                .max(now.saturating_add(interval.as_nanos() as u64));
+            let wake = self.next_wake(now);
             self.transport
                 .wait(Duration::from_nanos(wake.saturating_sub(now)))?;
         }
         Ok(())
+    }
+
+    /// When to wake next, ns since the epoch: while output is queued,
+    /// [`BUSY_WAKE`] from now (the pacer hands it out as the line allows);
+    /// otherwise at the deadline of the next tick that produces output, the
+    /// next `--pps` edge or [`IDLE_WAKE`] from now, whichever comes first —
+    /// never before the next tick deadline, so ticks run in batches on the
+    /// absolute schedule.
+    fn next_wake(&self, now: u64) -> u64 {
+        let busy_until = now.saturating_add(BUSY_WAKE.as_nanos() as u64);
+        let idle_until = now.saturating_add(IDLE_WAKE.as_nanos() as u64);
+        let mut wake = if self.dev.tx_len() > 0 || self.transport.backlog_len() > 0 {
+            busy_until
+        } else {
+            match self.dev.ticks_to_next_output() {
+                Some(k) => (self.ticks + k)
+                    .saturating_mul(self.period_ns)
+                    .min(idle_until),
+                None => idle_until,
+            }
+        };
+        if let Some(pps) = self.next_pps_ns {
+            wake = wake.min(pps);
+        }
+        wake.max(self.next_deadline())
     }
 
     /// Tells stderr, at most once a second, that the device dropped frames
