@@ -3,6 +3,8 @@
 //! format at several data rates and baud rates (ICD 5.5, Table 5.28), and
 //! the pins driven through the control socket (1PPS, EXTRIG, TOV, BOOT).
 
+// Shared with the e2e suite; not every helper is used here.
+#[allow(dead_code)]
 mod support;
 
 use std::io::{BufRead, BufReader, Write};
