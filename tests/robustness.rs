@@ -92,6 +92,6 @@ proptest! {
         // Parameters are valid for the model after a power cycle.
         b.dev.power_cycle(Instant(b.now));
         let rate = u16::from_le_bytes(b.read_ram(0x0012, 2).unwrap().try_into().unwrap());
-        prop_assert!(rate >= 1 && b.dev.product().model.internal_rate_hz % u32::from(rate) == 0);
+        prop_assert!(rate >= 1 && b.dev.product().model.internal_rate_hz.is_multiple_of(u32::from(rate)));
     }
 }
