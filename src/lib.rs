@@ -24,7 +24,10 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod ahrs;
+pub mod chain;
 pub mod device;
+pub mod dsp;
 pub mod kernel;
 pub mod model;
 pub mod nor;

@@ -1,0 +1,534 @@
+//! The FIR low-pass of ICD 5.6 (Table 5.29): linear phase, order N, group
+//! delay exactly N/2 samples.
+//!
+//! | LPF_Bandwidth code | −3 dB | order at 2 kHz | order at 4 kHz (K201) | delay |
+//! |---|---|---|---|---|
+//! | 0 | 16 Hz | 192 | — | 48 ms |
+//! | 1 | 33 Hz | 96 | — | 24 ms |
+//! | 2 | 66 Hz | 48 | 96 | 12 ms |
+//! | 3 | 131 Hz | 24 | 48 | 6 ms |
+//! | 4 | 262 Hz | 12 | 24 | 3 ms |
+//! | 0xFF | off | — | — | 0 |
+//!
+//! **Design.** Windowed sinc with a Blackman window over each stage's taps
+//! (`w[n] = 0.42 − 0.5 cos(2π(n+1)/(N+2)) + 0.08 cos(4π(n+1)/(N+2))`, so no tap
+//! is zero), normalised to unit DC gain. The sinc cutoff is chosen per design
+//! so that the −3 dB point of the whole filter falls exactly on the Table 5.29
+//! bandwidth (found by bisection offline; `tests/signal_fir.rs` measures it).
+//! Coefficients are computed at compile time by `const fn` (own Taylor
+//! sine/cosine in f64): no run-time cost, they live in flash. Every stage is
+//! symmetric, so the phase is exactly linear and the group delay is N/2
+//! samples = N/(2·f_s), Table 5.29's delay (NOTES.md). The stop band beyond
+//! 3.2× the bandwidth is at least 64 dB down.
+//!
+//! **Two-stage (interpolated) structure for the long orders.** Orders 192
+//! (16 Hz) and 96 at 2 kHz (33 Hz; and 96 at 4 kHz, the same normalised
+//! design) are realised as `H(z) = P(z) · G(z^L)`: a short pre-filter P
+//! (order 16, cutoff 0.05·f_s) followed by a prototype G whose taps are L
+//! samples apart (order 44 with L = 4 for 16 Hz: 16 + 4·44 = 192; order 40
+//! with L = 2 for 33 Hz: 16 + 2·40 = 96). The product of two symmetric
+//! filters is a symmetric FIR of exactly order N — the same kind of filter,
+//! delay N/2 — built from 32 (30) pre-added multiply-adds per channel instead
+//! of 97 (49). P is the same for both, so it runs on every tick whatever the
+//! design and its output history is always ready: switching designs never
+//! needs a refill.
+//!
+//! **Structure.** Nine channels (gyro, acc, aux acc × 3) are filtered in one
+//! pass over channel-interleaved histories that are stored twice (every
+//! sample is written at `i` and `i + ring`), so each window is one contiguous
+//! slice; symmetric taps are pre-added (`h[k]·(x[k] + x[N−k])`), halving the
+//! multiplications. The input history (49 samples) serves the one-stage
+//! designs (orders ≤ 48) and P; the history of P's output (177 samples)
+//! serves G. Both always hold the real past of the signal, so reconfiguring
+//! keeps the filter running on it.
+//!
+//! **Fixed point** ([`FirBankFixed`]) for cores without an FPU: samples are
+//! `i32` (the chain scales gyro by 2¹⁷ per °/s and accelerometers by 2²⁰ per g),
+//! coefficients Q15 rounded to nearest with each stage's centre tap adjusted
+//! so its taps sum to exactly 2¹⁵ (unit DC gain, exact). Each pre-added pair
+//! `s = x[k] + x[N−k]` is split `s = hi·2¹⁵ + lo` (0 ≤ lo < 2¹⁵) and both halves
+//! are multiplied by the coefficient in 32-bit — one-cycle `MULS` on a
+//! Cortex-M0+ — into two `i32` accumulators that cannot overflow (|s| < 2³⁰ and
+//! a stage's coefficients' absolute sum is < 1.1 · 2¹⁵). The result
+//! `acc_hi + ((acc_lo + 2¹⁴) >> 15)` is the stage's Σ h·x rounded to nearest,
+//! exactly. The difference from the float path is bounded by
+//! [`FirDesign::fixed_error_gain`] × max|x| + 2 LSB (rounding of the input, of
+//! P's output and of the output), pinned by a parity test.
+
+// Numeric code indexes parallel arrays (axes, channels) by one index.
+#![allow(clippy::needless_range_loop)]
+
+/// Largest order (Table 5.29).
+pub const MAX_ORDER: usize = 192;
+/// Input samples kept: the longest one-stage design (order 48) + 1.
+pub const RING: usize = 49;
+/// Pre-filter outputs kept: the longest span of a two-stage prototype
+/// (4 × 44) + 1.
+pub const MID_RING: usize = 177;
+/// Channels filtered together: gyro X/Y/Z, acc X/Y/Z, aux acc X/Y/Z.
+pub const CHANNELS: usize = 9;
+
+/// One symmetric FIR stage.
+#[derive(Debug, PartialEq)]
+pub struct Stage {
+    /// Order (taps − 1), even.
+    pub order: usize,
+    /// Sinc cutoff as a fraction of the stage's own sample rate.
+    pub fc_norm: f64,
+    /// Taps 0..=order/2 (the rest mirror them), unit DC gain.
+    pub half: &'static [f32],
+    /// The same taps in Q15, summing (mirrored) to exactly 32768.
+    pub half_q15: &'static [i32],
+}
+
+impl Stage {
+    /// Tap `n` (0..=order), float.
+    pub fn tap(&self, n: usize) -> f32 {
+        let h = self.order / 2;
+        self.half[if n <= h { n } else { self.order - n }]
+    }
+    /// Tap `n` (0..=order), Q15.
+    pub fn tap_q15(&self, n: usize) -> i32 {
+        let h = self.order / 2;
+        self.half_q15[if n <= h { n } else { self.order - n }]
+    }
+    /// Σ |taps|.
+    pub fn l1(&self) -> f32 {
+        (0..=self.order).map(|n| self.tap(n).abs()).sum()
+    }
+}
+
+/// One FIR design of Table 5.29.
+#[derive(Debug, PartialEq)]
+pub struct FirDesign {
+    /// Filter order N of the whole filter (N + 1 taps).
+    pub order: usize,
+    /// −3 dB bandwidth, Hz (Table 5.29).
+    pub bandwidth_hz: f32,
+    /// Sample rate the design is for, Hz.
+    pub rate_hz: u32,
+    /// The stage run on the input (`stride` 1) or, for the two-stage
+    /// designs, the prototype G run on [`PRE`]'s output with taps `stride`
+    /// samples apart.
+    pub stage: Stage,
+    /// 1 = one stage; L > 1 = `PRE(z) · G(z^L)`.
+    pub stride: usize,
+}
+
+impl FirDesign {
+    /// Group delay, samples (N/2, exact).
+    pub const fn delay_samples(&self) -> usize {
+        self.order / 2
+    }
+
+    /// Group delay, seconds (Table 5.29).
+    pub fn delay_s(&self) -> f32 {
+        self.order as f32 / (2.0 * self.rate_hz as f32)
+    }
+
+    /// Tap `n` (0..=N) of the whole impulse response, float (for a
+    /// two-stage design the convolution of the stages).
+    pub fn tap(&self, n: usize) -> f32 {
+        self.tap_with(n, Stage::tap, |s, k| s.tap(k))
+    }
+
+    /// Tap `n` of the whole impulse response as the fixed-point path
+    /// realises it (Q15 stages), as a fraction.
+    pub fn tap_fixed(&self, n: usize) -> f32 {
+        self.tap_with(
+            n,
+            |s, k| s.tap_q15(k) as f32 / 32768.0,
+            |s, k| s.tap_q15(k) as f32 / 32768.0,
+        )
+    }
+
+    fn tap_with(
+        &self,
+        n: usize,
+        pre: impl Fn(&Stage, usize) -> f32,
+        main: impl Fn(&Stage, usize) -> f32,
+    ) -> f32 {
+        if self.stride == 1 {
+            return main(&self.stage, n);
+        }
+        let mut acc = 0.0;
+        for k in 0..=PRE.order.min(n) {
+            let m = n - k;
+            if m.is_multiple_of(self.stride) && m / self.stride <= self.stage.order {
+                acc += pre(&PRE, k) * main(&self.stage, m / self.stride);
+            }
+        }
+        acc
+    }
+
+    /// Σ over all taps of |h − h_fixed|: bounds the fixed-point coefficient
+    /// error (multiply by max|x|).
+    pub fn fixed_error_gain(&self) -> f32 {
+        (0..=self.order)
+            .map(|n| (self.tap(n) - self.tap_fixed(n)).abs())
+            .sum()
+    }
+}
+
+// ----- compile-time design -----
+
+const PI: f64 = core::f64::consts::PI;
+const TAU: f64 = core::f64::consts::TAU;
+
+/// sin and cos of `x` by range reduction and Taylor series (|error| < 1e-15).
+const fn sin_cos(x: f64) -> (f64, f64) {
+    let k = x / TAU;
+    let k = if k >= 0.0 {
+        (k + 0.5) as i64
+    } else {
+        (k - 0.5) as i64
+    };
+    let r = x - k as f64 * TAU;
+    let mut s = 0.0;
+    let mut c = 0.0;
+    let mut term_s = r;
+    let mut term_c = 1.0;
+    let mut n = 0;
+    while n < 30 {
+        s += term_s;
+        c += term_c;
+        let a = (2 * n + 2) as f64;
+        let b = (2 * n + 3) as f64;
+        term_s = -term_s * r * r / (a * b);
+        term_c = -term_c * r * r / ((2 * n + 1) as f64 * a);
+        n += 1;
+    }
+    (s, c)
+}
+
+/// Half of a Blackman-windowed sinc of order `order`, cutoff `fc` (fraction of
+/// the sample rate), unit DC gain.
+const fn design_half<const H: usize>(order: usize, fc: f64) -> [f64; H] {
+    let mut h = [0.0; H];
+    let mut sum = 0.0;
+    let mut n = 0;
+    while n < H {
+        let m = n as f64 - order as f64 / 2.0;
+        let x = (n + 1) as f64 / (order + 2) as f64;
+        let w = 0.42 - 0.5 * sin_cos(TAU * x).1 + 0.08 * sin_cos(2.0 * TAU * x).1;
+        let s = if n == order / 2 {
+            2.0 * fc
+        } else {
+            sin_cos(TAU * fc * m).0 / (PI * m)
+        };
+        h[n] = w * s;
+        sum += if n == order / 2 { h[n] } else { 2.0 * h[n] };
+        n += 1;
+    }
+    let mut n = 0;
+    while n < H {
+        h[n] /= sum;
+        n += 1;
+    }
+    h
+}
+
+const fn to_f32<const H: usize>(h: [f64; H]) -> [f32; H] {
+    let mut o = [0.0f32; H];
+    let mut n = 0;
+    while n < H {
+        o[n] = h[n] as f32;
+        n += 1;
+    }
+    o
+}
+
+/// Q15, rounded to nearest; the centre tap takes up the rounding so the
+/// mirrored sum is exactly 32768.
+const fn to_q15<const H: usize>(h: [f64; H]) -> [i32; H] {
+    let mut o = [0i32; H];
+    let mut sum = 0i32;
+    let mut n = 0;
+    while n < H {
+        let v = h[n] * 32768.0;
+        o[n] = if v >= 0.0 {
+            (v + 0.5) as i32
+        } else {
+            (v - 0.5) as i32
+        };
+        sum += if n + 1 == H { o[n] } else { 2 * o[n] };
+        n += 1;
+    }
+    o[H - 1] += 32768 - sum;
+    o
+}
+
+macro_rules! stage {
+    ($h:literal, $order:literal, $fc:literal) => {{
+        const D: [f64; $h] = design_half::<$h>($order, $fc);
+        const F: [f32; $h] = to_f32(D);
+        const Q: [i32; $h] = to_q15(D);
+        Stage {
+            order: $order,
+            fc_norm: $fc,
+            half: &F,
+            half_q15: &Q,
+        }
+    }};
+}
+
+macro_rules! designs {
+    ($( $name:ident, $order:literal, $bw:literal, $rate:literal, $stride:literal, [$h:literal, $sorder:literal, $fc:literal]; )*) => {
+        $(
+            #[doc = concat!("Order ", stringify!($order), ", ", stringify!($bw), " Hz at ", stringify!($rate), " Hz.")]
+            pub static $name: FirDesign = FirDesign {
+                order: $order,
+                bandwidth_hz: $bw,
+                rate_hz: $rate,
+                stage: stage!($h, $sorder, $fc),
+                stride: $stride,
+            };
+        )*
+    };
+}
+
+/// The pre-filter P of the two-stage designs: order 16, cutoff 0.05·f_s.
+pub static PRE: Stage = stage!(9, 16, 0.05);
+
+designs! {
+    FIR_16HZ_2K, 192, 16.0, 2000, 4, [23, 44, 0.04248138727458818];
+    FIR_33HZ_2K, 96, 33.0, 2000, 2, [21, 40, 0.04550790936390805];
+    FIR_66HZ_2K, 48, 66.0, 2000, 1, [25, 48, 0.042826545562041594];
+    FIR_131HZ_2K, 24, 131.0, 2000, 1, [13, 24, 0.08459574257503238];
+    FIR_262HZ_2K, 12, 262.0, 2000, 1, [7, 12, 0.1671063788343958];
+    FIR_66HZ_4K, 96, 66.0, 4000, 2, [21, 40, 0.04550790936390805];
+    FIR_131HZ_4K, 48, 131.0, 4000, 1, [25, 48, 0.042548959277471196];
+    FIR_262HZ_4K, 24, 262.0, 4000, 1, [13, 24, 0.08459574257503238];
+}
+
+/// Every design, for tests and documentation.
+pub static DESIGNS: [&FirDesign; 8] = [
+    &FIR_16HZ_2K,
+    &FIR_33HZ_2K,
+    &FIR_66HZ_2K,
+    &FIR_131HZ_2K,
+    &FIR_262HZ_2K,
+    &FIR_66HZ_4K,
+    &FIR_131HZ_4K,
+    &FIR_262HZ_4K,
+];
+
+/// The design of LPF_Bandwidth `code` (Table 5.24) at `internal_rate_hz`;
+/// `None` = filter off (0xFF, or a code the rate has no design for).
+pub fn design(code: u8, internal_rate_hz: u32) -> Option<&'static FirDesign> {
+    match (internal_rate_hz, code) {
+        (4000, 2) => Some(&FIR_66HZ_4K),
+        (4000, 3) => Some(&FIR_131HZ_4K),
+        (4000, 4) => Some(&FIR_262HZ_4K),
+        (4000, _) => None,
+        (_, 0) => Some(&FIR_16HZ_2K),
+        (_, 1) => Some(&FIR_33HZ_2K),
+        (_, 2) => Some(&FIR_66HZ_2K),
+        (_, 3) => Some(&FIR_131HZ_2K),
+        (_, 4) => Some(&FIR_262HZ_2K),
+        _ => None,
+    }
+}
+
+/// One symmetric stage over a channel-interleaved window `w` (oldest first,
+/// `order·stride + 1` rows), float.
+#[inline(always)]
+fn run_f32(w: &[[f32; CHANNELS]], st: &Stage, stride: usize) -> [f32; CHANNELS] {
+    let n = st.order;
+    let (lo, rest) = w.split_at(n / 2 * stride);
+    let (mid, hi) = rest.split_first().expect("window");
+    let (centre, coefs) = st.half.split_last().expect("taps");
+    let mut acc = [0.0f32; CHANNELS];
+    for c in 0..CHANNELS {
+        acc[c] = centre * mid[c];
+    }
+    if stride == 1 {
+        for ((a, b), h) in lo.iter().zip(hi.iter().rev()).zip(coefs.iter()) {
+            for c in 0..CHANNELS {
+                acc[c] += h * (a[c] + b[c]);
+            }
+        }
+    } else {
+        // Rows 0, L, 2L… and N·L, (N−1)·L…: the first row of each L-chunk of
+        // `lo`, the last row of each L-chunk of `hi` counted from its end.
+        let pairs = lo.chunks_exact(stride).zip(hi.rchunks_exact(stride));
+        for ((a, b), h) in pairs.zip(coefs.iter()) {
+            let (a, b) = (&a[0], &b[stride - 1]);
+            for c in 0..CHANNELS {
+                acc[c] += h * (a[c] + b[c]);
+            }
+        }
+    }
+    acc
+}
+
+/// One symmetric stage, fixed point (module doc), rounded to nearest.
+#[inline(always)]
+fn run_i32(w: &[[i32; CHANNELS]], st: &Stage, stride: usize) -> [i32; CHANNELS] {
+    let n = st.order;
+    let (lo, rest) = w.split_at(n / 2 * stride);
+    let (mid, hi) = rest.split_first().expect("window");
+    let (centre, coefs) = st.half_q15.split_last().expect("taps");
+    let mut acc_hi = [0i32; CHANNELS];
+    let mut acc_lo = [1i32 << 14; CHANNELS];
+    for c in 0..CHANNELS {
+        let s = mid[c];
+        acc_hi[c] += centre * (s >> 15);
+        acc_lo[c] += centre * (s & 0x7FFF);
+    }
+    let mut pair = |a: &[i32; CHANNELS], b: &[i32; CHANNELS], h: i32| {
+        for c in 0..CHANNELS {
+            let s = a[c] + b[c];
+            acc_hi[c] += h * (s >> 15);
+            acc_lo[c] += h * (s & 0x7FFF);
+        }
+    };
+    if stride == 1 {
+        for ((a, b), &h) in lo.iter().zip(hi.iter().rev()).zip(coefs.iter()) {
+            pair(a, b, h);
+        }
+    } else {
+        let pairs = lo.chunks_exact(stride).zip(hi.rchunks_exact(stride));
+        for ((a, b), &h) in pairs.zip(coefs.iter()) {
+            pair(&a[0], &b[stride - 1], h);
+        }
+    }
+    let mut y = [0i32; CHANNELS];
+    for c in 0..CHANNELS {
+        y[c] = acc_hi[c] + (acc_lo[c] >> 15);
+    }
+    y
+}
+
+macro_rules! bank {
+    ($name:ident, $t:ty, $run:ident, $doc:literal) => {
+        #[doc = $doc]
+        #[derive(Debug, Clone)]
+        pub struct $name {
+            raw: [[$t; CHANNELS]; 2 * RING],
+            raw_pos: usize,
+            mid: [[$t; CHANNELS]; 2 * MID_RING],
+            mid_pos: usize,
+            design: Option<&'static FirDesign>,
+        }
+
+        impl $name {
+            /// A bank whose history is all `x` (the steady state of input `x`).
+            pub fn new(design: Option<&'static FirDesign>, x: &[$t; CHANNELS]) -> Self {
+                $name {
+                    raw: [*x; 2 * RING],
+                    raw_pos: 0,
+                    mid: [*x; 2 * MID_RING],
+                    mid_pos: 0,
+                    design,
+                }
+            }
+
+            /// Switches to `design`, keeping the histories.
+            pub fn set_design(&mut self, design: Option<&'static FirDesign>) {
+                self.design = design;
+            }
+
+            /// The current design (`None` = off).
+            pub fn design(&self) -> Option<&'static FirDesign> {
+                self.design
+            }
+
+            /// Fills the histories with `x`.
+            pub fn fill(&mut self, x: &[$t; CHANNELS]) {
+                self.raw = [*x; 2 * RING];
+                self.mid = [*x; 2 * MID_RING];
+            }
+
+            /// Pushes one sample per channel and returns the filtered output.
+            #[inline]
+            pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
+                let p = self.raw_pos;
+                self.raw[p] = *x;
+                self.raw[p + RING] = *x;
+                self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
+                let end = p + RING;
+                // The pre-filter runs on every tick.
+                let m = $run(&self.raw[end - PRE.order..=end], &PRE, 1);
+                let q = self.mid_pos;
+                self.mid[q] = m;
+                self.mid[q + MID_RING] = m;
+                self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
+                match self.design {
+                    None => *x,
+                    Some(d) if d.stride == 1 => $run(&self.raw[end - d.order..=end], &d.stage, 1),
+                    Some(d) => {
+                        let e = q + MID_RING;
+                        let span = d.stage.order * d.stride;
+                        $run(&self.mid[e - span..=e], &d.stage, d.stride)
+                    }
+                }
+            }
+        }
+    };
+}
+
+bank!(
+    FirBank,
+    f32,
+    run_f32,
+    "The float FIR over [`CHANNELS`] channels."
+);
+bank!(
+    FirBankFixed,
+    i32,
+    run_i32,
+    "The fixed-point FIR over [`CHANNELS`] channels (module doc); samples |x| < 2²⁹."
+);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn const_sine_is_accurate() {
+        for i in -100..100 {
+            let x = i as f64 * 0.37;
+            let (s, c) = sin_cos(x);
+            assert!((s - libm::sin(x)).abs() < 1e-12, "{x}");
+            assert!((c - libm::cos(x)).abs() < 1e-12, "{x}");
+        }
+    }
+
+    #[test]
+    fn q15_taps_sum_to_one_exactly_and_stages_compose_to_order_n() {
+        for st in DESIGNS.iter().map(|d| &d.stage).chain([&PRE]) {
+            let n = st.half_q15.len();
+            let sum: i32 = st.half_q15[..n - 1].iter().sum::<i32>() * 2 + st.half_q15[n - 1];
+            assert_eq!(sum, 32768);
+            let fsum: f32 = st.half[..n - 1].iter().sum::<f32>() * 2.0 + st.half[n - 1];
+            assert!((fsum - 1.0).abs() < 1e-6);
+            assert_eq!(n, st.order / 2 + 1);
+            assert!(
+                st.l1() < 1.1,
+                "L1 {}: the fixed-point accumulators rely on it",
+                st.l1()
+            );
+        }
+        for d in DESIGNS {
+            let span = if d.stride == 1 {
+                d.stage.order
+            } else {
+                PRE.order + d.stride * d.stage.order
+            };
+            assert_eq!(span, d.order);
+            assert!(d.stride == 1 || d.stage.order * d.stride < MID_RING);
+            assert!(d.stride > 1 || d.order < RING);
+            let sum: f32 = (0..=d.order).map(|n| d.tap(n)).sum();
+            assert!((sum - 1.0).abs() < 1e-5);
+            for n in 0..=d.order {
+                let (a, b) = (d.tap(n), d.tap(d.order - n));
+                assert!(
+                    (a - b).abs() < 1e-7,
+                    "symmetric: order {} n {n}: {a} {b}",
+                    d.order
+                );
+            }
+        }
+    }
+}
