@@ -16,6 +16,7 @@ use core::fmt::Write as _;
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
+use crate::chain::{ChainConfig, SignalChain};
 use crate::kernel::command::Command;
 use crate::kernel::fields::{self, Field, OutputCtx};
 use crate::kernel::formats::{self, UDD};
@@ -23,7 +24,6 @@ use crate::kernel::frame::{self, Decoder, TYPE_COMMAND, TYPE_DATA};
 use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
 use crate::kernel::{rate, udd};
 use crate::model::{Capability, Product};
-use crate::sensor::Sample;
 use crate::store::ParamStore;
 use crate::time::Instant;
 
@@ -143,6 +143,8 @@ pub struct Device<F: NorFlash> {
     last_trigger: Option<Instant>,
     last_pps: Option<Instant>,
     pps_since_frame: bool,
+    /// What the device measures and computes (ICD 5.3.6, 5.6–5.8, App. B/C).
+    chain: SignalChain,
 }
 
 impl<F: NorFlash> core::fmt::Debug for Device<F> {
@@ -197,6 +199,7 @@ impl<F: NorFlash> Device<F> {
             last_trigger: None,
             last_pps: None,
             pps_since_frame: false,
+            chain: SignalChain::new(cfg.product, cfg.seed),
         };
         dev.boot(now);
         dev
@@ -225,6 +228,7 @@ impl<F: NorFlash> Device<F> {
         self.last_trigger = None;
         self.last_pps = None;
         self.pps_since_frame = false;
+        self.chain = SignalChain::new(self.cfg.product, self.cfg.seed);
         self.boot(now);
     }
 
@@ -238,6 +242,8 @@ impl<F: NorFlash> Device<F> {
         }
         self.saved = block;
         self.ram = block;
+        self.chain
+            .configure(&ChainConfig::from_block(&self.ram, &product));
         self.line_rate = params::baud_rate(params::BAUD_RATE.read_int(&self.ram) as u8);
         let _ = self.events.push_back(Event::LineRate(self.line_rate));
         let active = if product.model.boot_active_low {
@@ -292,12 +298,16 @@ impl<F: NorFlash> Device<F> {
             self.last_rx = now;
             self.on_rx(&[], now);
         }
+        self.chain.tick(now);
         let triggered = self.triggered();
         let Some(s) = self.stream.as_mut() else {
             return;
         };
         if s.align_left > 0 {
             s.align_left -= 1;
+            if s.align_left == 0 {
+                self.chain.end_alignment();
+            }
             return;
         }
         s.ticks += 1;
@@ -496,7 +506,8 @@ impl<F: NorFlash> Device<F> {
                 self.send(crate::kernel::command::GET_DEV_INFO, &info);
             }
             Command::GetBit => {
-                self.send(crate::kernel::command::GET_BIT, &[0; 4]);
+                let bit = self.chain.status().bit;
+                self.send(crate::kernel::command::GET_BIT, &bit);
             }
             Command::UddConfig => self.udd_pending = true,
             Command::UddConfigMessage(list) => self.udd_config(list, checksum),
@@ -647,25 +658,39 @@ impl<F: NorFlash> Device<F> {
         };
         let align_s = u64::from(params::INITIAL_ALIGNMENT_TIME.read_int(&self.ram));
         let internal = u64::from(self.cfg.product.model.internal_rate_hz);
+        let product = self.cfg.product;
+        self.chain
+            .configure(&ChainConfig::from_block(&self.ram, &product));
+        let align_left = if orientation { align_s * internal } else { 0 };
+        if orientation {
+            if align_left > 0 {
+                self.chain.begin_alignment();
+            } else {
+                self.chain.skip_alignment();
+            }
+        }
         self.stream = Some(Stream {
             code,
             divisor: self.divisor_for(code),
             ticks: 0,
-            align_left: if orientation { align_s * internal } else { 0 },
+            align_left,
         });
     }
 
-    fn sample(&self) -> Sample {
-        let mut s = Sample::STATIC_LEVEL;
-        if !self.cfg.product.model.has(Capability::AuxAccel) {
-            s.aux_acc = [0.0; 3];
-            s.aux_acc_filtered = [0.0; 3];
-        }
-        s
+    /// The signal chain: motion source, error model and fault injection
+    /// for boards, tests and scripted runs.
+    pub fn chain_mut(&mut self) -> &mut SignalChain {
+        &mut self.chain
+    }
+
+    /// The signal chain (read-only).
+    pub fn chain(&self) -> &SignalChain {
+        &self.chain
     }
 
     fn emit(&mut self, code: u8, now: Instant) {
-        let sample = self.sample();
+        let sample = self.chain.output();
+        let status = self.chain.status();
         let product = self.cfg.product;
         let since_ref = now.since(self.last_pps.unwrap_or(self.powered_at));
         let mut time_flags = 0;
@@ -679,8 +704,8 @@ impl<F: NorFlash> Device<F> {
             sample: &sample,
             product: &product,
             counter: (self.ticks * 2000 / u64::from(product.model.internal_rate_hz)) as u16,
-            usw: 0,
-            usw_ext: 0x0001,
+            usw: status.usw,
+            usw_ext: status.usw_ext,
             time_flags,
             second_fraction_ns: (since_ref % 1_000_000_000) as u32,
             imu_time_ns: now.since(self.powered_at),
