@@ -395,3 +395,40 @@ fn boot_high_at_power_on_silences_the_device_until_the_next_power_cycle() {
     c.send(&command(0x1A));
     assert_eq!(c.frame().id(), 0x1A);
 }
+
+#[test]
+fn injected_faults_and_motion_reach_usw_and_getbit_on_the_wire() {
+    let (_emu, mut c, mut ctl) = with_control(&["--model", "KERNEL-110-G450-A40"]);
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    let usw_now = |c: &mut Conn| {
+        c.drain_for(Duration::from_millis(60));
+        u16_at(c.frame_with_id(0x8F).payload(), 26)
+    };
+    assert_eq!(usw_now(&mut c), 0);
+    assert_eq!(ctl.cmd("fault comm on"), "ok");
+    assert_eq!(usw_now(&mut c), 1 << 1);
+    assert_eq!(ctl.cmd("fault comm off"), "ok");
+    assert_eq!(ctl.cmd("fault temperature 100"), "ok");
+    let f = {
+        c.drain_for(Duration::from_millis(60));
+        c.frame_with_id(0x8F)
+    };
+    assert_eq!(u16_at(f.payload(), 26), 1 << 14);
+    assert_eq!(&f.payload()[30..32], &1000i16.to_le_bytes());
+    assert_eq!(ctl.cmd("fault temperature off"), "ok");
+    // 600 deg/s about Z on a 450 deg/s gyro: Z out of range.
+    assert_eq!(ctl.cmd("motion rotate 0 0 600"), "ok");
+    assert_eq!(usw_now(&mut c), 1 << 12);
+    assert_eq!(ctl.cmd("motion static"), "ok");
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(usw_now(&mut c), 0);
+    // GetBIT reflects a gyro BIT failure.
+    c.send(&command(0xFE));
+    c.drain_for(Duration::from_millis(100));
+    assert_eq!(ctl.cmd("fault gyro-bit on"), "ok");
+    c.send(&command(0x1A));
+    let bit = c.frame_with_id(0x1A);
+    assert_ne!(bit.payload()[0] & 0b1_1100, 0);
+    assert_eq!(ctl.cmd("fault warp on"), "error unknown fault: warp");
+}

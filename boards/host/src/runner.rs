@@ -189,6 +189,8 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 match cmd {
                     control::Command::Edge(pin, level) => dev.on_pin(pin, level, t),
                     control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, t),
+                    control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+                    control::Command::Motion(m) => dev.chain_mut().set_motion(m),
                 }
                 Ok(())
             })?;
