@@ -108,6 +108,12 @@ impl Conn {
     /// Connects to the emulator's TCP port.
     pub fn tcp(addr: SocketAddr) -> Conn {
         let s = TcpStream::connect_timeout(&addr, TIMEOUT).expect("connect");
+        Conn::from_tcp(s)
+    }
+
+    /// A client over an already connected TCP stream (e.g. QEMU's serial
+    /// port, tests/conformance).
+    pub fn from_tcp(s: TcpStream) -> Conn {
         s.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
         s.set_write_timeout(Some(TIMEOUT)).unwrap();
         s.set_nodelay(true).unwrap();

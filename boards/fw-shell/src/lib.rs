@@ -1,0 +1,445 @@
+//! # fw-shell — what every MCU board does the same way
+//!
+//! The emulator core ([`imu_emu::device::Device`]) is sans-IO. This crate is
+//! the firmware half every board shares, generic over a few small traits the
+//! board implements:
+//!
+//! | trait | the board provides |
+//! |---|---|
+//! | [`Clock`] | a free-running monotonic timestamp in ns |
+//! | [`Uart`] | non-blocking RX drain, TX room/write, TX-idle query, baud set |
+//! | [`TovPin`] | the TOV output pin |
+//! | [`EdgeSource`] | 1PPS/EXTRIG edges timestamped in the board's ISR or capture unit |
+//! | `NorFlash` | the flash the parameter store lives in (2 sectors at offset 0) |
+//!
+//! The board calls [`Shell::service`] from its tick interrupt (the highest
+//! priority, 2 kHz; 4 kHz on the K201, [`Shell::tick_hz`]). One call:
+//!
+//! 1. runs every tick that is due on the absolute schedule
+//!    `deadline_k = epoch + k × period` (a late interrupt catches up, capped
+//!    at [`MAX_CATCH_UP`] per call), each with its own deadline as `now`;
+//!    before each tick it delivers the pin edges stamped at or before that
+//!    deadline and moves the bytes the line carried by then;
+//! 2. feeds the bytes the UART received into `on_rx`;
+//! 3. drains `poll_tx` into the UART at the line rate ([`pacer`]): bytes
+//!    allowed = elapsed × `line_rate()/10` with a fractional accumulator,
+//!    never more than the UART's room, never blocking;
+//! 4. acts on events: `LineRate` → the UART switches once everything before
+//!    it has left the wire ([`Uart::tx_idle`]); `Tov` → the pin edge is
+//!    applied at its time (at the first service at or after it).
+//!
+//! The device is owned by the tick alone: interrupts that receive bytes or
+//! stamp edges only push into lock-free SPSC queues that the tick drains, so
+//! nothing the tick needs is ever locked by a lower priority.
+#![no_std]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod pacer;
+
+use embedded_storage::nor_flash::NorFlash;
+use heapless::Deque;
+pub use imu_emu;
+use imu_emu::device::{Device, Event, Level, Pin, PowerOn};
+use imu_emu::time::Instant;
+
+use crate::pacer::Pacer;
+
+/// Most ticks one [`Shell::service`] call runs (catching up after a stall,
+/// e.g. a flash erase); the rest run on the next calls.
+pub const MAX_CATCH_UP: u32 = 16;
+/// A tick whose deadline is at most this fraction of a period in the future
+/// is run now: interrupts derived from the same clock may fire a few ns
+/// early.
+pub const EARLY_SLACK_DIV: u64 = 8;
+/// Bytes moved per UART read/write chunk.
+const CHUNK: usize = 128;
+
+/// A free-running monotonic clock.
+pub trait Clock {
+    /// Now, in ns since an arbitrary epoch (the shell takes its own epoch at
+    /// power-on). Must never go back; called from the tick only.
+    fn now(&mut self) -> Instant;
+}
+
+/// The UART carrying the KERNEL protocol. Every method is non-blocking.
+pub trait Uart {
+    /// Moves received bytes into `buf`; how many.
+    fn read(&mut self, buf: &mut [u8]) -> usize;
+    /// Bytes [`Uart::write`] accepts now (FIFO space, free DMA buffer…).
+    fn tx_room(&mut self) -> usize;
+    /// Queues `bytes` for transmission; `bytes.len() <= tx_room()`.
+    fn write(&mut self, bytes: &[u8]);
+    /// Whether everything written so far has left the wire (shift register
+    /// empty), so the baud rate can change without corrupting a byte.
+    fn tx_idle(&mut self) -> bool;
+    /// Sets the line rate in bit/s (called only while [`Uart::tx_idle`]).
+    fn set_baud(&mut self, bps: u32);
+}
+
+/// The TOV output (ICD 4.1.4).
+pub trait TovPin {
+    /// Drives the pin.
+    fn set(&mut self, level: Level);
+}
+
+/// A board without a TOV pin.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoTov;
+impl TovPin for NoTov {
+    fn set(&mut self, _level: Level) {}
+}
+
+/// An input edge on 1PPS or EXTRIG, stamped by the board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Edge {
+    /// Which pin.
+    pub pin: Pin,
+    /// The level after the edge.
+    pub level: Level,
+    /// When, on the [`Clock`]'s time base.
+    pub at: Instant,
+}
+
+/// Where the shell takes pin edges from (in time order).
+pub trait EdgeSource {
+    /// The oldest edge not taken yet.
+    fn pop(&mut self) -> Option<Edge>;
+}
+
+/// The consumer end of an SPSC queue filled by the board's pin ISR.
+impl EdgeSource for heapless::spsc::Consumer<'_, Edge> {
+    fn pop(&mut self) -> Option<Edge> {
+        self.dequeue()
+    }
+}
+
+/// A board without pin inputs.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoEdges;
+impl EdgeSource for NoEdges {
+    fn pop(&mut self) -> Option<Edge> {
+        None
+    }
+}
+
+/// The BOOT input sampled at reset, as [`PowerOn::boot`] wants it:
+/// `None` when the board cannot tell (floating or not wired).
+pub fn boot_level(high: Option<bool>) -> Option<Level> {
+    high.map(|h| if h { Level::High } else { Level::Low })
+}
+
+/// Timing figures of the tick service, in ns of the board's clock.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Stats {
+    /// Ticks run since the last reset.
+    pub ticks: u64,
+    /// [`Shell::service`] calls since the last reset.
+    pub services: u64,
+    /// Longest `Device::on_tick` call.
+    pub max_on_tick_ns: u64,
+    /// Longest tick: the edges due, the TX pump up to its deadline and
+    /// `on_tick` (in a catch-up batch, each tick counts alone).
+    pub max_tick_ns: u64,
+    /// Longest whole [`Shell::service`] call that ran one tick (or none)
+    /// and no `on_rx` with bytes: the steady-state cost of the tick
+    /// interrupt (tick, RX drain, TX pump, events).
+    pub max_service_ns: u64,
+    /// Longest [`Shell::service`] call that caught up several ticks.
+    pub max_batch_service_ns: u64,
+    /// Longest [`Shell::service`] call including received commands (a
+    /// SaveFlash writes flash here).
+    pub max_service_rx_ns: u64,
+    /// Most ticks one call had to run (1 = never late).
+    pub max_batch: u32,
+    /// Bytes handed to the UART.
+    pub tx_bytes: u64,
+    /// Bytes received.
+    pub rx_bytes: u64,
+}
+
+/// The firmware shell: a device and the board's peripherals.
+///
+/// The device is borrowed, not owned: it is ~6 KiB, and a board builds it
+/// straight into a static of its own (`MaybeUninit::write` in a function of
+/// its own) so power-on does not need several copies of it on the stack.
+pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
+    dev: &'d mut Device<F>,
+    uart: U,
+    clock: C,
+    tov: T,
+    edges: E,
+    /// Next edge taken from `edges`, waiting for its tick.
+    lookahead: Option<Edge>,
+    /// Clock reading at power-on: the device's `Instant::ZERO`.
+    epoch: u64,
+    period_ns: u64,
+    /// Ticks run since power-on; the next deadline is `(ticks+1) × period`.
+    ticks: u64,
+    pacer: Pacer,
+    /// A line-rate switch waiting for the UART to go idle.
+    pending_baud: Option<u32>,
+    /// TOV edges waiting for their time.
+    tov_queue: Deque<(Level, Instant), 8>,
+    stats: Stats,
+}
+
+/// Powers a device on at `Instant::ZERO` (parameters from `flash`, BOOT
+/// from `cfg`): what a board writes into the device's static right before
+/// [`Shell::new`].
+pub fn power_on<F: NorFlash>(cfg: PowerOn, flash: F) -> Device<F> {
+    Device::power_on_with(cfg, flash, Instant::ZERO)
+}
+
+impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, U, C, T, E> {
+    /// Takes a device just powered on ([`power_on`]; its `Instant::ZERO` is
+    /// now) and the board's peripherals. The UART is set to the device's
+    /// line rate at once.
+    pub fn new(dev: &'d mut Device<F>, uart: U, mut clock: C, tov: T, edges: E) -> Self {
+        let epoch = clock.now().as_nanos();
+        let period_ns = dev.tick_period_ns().max(1);
+        let rate = dev.line_rate();
+        let mut shell = Shell {
+            dev,
+            uart,
+            clock,
+            tov,
+            edges,
+            lookahead: None,
+            epoch,
+            period_ns,
+            ticks: 0,
+            pacer: Pacer::new(rate, 0),
+            pending_baud: None,
+            tov_queue: Deque::new(),
+            stats: Stats::default(),
+        };
+        shell.tov.set(Level::Low);
+        shell.uart.set_baud(rate);
+        shell.handle_events(0);
+        shell
+    }
+
+    /// Power cycle (e.g. a board reset request): RAM reloads from flash,
+    /// queues empty, the schedule restarts. Never inlined: rebuilding the
+    /// device's state takes a deep stack frame the tick interrupt must not
+    /// reserve on every tick.
+    #[inline(never)]
+    #[cold]
+    pub fn power_cycle(&mut self, boot: Option<Level>) {
+        self.epoch = self.clock.now().as_nanos();
+        self.dev.power_cycle_with(boot, Instant::ZERO);
+        self.ticks = 0;
+        self.lookahead = None;
+        while self.edges.pop().is_some() {}
+        self.tov_queue.clear();
+        self.tov.set(Level::Low);
+        self.pending_baud = None;
+        self.period_ns = self.dev.tick_period_ns().max(1);
+        self.pacer = Pacer::new(self.dev.line_rate(), 0);
+        self.handle_events(0);
+    }
+
+    /// Rate at which [`Shell::service`] should be called, Hz (the internal
+    /// rate: 2000, 4000 on the K201). Calling it faster is harmless.
+    pub fn tick_hz(&self) -> u32 {
+        (1_000_000_000 / self.period_ns) as u32
+    }
+
+    /// Tick period, ns.
+    pub fn tick_period_ns(&self) -> u64 {
+        self.period_ns
+    }
+
+    /// The device.
+    pub fn device(&self) -> &Device<F> {
+        self.dev
+    }
+
+    /// The device, mutably.
+    pub fn device_mut(&mut self) -> &mut Device<F> {
+        self.dev
+    }
+
+    /// The UART.
+    pub fn uart_mut(&mut self) -> &mut U {
+        &mut self.uart
+    }
+
+    /// The clock.
+    pub fn clock_mut(&mut self) -> &mut C {
+        &mut self.clock
+    }
+
+    /// Timing figures so far.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Forgets the timing figures.
+    pub fn reset_stats(&mut self) {
+        self.stats = Stats::default();
+    }
+
+    /// Device time now (ns since power-on).
+    pub fn now(&mut self) -> u64 {
+        self.clock.now().as_nanos().saturating_sub(self.epoch)
+    }
+
+    fn next_deadline(&self) -> u64 {
+        (self.ticks + 1).saturating_mul(self.period_ns)
+    }
+
+    /// The tick service: call from the tick interrupt (see the crate docs).
+    /// Never blocks.
+    pub fn service(&mut self) {
+        self.service_with(|_| {});
+    }
+
+    /// [`Shell::service`] with a hook run right after the received bytes
+    /// were executed and before any reply is handed to the UART (e.g. to
+    /// persist the flash image, so a client that saw a SaveFlash
+    /// acknowledgement can cut the power at once).
+    pub fn service_with(&mut self, after_rx: impl FnOnce(&mut Device<F>)) {
+        let t0 = self.now();
+        let slack = self.period_ns / EARLY_SLACK_DIV;
+        let mut batch = 0;
+        while batch < MAX_CATCH_UP && self.next_deadline() <= t0 + slack {
+            let deadline = self.next_deadline();
+            let start = if batch == 0 { t0 } else { self.now() };
+            self.deliver_edges(deadline);
+            self.pump_tx(deadline);
+            let a = self.now();
+            self.dev.on_tick(Instant::from_nanos(deadline));
+            let b = self.now();
+            self.stats.max_on_tick_ns = self.stats.max_on_tick_ns.max(b - a);
+            self.stats.max_tick_ns = self.stats.max_tick_ns.max(b.saturating_sub(start));
+            self.ticks += 1;
+            batch += 1;
+        }
+        self.stats.ticks += u64::from(batch);
+        self.stats.max_batch = self.stats.max_batch.max(batch);
+
+        let now = self.now().max(t0);
+        let mut rx = 0;
+        let mut buf = [0u8; CHUNK];
+        loop {
+            let n = self.uart.read(&mut buf);
+            if n == 0 {
+                break;
+            }
+            rx += n;
+            self.dev.on_rx(&buf[..n], Instant::from_nanos(now));
+        }
+        self.stats.rx_bytes += rx as u64;
+        after_rx(self.dev);
+        self.deliver_edges(now);
+        self.pump_tx(now);
+        self.apply_tov(now);
+
+        let t1 = self.now();
+        self.stats.services += 1;
+        let took = t1.saturating_sub(t0);
+        let slot = if rx > 0 {
+            &mut self.stats.max_service_rx_ns
+        } else if batch > 1 {
+            &mut self.stats.max_batch_service_ns
+        } else {
+            &mut self.stats.max_service_ns
+        };
+        *slot = (*slot).max(took);
+    }
+
+    /// Delivers the edges stamped at or before `until` (device time).
+    fn deliver_edges(&mut self, until: u64) {
+        loop {
+            let edge = match self.lookahead.take().or_else(|| self.edges.pop()) {
+                Some(e) => e,
+                None => return,
+            };
+            let at = edge.at.as_nanos().saturating_sub(self.epoch);
+            if at > until {
+                self.lookahead = Some(edge);
+                return;
+            }
+            self.dev
+                .on_pin(edge.pin, edge.level, Instant::from_nanos(at));
+            self.handle_events(at);
+        }
+    }
+
+    /// Moves the bytes the line can carry by `at` from the device to the
+    /// UART, then acts on events.
+    fn pump_tx(&mut self, at: u64) {
+        self.pacer.advance(at);
+        let mut buf = [0u8; CHUNK];
+        loop {
+            if let Some(rate) = self.pending_baud {
+                if !self.uart.tx_idle() {
+                    break;
+                }
+                self.uart.set_baud(rate);
+                self.pacer.set_rate(rate, at);
+                self.pending_baud = None;
+            }
+            let room = self
+                .pacer
+                .available()
+                .min(self.uart.tx_room())
+                .min(buf.len());
+            if room == 0 {
+                break;
+            }
+            let n = self.dev.poll_tx(&mut buf[..room]);
+            if n > 0 {
+                self.uart.write(&buf[..n]);
+                self.pacer.consume(n);
+                self.stats.tx_bytes += n as u64;
+            }
+            let switched = self.handle_events(at);
+            if n == 0 && !switched {
+                break;
+            }
+        }
+        self.handle_events(at);
+    }
+
+    /// Acts on device events; whether a line-rate switch came.
+    fn handle_events(&mut self, at: u64) -> bool {
+        let mut switched = false;
+        while let Some(ev) = self.dev.poll_event() {
+            match ev {
+                Event::LineRate(bps) => {
+                    if bps != self.pacer.rate() || self.pending_baud.is_some() {
+                        self.pending_baud = Some(bps);
+                    }
+                    switched = true;
+                }
+                Event::Tov { level, at: when } => {
+                    if self.tov_queue.is_full() {
+                        // Too many frames in flight to keep every edge:
+                        // drop the oldest pair's edge.
+                        self.tov_queue.pop_front();
+                    }
+                    let _ = self.tov_queue.push_back((level, when));
+                }
+            }
+        }
+        self.apply_tov(at);
+        switched
+    }
+
+    /// Drives the TOV edges whose time has come.
+    fn apply_tov(&mut self, now: u64) {
+        while let Some(&(level, when)) = self.tov_queue.front() {
+            if when.as_nanos() > now {
+                break;
+            }
+            self.tov.set(level);
+            self.tov_queue.pop_front();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,286 @@
+//! Host tests of the shell with fake peripherals.
+
+extern crate std;
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::vec::Vec;
+
+use imu_emu::device::{Level, Pin, PowerOn};
+use imu_emu::model::Product;
+use imu_emu::nor::RamNor;
+use imu_emu::time::Instant;
+
+use super::*;
+
+/// What the fake board saw; shared between the test and the fakes.
+#[derive(Default)]
+struct Board {
+    now: u64,
+    rx: Vec<u8>,
+    /// (time, byte) of every byte written.
+    tx: Vec<(u64, u8)>,
+    /// UART FIFO size; the fake FIFO empties between service calls.
+    room: usize,
+    fifo: usize,
+    idle: bool,
+    bauds: Vec<(u64, u32)>,
+    tov: Vec<(u64, Level)>,
+    edges: Vec<Edge>,
+}
+
+type Shared = Rc<RefCell<Board>>;
+
+struct FakeUart(Shared);
+impl Uart for FakeUart {
+    fn read(&mut self, buf: &mut [u8]) -> usize {
+        let mut b = self.0.borrow_mut();
+        let n = b.rx.len().min(buf.len());
+        buf[..n].copy_from_slice(&b.rx[..n]);
+        b.rx.drain(..n);
+        n
+    }
+    fn tx_room(&mut self) -> usize {
+        let b = self.0.borrow();
+        b.room - b.fifo
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        let mut b = self.0.borrow_mut();
+        assert!(bytes.len() <= b.room - b.fifo);
+        b.fifo += bytes.len();
+        let now = b.now;
+        b.tx.extend(bytes.iter().map(|&x| (now, x)));
+    }
+    fn tx_idle(&mut self) -> bool {
+        self.0.borrow().idle
+    }
+    fn set_baud(&mut self, bps: u32) {
+        let mut b = self.0.borrow_mut();
+        let now = b.now;
+        b.bauds.push((now, bps));
+    }
+}
+
+struct FakeClock(Shared);
+impl Clock for FakeClock {
+    fn now(&mut self) -> Instant {
+        Instant::from_nanos(self.0.borrow().now)
+    }
+}
+
+struct FakeTov(Shared);
+impl TovPin for FakeTov {
+    fn set(&mut self, level: Level) {
+        let mut b = self.0.borrow_mut();
+        let now = b.now;
+        b.tov.push((now, level));
+    }
+}
+
+struct FakeEdges(Shared);
+impl EdgeSource for FakeEdges {
+    fn pop(&mut self) -> Option<Edge> {
+        let mut b = self.0.borrow_mut();
+        if b.edges.is_empty() {
+            None
+        } else {
+            Some(b.edges.remove(0))
+        }
+    }
+}
+
+type TestShell = Shell<'static, RamNor<8192>, FakeUart, FakeClock, FakeTov, FakeEdges>;
+
+/// A K110 powered on at board time 1 ms (so the epoch is not 0).
+fn shell() -> (TestShell, Shared) {
+    let b: Shared = Rc::new(RefCell::new(Board {
+        now: 1_000_000,
+        room: 64,
+        idle: true,
+        ..Board::default()
+    }));
+    let cfg = PowerOn {
+        product: Product::parse("K110").unwrap(),
+        boot: None,
+        seed: 1,
+    };
+    let dev = std::boxed::Box::leak(std::boxed::Box::new(power_on(cfg, RamNor::new())));
+    let s = Shell::new(
+        dev,
+        FakeUart(b.clone()),
+        FakeClock(b.clone()),
+        FakeTov(b.clone()),
+        FakeEdges(b.clone()),
+    );
+    (s, b)
+}
+
+fn frame(payload: &[u8]) -> Vec<u8> {
+    let len = (payload.len() + 6) as u16;
+    let mut f = std::vec![0xAA, 0x55, 0, 0];
+    f.extend_from_slice(&len.to_le_bytes());
+    f.extend_from_slice(payload);
+    let s = f[2..]
+        .iter()
+        .fold(0u16, |s, &x| s.wrapping_add(u16::from(x)));
+    f.extend_from_slice(&s.to_le_bytes());
+    f
+}
+
+fn save_flash(id: u16, value: &[u8]) -> Vec<u8> {
+    let mut p = std::vec![0xB2, 0xFF];
+    p.extend_from_slice(&id.to_le_bytes());
+    p.extend_from_slice(&(value.len() as u16).to_le_bytes());
+    p.extend_from_slice(value);
+    frame(&p)
+}
+
+/// Services every `step` ns until board time `until`.
+fn run(s: &mut TestShell, b: &Shared, until: u64, step: u64) {
+    loop {
+        let now = b.borrow().now;
+        if now >= until {
+            break;
+        }
+        b.borrow_mut().now = (now + step).min(until);
+        b.borrow_mut().fifo = 0;
+        s.service();
+    }
+}
+
+#[test]
+fn power_on_sets_the_line_rate_and_tov_low() {
+    let (s, b) = shell();
+    assert_eq!(b.borrow().bauds, [(1_000_000, 115_200)]);
+    assert_eq!(b.borrow().tov, [(1_000_000, Level::Low)]);
+    assert_eq!(s.tick_hz(), 2000);
+}
+
+#[test]
+fn ticks_follow_absolute_deadlines_and_catch_up_in_bounded_batches() {
+    let (mut s, b) = shell();
+    // Exactly on time: one tick per call.
+    run(&mut s, &b, 1_000_000 + 10 * 500_000, 500_000);
+    assert_eq!(s.stats().ticks, 10);
+    assert_eq!(s.stats().max_batch, 1);
+    // A 20 ms stall: 40 ticks due, at most MAX_CATCH_UP per call.
+    b.borrow_mut().now += 20_000_000;
+    s.service();
+    assert_eq!(s.stats().ticks, 10 + u64::from(MAX_CATCH_UP));
+    s.service();
+    s.service();
+    assert_eq!(s.stats().ticks, 50);
+    assert_eq!(s.stats().max_batch, MAX_CATCH_UP);
+    // An interrupt a few ns early still runs its tick.
+    b.borrow_mut().now += 500_000 - 100;
+    s.service();
+    assert_eq!(s.stats().ticks, 51);
+}
+
+#[test]
+fn replies_leave_at_the_line_rate() {
+    let (mut s, b) = shell();
+    b.borrow_mut().rx = frame(&[0x12]); // GetDevInfo: 174 bytes
+    b.borrow_mut().now += 500_000;
+    s.service();
+    // 115200 bit/s = 11.52 bytes/ms; the request came at device time
+    // 0.5 ms, the credit counts from power-on: 10.5 ms → 120 bytes.
+    run(&mut s, &b, 1_500_000 + 10_000_000, 500_000);
+    let sent = b.borrow().tx.len();
+    assert!((118..=121).contains(&sent), "{sent}");
+    run(&mut s, &b, 40_000_000, 500_000);
+    let tx: Vec<u8> = b.borrow().tx.iter().map(|&(_, x)| x).collect();
+    assert_eq!(tx.len(), 174);
+    assert_eq!(&tx[..4], &[0xAA, 0x55, 0x01, 0x12]);
+}
+
+#[test]
+fn tx_never_exceeds_the_uart_room() {
+    let (mut s, b) = shell();
+    b.borrow_mut().room = 3;
+    b.borrow_mut().rx = frame(&[0x12]);
+    run(&mut s, &b, 11_000_000, 500_000);
+    // 20 calls × a 3-byte FIFO.
+    assert_eq!(b.borrow().tx.len(), 60);
+}
+
+#[test]
+fn a_baud_switch_waits_for_the_uart_to_be_idle() {
+    let (mut s, b) = shell();
+    let mut cmd = save_flash(0x03B2, &[0x0B]); // 2 000 000 bit/s
+    cmd.extend(frame(&[0xC2])); // CommitBaudRate
+    cmd.extend(frame(&[0x12])); // GetDevInfo, answered at the new rate
+    b.borrow_mut().rx = cmd;
+    b.borrow_mut().idle = false;
+    run(&mut s, &b, 10_000_000, 500_000);
+    // The SaveFlash ack (10 bytes) left at 115200; the switch waits.
+    assert_eq!(b.borrow().tx.len(), 10);
+    assert_eq!(b.borrow().bauds.len(), 1);
+    b.borrow_mut().idle = true;
+    let t = b.borrow().now;
+    run(&mut s, &b, t + 500_000, 500_000);
+    assert_eq!(b.borrow().bauds[1], (t + 500_000, 2_000_000));
+    // The credit restarts at the switch: 2 Mbit/s = 100 bytes per tick,
+    // the UART FIFO takes 64 per call.
+    assert_eq!(b.borrow().tx.len(), 10);
+    run(&mut s, &b, t + 1_000_000, 500_000);
+    assert_eq!(b.borrow().tx.len(), 10 + 64);
+    run(&mut s, &b, t + 2_000_000, 500_000);
+    assert_eq!(b.borrow().tx.len(), 10 + 174);
+}
+
+#[test]
+fn tov_rises_at_the_output_tick_and_falls_after_the_last_bit() {
+    let (mut s, b) = shell();
+    let mut cmd = save_flash(0x0499, &[1]); // TOV_Control
+    cmd.extend(frame(&[0x8F])); // GA
+    b.borrow_mut().rx = cmd;
+    b.borrow_mut().room = 1000;
+    run(&mut s, &b, 60_000_000, 500_000);
+    let tov = b.borrow().tov.clone();
+    // Low at power-on, then pairs: 100 Hz for ~59 ms → 5 frames.
+    assert!(tov.len() > 2 * 5, "{tov:?}");
+    for pair in tov[1..].chunks(2) {
+        assert_eq!(pair[0].1, Level::High);
+        assert_eq!(pair[1].1, Level::Low);
+        // A 40-byte GA frame takes 3.47 ms at 115200: falls ~7 ticks later.
+        let width = pair[1].0 - pair[0].0;
+        assert!((3_000_000..=4_500_000).contains(&width), "{width}");
+    }
+}
+
+#[test]
+fn edges_reach_the_device_before_the_tick_at_their_time() {
+    let (mut s, b) = shell();
+    // EXTRIG triggers GA: Trigger_Control 1, Polarity 1 (rising), GA.
+    let mut cmd = save_flash(0x05FA, &[1]);
+    cmd.extend(save_flash(0x05FB, &[1]));
+    cmd.extend(frame(&[0x8F]));
+    b.borrow_mut().rx = cmd;
+    b.borrow_mut().room = 1000;
+    run(&mut s, &b, 5_000_000, 500_000);
+    let before = b.borrow().tx.len();
+    // A rising edge stamped 2 ms from now, queued at once: delivered only
+    // when its time comes, then exactly one frame.
+    let at = b.borrow().now + 2_000_000;
+    b.borrow_mut().edges.push(Edge {
+        pin: Pin::Extrig,
+        level: Level::High,
+        at: Instant::from_nanos(at),
+    });
+    run(&mut s, &b, at - 500_000, 500_000);
+    assert_eq!(b.borrow().tx.len(), before);
+    run(&mut s, &b, at + 10_000_000, 500_000);
+    assert_eq!(b.borrow().tx.len(), before + 40);
+}
+
+#[test]
+fn power_cycle_restarts_the_schedule_and_keeps_flash() {
+    let (mut s, b) = shell();
+    b.borrow_mut().rx = save_flash(0x0012, &50u16.to_le_bytes());
+    run(&mut s, &b, 5_000_000, 500_000);
+    s.power_cycle(None);
+    assert_eq!(s.device().param_ram(0x0012), Some(&50u16.to_le_bytes()[..]));
+    let t = b.borrow().now;
+    run(&mut s, &b, t + 1_000_000, 500_000);
+    assert_eq!(s.device().mode(), imu_emu::device::Mode::Idle);
+}

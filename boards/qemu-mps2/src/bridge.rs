@@ -1,0 +1,153 @@
+//! The pin bridge on UART1: a one-byte-per-event line protocol.
+//!
+//! Host → firmware:
+//!
+//! | byte | meaning |
+//! |---|---|
+//! | `P` / `p` | 1PPS goes high / low (stamped when the byte arrives) |
+//! | `E` / `e` | EXTRIG goes high / low (stamped likewise) |
+//! | `B` / `b` / `f` | BOOT is high / low / floating at the next power-on |
+//! | `R` | power cycle now (RAM reloads from flash, BOOT is sampled) |
+//! | `S` | report the tick's timing figures (one text line, below) |
+//! | `Z` | zero the timing figures |
+//!
+//! Firmware → host: `T` / `t` when TOV goes high / low; `R` after a power
+//! cycle; and for `S` one line
+//! `S ticks=… services=… on_tick_max_ns=… tick_max_ns=… service_max_ns=…
+//! service_batch_max_ns=… service_rx_max_ns=… batch_max=… tx=… rx=…
+//! dropped=… stack=… stack_init=…\n` — the fields of `fw_shell::Stats`
+//! (`stack` = the running firmware's stack high-water mark in bytes,
+//! `stack_init` = what power-on used). Other bytes are ignored.
+
+use core::fmt::Write as _;
+
+use fw_shell::Edge;
+use heapless::spsc::{Consumer, Producer};
+use imu_emu::device::{Level, Pin};
+
+use crate::app::BoardShell;
+use crate::board;
+use crate::mps2::UART1;
+
+/// ISR side: stamps edges, forwards commands.
+pub fn on_byte(b: u8, edges: &mut Producer<'static, Edge>, cmds: &mut Producer<'static, u8>) {
+    let (pin, level) = match b {
+        b'P' => (Pin::Pps, Level::High),
+        b'p' => (Pin::Pps, Level::Low),
+        b'E' => (Pin::Extrig, Level::High),
+        b'e' => (Pin::Extrig, Level::Low),
+        _ => {
+            let _ = cmds.enqueue(b);
+            return;
+        }
+    };
+    let _ = edges.enqueue(Edge {
+        pin,
+        level,
+        at: board::now(),
+    });
+}
+
+/// Tick side: executes commands.
+pub struct Bridge {
+    cmds: Consumer<'static, u8>,
+    boot: Option<Level>,
+}
+
+impl Bridge {
+    /// `boot` = the BOOT level the board powered on with.
+    pub fn new(cmds: Consumer<'static, u8>, boot: Option<Level>) -> Self {
+        Bridge { cmds, boot }
+    }
+
+    /// Executes the commands received so far.
+    pub fn serve(&mut self, shell: &mut BoardShell) {
+        while let Some(c) = self.cmds.dequeue() {
+            match c {
+                b'B' => self.boot = Some(Level::High),
+                b'b' => self.boot = Some(Level::Low),
+                b'f' => self.boot = None,
+                b'R' => {
+                    shell.power_cycle(self.boot);
+                    UART1.put_wait(b'R');
+                }
+                b'S' => report(shell),
+                b'Z' => shell.reset_stats(),
+                _ => {}
+            }
+        }
+    }
+}
+
+fn report(shell: &mut BoardShell) {
+    let s = shell.stats();
+    let mut line: heapless::String<320> = heapless::String::new();
+    let _ = writeln!(
+        line,
+        "S ticks={} services={} on_tick_max_ns={} tick_max_ns={} service_max_ns={} \
+         service_batch_max_ns={} service_rx_max_ns={} batch_max={} tx={} rx={} dropped={} \
+         stack={} stack_init={}",
+        s.ticks,
+        s.services,
+        s.max_on_tick_ns,
+        s.max_tick_ns,
+        s.max_service_ns,
+        s.max_batch_service_ns,
+        s.max_service_rx_ns,
+        s.max_batch,
+        s.tx_bytes,
+        s.rx_bytes,
+        shell.device().tx_dropped(),
+        stack_used(),
+        INIT_STACK.load(core::sync::atomic::Ordering::Relaxed),
+    );
+    for &b in line.as_bytes() {
+        UART1.put_wait(b);
+    }
+}
+
+/// Stack the power-on (init) used, bytes.
+static INIT_STACK: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
+
+/// Remembers the stack power-on used and paints the free stack again, so
+/// [`stack_used`] then tells what the running firmware uses. Called once,
+/// from `idle`, with the interrupts already running.
+pub fn repaint_stack() {
+    extern "C" {
+        static __sheap: u32;
+    }
+    INIT_STACK.store(stack_used(), core::sync::atomic::Ordering::Relaxed);
+    let sp = cortex_m::register::msp::read() as usize - 256;
+    // SAFETY: paints the free RAM below this frame. Interrupt frames live
+    // there only while an interrupt runs, and then this loop does not.
+    unsafe {
+        let mut p = core::ptr::addr_of!(__sheap) as *mut u32;
+        while (p as usize) < sp {
+            core::ptr::write_volatile(p, PAINT);
+            p = p.add(1);
+        }
+    }
+}
+
+/// The stack paint.
+const PAINT: u32 = 0x5A5A_A5A5;
+
+/// Stack high-water mark in bytes: the RAM between the end of the statics
+/// and the reset stack pointer was painted at reset (`__pre_init`); the
+/// lowest word no longer holding the paint is as deep as the stack went.
+pub fn stack_used() -> usize {
+    extern "C" {
+        static __sheap: u32;
+        static _stack_start: u32;
+    }
+    // SAFETY: linker symbols; the range between them is RAM owned by the
+    // stack, read word by word.
+    unsafe {
+        let mut p = core::ptr::addr_of!(__sheap);
+        let top = core::ptr::addr_of!(_stack_start);
+        while p < top && core::ptr::read_volatile(p) == PAINT {
+            p = p.add(1);
+        }
+        top as usize - p as usize
+    }
+}

@@ -1,0 +1,244 @@
+//! # imu-emu on a Raspberry Pi Pico (RP2040)
+//!
+//! Pinout (README "Flash it to a board"):
+//!
+//! | pin | function |
+//! |---|---|
+//! | GP0 / GP1 | UART0 TX / RX: the KERNEL UART, to an RS-422 transceiver |
+//! | GP2 | 1PPS input (edge interrupt, stamped with the µs timer) |
+//! | GP3 | EXTRIG input (likewise) |
+//! | GP4 | TOV output |
+//! | GP5 | BOOT input, sampled at reset (driven high / low / floating) |
+//!
+//! Clocks: 12 MHz crystal → 125 MHz system and `clk_peri`. TIMER ALARM0
+//! interrupts at the internal rate (2 kHz; 4 kHz on the K201) and runs the
+//! shell's tick service at the top priority; the 64-bit µs TIMER is the
+//! time base. UART0 RX interrupts fill a ring the tick drains, TX writes the
+//! 32-byte FIFO. Parameters live in the last 8 KiB of the flash, written
+//! through the boot ROM (src/hw.rs). The core runs its fixed-point FIR
+//! (`fixed-point` feature: no FPU). Model and seed are fixed at build time
+//! (`IMU_EMU_MODEL`, `IMU_EMU_SEED`, default K110 and 0).
+#![no_std]
+#![no_main]
+
+mod hw;
+
+use defmt_rtt as _;
+use panic_probe as _;
+
+/// The second-stage bootloader for the Pico's W25Q16JV flash.
+#[link_section = ".boot2"]
+#[used]
+pub static BOOT2_FIRMWARE: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
+
+#[rtic::app(device = rp2040_hal::pac, peripherals = true)]
+mod app {
+    use core::mem::MaybeUninit;
+
+    use embedded_hal::digital::{InputPin, OutputPin};
+    use fw_shell::{Edge, Shell, TovPin};
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use imu_emu::device::{Device, Level, Pin, PowerOn};
+    use imu_emu::model::Product;
+    use rp2040_hal::clocks::{self, Clock as _};
+    use rp2040_hal::fugit::RateExtU32;
+    use rp2040_hal::gpio::{
+        self, FunctionSio, FunctionUart, Interrupt, Pins, PullDown, SioInput, SioOutput,
+    };
+    use rp2040_hal::uart::{DataBits, StopBits, UartConfig, UartPeripheral};
+    use rp2040_hal::{Sio, Timer, Watchdog};
+
+    use crate::hw::{self, RomFlash, Tick, TimerClock, Uart0};
+
+    type TovGpio = gpio::Pin<gpio::bank0::Gpio4, FunctionSio<SioOutput>, PullDown>;
+    type PpsGpio = gpio::Pin<gpio::bank0::Gpio2, FunctionSio<SioInput>, PullDown>;
+    type ExtrigGpio = gpio::Pin<gpio::bank0::Gpio3, FunctionSio<SioInput>, PullDown>;
+
+    /// TOV on GP4.
+    pub struct Tov(TovGpio);
+    impl TovPin for Tov {
+        fn set(&mut self, level: Level) {
+            let _ = match level {
+                Level::High => self.0.set_high(),
+                Level::Low => self.0.set_low(),
+            };
+        }
+    }
+
+    type BoardDevice = Device<RomFlash>;
+    type BoardShell = Shell<'static, RomFlash, Uart0, TimerClock, Tov, Consumer<'static, Edge>>;
+
+    #[shared]
+    struct Shared {}
+
+    #[local]
+    struct Local {
+        shell: BoardShell,
+        tick: Tick,
+        rx_in: Producer<'static, u8>,
+        edges_in: Producer<'static, Edge>,
+        pps: PpsGpio,
+        extrig: ExtrigGpio,
+    }
+
+    #[init(local = [
+        device: MaybeUninit<BoardDevice> = MaybeUninit::uninit(),
+        boot2: [u32; 64] = [0; 64],
+        rxq: Queue<u8, 1024> = Queue::new(),
+        edgeq: Queue<Edge, 32> = Queue::new(),
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let mut pac = cx.device;
+        let mut watchdog = Watchdog::new(pac.WATCHDOG);
+        let clocks = clocks::init_clocks_and_plls(
+            12_000_000,
+            pac.XOSC,
+            pac.CLOCKS,
+            pac.PLL_SYS,
+            pac.PLL_USB,
+            &mut pac.RESETS,
+            &mut watchdog,
+        )
+        .unwrap_or_else(|_| panic!("clock setup"));
+        let sio = Sio::new(pac.SIO);
+        let pins = Pins::new(
+            pac.IO_BANK0,
+            pac.PADS_BANK0,
+            sio.gpio_bank0,
+            &mut pac.RESETS,
+        );
+        // Out of reset; the shell reads the counter directly.
+        let _timer = Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
+
+        // BOOT: pulled up and then down; a driven pin reads the same both
+        // times, a floating one follows the pull.
+        let mut boot_pin = pins.gpio5.into_pull_up_input();
+        cortex_m::asm::delay(2000);
+        let up = boot_pin.is_high().unwrap_or(false);
+        let mut boot_pin = boot_pin.into_pull_down_input();
+        cortex_m::asm::delay(2000);
+        let down = boot_pin.is_high().unwrap_or(false);
+        let boot = if up == down {
+            fw_shell::boot_level(Some(up))
+        } else {
+            None
+        };
+
+        let clk_hz = clocks.peripheral_clock.freq().to_Hz();
+        let uart_pins = (
+            pins.gpio0.into_function::<FunctionUart>(),
+            pins.gpio1.into_function::<FunctionUart>(),
+        );
+        let _uart = UartPeripheral::new(pac.UART0, uart_pins, &mut pac.RESETS)
+            .enable(
+                UartConfig::new(115_200.Hz(), DataBits::Eight, None, StopBits::One),
+                clocks.peripheral_clock.freq(),
+            )
+            .unwrap_or_else(|_| panic!("uart setup"));
+        Uart0::enable_rx_irq();
+
+        let pps = pins.gpio2.into_pull_down_input();
+        let extrig = pins.gpio3.into_pull_down_input();
+        for i in [Interrupt::EdgeHigh, Interrupt::EdgeLow] {
+            pps.set_interrupt_enabled(i, true);
+            extrig.set_interrupt_enabled(i, true);
+        }
+        let tov = Tov(pins.gpio4.into_push_pull_output());
+
+        let product = Product::parse(option_env!("IMU_EMU_MODEL").unwrap_or("K110"))
+            .unwrap_or_else(|_| panic!("IMU_EMU_MODEL is not a KERNEL model"));
+        let seed = option_env!("IMU_EMU_SEED")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        let flash = RomFlash::new(cx.local.boot2);
+        let dev = power_on(
+            cx.local.device,
+            PowerOn {
+                product,
+                boot,
+                seed,
+            },
+            flash,
+        );
+        let (rx_in, rx_out) = cx.local.rxq.split();
+        let (edges_in, edges_out) = cx.local.edgeq.split();
+        let uart = Uart0 { rx: rx_out, clk_hz };
+        let shell = Shell::new(dev, uart, TimerClock, tov, edges_out);
+        let tick = Tick::start(shell.tick_hz());
+        defmt::info!(
+            "imu-emu: {} on RP2040, tick {} Hz",
+            product.code().as_str(),
+            shell.tick_hz()
+        );
+        (
+            Shared {},
+            Local {
+                shell,
+                tick,
+                rx_in,
+                edges_in,
+                pps,
+                extrig,
+            },
+        )
+    }
+
+    /// Builds the ~6 KiB device straight into its static, in a frame of
+    /// its own that is gone before init goes on.
+    #[inline(never)]
+    fn power_on(
+        slot: &'static mut MaybeUninit<BoardDevice>,
+        cfg: PowerOn,
+        flash: RomFlash,
+    ) -> &'static mut BoardDevice {
+        slot.write(fw_shell::power_on(cfg, flash))
+    }
+
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// The tick: the device's only owner.
+    #[task(binds = TIMER_IRQ_0, priority = 3, local = [shell, tick])]
+    fn tick(cx: tick::Context) {
+        cx.local.tick.rearm();
+        cx.local.shell.service();
+    }
+
+    /// KERNEL UART RX: the FIFO into the tick's ring.
+    #[task(binds = UART0_IRQ, priority = 2, local = [rx_in])]
+    fn uart_rx(cx: uart_rx::Context) {
+        hw::uart0_rx(cx.local.rx_in);
+    }
+
+    /// 1PPS / EXTRIG edges, stamped here with the µs timer.
+    #[task(binds = IO_IRQ_BANK0, priority = 2, local = [edges_in, pps, extrig])]
+    fn pins(cx: pins::Context) {
+        let at = hw::now();
+        let l = cx.local;
+        for (i, level) in [
+            (Interrupt::EdgeHigh, Level::High),
+            (Interrupt::EdgeLow, Level::Low),
+        ] {
+            if l.pps.interrupt_status(i) {
+                l.pps.clear_interrupt(i);
+                let _ = l.edges_in.enqueue(Edge {
+                    pin: Pin::Pps,
+                    level,
+                    at,
+                });
+            }
+            if l.extrig.interrupt_status(i) {
+                l.extrig.clear_interrupt(i);
+                let _ = l.edges_in.enqueue(Edge {
+                    pin: Pin::Extrig,
+                    level,
+                    at,
+                });
+            }
+        }
+    }
+}
