@@ -35,6 +35,10 @@ pub const TX_CAP: usize = 2048;
 /// An incomplete frame with no new byte for this long is abandoned and the
 /// decoder resyncs on the bytes after its first byte (a frame cut short).
 pub const RX_IDLE_ABANDON_NS: u64 = 100_000_000;
+/// Largest payload the device sends: a UDD frame of 16 types of 12 bytes.
+const MAX_PAYLOAD: usize = 1 + params::UDD_MAX_TYPES * 13;
+/// Nanoseconds per second.
+const NS_PER_S: u64 = 1_000_000_000;
 /// Where the parameter store lives in the device's flash.
 pub const STORE_BASE: u32 = 0;
 
@@ -100,6 +104,71 @@ pub struct PowerOn {
     pub seed: u64,
 }
 
+/// The UART transmit queue: a byte ring filled and drained by slices.
+struct TxRing {
+    buf: [u8; TX_CAP],
+    head: usize,
+    len: usize,
+}
+
+impl TxRing {
+    const fn new() -> Self {
+        TxRing {
+            buf: [0; TX_CAP],
+            head: 0,
+            len: 0,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn free(&self) -> usize {
+        TX_CAP - self.len
+    }
+
+    fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+    }
+
+    /// Appends `bytes` (the caller checked [`TxRing::free`]).
+    fn push(&mut self, bytes: &[u8]) {
+        let n = bytes.len().min(self.free());
+        let tail = (self.head + self.len) % TX_CAP;
+        let first = n.min(TX_CAP - tail);
+        self.buf[tail..tail + first].copy_from_slice(&bytes[..first]);
+        self.buf[..n - first].copy_from_slice(&bytes[first..n]);
+        self.len += n;
+    }
+
+    /// Moves up to `out.len()` bytes out.
+    fn pop(&mut self, out: &mut [u8]) -> usize {
+        let n = out.len().min(self.len);
+        let first = n.min(TX_CAP - self.head);
+        out[..first].copy_from_slice(&self.buf[self.head..self.head + first]);
+        out[first..n].copy_from_slice(&self.buf[..n - first]);
+        self.head = (self.head + n) % TX_CAP;
+        self.len -= n;
+        n
+    }
+}
+
+/// What an output frame carries: the UDD header (N and the type list; empty
+/// for fixed formats) and the fields, resolved once per stream.
+#[derive(Debug, Clone, Default)]
+struct Layout {
+    header: heapless::Vec<u8, { 1 + params::UDD_MAX_TYPES }>,
+    fields: heapless::Vec<Field, { params::UDD_MAX_TYPES }>,
+}
+
+impl Layout {
+    fn payload_len(&self) -> usize {
+        self.header.len() + fields::payload_len(&self.fields)
+    }
+}
+
 #[derive(Debug, Clone)]
 struct Stream {
     /// Data command code (Table 5.16).
@@ -110,6 +179,12 @@ struct Stream {
     ticks: u64,
     /// Alignment ticks still to run.
     align_left: u64,
+    /// The frame layout.
+    layout: Layout,
+    /// Output only on EXTRIG edges (Trigger_Control, latched at start).
+    triggered: bool,
+    /// TOV output on (TOV_Control, latched at start).
+    tov: bool,
 }
 
 /// An emulated KERNEL IMU owning its flash.
@@ -119,7 +194,7 @@ pub struct Device<F: NorFlash> {
     cfg: PowerOn,
     rx: Decoder<RX_FRAME_CAP>,
     last_rx: Instant,
-    tx: Deque<u8, TX_CAP>,
+    tx: TxRing,
     tx_dropped: u32,
     /// Live parameters (what ReadRAM answers and the device runs with).
     ram: Block,
@@ -139,6 +214,9 @@ pub struct Device<F: NorFlash> {
     /// When the UART will have sent everything queued so far, at the
     /// current line rate (10 bit times per byte).
     line_free_at: Instant,
+    /// Start of the current second of the second fraction (5.2.3.1): the
+    /// last 1PPS edge, or power-on, advanced by whole seconds.
+    second_start: Instant,
     /// Last accepted EXTRIG edge (hold-off reference, 4.1.3).
     last_trigger: Option<Instant>,
     last_pps: Option<Instant>,
@@ -182,7 +260,7 @@ impl<F: NorFlash> Device<F> {
             cfg,
             rx: Decoder::new(),
             last_rx: now,
-            tx: Deque::new(),
+            tx: TxRing::new(),
             tx_dropped: 0,
             ram: factory,
             saved: factory,
@@ -196,6 +274,7 @@ impl<F: NorFlash> Device<F> {
             events: Deque::new(),
             clock: now,
             line_free_at: now,
+            second_start: now,
             last_trigger: None,
             last_pps: None,
             pps_since_frame: false,
@@ -225,6 +304,7 @@ impl<F: NorFlash> Device<F> {
         self.events.clear();
         self.clock = now;
         self.line_free_at = now;
+        self.second_start = now;
         self.last_trigger = None;
         self.last_pps = None;
         self.pps_since_frame = false;
@@ -299,7 +379,6 @@ impl<F: NorFlash> Device<F> {
             self.on_rx(&[], now);
         }
         self.chain.tick(now);
-        let triggered = self.triggered();
         let Some(s) = self.stream.as_mut() else {
             return;
         };
@@ -311,7 +390,7 @@ impl<F: NorFlash> Device<F> {
             return;
         }
         s.ticks += 1;
-        if !triggered && s.ticks.is_multiple_of(u64::from(s.divisor)) {
+        if !s.triggered && s.ticks.is_multiple_of(u64::from(s.divisor)) {
             let code = s.code;
             self.emit(code, now);
         }
@@ -333,6 +412,7 @@ impl<F: NorFlash> Device<F> {
         match (pin, level) {
             (Pin::Pps, Level::High) => {
                 self.last_pps = Some(at);
+                self.second_start = at;
                 self.pps_since_frame = true;
             }
             (Pin::Pps, Level::Low) => {}
@@ -341,8 +421,11 @@ impl<F: NorFlash> Device<F> {
                     0 => Level::Low,
                     _ => Level::High,
                 };
-                let streaming = self.mode() == Mode::Continuous;
-                if !self.triggered() || !streaming || level != want {
+                let triggered = self
+                    .stream
+                    .as_ref()
+                    .is_some_and(|s| s.triggered && s.align_left == 0);
+                if !triggered || level != want {
                     return;
                 }
                 let hold_off_ns = u64::from(params::HOLD_OFF_TIME.read_int(&self.ram)) * 1_000_000;
@@ -358,8 +441,8 @@ impl<F: NorFlash> Device<F> {
     }
 
     /// Whether output is EXTRIG-triggered (Trigger_Control = 1 on a model
-    /// with EXTRIG).
-    fn triggered(&self) -> bool {
+    /// with EXTRIG), per the live parameters.
+    fn trigger_enabled(&self) -> bool {
         self.cfg.product.model.has(Capability::Extrig)
             && params::TRIGGER_CONTROL.read_int(&self.ram) == 1
     }
@@ -372,16 +455,8 @@ impl<F: NorFlash> Device<F> {
             Some((_, before)) => before,
             None => usize::MAX,
         };
-        let mut n = 0;
-        while n < buf.len() && n < limit {
-            match self.tx.pop_front() {
-                Some(b) => {
-                    buf[n] = b;
-                    n += 1;
-                }
-                None => break,
-            }
-        }
+        let want = buf.len().min(limit);
+        let n = self.tx.pop(&mut buf[..want]);
         if let Some((_, before)) = self.line_switch.as_mut() {
             *before -= n;
         }
@@ -441,7 +516,7 @@ impl<F: NorFlash> Device<F> {
     /// [`Device::on_tick`] for each of them, late is fine).
     pub fn ticks_to_next_output(&self) -> Option<u64> {
         let s = self.stream.as_ref()?;
-        if self.firmware_update || self.triggered() {
+        if self.firmware_update || s.triggered {
             return None;
         }
         let d = u64::from(s.divisor);
@@ -584,10 +659,18 @@ impl<F: NorFlash> Device<F> {
         let rate = params::baud_rate(p.read_int(&self.ram) as u8);
         self.line_rate = rate;
         self.line_switch = Some((rate, self.tx.len()));
+        self.refresh_stream();
+    }
+
+    /// Recomputes the running stream's layout and rate (after a baud-rate
+    /// or UDD configuration change).
+    fn refresh_stream(&mut self) {
         if let Some(code) = self.stream.as_ref().map(|s| s.code) {
-            let divisor = self.divisor_for(code);
+            let layout = self.layout(code);
+            let divisor = self.divisor_for(&layout);
             if let Some(s) = self.stream.as_mut() {
                 s.divisor = divisor;
+                s.layout = layout;
             }
         }
     }
@@ -612,10 +695,7 @@ impl<F: NorFlash> Device<F> {
                 // Persist; a flash failure leaves the new config in RAM only.
                 let _ = self.store.save(&mut self.flash, &self.saved);
                 if self.stream.as_ref().is_some_and(|s| s.code == UDD) {
-                    let divisor = self.divisor_for(UDD);
-                    if let Some(s) = self.stream.as_mut() {
-                        s.divisor = divisor;
-                    }
+                    self.refresh_stream();
                 }
                 let reply = udd::config_reply(checksum, errors, 0, max as u16);
                 self.send(crate::kernel::command::UDD_CONFIG, &reply);
@@ -634,17 +714,35 @@ impl<F: NorFlash> Device<F> {
 
     // ----- output -----
 
-    fn payload_len(&self, code: u8) -> usize {
+    /// The frame layout of data command `code`: a fixed format's fields, or
+    /// the UDD header and the configured types' fields (Table 5.13).
+    fn layout(&self, code: u8) -> Layout {
+        let mut l = Layout::default();
         match formats::find(code) {
-            Some(f) => f.payload_len(),
-            None => udd::payload_len(&self.udd_config_now()),
+            Some(f) => {
+                for &field in f.fields {
+                    let _ = l.fields.push(field);
+                }
+            }
+            None => {
+                let config = self.udd_config_now();
+                let _ = l.header.push(config.len() as u8);
+                for &c in &config {
+                    let _ = l.header.push(c);
+                    if let Some(t) = udd::find(c) {
+                        let _ = l.fields.push(t.field);
+                    }
+                }
+            }
         }
+        l
     }
 
-    fn divisor_for(&self, code: u8) -> u32 {
+    /// Output every this many ticks: Data_Rate lowered by Formula 5.1.
+    fn divisor_for(&self, layout: &Layout) -> u32 {
         let internal = self.cfg.product.model.internal_rate_hz;
         let requested = params::DATA_RATE.read_int(&self.ram);
-        let eff = rate::effective_rate(requested, self.line_rate, self.payload_len(code), internal);
+        let eff = rate::effective_rate(requested, self.line_rate, layout.payload_len(), internal);
         internal / eff.max(1)
     }
 
@@ -669,11 +767,15 @@ impl<F: NorFlash> Device<F> {
                 self.chain.skip_alignment();
             }
         }
+        let layout = self.layout(code);
         self.stream = Some(Stream {
             code,
-            divisor: self.divisor_for(code),
+            divisor: self.divisor_for(&layout),
             ticks: 0,
             align_left,
+            layout,
+            triggered: self.trigger_enabled(),
+            tov: params::TOV_CONTROL.read_int(&self.ram) == 1,
         });
     }
 
@@ -688,57 +790,65 @@ impl<F: NorFlash> Device<F> {
         &self.chain
     }
 
+    /// Produces one output frame of the running stream at `now`.
     fn emit(&mut self, code: u8, now: Instant) {
+        let Some(stream) = self.stream.as_ref() else {
+            return;
+        };
         let sample = self.chain.output();
         let status = self.chain.status();
         let product = self.cfg.product;
-        let since_ref = now.since(self.last_pps.unwrap_or(self.powered_at));
+        // Second fraction (5.2.3.1): ns since the current second began,
+        // which is the last 1PPS edge or power-on advanced by whole seconds
+        // (a division only when a second boundary has passed).
+        let mut into_second = now.since(self.second_start);
+        if into_second >= NS_PER_S {
+            let whole = into_second - into_second % NS_PER_S;
+            self.second_start = self.second_start.plus_nanos(whole);
+            into_second -= whole;
+        }
         let mut time_flags = 0;
         if self.pps_since_frame {
             time_flags |= 0x0001;
         }
-        if since_ref > 1_000_000_000 {
+        if now.since(self.last_pps.unwrap_or(self.powered_at)) > NS_PER_S {
             time_flags |= 0x0008;
         }
+        // The counter advances at 2 kHz (Tables 5.7, 5.10 note 3).
+        let counter = if product.model.internal_rate_hz == 4000 {
+            self.ticks >> 1
+        } else {
+            self.ticks
+        };
         let ctx = OutputCtx {
             sample: &sample,
             product: &product,
-            counter: (self.ticks * 2000 / u64::from(product.model.internal_rate_hz)) as u16,
+            counter: counter as u16,
             usw: status.usw,
             usw_ext: status.usw_ext,
             time_flags,
-            second_fraction_ns: (since_ref % 1_000_000_000) as u32,
+            second_fraction_ns: into_second as u32,
             imu_time_ns: now.since(self.powered_at),
         };
-        let mut payload = [0u8; 1 + params::UDD_MAX_TYPES * 13];
-        let n = match formats::find(code) {
-            Some(f) => fields::write_all(f.fields, &ctx, &mut payload),
-            None => {
-                let config = self.udd_config_now();
-                payload[0] = config.len() as u8;
-                payload[1..1 + config.len()].copy_from_slice(&config);
-                let mut list: heapless::Vec<Field, { params::UDD_MAX_TYPES }> =
-                    heapless::Vec::new();
-                for t in config.iter().filter_map(|&c| udd::find(c)) {
-                    let _ = list.push(t.field);
-                }
-                let at = 1 + config.len();
-                fields::write_all(&list, &ctx, &mut payload[at..]).map(|n| at + n)
-            }
+        let mut payload = [0u8; MAX_PAYLOAD];
+        let layout = &stream.layout;
+        let at = layout.header.len();
+        payload[..at].copy_from_slice(&layout.header);
+        let tov = stream.tov;
+        let Some(n) = fields::write_all(&layout.fields, &ctx, &mut payload[at..]) else {
+            return;
         };
-        if let Some(n) = n {
-            if let Some(end) = self.send(code, &payload[..n]) {
-                self.pps_since_frame = false;
-                if params::TOV_CONTROL.read_int(&self.ram) == 1 {
-                    let _ = self.events.push_back(Event::Tov {
-                        level: Level::High,
-                        at: now,
-                    });
-                    let _ = self.events.push_back(Event::Tov {
-                        level: Level::Low,
-                        at: end,
-                    });
-                }
+        if let Some(end) = self.send(code, &payload[..at + n]) {
+            self.pps_since_frame = false;
+            if tov {
+                let _ = self.events.push_back(Event::Tov {
+                    level: Level::High,
+                    at: now,
+                });
+                let _ = self.events.push_back(Event::Tov {
+                    level: Level::Low,
+                    at: end,
+                });
             }
         }
     }
@@ -747,15 +857,13 @@ impl<F: NorFlash> Device<F> {
     /// Returns when its last bit will have left the line, assuming the UART
     /// sends the queue back to back at the current line rate.
     fn send(&mut self, id: u8, payload: &[u8]) -> Option<Instant> {
-        let mut buf = [0u8; frame::OVERHEAD + 1 + params::UDD_MAX_TYPES * 13];
+        let mut buf = [0u8; frame::OVERHEAD + MAX_PAYLOAD];
         let n = frame::encode(TYPE_DATA, id, payload, &mut buf)?;
-        if TX_CAP - self.tx.len() < n {
+        if self.tx.free() < n {
             self.tx_dropped = self.tx_dropped.wrapping_add(1);
             return None;
         }
-        for &b in &buf[..n] {
-            let _ = self.tx.push_back(b);
-        }
+        self.tx.push(&buf[..n]);
         let start = self.line_free_at.max(self.clock);
         let wire_ns = (n as u64) * 10 * 1_000_000_000 / u64::from(self.line_rate.max(1));
         self.line_free_at = start.plus_nanos(wire_ns);
@@ -798,7 +906,7 @@ impl<F: NorFlash> Device<F> {
         p[2..4].copy_from_slice(&iat.to_le_bytes());
         for i in 0..3 {
             let a = params::ALIGNMENT_ANGLES.read_f32(&self.ram, i);
-            let v = fields::sat_i16(f64::from(a) * 100.0);
+            let v = fields::sat_i16(a, 100);
             p[23 + 2 * i..25 + 2 * i].copy_from_slice(&v.to_le_bytes());
         }
         p[50..56].copy_from_slice(b"KERNEL");

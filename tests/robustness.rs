@@ -44,14 +44,14 @@ fn op() -> impl Strategy<Value = Op> {
         .prop_map(Op::Frame),
         (any::<u16>(), prop::collection::vec(any::<u8>(), 0..14))
             .prop_map(|(i, v)| Op::Save(i % 0x0700, v)),
-        (0u16..3000).prop_map(Op::Ticks),
+        (0u16..800).prop_map(Op::Ticks),
         (any::<bool>(), any::<bool>()).prop_map(|(a, b)| Op::Edge(a, b)),
         Just(Op::PowerCycle),
     ]
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 100, ..ProptestConfig::default() })]
 
     #[test]
     fn no_input_breaks_the_device(model in prop_oneof![Just("K110"), Just("K201"), Just("K120"), Just("K100")],

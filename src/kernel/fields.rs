@@ -73,24 +73,72 @@ pub enum Field {
     SupplyVoltage,
 }
 
-/// Rounds to nearest and saturates at the i32 limits (NaN → 0).
-pub fn sat_i32(x: f64) -> i32 {
-    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
+/// `x · k` rounded to the nearest integer, halves away from zero, computed
+/// exactly: the f32 is split into its 24-bit mantissa and exponent and the
+/// mantissa multiplied by the integer scale in 64 bits (one `UMULL` on a
+/// Cortex-M4), so no float arithmetic runs (the M4F's FPU is single
+/// precision; f64 would be software) and the result is the same on every
+/// platform. NaN gives 0; ±∞ and huge values give a magnitude beyond any
+/// field, which the callers saturate.
+pub fn scale_round(x: f32, k: u32) -> i64 {
+    let bits = x.to_bits();
+    let negative = bits >> 31 != 0;
+    let exp = ((bits >> 23) & 0xFF) as i32;
+    let frac = bits & 0x7F_FFFF;
+    if exp == 0xFF {
+        return match (frac != 0, negative) {
+            (true, _) => 0,
+            (false, true) => i64::MIN,
+            (false, false) => i64::MAX,
+        };
+    }
+    // x = m · 2^e exactly.
+    let (m, e) = if exp == 0 {
+        (frac, -149)
+    } else {
+        (frac | 0x80_0000, exp - 150)
+    };
+    let p = u64::from(m) * u64::from(k); // < 2^56
+    let magnitude = if e >= 0 {
+        if e > 6 {
+            1 << 62
+        } else {
+            p << e
+        }
+    } else {
+        let sh = (-e) as u32;
+        if sh > 60 {
+            0
+        } else {
+            (p + (1 << (sh - 1))) >> sh
+        }
+    };
+    let magnitude = magnitude.min(1 << 62) as i64;
+    if negative {
+        -magnitude
+    } else {
+        magnitude
+    }
 }
 
-/// Rounds to nearest and saturates at the i16 limits (NaN → 0).
-pub fn sat_i16(x: f64) -> i16 {
-    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i16
+/// `x · k`, rounded (see [`scale_round`]), saturated at the i32 limits.
+pub fn sat_i32(x: f32, k: u32) -> i32 {
+    scale_round(x, k).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
 }
 
-/// Rounds to nearest and saturates at the u16 limits (NaN → 0).
-pub fn sat_u16(x: f64) -> u16 {
-    (x + 0.5) as u16
+/// `x · k`, rounded (see [`scale_round`]), saturated at the i16 limits.
+pub fn sat_i16(x: f32, k: u32) -> i16 {
+    scale_round(x, k).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16
 }
 
-/// Heading in [0, 360) degrees.
-fn heading_0_360(h: f32) -> f64 {
-    let h = f64::from(h) % 360.0;
+/// `x · k`, rounded (see [`scale_round`]), saturated at the u16 limits.
+pub fn sat_u16(x: f32, k: u32) -> u16 {
+    scale_round(x, k).clamp(0, i64::from(u16::MAX)) as u16
+}
+
+/// Heading in [0, 360) degrees (the f32 remainder is exact).
+fn heading_0_360(h: f32) -> f32 {
+    let h = h % 360.0;
     if h < 0.0 {
         h + 360.0
     } else {
@@ -98,15 +146,15 @@ fn heading_0_360(h: f32) -> f64 {
     }
 }
 
-fn put3_i32(out: &mut [u8], v: [f32; 3], scale: f64) {
+fn put3_i32(out: &mut [u8], v: [f32; 3], k: u32) {
     for (c, x) in out.chunks_exact_mut(4).zip(v) {
-        c.copy_from_slice(&sat_i32(f64::from(x) * scale).to_le_bytes());
+        c.copy_from_slice(&sat_i32(x, k).to_le_bytes());
     }
 }
 
-fn put3_i16(out: &mut [u8], v: [f32; 3], scale: f64) {
+fn put3_i16(out: &mut [u8], v: [f32; 3], k: u32) {
     for (c, x) in out.chunks_exact_mut(2).zip(v) {
-        c.copy_from_slice(&sat_i16(f64::from(x) * scale).to_le_bytes());
+        c.copy_from_slice(&sat_i16(x, k).to_le_bytes());
     }
 }
 
@@ -145,47 +193,43 @@ impl Field {
             return 0;
         };
         let s = ctx.sample;
-        let kg = f64::from(ctx.product.gyro.kg());
-        let ka = f64::from(ctx.product.accel.ka());
+        let kg = ctx.product.gyro.kg();
+        let ka = ctx.product.accel.ka();
         match self {
             Field::Euler => {
-                out[0..2]
-                    .copy_from_slice(&sat_u16(heading_0_360(s.euler[0]) * 100.0).to_le_bytes());
-                out[2..4].copy_from_slice(&sat_i16(f64::from(s.euler[1]) * 100.0).to_le_bytes());
-                out[4..6].copy_from_slice(&sat_i16(f64::from(s.euler[2]) * 100.0).to_le_bytes());
+                out[0..2].copy_from_slice(&sat_u16(heading_0_360(s.euler[0]), 100).to_le_bytes());
+                out[2..4].copy_from_slice(&sat_i16(s.euler[1], 100).to_le_bytes());
+                out[4..6].copy_from_slice(&sat_i16(s.euler[2], 100).to_le_bytes());
             }
             Field::EulerHr => {
-                out[0..4]
-                    .copy_from_slice(&sat_i32(heading_0_360(s.euler[0]) * 1000.0).to_le_bytes());
-                out[4..8].copy_from_slice(&sat_i32(f64::from(s.euler[1]) * 1000.0).to_le_bytes());
-                out[8..12].copy_from_slice(&sat_i32(f64::from(s.euler[2]) * 1000.0).to_le_bytes());
+                out[0..4].copy_from_slice(&sat_i32(heading_0_360(s.euler[0]), 1000).to_le_bytes());
+                out[4..8].copy_from_slice(&sat_i32(s.euler[1], 1000).to_le_bytes());
+                out[8..12].copy_from_slice(&sat_i32(s.euler[2], 1000).to_le_bytes());
             }
             Field::Quat => {
                 for (c, q) in out.chunks_exact_mut(2).zip(s.quat) {
-                    c.copy_from_slice(&sat_i16(f64::from(q) * 1e4).to_le_bytes());
+                    c.copy_from_slice(&sat_i16(q, 10_000).to_le_bytes());
                 }
             }
             Field::Gyro => put3_i16(out, s.gyro, kg),
-            Field::GyroHr => put3_i32(out, s.gyro, 1e5),
+            Field::GyroHr => put3_i32(out, s.gyro, 100_000),
             Field::Acc => put3_i16(out, s.acc, ka),
-            Field::AccHr => put3_i32(out, s.acc, 1e6),
-            Field::AuxAccHr => put3_i32(out, s.aux_acc, 1e6),
-            Field::GyroBiasCompHr => put3_i32(out, s.gyro_filtered, 1e5),
-            Field::GyroBiasHr => put3_i32(out, s.gyro_bias, 1e5),
-            Field::FilteredAccHr => put3_i32(out, s.acc_filtered, 1e6),
-            Field::FilteredAuxAccHr => put3_i32(out, s.aux_acc_filtered, 1e6),
+            Field::AccHr => put3_i32(out, s.acc, 1_000_000),
+            Field::AuxAccHr => put3_i32(out, s.aux_acc, 1_000_000),
+            Field::GyroBiasCompHr => put3_i32(out, s.gyro_filtered, 100_000),
+            Field::GyroBiasHr => put3_i32(out, s.gyro_bias, 100_000),
+            Field::FilteredAccHr => put3_i32(out, s.acc_filtered, 1_000_000),
+            Field::FilteredAuxAccHr => put3_i32(out, s.aux_acc_filtered, 1_000_000),
             Field::Zero(_) => out.fill(0),
             Field::Usw => out.copy_from_slice(&ctx.usw.to_le_bytes()),
             Field::UswExt => out.copy_from_slice(&ctx.usw_ext.to_le_bytes()),
             Field::Counter => out.copy_from_slice(&ctx.counter.to_le_bytes()),
-            Field::Temperature => {
-                out.copy_from_slice(&sat_i16(f64::from(s.temperature) * 10.0).to_le_bytes())
-            }
+            Field::Temperature => out.copy_from_slice(&sat_i16(s.temperature, 10).to_le_bytes()),
             Field::TimeFlags => out.copy_from_slice(&ctx.time_flags.to_le_bytes()),
             Field::SecondFraction => out.copy_from_slice(&ctx.second_fraction_ns.to_le_bytes()),
             Field::ImuTime => out.copy_from_slice(&ctx.imu_time_ns.to_le_bytes()),
             Field::SupplyVoltage => {
-                out.copy_from_slice(&sat_u16(f64::from(s.supply_voltage) * 100.0).to_le_bytes())
+                out.copy_from_slice(&sat_u16(s.supply_voltage, 100).to_le_bytes())
             }
         }
         n
@@ -209,4 +253,56 @@ pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Optio
         at += n;
     }
     Some(at)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference: the exact product in f64 (a 24-bit mantissa times a
+    /// scale below 2^20 is exact in f64), rounded half away from zero.
+    fn reference(x: f32, k: u32) -> i64 {
+        let p = f64::from(x) * f64::from(k);
+        let r = if p >= 0.0 {
+            (p + 0.5).floor()
+        } else {
+            -((-p + 0.5).floor())
+        };
+        r as i64
+    }
+
+    #[test]
+    fn scale_round_is_exact() {
+        let mut state = 0x1234_5678_9ABC_DEF0u64;
+        let scales = [
+            10, 20, 50, 100, 500, 1000, 2000, 4000, 10_000, 100_000, 1_000_000,
+        ];
+        for i in 0..200_000u32 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            // Mostly ordinary magnitudes, some ties and tiny numbers.
+            let x = match i % 4 {
+                0 => f32::from_bits((state >> 32) as u32) % 5000.0,
+                1 => ((state >> 40) as i32 as f32) / 65536.0,
+                2 => ((state >> 48) as i32 as f32 + 0.5) / 100.0,
+                _ => f32::from_bits(((state >> 32) as u32) & 0x3FFF_FFFF) * 1e-3,
+            };
+            if !x.is_finite() {
+                continue;
+            }
+            for &k in &scales {
+                assert_eq!(scale_round(x, k), reference(x, k), "{x:e} x {k}");
+            }
+        }
+        assert_eq!(scale_round(0.5, 1), 1);
+        assert_eq!(scale_round(-0.5, 1), -1);
+        assert_eq!(scale_round(0.499_999_97, 1), 0);
+        assert_eq!(scale_round(f32::NAN, 100), 0);
+        assert_eq!(sat_i32(f32::INFINITY, 10), i32::MAX);
+        assert_eq!(sat_i16(f32::NEG_INFINITY, 10), i16::MIN);
+        assert_eq!(sat_i32(3.0e38, 1_000_000), i32::MAX);
+        assert_eq!(sat_u16(-5.0, 100), 0);
+        assert_eq!(sat_i32(1e-40, 1_000_000), 0);
+    }
 }
