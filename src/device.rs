@@ -175,8 +175,8 @@ struct Stream {
     code: u8,
     /// Output every `divisor` ticks.
     divisor: u32,
-    /// Ticks since output began (after alignment).
-    ticks: u64,
+    /// Ticks until the next periodic output (counts down from `divisor`).
+    countdown: u32,
     /// Alignment ticks still to run.
     align_left: u64,
     /// The frame layout.
@@ -206,6 +206,8 @@ pub struct Device<F: NorFlash> {
     powered_at: Instant,
     ticks: u64,
     line_rate: u32,
+    /// Time one byte occupies the line at `line_rate`, ps.
+    byte_time_ps: u64,
     /// Line-rate switch waiting for the bytes queued before it: (rate, bytes).
     line_switch: Option<(u32, usize)>,
     events: Deque<Event, 16>,
@@ -270,6 +272,7 @@ impl<F: NorFlash> Device<F> {
             powered_at: now,
             ticks: 0,
             line_rate: 115_200,
+            byte_time_ps: 10_000_000_000_000 / 115_200,
             line_switch: None,
             events: Deque::new(),
             clock: now,
@@ -324,7 +327,9 @@ impl<F: NorFlash> Device<F> {
         self.ram = block;
         self.chain
             .configure(&ChainConfig::from_block(&self.ram, &product));
-        self.line_rate = params::baud_rate(params::BAUD_RATE.read_int(&self.ram) as u8);
+        self.set_line_rate(params::baud_rate(
+            params::BAUD_RATE.read_int(&self.ram) as u8
+        ));
         let _ = self.events.push_back(Event::LineRate(self.line_rate));
         let active = if product.model.boot_active_low {
             Level::Low
@@ -389,8 +394,11 @@ impl<F: NorFlash> Device<F> {
             }
             return;
         }
-        s.ticks += 1;
-        if !s.triggered && s.ticks.is_multiple_of(u64::from(s.divisor)) {
+        s.countdown = s.countdown.saturating_sub(1);
+        if s.countdown == 0 {
+            s.countdown = s.divisor;
+        }
+        if !s.triggered && s.countdown == s.divisor {
             let code = s.code;
             self.emit(code, now);
         }
@@ -519,8 +527,7 @@ impl<F: NorFlash> Device<F> {
         if self.firmware_update || s.triggered {
             return None;
         }
-        let d = u64::from(s.divisor);
-        Some(s.align_left + (d - s.ticks % d))
+        Some(s.align_left + u64::from(s.countdown))
     }
 
     /// The emulated product.
@@ -657,7 +664,7 @@ impl<F: NorFlash> Device<F> {
         let r = p.range();
         self.ram[r.clone()].copy_from_slice(&self.saved[r]);
         let rate = params::baud_rate(p.read_int(&self.ram) as u8);
-        self.line_rate = rate;
+        self.set_line_rate(rate);
         self.line_switch = Some((rate, self.tx.len()));
         self.refresh_stream();
     }
@@ -670,6 +677,7 @@ impl<F: NorFlash> Device<F> {
             let divisor = self.divisor_for(&layout);
             if let Some(s) = self.stream.as_mut() {
                 s.divisor = divisor;
+                s.countdown = s.countdown.min(divisor);
                 s.layout = layout;
             }
         }
@@ -768,10 +776,11 @@ impl<F: NorFlash> Device<F> {
             }
         }
         let layout = self.layout(code);
+        let divisor = self.divisor_for(&layout);
         self.stream = Some(Stream {
             code,
-            divisor: self.divisor_for(&layout),
-            ticks: 0,
+            divisor,
+            countdown: divisor,
             align_left,
             layout,
             triggered: self.trigger_enabled(),
@@ -857,17 +866,37 @@ impl<F: NorFlash> Device<F> {
     /// Returns when its last bit will have left the line, assuming the UART
     /// sends the queue back to back at the current line rate.
     fn send(&mut self, id: u8, payload: &[u8]) -> Option<Instant> {
-        let mut buf = [0u8; frame::OVERHEAD + MAX_PAYLOAD];
-        let n = frame::encode(TYPE_DATA, id, payload, &mut buf)?;
+        let n = payload.len() + frame::OVERHEAD;
+        let len_field = u16::try_from(payload.len() + 6).ok()?;
         if self.tx.free() < n {
             self.tx_dropped = self.tx_dropped.wrapping_add(1);
             return None;
         }
-        self.tx.push(&buf[..n]);
+        // Table 5.2, written straight into the queue.
+        let len = len_field.to_le_bytes();
+        let head = [
+            frame::HEADER[0],
+            frame::HEADER[1],
+            TYPE_DATA,
+            id,
+            len[0],
+            len[1],
+        ];
+        let sum = frame::checksum(&head[2..]).wrapping_add(frame::checksum(payload));
+        self.tx.push(&head);
+        self.tx.push(payload);
+        self.tx.push(&sum.to_le_bytes());
         let start = self.line_free_at.max(self.clock);
-        let wire_ns = (n as u64) * 10 * 1_000_000_000 / u64::from(self.line_rate.max(1));
+        let wire_ns = n as u64 * self.byte_time_ps / 1000;
         self.line_free_at = start.plus_nanos(wire_ns);
         Some(self.line_free_at)
+    }
+
+    /// Sets the line rate the device models (Formula 5.1, TOV timing).
+    fn set_line_rate(&mut self, bps: u32) {
+        self.line_rate = bps.max(1);
+        // 10 bit times per byte on the wire, in picoseconds.
+        self.byte_time_ps = 10_000_000_000_000 / u64::from(self.line_rate);
     }
 
     // ----- identification -----
