@@ -5,7 +5,9 @@
 use std::thread::sleep;
 use std::time::{Duration, Instant};
 
-use crate::support::{ack_of, command, frame, hex, read_ram, save_flash, sum16, Conn, Frame};
+use crate::support::{
+    ack_of, command, count_for, frame, hex, read_ram, save, save_flash, sum16, Conn, Frame,
+};
 use crate::target::{Dut, Kind, Opts};
 
 const GET_DEV_INFO: u8 = 0x12;
@@ -66,27 +68,6 @@ fn ga_frame(c: &mut Conn) -> Frame {
     assert_eq!(f.bytes.len(), GA_FRAME_LEN);
     assert_eq!(&f.bytes[4..6], &[0x26, 0x00]);
     f
-}
-
-/// Frames with `id` and their bytes completed within `d` of now; any other
-/// frame fails.
-fn count_for(c: &mut Conn, id: u8, d: Duration) -> (usize, usize) {
-    let end = Instant::now() + d;
-    let (mut frames, mut bytes) = (0, 0);
-    while let Some(f) = c.frame_before(end) {
-        assert_eq!(f.id(), id, "{:02X?}", f.bytes);
-        frames += 1;
-        bytes += f.bytes.len();
-    }
-    (frames, bytes)
-}
-
-/// Saves a parameter and waits for its acknowledgement.
-fn save(c: &mut Conn, id: u16, value: &[u8]) {
-    let cmd = save_flash(id, value);
-    c.send(&cmd);
-    let ack = c.frame_with_id(0xB2);
-    assert_eq!(ack.bytes, ack_of(0xB2, &cmd));
 }
 
 /// Saves Baud_Rate `code` and commits it; returns once the line is quiet.

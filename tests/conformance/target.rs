@@ -22,7 +22,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
-use crate::support::{Conn, Emu, TIMEOUT};
+use crate::support::{Conn, Control as HostControl, Emu, TIMEOUT};
 
 /// Which implementation runs the device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -229,46 +229,21 @@ pub trait Pins {
 
 // ----- host: the control socket -----
 
-struct HostControl {
-    w: TcpStream,
-    r: BufReader<TcpStream>,
-}
-
 impl HostControl {
-    fn connect(addr: &str) -> HostControl {
-        let s = TcpStream::connect(addr).expect("control socket");
-        s.set_read_timeout(Some(TIMEOUT)).unwrap();
-        HostControl {
-            w: s.try_clone().unwrap(),
-            r: BufReader::new(s),
-        }
-    }
-    fn line(&mut self) -> String {
-        let mut l = String::new();
-        self.r.read_line(&mut l).expect("control line");
-        l.trim().to_owned()
-    }
-    fn cmd(&mut self, c: &str) {
-        writeln!(self.w, "{c}").unwrap();
-        loop {
-            let l = self.line();
-            if !l.starts_with("tov ") {
-                assert_eq!(l, "ok", "control {c:?}");
-                return;
-            }
-        }
+    fn ok(&mut self, c: &str) {
+        assert_eq!(self.cmd(c), "ok", "control {c:?}");
     }
 }
 
 impl Pins for HostControl {
     fn pps(&mut self) {
-        self.cmd("pps");
+        self.ok("pps");
     }
     fn extrig(&mut self, high: bool) {
-        self.cmd(if high { "extrig high" } else { "extrig low" });
+        self.ok(if high { "extrig high" } else { "extrig low" });
     }
     fn power_cycle(&mut self, boot: Option<bool>) {
-        self.cmd(match boot {
+        self.ok(match boot {
             None => "power-cycle",
             Some(true) => "power-cycle boot=high",
             Some(false) => "power-cycle boot=low",

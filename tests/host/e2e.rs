@@ -3,12 +3,16 @@
 //! the conformance suite (tests/conformance), which runs the same cases
 //! against this binary and against the QEMU firmware.
 
+// Shared with the other host suites; not every helper is used here.
+#[allow(dead_code)]
 mod support;
 
 use std::thread::sleep;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use support::{ack_of, command, frame, hex, read_ram, save_flash, sum16, Conn, Emu};
+use support::{
+    ack_of, command, count_for, frame, hex, read_ram, save, save_flash, sum16, Conn, Emu,
+};
 
 const GET_DEV_INFO: u8 = 0x12;
 const GA: u8 = 0x8F;
@@ -80,26 +84,6 @@ fn ga_frame(c: &mut Conn) -> support::Frame {
     f
 }
 
-/// GA frames and their bytes completed within `d` of now.
-fn count_ga_for(c: &mut Conn, d: Duration) -> (usize, usize) {
-    let end = Instant::now() + d;
-    let (mut frames, mut bytes) = (0, 0);
-    while let Some(f) = c.frame_before(end) {
-        assert_eq!(f.id(), GA, "{:02X?}", f.bytes);
-        frames += 1;
-        bytes += f.bytes.len();
-    }
-    (frames, bytes)
-}
-
-/// Saves a parameter and waits for its acknowledgement.
-fn save(c: &mut Conn, id: u16, value: &[u8]) {
-    let cmd = save_flash(id, value);
-    c.send(&cmd);
-    let ack = c.frame_with_id(0xB2);
-    assert_eq!(ack.bytes, ack_of(0xB2, &cmd));
-}
-
 fn flash_file(dir: &tempfile::TempDir) -> String {
     dir.path().join("flash.bin").to_str().unwrap().to_owned()
 }
@@ -116,12 +100,12 @@ fn a_new_connection_replaces_the_old_and_the_device_keeps_streaming() {
     sleep(Duration::from_millis(100));
 
     let mut c = emu.connect();
-    let (frames, _) = count_ga_for(&mut c, Duration::from_secs(1));
+    let (frames, _) = count_for(&mut c, GA, Duration::from_secs(1));
     assert!(frames >= 50, "{frames} GA frames in 1 s after reconnecting");
 
     // A third client replaces the second one while it is still open.
     let mut third = emu.connect();
-    let (frames, _) = count_ga_for(&mut third, Duration::from_millis(500));
+    let (frames, _) = count_for(&mut third, GA, Duration::from_millis(500));
     assert!(
         frames >= 25,
         "{frames} GA frames in 0.5 s on the third client"

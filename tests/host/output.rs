@@ -7,29 +7,16 @@
 #[allow(dead_code)]
 mod support;
 
-use std::io::{BufRead, BufReader, Write};
-use std::net::{TcpListener, TcpStream};
+use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
-use support::{command, read_ram, save_flash, Conn, Emu, TIMEOUT};
+use support::{command, read_ram, save, Conn, Control, Emu};
 
 const DATA_RATE: u16 = 0x0012;
 const ALIGN_TIME: u16 = 0x0014;
 const BAUD_RATE: u16 = 0x03B2;
 const TOV_CONTROL: u16 = 0x0499;
 const TRIGGER_CONTROL: u16 = 0x05FA;
-
-/// Sends a SaveFlash and waits for its acknowledgement.
-fn save(c: &mut Conn, id: u16, value: &[u8]) {
-    let cmd = save_flash(id, value);
-    c.send(&cmd);
-    let ack = c.frame_with_id(0xB2);
-    assert_eq!(
-        ack.payload(),
-        &cmd[cmd.len() - 2..],
-        "SaveFlash {id:#06x} acknowledged"
-    );
-}
 
 /// Sets the baud rate code and commits it; waits until it took effect.
 fn set_baud(c: &mut Conn, code: u8) {
@@ -232,46 +219,15 @@ fn free_port() -> u16 {
 
 /// Starts an emulator with a control socket; returns it, a UART client and
 /// the control connection.
-fn with_control(args: &[&str]) -> (Emu, Conn, Ctl) {
+fn with_control(args: &[&str]) -> (Emu, Conn, Control) {
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
     let mut all = vec!["--control", addr.as_str()];
     all.extend_from_slice(args);
     let emu = Emu::tcp(&all);
     let c = emu.connect();
-    let ctl = Ctl::connect(&addr);
+    let ctl = Control::connect(&addr);
     (emu, c, ctl)
-}
-
-struct Ctl {
-    w: TcpStream,
-    r: BufReader<TcpStream>,
-}
-
-impl Ctl {
-    fn connect(addr: &str) -> Ctl {
-        let s = TcpStream::connect(addr).expect("control socket");
-        s.set_read_timeout(Some(TIMEOUT)).unwrap();
-        Ctl {
-            w: s.try_clone().unwrap(),
-            r: BufReader::new(s),
-        }
-    }
-    fn line(&mut self) -> String {
-        let mut l = String::new();
-        self.r.read_line(&mut l).expect("control line");
-        l.trim().to_owned()
-    }
-    /// Sends a command and returns its answer, skipping TOV reports.
-    fn cmd(&mut self, c: &str) -> String {
-        writeln!(self.w, "{c}").unwrap();
-        loop {
-            let l = self.line();
-            if !l.starts_with("tov ") {
-                return l;
-            }
-        }
-    }
 }
 
 fn u16_at(p: &[u8], i: usize) -> u16 {

@@ -392,3 +392,61 @@ impl Drop for Emu {
         }
     }
 }
+
+/// Saves a parameter and waits for its acknowledgement (ICD 5.3.7).
+pub fn save(c: &mut Conn, id: u16, value: &[u8]) {
+    let cmd = save_flash(id, value);
+    c.send(&cmd);
+    let ack = c.frame_with_id(0xB2);
+    assert_eq!(ack.bytes, ack_of(0xB2, &cmd));
+}
+
+/// Frames with `id` and their bytes completed within `d` of now; any other
+/// frame fails.
+pub fn count_for(c: &mut Conn, id: u8, d: Duration) -> (usize, usize) {
+    let end = Instant::now() + d;
+    let (mut frames, mut bytes) = (0, 0);
+    while let Some(f) = c.frame_before(end) {
+        assert_eq!(f.id(), id, "{:02X?}", f.bytes);
+        frames += 1;
+        bytes += f.bytes.len();
+    }
+    (frames, bytes)
+}
+
+/// A client of the host runner's control socket (`--control`).
+pub struct Control {
+    w: std::net::TcpStream,
+    r: BufReader<std::net::TcpStream>,
+}
+
+impl Control {
+    /// Connects to the control socket at `addr`.
+    pub fn connect(addr: &str) -> Control {
+        let s = std::net::TcpStream::connect(addr).expect("control socket");
+        s.set_read_timeout(Some(TIMEOUT)).unwrap();
+        Control {
+            w: s.try_clone().unwrap(),
+            r: BufReader::new(s),
+        }
+    }
+
+    /// The next line the runner sent (an answer or a TOV report).
+    pub fn line(&mut self) -> String {
+        let mut l = String::new();
+        self.r.read_line(&mut l).expect("control line");
+        l.trim().to_owned()
+    }
+
+    /// Sends a command and returns its answer, skipping TOV reports.
+    pub fn cmd(&mut self, c: &str) -> String {
+        use std::io::Write as _;
+        writeln!(self.w, "{c}").unwrap();
+        loop {
+            let l = self.line();
+            if !l.starts_with("tov ") {
+                return l;
+            }
+        }
+    }
+}
