@@ -11,8 +11,6 @@
 //! dev.power_cycle(now);
 //! ```
 
-use core::fmt::Write as _;
-
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
@@ -905,24 +903,28 @@ impl<F: NorFlash> Device<F> {
     /// both duplicated; 166 bytes.
     fn dev_info(&self) -> [u8; 166] {
         let mut p = [0u8; 166];
-        let mut sn: heapless::String<16> = heapless::String::new();
-        let _ = write!(sn, "{:08}", 10_000_000 + self.cfg.seed % 90_000_000);
+        // Serial: 8 ASCII digits (no core::fmt, which costs firmware flash).
+        let mut sn = [b'0'; 8];
+        let mut n = 10_000_000 + self.cfg.seed % 90_000_000;
+        for d in sn.iter_mut().rev() {
+            *d = b'0' + (n % 10) as u8;
+            n /= 10;
+        }
         let mut fw: heapless::String<64> = heapless::String::new();
-        let _ = write!(
-            fw,
-            "{} imu-emu {}",
-            self.cfg.product.code(),
-            env!("CARGO_PKG_VERSION")
-        );
-        let copy = |dst: &mut [u8], s: &str| {
-            let n = s.len().min(dst.len());
-            dst[..n].copy_from_slice(&s.as_bytes()[..n]);
-        };
-        copy(&mut p[0..8], &sn);
-        copy(&mut p[8..48], &fw);
+        for part in [
+            self.cfg.product.code().as_str(),
+            " imu-emu ",
+            env!("CARGO_PKG_VERSION"),
+        ] {
+            let _ = fw.push_str(part);
+        }
+        let fw = fw.as_bytes();
+        let fw = &fw[..fw.len().min(40)];
+        p[0..8].copy_from_slice(&sn);
+        p[8..8 + fw.len()].copy_from_slice(fw);
         p[49] = self.cfg.product.model.imu_type;
-        copy(&mut p[50..58], &sn);
-        copy(&mut p[58..98], &fw);
+        p[50..58].copy_from_slice(&sn);
+        p[58..58 + fw.len()].copy_from_slice(fw);
         p
     }
 

@@ -5,8 +5,6 @@
 //! Table 5.6 (KG/KA), Table 5.15 notes (per-model UDD types), Table 5.24
 //! (Sensors_Measurement_Range nibbles, LPF codes), NOTES.md.
 
-use core::fmt::Write as _;
-
 /// Gyroscope measurement range option of a product code (`G450`, …).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GyroRange {
@@ -54,6 +52,14 @@ impl GyroRange {
             GyroRange::G2000 => 9,
         }
     }
+    /// The product-code option (`G2000`).
+    pub const fn option(self) -> &'static str {
+        match self {
+            GyroRange::G450 => "G450",
+            GyroRange::G950 => "G950",
+            GyroRange::G2000 => "G2000",
+        }
+    }
     fn parse(s: &str) -> Option<Self> {
         match s {
             "G450" => Some(GyroRange::G450),
@@ -87,6 +93,14 @@ impl AccelRange {
             AccelRange::A8 => 3,
             AccelRange::A15 => 5,
             AccelRange::A40 => 6,
+        }
+    }
+    /// The product-code option (`A40`).
+    pub const fn option(self) -> &'static str {
+        match self {
+            AccelRange::A8 => "A8",
+            AccelRange::A15 => "A15",
+            AccelRange::A40 => "A40",
         }
     }
     fn parse(s: &str) -> Option<Self> {
@@ -368,15 +382,19 @@ impl Product {
         } else {
             ""
         };
-        // 32 bytes always fit the longest code (KERNEL-110M-G2000-A15 = 21).
-        let _ = write!(
-            s,
-            "KERNEL-{}-G{}-A{}{}",
+        // 32 bytes always fit the longest code (KERNEL-110M-G2000-A15 = 21);
+        // no core::fmt, which would cost firmware flash.
+        for part in [
+            "KERNEL-",
             self.model.number,
-            self.gyro.full_scale(),
-            self.accel.full_scale(),
-            aux
-        );
+            "-",
+            self.gyro.option(),
+            "-",
+            self.accel.option(),
+            aux,
+        ] {
+            let _ = s.push_str(part);
+        }
         s
     }
 
