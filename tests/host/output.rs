@@ -388,3 +388,41 @@ fn injected_faults_and_motion_reach_usw_and_getbit_on_the_wire() {
     assert_ne!(bit.payload()[0] & 0b1_1100, 0);
     assert_eq!(ctl.cmd("fault warp on"), "error unknown fault: warp");
 }
+
+#[test]
+fn a_trajectory_file_drives_what_the_device_measures() {
+    // 100 deg/s about Z for the first 2 s, then 0; 0.5 g along X; 50 degC.
+    let dir = std::env::temp_dir().join(format!("imu-emu-traj-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("spin.csv");
+    std::fs::write(
+        &path,
+        "time_s,wx,wy,wz,fx,fy,fz,temp_c\n0,0,0,100,0.5,0,1,50\n2,0,0,100,0.5,0,1,50\n2.001,0,0,0,0.5,0,1,50\n",
+    )
+    .unwrap();
+    let emu = Emu::tcp(&["--model", "K110", "--trajectory", path.to_str().unwrap()]);
+    let mut c = emu.connect();
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    c.drain_for(Duration::from_millis(200));
+    let p = c.frame_with_id(0x8F).payload().to_vec();
+    let i32_at = |i: usize| i32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]);
+    // Default K110 errors (bias, scale factor, noise) are far below 1 deg/s
+    // and 0.02 g.
+    assert!(
+        (i32_at(8) - 10_000_000).abs() < 100_000,
+        "gyro Z {}",
+        i32_at(8)
+    );
+    assert!(
+        (i32_at(12) - 500_000).abs() < 20_000,
+        "acc X {}",
+        i32_at(12)
+    );
+    assert_eq!(
+        &p[30..32],
+        &500i16.to_le_bytes(),
+        "temperature from the file"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

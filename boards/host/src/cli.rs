@@ -71,6 +71,15 @@ pub struct Args {
     #[arg(long)]
     pub pps: bool,
 
+    /// Replay the motion from a CSV file: `time_s, wx, wy, wz, fx, fy, fz[,
+    /// temp_c]` (deg/s, g, unit axes), interpolated per tick.
+    #[arg(long, value_name = "FILE")]
+    pub trajectory: Option<PathBuf>,
+
+    /// With --trajectory: start the file over after its last sample.
+    #[arg(long, requires = "trajectory")]
+    pub trajectory_loop: bool,
+
     /// Seed of the device's random processes (sensor noise, …).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
@@ -122,6 +131,18 @@ fn serve<F: NorFlash, T: Transport>(
     let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
     transport.set_line_rate(dev.line_rate())?;
 
+    let trajectory = match &args.trajectory {
+        Some(path) => {
+            let t = crate::trajectory::Trajectory::load(path, args.trajectory_loop)?;
+            eprintln!(
+                "imu-emu: trajectory {} ({} samples)",
+                path.display(),
+                t.len()
+            );
+            Some(t)
+        }
+        None => None,
+    };
     let control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -149,6 +170,9 @@ fn serve<F: NorFlash, T: Transport>(
     }
     if args.pps {
         runner = runner.with_pps();
+    }
+    if let Some(t) = trajectory {
+        runner = runner.with_trajectory(t);
     }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");

@@ -12,6 +12,7 @@
 //!   file so a restart is a power cycle;
 //! * [`control`] — the control socket: 1PPS/EXTRIG edges, power cycle
 //!   with BOOT, TOV edges reported back;
+//! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -22,4 +23,5 @@ pub mod control;
 pub mod flash;
 pub mod pacer;
 pub mod runner;
+pub mod trajectory;
 pub mod transport;

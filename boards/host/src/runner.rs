@@ -22,10 +22,12 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Event, Level, Pin};
+use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
 
 use crate::control::{self, Control};
 use crate::pacer::Pacer;
+use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 
 /// Wake interval while the device streams or has output queued.
@@ -51,6 +53,8 @@ pub struct Runner<F: NorFlash, T: Transport> {
     control: Option<Control>,
     /// Next 1PPS edge of the `--pps` generator, ns since the epoch.
     next_pps_ns: Option<u64>,
+    /// Motion replayed from a file (`--trajectory`), if any.
+    trajectory: Option<Trajectory>,
 }
 
 impl<F: NorFlash, T: Transport> Runner<F, T> {
@@ -70,7 +74,15 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             reported_at_ns: 0,
             control: None,
             next_pps_ns: None,
+            trajectory: None,
         }
+    }
+
+    /// Replays `t` as the motion the device measures: before each tick the
+    /// sample for that tick's time is handed to the signal chain.
+    pub fn with_trajectory(mut self, t: Trajectory) -> Self {
+        self.trajectory = Some(t);
+        self
     }
 
     /// Serves the control socket (pin edges, power cycle, TOV reports).
@@ -175,6 +187,10 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 self.next_pps_ns = Some(pps + 1_000_000_000);
             }
             self.pump_tx(deadline)?;
+            if let Some(t) = self.trajectory.as_mut() {
+                let truth = t.at(deadline as f64 * 1e-9);
+                self.dev.chain_mut().set_motion(Motion::Sample(truth));
+            }
             self.dev.on_tick(Instant::from_nanos(deadline));
             self.ticks += 1;
         }

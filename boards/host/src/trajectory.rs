@@ -1,0 +1,173 @@
+//! Trajectory replay (`--trajectory FILE`): the motion the device measures
+//! read from a CSV file instead of a built-in motion source.
+//!
+//! One sample per line: `time_s, wx, wy, wz, fx, fy, fz[, temp_c]` — time in
+//! seconds from the start, angular rate in °/s and specific force in g
+//! (g = 9.8106 m/s², ICD 5.2.1; at rest +1 g along up), in the unit's axes,
+//! optionally the sensor temperature in °C. Blank lines, lines starting with
+//! `#` and a first line that is not numeric (a header) are skipped; times
+//! must increase. Between samples the values are interpolated linearly;
+//! before the first sample the first holds, after the last the last holds
+//! (or, with `--trajectory-loop`, the file starts over).
+
+use std::path::Path;
+
+use anyhow::{bail, Context as _};
+use imu_emu::sensor::Truth;
+
+/// A loaded trajectory.
+#[derive(Debug, Clone)]
+pub struct Trajectory {
+    rows: Vec<(f64, Truth)>,
+    looped: bool,
+    /// Index of the row at or before the last time asked (times only grow).
+    cursor: usize,
+}
+
+fn lerp(a: f32, b: f32, w: f32) -> f32 {
+    a + (b - a) * w
+}
+
+impl Trajectory {
+    /// Reads and parses `path`.
+    pub fn load(path: &Path, looped: bool) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading trajectory {}", path.display()))?;
+        Self::parse(&text, looped).with_context(|| format!("in {}", path.display()))
+    }
+
+    /// Parses CSV text (see the module docs).
+    pub fn parse(text: &str, looped: bool) -> anyhow::Result<Self> {
+        let mut rows: Vec<(f64, Truth)> = Vec::new();
+        for (i, line) in text.lines().enumerate() {
+            let line = line.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            let numbers: Result<Vec<f64>, _> = cells.iter().map(|c| c.parse::<f64>()).collect();
+            let Ok(v) = numbers else {
+                if rows.is_empty() && i == 0 {
+                    continue; // a header
+                }
+                bail!("line {}: not a number in {line:?}", i + 1);
+            };
+            if !(v.len() == 7 || v.len() == 8) || v.iter().any(|x| !x.is_finite()) {
+                bail!(
+                    "line {}: expected 7 or 8 finite numbers, got {line:?}",
+                    i + 1
+                );
+            }
+            if let Some((t, _)) = rows.last() {
+                if v[0] <= *t {
+                    bail!("line {}: time {} does not increase", i + 1, v[0]);
+                }
+            }
+            let truth = Truth {
+                rate_dps: [v[1] as f32, v[2] as f32, v[3] as f32],
+                specific_force_g: [v[4] as f32, v[5] as f32, v[6] as f32],
+                temperature_c: v.get(7).map(|&t| t as f32),
+            };
+            rows.push((v[0], truth));
+        }
+        if rows.is_empty() {
+            bail!("no samples");
+        }
+        Ok(Trajectory {
+            rows,
+            looped,
+            cursor: 0,
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether there are no samples (never, once parsed).
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The truth at `t` seconds since the start; `t` never decreases between
+    /// calls (the cursor only moves forward).
+    pub fn at(&mut self, t: f64) -> Truth {
+        let first = self.rows[0].0;
+        let last = self.rows[self.rows.len() - 1].0;
+        let mut t = t;
+        if self.looped && t > last && last > first {
+            t = first + (t - first) % (last - first);
+            if t < self.rows[self.cursor].0 {
+                self.cursor = 0;
+            }
+        }
+        if t <= first {
+            return self.rows[0].1;
+        }
+        if t >= last {
+            return self.rows[self.rows.len() - 1].1;
+        }
+        while self.rows[self.cursor + 1].0 < t {
+            self.cursor += 1;
+        }
+        let (t0, a) = self.rows[self.cursor];
+        let (t1, b) = self.rows[self.cursor + 1];
+        let w = ((t - t0) / (t1 - t0)) as f32;
+        let mix = |x: [f32; 3], y: [f32; 3]| {
+            [
+                lerp(x[0], y[0], w),
+                lerp(x[1], y[1], w),
+                lerp(x[2], y[2], w),
+            ]
+        };
+        Truth {
+            rate_dps: mix(a.rate_dps, b.rate_dps),
+            specific_force_g: mix(a.specific_force_g, b.specific_force_g),
+            temperature_c: match (a.temperature_c, b.temperature_c) {
+                (Some(x), Some(y)) => Some(lerp(x, y, w)),
+                (x, y) => x.or(y),
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CSV: &str = "time,wx,wy,wz,fx,fy,fz,temp\n\
+                       # a comment\n\
+                       0.0, 0, 0, 0, 0, 0, 1, 20\n\
+                       1.0, 10, 0, 0, 0, 0, 1, 30\n\
+                       2.0, 10, 0, 0, 0.5, 0, 1\n";
+
+    #[test]
+    fn parses_interpolates_and_holds() {
+        let mut t = Trajectory::parse(CSV, false).unwrap();
+        assert_eq!(t.len(), 3);
+        assert_eq!(t.at(0.0).rate_dps, [0.0, 0.0, 0.0]);
+        let mid = t.at(0.5);
+        assert_eq!(mid.rate_dps, [5.0, 0.0, 0.0]);
+        assert_eq!(mid.temperature_c, Some(25.0));
+        assert_eq!(t.at(1.5).specific_force_g, [0.25, 0.0, 1.0]);
+        assert_eq!(t.at(1.5).temperature_c, Some(30.0));
+        assert_eq!(t.at(9.0).specific_force_g, [0.5, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn loops_when_asked() {
+        let mut t = Trajectory::parse(CSV, true).unwrap();
+        assert_eq!(t.at(2.5).rate_dps, [5.0, 0.0, 0.0]);
+        assert_eq!(t.at(3.5).rate_dps, [10.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn rejects_bad_files() {
+        assert!(Trajectory::parse("", false).is_err());
+        assert!(Trajectory::parse("0,1,2,3\n", false).is_err());
+        assert!(Trajectory::parse("0,0,0,0,0,0,1\n0,0,0,0,0,0,1\n", false).is_err());
+        assert!(Trajectory::parse("0,0,0,0,0,0,1\nx,0,0,0,0,0,1\n", false).is_err());
+        assert!(Trajectory::parse("0,0,0,0,0,0,NaN\n", false).is_err());
+    }
+}
