@@ -89,24 +89,53 @@
 //! ≈ 0.31 µs and a factory tick ≈ 0.15 µs.
 
 use crate::ahrs::alignment::{level_from, AlignConfig, Alignment};
+#[cfg(not(feature = "fixed-point"))]
 use crate::ahrs::attitude::Attitude;
+#[cfg(feature = "fixed-point")]
+use crate::ahrs::attitude::AttitudeFixed;
 use crate::ahrs::mounting::Mounting;
+#[cfg(feature = "fixed-point")]
+use crate::ahrs::mounting::MountingFixed;
+#[cfg(not(feature = "fixed-point"))]
+use crate::ahrs::rotation::{canonical, euler_from_quat};
+#[cfg(feature = "fixed-point")]
+use crate::ahrs::rotation::{euler_deg_q30, level_q30, quat_rotate_inv_q30};
 use crate::ahrs::rotation::{Quat, Vec3};
 #[cfg(not(feature = "fixed-point"))]
 use crate::dsp::cascade::Cascade;
+#[cfg(feature = "fixed-point")]
+use crate::dsp::cascade::CascadeFixed;
 use crate::dsp::cascade::{CascadeConfig, SecondOrder};
+#[cfg(not(feature = "fixed-point"))]
+use crate::dsp::fir::FirBank;
+#[cfg(feature = "fixed-point")]
+use crate::dsp::fir::FirBankFixed;
 use crate::dsp::fir::{self, FirDesign, CHANNELS};
-use crate::dsp::variant::{OutputVariant, VariantAccumulator};
+#[cfg(feature = "fixed-point")]
+use crate::dsp::fixed::{scaled_f32, to_fixed};
+use crate::dsp::variant::OutputVariant;
+#[cfg(not(feature = "fixed-point"))]
+use crate::dsp::variant::VariantAccumulator;
+#[cfg(feature = "fixed-point")]
+use crate::dsp::variant::VariantFixed;
 use crate::kernel::params::{self, Block};
 use crate::model::{Capability, Product};
-use crate::sensor::errors::{ErrorModel, TriadEngine};
-use crate::sensor::motion::{
-    earth_enu, BuiltinMotion, Motion, MotionSource, Truth, TruthFrame, DEFAULT_LATITUDE_DEG,
-};
+use crate::sensor::errors::ErrorModel;
+#[cfg(not(feature = "fixed-point"))]
+use crate::sensor::errors::TriadEngine;
+#[cfg(feature = "fixed-point")]
+use crate::sensor::errors::{TriadEngineFixed, ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+#[cfg(not(feature = "fixed-point"))]
+use crate::sensor::motion::BuiltinMotion;
+#[cfg(feature = "fixed-point")]
+use crate::sensor::motion::{BuiltinMotionFixed, TruthFixed};
+use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
 use crate::time::Instant;
+
+const RAD: f32 = 180.0 / core::f32::consts::PI;
 
 /// Saturation of the aux (high-g) accelerometer, g (product code `A90`).
 pub const AUX_RANGE_G: f32 = 90.0;
@@ -265,97 +294,37 @@ pub const FIXED_UNIT: [f32; CHANNELS] = [
     1.0 / 1_048_576.0,
 ];
 
-/// The FIR and the cascade, float (FPU cores).
+/// The numeric core of the chain, float (FPU cores): sensor engines, the
+/// built-in motion, mounting, FIR, cascade, accumulator and attitude.
 #[cfg(not(feature = "fixed-point"))]
 #[derive(Debug, Clone)]
-struct Filters {
-    fir: fir::FirBank,
+struct Core {
+    engines: [TriadEngine; 3],
+    motion: BuiltinMotion,
+    mounting: Mounting,
+    fir: FirBank,
     cascade: Cascade,
-    last: [f32; CHANNELS],
+    variant: VariantAccumulator,
+    attitude: Attitude,
 }
 
-#[cfg(not(feature = "fixed-point"))]
-impl Filters {
-    fn new(cfg: &ChainConfig, x: &[f32; CHANNELS]) -> Self {
-        Filters {
-            fir: fir::FirBank::new(cfg.fir_design(), x),
-            cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, x),
-            last: *x,
-        }
-    }
-    fn configure(&mut self, cfg: &ChainConfig) {
-        self.fir.set_design(cfg.fir_design());
-        self.cascade
-            .configure(&cfg.cascade, cfg.internal_rate_hz, &self.last);
-    }
-    /// (FIR output, cascade output), sensor axes.
-    #[inline]
-    fn push(&mut self, x: &[f32; CHANNELS]) -> ([f32; CHANNELS], [f32; CHANNELS]) {
-        let y = self.fir.push(x);
-        self.last = y;
-        let mut z = y;
-        self.cascade.process(&mut z);
-        (y, z)
-    }
-    fn last(&self) -> [f32; CHANNELS] {
-        self.last
-    }
-}
-
-/// The FIR and the cascade in fixed point (`fixed-point` feature).
+/// The numeric core in integers (`fixed-point` feature, cores without an
+/// FPU): the same stages on `i32` samples (module doc, "Fixed point").
 #[cfg(feature = "fixed-point")]
 #[derive(Debug, Clone)]
-struct Filters {
-    fir: fir::FirBankFixed,
-    cascade: crate::dsp::cascade::CascadeFixed,
-    last: [i32; CHANNELS],
-}
-
-#[cfg(feature = "fixed-point")]
-impl Filters {
-    /// To the fixed-point scale, rounded half away from zero (sign by bit
-    /// copy, no float compare), clamped to ±2²⁹.
-    #[inline]
-    fn to_fixed(x: &[f32; CHANNELS]) -> [i32; CHANNELS] {
-        let mut o = [0i32; CHANNELS];
-        for c in 0..CHANNELS {
-            let v = x[c] * FIXED_SCALE[c];
-            o[c] = ((v + 0.5f32.copysign(v)) as i32).clamp(-(1 << 29), 1 << 29);
-        }
-        o
-    }
-    #[inline]
-    fn to_float(y: &[i32; CHANNELS]) -> [f32; CHANNELS] {
-        let mut o = [0.0f32; CHANNELS];
-        for c in 0..CHANNELS {
-            o[c] = y[c] as f32 * FIXED_UNIT[c];
-        }
-        o
-    }
-    fn new(cfg: &ChainConfig, x: &[f32; CHANNELS]) -> Self {
-        let q = Self::to_fixed(x);
-        Filters {
-            fir: fir::FirBankFixed::new(cfg.fir_design(), &q),
-            cascade: crate::dsp::cascade::CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &q),
-            last: q,
-        }
-    }
-    fn configure(&mut self, cfg: &ChainConfig) {
-        self.fir.set_design(cfg.fir_design());
-        self.cascade
-            .configure(&cfg.cascade, cfg.internal_rate_hz, &self.last);
-    }
-    #[inline]
-    fn push(&mut self, x: &[f32; CHANNELS]) -> ([f32; CHANNELS], [f32; CHANNELS]) {
-        let y = self.fir.push(&Self::to_fixed(x));
-        self.last = y;
-        let mut z = y;
-        self.cascade.process(&mut z);
-        (Self::to_float(&y), Self::to_float(&z))
-    }
-    fn last(&self) -> [f32; CHANNELS] {
-        Self::to_float(&self.last)
-    }
+struct Core {
+    engines: [TriadEngineFixed; 3],
+    motion: BuiltinMotionFixed,
+    mounting: MountingFixed,
+    fir: FirBankFixed,
+    cascade: CascadeFixed,
+    variant: VariantFixed,
+    attitude: AttitudeFixed,
+    /// Sensor axes whose temperature terms are still to be updated (one a
+    /// tick, module doc).
+    temp_pending: u8,
+    /// The gyro bias in FIR units (°/s·2¹⁷), for the filtered gyro.
+    bias_fir: [i32; 3],
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -368,51 +337,133 @@ enum Ahrs {
 #[derive(Debug, Clone)]
 pub struct SignalChain {
     product: Product,
-    rate_hz: u32,
     dt: f32,
     has_aux: bool,
     rng: Rng,
     errors: ErrorModel,
     errors_dirty: bool,
-    engines: [TriadEngine; 3],
     temp_model: TemperatureModel,
-    temp_ticks: u32,
     temperature: f32,
     faults: Faults,
-    motion: BuiltinMotion,
     truth_frame: TruthFrame,
     cfg: ChainConfig,
-    mounting: Mounting,
-    filters: Filters,
-    variant: VariantAccumulator,
-    /// Last sensor-axis measurement (gyro, acc, aux): frozen on a comm fault.
-    sensor: [Vec3; 3],
+    core: Core,
     ahrs: Ahrs,
-    attitude: Attitude,
     bias: Vec3,
     bias_failed: bool,
-    earth_assumed: Vec3,
     sat_live: u8,
     sat_reported: u8,
     ticks: u64,
     interval: f32,
 }
 
+#[cfg(not(feature = "fixed-point"))]
 fn pack(s: &[Vec3; 3]) -> [f32; CHANNELS] {
     [
         s[0][0], s[0][1], s[0][2], s[1][0], s[1][1], s[1][2], s[2][0], s[2][1], s[2][2],
     ]
 }
 
-fn triad(x: &[f32; CHANNELS], i: usize) -> Vec3 {
+fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
     [x[3 * i], x[3 * i + 1], x[3 * i + 2]]
 }
+
+/// The Earth rate the AHRS assumes (module doc of [`crate::ahrs::alignment`]):
+/// `earth_enu(DEFAULT_LATITUDE_DEG)`, as a constant (a unit test pins the
+/// equality bit for bit).
+pub const EARTH_ASSUMED: Vec3 = [
+    0.0,
+    f32::from_bits(0x3858_4525), // 5.156281e-5 rad/s
+    f32::from_bits(0x3858_4525),
+];
+
+/// [`EARTH_ASSUMED`] in °/s·2^(GYRO_BITS + 8) (the fixed-point motion's unit).
+#[cfg(feature = "fixed-point")]
+fn earth_assumed_fixed() -> [i32; 3] {
+    EARTH_ASSUMED.map(|w| to_fixed(w * RAD, GYRO_BITS + 8))
+}
+
+/// FIR units (°/s·2¹⁷, g·2²⁰) of a fixed-point measurement, rounded.
+#[cfg(feature = "fixed-point")]
+#[inline]
+fn fir_units(s: &[[i32; 3]; 3]) -> [i32; CHANNELS] {
+    let r = |x: i32, k: u32| (x >> k) + ((x >> (k - 1)) & 1);
+    let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
+    [
+        r(s[0][0], g),
+        r(s[0][1], g),
+        r(s[0][2], g),
+        r(s[1][0], a),
+        r(s[1][1], a),
+        r(s[1][2], a),
+        r(s[2][0], a),
+        r(s[2][1], a),
+        r(s[2][2], a),
+    ]
+}
+
+#[cfg(not(feature = "fixed-point"))]
+impl Core {
+    fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
+        let x = pack(t0);
+        Core {
+            engines: [
+                TriadEngine::new(product.gyro.full_scale() as f32),
+                TriadEngine::new(product.accel.full_scale() as f32),
+                TriadEngine::new(AUX_RANGE_G),
+            ],
+            motion: BuiltinMotion::new(Motion::default(), dt),
+            mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
+            fir: FirBank::new(cfg.fir_design(), &x),
+            cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
+            variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
+            attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
+        }
+    }
+}
+
+#[cfg(feature = "fixed-point")]
+impl Core {
+    fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
+        let sensor = [
+            t0[0].map(|v| to_fixed(v, GYRO_BITS)),
+            t0[1].map(|v| to_fixed(v, ACC_BITS)),
+            t0[2].map(|v| to_fixed(v, ACC_BITS)),
+        ];
+        let x = fir_units(&sensor);
+        let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
+        Core {
+            engines: [
+                TriadEngineFixed::new(product.gyro.full_scale() as f32, GYRO_BITS),
+                TriadEngineFixed::new(product.accel.full_scale() as f32, ACC_BITS),
+                TriadEngineFixed::new(AUX_RANGE_G, ACC_BITS),
+            ],
+            motion: BuiltinMotionFixed::new(Motion::default(), dt),
+            mounting: MountingFixed::new(&mounting),
+            fir: FirBankFixed::new(cfg.fir_design(), &x),
+            cascade: CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &x),
+            variant: VariantFixed::new(cfg.output_variant, dt, &x),
+            attitude: AttitudeFixed::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
+            temp_pending: 0,
+            bias_fir: [0; 3],
+        }
+    }
+}
+
+/// What [`SignalChain::attitude_mut`] gives: the attitude filter of this
+/// build ([`Attitude`], or [`AttitudeFixed`] with the `fixed-point` feature;
+/// both have `set`, `set_tilt_correction`, `quat`, `euler_deg`).
+#[cfg(not(feature = "fixed-point"))]
+pub type ChainAttitude = Attitude;
+/// What [`SignalChain::attitude_mut`] gives (see the float build's doc).
+#[cfg(feature = "fixed-point")]
+pub type ChainAttitude = AttitudeFixed;
 
 impl SignalChain {
     /// Power-on of `product` with every random process seeded by `seed`.
     ///
     /// The unit is static, level, z up, heading 0 at
-    /// [`DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
+    /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
     /// [`crate::sensor::ErrorSpec`]; the parameters are the factory
     /// defaults until [`SignalChain::configure`]. The AHRS starts levelled,
@@ -423,19 +474,9 @@ impl SignalChain {
         let has_aux = product.model.has(Capability::AuxAccel);
         let mut rng = Rng::new(seed);
         let errors = ErrorModel::for_product(&product, &mut rng);
-        let mut engines = [
-            TriadEngine::new(product.gyro.full_scale() as f32),
-            TriadEngine::new(product.accel.full_scale() as f32),
-            TriadEngine::new(AUX_RANGE_G),
-        ];
         let temp_model = TemperatureModel::default();
         let temperature = temp_model.temperature_c();
-        let sensors = [&errors.gyro, &errors.acc, &errors.aux];
-        for (e, s) in engines.iter_mut().zip(sensors) {
-            e.randomize_gm(s, &mut rng);
-        }
         let cfg = ChainConfig::defaults(&product);
-        let motion = BuiltinMotion::new(Motion::default(), dt);
         let t0 = Truth::at_rest();
         let sensor = [
             t0.rate_dps,
@@ -446,33 +487,27 @@ impl SignalChain {
                 [0.0; 3]
             },
         ];
-        let x = pack(&sensor);
-        let earth_assumed = earth_enu(DEFAULT_LATITUDE_DEG);
+        let mut core = Core::new(&product, &cfg, &sensor, dt);
+        let sensors = [&errors.gyro, &errors.acc, &errors.aux];
+        for (e, s) in core.engines.iter_mut().zip(sensors) {
+            e.randomize_gm(s, &mut rng);
+        }
         let mut chain = SignalChain {
             product,
-            rate_hz,
             dt,
             has_aux,
             rng,
             errors,
             errors_dirty: true,
-            engines,
             temp_model,
-            temp_ticks: 0,
             temperature,
             faults: Faults::default(),
-            motion,
             truth_frame: TruthFrame::Sensor,
             cfg,
-            mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
-            filters: Filters::new(&cfg, &x),
-            variant: VariantAccumulator::new(cfg.output_variant, dt),
-            sensor,
+            core,
             ahrs: Ahrs::Running,
-            attitude: Attitude::new(level_from(&t0.specific_force_g), earth_assumed, dt),
             bias: [0.0; 3],
             bias_failed: false,
-            earth_assumed,
             sat_live: 0,
             sat_reported: 0,
             ticks: 0,
@@ -496,17 +531,37 @@ impl SignalChain {
     /// doc: FIR history kept, cascade in steady state, accumulator emptied.
     pub fn configure(&mut self, cfg: &ChainConfig) {
         self.cfg = *cfg;
-        self.mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
+        let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
+        let c = &mut self.core;
+        c.fir.set_design(cfg.fir_design());
         // The cascade starts in the steady state of the last FIR output
         // (exact for a steady signal).
-        self.filters.configure(cfg);
-        self.variant = VariantAccumulator::new(cfg.output_variant, self.dt);
+        let last = c.variant.last();
+        c.cascade
+            .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
+        #[cfg(not(feature = "fixed-point"))]
+        {
+            c.mounting = mounting;
+            c.variant = VariantAccumulator::new(cfg.output_variant, self.dt, &last);
+        }
+        #[cfg(feature = "fixed-point")]
+        {
+            c.mounting = MountingFixed::new(&mounting);
+            c.variant = VariantFixed::new(cfg.output_variant, self.dt, &last);
+        }
     }
 
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
-        self.motion = BuiltinMotion::new(m, self.dt);
+        #[cfg(not(feature = "fixed-point"))]
+        {
+            self.core.motion = BuiltinMotion::new(m, self.dt);
+        }
+        #[cfg(feature = "fixed-point")]
+        {
+            self.core.motion = BuiltinMotionFixed::new(m, self.dt);
+        }
     }
 
     /// Which axes the motion describes (default: the unit's own).
@@ -517,7 +572,7 @@ impl SignalChain {
     /// The true attitude of the built-in motion at the last tick (housing or
     /// carrier per [`TruthFrame`], Appendix C convention).
     pub fn truth_attitude(&self) -> Option<Quat> {
-        self.motion.attitude()
+        self.core.motion.attitude()
     }
 
     /// The error model, for reading or changing (changes apply at the next
@@ -551,7 +606,22 @@ impl SignalChain {
     /// The last measurement in sensor axes, before any filter: gyro (°/s),
     /// acc (g), aux acc (g).
     pub fn last_sensor(&self) -> [Vec3; 3] {
-        self.sensor
+        #[cfg(not(feature = "fixed-point"))]
+        {
+            // The FIR's newest input row is the last measurement.
+            let x = self.core.fir.last_input();
+            [triad(&x, 0), triad(&x, 1), triad(&x, 2)]
+        }
+        #[cfg(feature = "fixed-point")]
+        {
+            // The FIR's newest input row: the last measurement in FIR units.
+            let x = self.core.fir.last_input();
+            [
+                triad(&x, 0).map(|v| scaled_f32(v, 17)),
+                triad(&x, 1).map(|v| scaled_f32(v, 20)),
+                triad(&x, 2).map(|v| scaled_f32(v, 20)),
+            ]
+        }
     }
 
     /// The estimated gyro bias, carrier axes, °/s.
@@ -565,8 +635,8 @@ impl SignalChain {
     }
 
     /// The attitude filter (tests switch its tilt correction).
-    pub fn attitude_mut(&mut self) -> &mut Attitude {
-        &mut self.attitude
+    pub fn attitude_mut(&mut self) -> &mut ChainAttitude {
+        &mut self.core.attitude
     }
 
     /// Seconds the last [`SignalChain::output`] covered (its ticks × the
@@ -582,77 +652,123 @@ impl SignalChain {
 
     fn refresh_errors(&mut self) {
         let dt = self.dt;
+        let e = &self.errors;
         let t = self.temperature;
-        self.engines[0].configure(&self.errors.gyro, t, dt);
-        self.engines[1].configure(&self.errors.acc, t, dt);
-        self.engines[2].configure(&self.errors.aux, t, dt);
+        let c = &mut self.core.engines;
+        c[0].configure(&e.gyro, t, dt);
+        c[1].configure(&e.acc, t, dt);
+        c[2].configure(&e.aux, t, dt);
+        #[cfg(feature = "fixed-point")]
+        {
+            self.core.temp_pending = 0;
+        }
         self.temp_model.prepare(UPDATE_TICKS as f32 * dt);
         self.errors_dirty = false;
+    }
+
+    /// The start of every tick: tick count, error-model changes, and the
+    /// temperature (the model every [`UPDATE_TICKS`], an override at once).
+    #[inline]
+    fn begin_tick(&mut self, truth_temperature: Option<f32>) {
+        self.ticks += 1;
+        if self.errors_dirty {
+            self.refresh_errors();
+        }
+        let forced = self.faults.temperature_c.or(truth_temperature);
+        let update = self.ticks.is_multiple_of(u64::from(UPDATE_TICKS));
+        if update {
+            self.temp_model.step();
+        }
+        let t = forced.unwrap_or_else(|| self.temp_model.temperature_c());
+        if update || t != self.temperature {
+            self.temperature = t;
+            #[cfg(not(feature = "fixed-point"))]
+            {
+                let (e, c) = (&self.errors, &mut self.core.engines);
+                c[0].set_temperature(&e.gyro, t);
+                c[1].set_temperature(&e.acc, t);
+                c[2].set_temperature(&e.aux, t);
+            }
+            #[cfg(feature = "fixed-point")]
+            {
+                self.core.temp_pending = 9;
+            }
+        }
+        // Fixed point: one axis a tick (two soft-float products each).
+        #[cfg(feature = "fixed-point")]
+        if self.core.temp_pending > 0 {
+            self.core.temp_pending -= 1;
+            let k = usize::from(self.core.temp_pending);
+            let (e, i) = (
+                [2, 2, 2, 1, 1, 1, 0, 0, 0][k],
+                [2, 1, 0, 2, 1, 0, 2, 1, 0][k],
+            );
+            let errs = [&self.errors.gyro, &self.errors.acc, &self.errors.aux][e];
+            self.core.engines[e].set_axis_temperature(errs, i, self.temperature);
+        }
     }
 
     /// One internal-rate tick with the built-in motion: truth → errors and
     /// saturation → FIR → cascade → variant accumulator, and alignment or
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
-        let truth = self.motion.next(now, self.dt);
-        self.process(&truth);
+        #[cfg(not(feature = "fixed-point"))]
+        {
+            let truth = self.core.motion.next(now, self.dt);
+            self.process(&truth);
+        }
+        #[cfg(feature = "fixed-point")]
+        {
+            let _ = now;
+            let truth = self.core.motion.next();
+            self.process(&truth);
+        }
     }
 
     /// One tick with an external motion source (a host's trajectory player)
     /// instead of the built-in motion.
     pub fn tick_with(&mut self, now: Instant, source: &mut dyn MotionSource) {
         let truth = source.next(now, self.dt);
+        #[cfg(not(feature = "fixed-point"))]
         self.process(&truth);
+        #[cfg(feature = "fixed-point")]
+        self.process(&TruthFixed::from_truth(&truth));
     }
 
+    #[cfg(not(feature = "fixed-point"))]
     fn process(&mut self, truth: &Truth) {
-        self.ticks += 1;
-        if self.errors_dirty {
-            self.refresh_errors();
-        }
-        // Temperature: the model every UPDATE_TICKS, an override at once.
-        self.temp_ticks += 1;
-        let forced = self.faults.temperature_c.or(truth.temperature_c);
-        let update = self.temp_ticks >= UPDATE_TICKS;
-        if update {
-            self.temp_ticks = 0;
-            self.temp_model.step();
-        }
-        let t = forced.unwrap_or_else(|| self.temp_model.temperature_c());
-        if update || t != self.temperature {
-            self.temperature = t;
-            self.engines[0].set_temperature(&self.errors.gyro, t);
-            self.engines[1].set_temperature(&self.errors.acc, t);
-            self.engines[2].set_temperature(&self.errors.aux, t);
-        }
-
+        self.begin_tick(truth.temperature_c);
+        let c = &mut self.core;
         // Sensors (sensor axes).
-        if !self.faults.sensor_comm {
+        let sensor = if !self.faults.sensor_comm {
             let (rate, force) = match self.truth_frame {
                 TruthFrame::Sensor => (truth.rate_dps, truth.specific_force_g),
                 TruthFrame::Carrier => (
-                    self.mounting.to_sensor(&truth.rate_dps),
-                    self.mounting.to_sensor(&truth.specific_force_g),
+                    c.mounting.to_sensor(&truth.rate_dps),
+                    c.mounting.to_sensor(&truth.specific_force_g),
                 ),
             };
-            let (g, over) = self.engines[0].measure(&rate, &mut self.rng);
-            let (a, _) = self.engines[1].measure(&force, &mut self.rng);
+            let (g, over) = c.engines[0].measure(&rate, &mut self.rng);
+            let (a, _) = c.engines[1].measure(&force, &mut self.rng);
             let aux = if self.has_aux {
-                self.engines[2].measure(&force, &mut self.rng).0
+                c.engines[2].measure(&force, &mut self.rng).0
             } else {
                 [0.0; 3]
             };
             self.sat_live |= over;
-            self.sensor = [g, a, aux];
-        }
+            pack(&[g, a, aux])
+        } else {
+            // Frozen: the FIR's newest input is the last good measurement.
+            c.fir.last_input()
+        };
 
         // AHRS on carrier axes, before the FIR.
-        let gc = self.mounting.to_carrier(&self.sensor[0]);
-        let ac = self.mounting.to_carrier(&self.sensor[1]);
+        let gc = c.mounting.to_carrier(&triad(&sensor, 0));
+        let ac = c.mounting.to_carrier(&triad(&sensor, 1));
         match &mut self.ahrs {
             Ahrs::Aligning(al) => {
-                al.add(&gc, &ac);
-                self.attitude.note_rate(&gc);
+                al.add(&gc, &ac, &self.cfg.align);
+                c.attitude.note_rate(&gc);
             }
             Ahrs::Running => {
                 let g = [
@@ -660,19 +776,80 @@ impl SignalChain {
                     gc[1] - self.bias[1],
                     gc[2] - self.bias[2],
                 ];
-                self.attitude.update(&g, &ac);
+                c.attitude.update(&g, &ac);
             }
         }
 
         // Filters (sensor axes).
-        let (y, z) = self.filters.push(&pack(&self.sensor));
-        self.variant.add(&y, &z);
+        let y = c.fir.push(&sensor);
+        let mut z = y;
+        c.cascade.process(&mut z);
+        c.variant.add(&y, &z);
+    }
+
+    #[cfg(feature = "fixed-point")]
+    fn process(&mut self, truth: &TruthFixed) {
+        self.begin_tick(truth.temperature_c);
+        let c = &mut self.core;
+        // Sensors (sensor axes), scaled by 2^GYRO_BITS, 2^ACC_BITS.
+        let sensor = if !self.faults.sensor_comm {
+            let (rate, force) = match self.truth_frame {
+                TruthFrame::Sensor => (truth.rate, truth.force),
+                TruthFrame::Carrier => (
+                    c.mounting.to_sensor(&truth.rate),
+                    c.mounting.to_sensor(&truth.force),
+                ),
+            };
+            let (g, over) = c.engines[0].measure(&rate, &mut self.rng);
+            let (a, _) = c.engines[1].measure(&force, &mut self.rng);
+            let aux = if self.has_aux {
+                c.engines[2].measure(&force, &mut self.rng).0
+            } else {
+                [0; 3]
+            };
+            self.sat_live |= over;
+            [g, a, aux]
+        } else {
+            // Frozen: the FIR's newest input (FIR units) is the last good
+            // measurement.
+            let x = c.fir.last_input();
+            let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
+            [
+                triad(&x, 0).map(|v| v << g),
+                triad(&x, 1).map(|v| v << a),
+                triad(&x, 2).map(|v| v << a),
+            ]
+        };
+
+        // AHRS on carrier axes, before the FIR.
+        let gc = c.mounting.to_carrier(&sensor[0]);
+        let ac = c.mounting.to_carrier(&sensor[1]);
+        match &mut self.ahrs {
+            Ahrs::Aligning(al) => {
+                al.add(
+                    &gc.map(|v| scaled_f32(v, GYRO_BITS)),
+                    &ac.map(|v| scaled_f32(v, ACC_BITS)),
+                    &self.cfg.align,
+                );
+                c.attitude.note_rate(&gc);
+            }
+            Ahrs::Running => c.attitude.update(&gc, &ac),
+        }
+
+        // Filters (sensor axes).
+        let y = c.fir.push(&fir_units(&sensor));
+        let mut z = y;
+        c.cascade.process(&mut z);
+        c.variant.add(&y, &z);
     }
 
     /// Enters the initial alignment (5.3.1): gyro bias and level estimation
     /// start from the next tick.
     pub fn begin_alignment(&mut self) {
-        self.ahrs = Ahrs::Aligning(Alignment::new(self.cfg.align, self.rate_hz));
+        self.ahrs = Ahrs::Aligning(Alignment::new(
+            &self.cfg.align,
+            self.product.model.internal_rate_hz,
+        ));
     }
 
     /// Ends the initial alignment (its time elapsed): accepts or rejects the
@@ -681,64 +858,144 @@ impl SignalChain {
     /// [`SignalChain::skip_alignment`].
     pub fn end_alignment(&mut self) {
         let result = match &self.ahrs {
-            Ahrs::Aligning(al) if al.ticks() > 0 => al.finish(&self.earth_assumed),
+            Ahrs::Aligning(al) if al.ticks() > 0 => {
+                #[cfg(not(feature = "fixed-point"))]
+                {
+                    al.finish(&EARTH_ASSUMED, &self.cfg.align)
+                }
+                #[cfg(feature = "fixed-point")]
+                {
+                    // Levelling and the Earth rate in integers (CORDIC): no
+                    // soft-float trigonometry in this tick.
+                    let f = al
+                        .mean_force()
+                        .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
+                    let q = level_q30(&f);
+                    let w = quat_rotate_inv_q30(&q, &earth_assumed_fixed());
+                    let r = al.finish_at(
+                        q.map(|v| scaled_f32(v, 30)),
+                        w.map(|v| scaled_f32(v, GYRO_BITS + 8)),
+                        &self.cfg.align,
+                    );
+                    self.core.attitude.set_q30(q);
+                    r
+                }
+            }
             _ => return self.skip_alignment(),
         };
-        self.bias = result.bias_dps;
         self.bias_failed = !result.accepted;
-        self.attitude.set(result.attitude);
+        #[cfg(not(feature = "fixed-point"))]
+        self.core.attitude.set(result.attitude);
+        self.set_bias(result.bias_dps);
         self.ahrs = Ahrs::Running;
-        self.variant.reset();
+        self.core.variant.reset();
     }
 
     /// Initial_Alignment_Time = 0: no bias estimation (bias 0, not failed),
     /// levelled at once from the FIR-filtered accelerometers, heading 0.
     pub fn skip_alignment(&mut self) {
-        let f = self.mounting.to_carrier(&triad(&self.filters.last(), 1));
-        self.bias = [0.0; 3];
+        let last = self.core.variant.last();
+        let f = self.core.mounting.to_carrier(&triad(&last, 1));
+        #[cfg(not(feature = "fixed-point"))]
+        self.core.attitude.set(level_from(&f));
+        #[cfg(feature = "fixed-point")]
+        self.core.attitude.set_q30(level_q30(&f));
         self.bias_failed = false;
-        self.attitude.set(level_from(&f));
+        self.set_bias([0.0; 3]);
         self.ahrs = Ahrs::Running;
-        self.variant.reset();
+        self.core.variant.reset();
+    }
+
+    fn set_bias(&mut self, b: Vec3) {
+        self.bias = b;
+        #[cfg(feature = "fixed-point")]
+        {
+            self.core.attitude.set_bias(&b, self.dt);
+            self.core.bias_fir = b.map(|v| to_fixed(v, 17));
+        }
+    }
+
+    /// The orientation now: (quaternion, Euler angles in degrees).
+    fn orientation(&self) -> (Quat, Vec3) {
+        match &self.ahrs {
+            #[cfg(not(feature = "fixed-point"))]
+            Ahrs::Aligning(al) => {
+                let q = al.level();
+                let e = euler_from_quat(&q);
+                (canonical(&q), [e[0] * RAD, e[1] * RAD, e[2] * RAD])
+            }
+            #[cfg(feature = "fixed-point")]
+            Ahrs::Aligning(al) => {
+                let f = al
+                    .mean_force()
+                    .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
+                let q = level_q30(&f);
+                (q.map(|v| scaled_f32(v, 30)), euler_deg_q30(&q))
+            }
+            Ahrs::Running => (self.core.attitude.quat(), self.core.attitude.euler_deg()),
+        }
     }
 
     /// The output of this output tick: data per the output variant over the
     /// interval since the previous output, in carrier axes; restarts the
     /// interval. See [`Sample`] for units.
     pub fn output(&mut self) -> Sample {
-        let v = self.variant.take();
+        let v = self.core.variant.take();
         self.interval = v.ticks as f32 * self.dt;
         self.sat_reported = self.sat_live;
         self.sat_live = 0;
-        let m = &self.mounting;
-        let gyro = m.to_carrier(&triad(&v.main, 0));
-        let acc = m.to_carrier(&triad(&v.main, 1));
-        let gyro_f = m.to_carrier(&triad(&v.filtered, 0));
-        let acc_f = m.to_carrier(&triad(&v.filtered, 1));
-        let (aux, aux_f) = if self.has_aux {
+        let m = &self.core.mounting;
+        #[cfg(not(feature = "fixed-point"))]
+        let (gyro, acc, gyro_f, acc_f, (aux, aux_f)) = {
+            let b = self.bias;
+            let gf = m.to_carrier(&triad(&v.filtered, 0));
             (
-                m.to_carrier(&triad(&v.main, 2)),
-                m.to_carrier(&triad(&v.filtered, 2)),
+                m.to_carrier(&triad(&v.main, 0)),
+                m.to_carrier(&triad(&v.main, 1)),
+                [gf[0] - b[0], gf[1] - b[1], gf[2] - b[2]],
+                m.to_carrier(&triad(&v.filtered, 1)),
+                if self.has_aux {
+                    (
+                        m.to_carrier(&triad(&v.main, 2)),
+                        m.to_carrier(&triad(&v.filtered, 2)),
+                    )
+                } else {
+                    ([0.0; 3], [0.0; 3])
+                },
             )
-        } else {
-            ([0.0; 3], [0.0; 3])
         };
-        let b = self.bias;
-        let (quat, euler) = match &self.ahrs {
-            Ahrs::Aligning(al) => {
-                let a = Attitude::new(al.level(), self.earth_assumed, self.dt);
-                (a.quat(), a.euler_deg())
-            }
-            Ahrs::Running => (self.attitude.quat(), self.attitude.euler_deg()),
+        #[cfg(feature = "fixed-point")]
+        let (gyro, acc, gyro_f, acc_f, (aux, aux_f)) = {
+            let f = |x: &[i32; CHANNELS], i: usize, k: u32| {
+                m.to_carrier(&triad(x, i)).map(|v| scaled_f32(v, k))
+            };
+            let b = self.core.bias_fir;
+            let gf = m.to_carrier(&triad(&v.filtered, 0));
+            (
+                f(&v.main, 0, 17),
+                f(&v.main, 1, 20),
+                [
+                    scaled_f32(gf[0].saturating_sub(b[0]), 17),
+                    scaled_f32(gf[1].saturating_sub(b[1]), 17),
+                    scaled_f32(gf[2].saturating_sub(b[2]), 17),
+                ],
+                f(&v.filtered, 1, 20),
+                if self.has_aux {
+                    (f(&v.main, 2, 20), f(&v.filtered, 2, 20))
+                } else {
+                    ([0.0; 3], [0.0; 3])
+                },
+            )
         };
+        let (quat, euler) = self.orientation();
         Sample {
             gyro,
             acc,
             aux_acc: aux,
             euler,
             quat,
-            gyro_filtered: [gyro_f[0] - b[0], gyro_f[1] - b[1], gyro_f[2] - b[2]],
-            gyro_bias: b,
+            gyro_filtered: gyro_f,
+            gyro_bias: self.bias,
             acc_filtered: acc_f,
             aux_acc_filtered: aux_f,
             temperature: self.temperature,
@@ -782,5 +1039,21 @@ impl SignalChain {
             bit[1] |= 0x10;
         }
         Status { usw, usw_ext, bit }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::motion::{earth_enu, DEFAULT_LATITUDE_DEG};
+
+    #[test]
+    fn the_assumed_earth_rate_is_the_default_site_s() {
+        let e = earth_enu(DEFAULT_LATITUDE_DEG);
+        assert_eq!(
+            e.map(f32::to_bits),
+            EARTH_ASSUMED.map(f32::to_bits),
+            "{e:?}"
+        );
     }
 }

@@ -83,13 +83,14 @@ pub struct AlignResult {
     pub attitude: Quat,
 }
 
-/// The running alignment.
+/// The running alignment. Its parameters ([`AlignConfig`]) are passed to
+/// [`Alignment::add`] and [`Alignment::finish`] rather than kept (the chain
+/// holds them in its configuration).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Alignment {
-    cfg: AlignConfig,
-    block_len: u32,
-    block_dt: f32,
-    in_block: u32,
+    rate_hz: u16,
+    block_len: u8,
+    in_block: u8,
     block_sum: Vec3,
     n_blocks: u32,
     blk_first: Vec3,
@@ -105,14 +106,13 @@ pub struct Alignment {
 }
 
 impl Alignment {
-    /// A fresh alignment for ticks at `rate_hz`.
-    pub fn new(cfg: AlignConfig, rate_hz: u32) -> Self {
-        let block_len = (rate_hz / 100).max(1);
+    /// A fresh alignment for ticks at `rate_hz` (≤ 25 500 Hz).
+    pub fn new(cfg: &AlignConfig, rate_hz: u32) -> Self {
+        let block_len = (rate_hz / 100).clamp(1, 255);
         let p0 = cfg.gyro_bias_rms * cfg.gyro_bias_rms;
         Alignment {
-            cfg,
-            block_len,
-            block_dt: block_len as f32 / rate_hz as f32,
+            rate_hz: rate_hz.min(25_500) as u16,
+            block_len: block_len as u8,
             in_block: 0,
             block_sum: [0.0; 3],
             n_blocks: 0,
@@ -136,7 +136,7 @@ impl Alignment {
 
     /// Adds one tick of carrier-axis gyro (°/s) and specific force (g).
     #[inline]
-    pub fn add(&mut self, gyro: &Vec3, acc: &Vec3) {
+    pub fn add(&mut self, gyro: &Vec3, acc: &Vec3, cfg: &AlignConfig) {
         if self.n == 0 {
             self.g_first = *gyro;
             self.a_first = *acc;
@@ -155,20 +155,21 @@ impl Alignment {
                 self.block_sum[1] * inv,
                 self.block_sum[2] * inv,
             ];
-            self.add_block(&m);
+            self.add_block(&m, cfg);
             self.in_block = 0;
             self.block_sum = [0.0; 3];
         }
     }
 
     /// One 10 ms block mean (relative to the first gyro sample).
-    fn add_block(&mut self, m: &Vec3) {
+    fn add_block(&mut self, m: &Vec3, cfg: &AlignConfig) {
         if self.n_blocks == 0 {
             self.blk_first = *m;
         }
         self.n_blocks += 1;
-        let q = self.cfg.gyro_bias_drift * self.cfg.gyro_bias_drift * self.block_dt;
-        let r = (self.cfg.gyro_noise_rms * self.cfg.gyro_noise_rms).max(1e-12);
+        let block_dt = f32::from(self.block_len) / f32::from(self.rate_hz);
+        let q = cfg.gyro_bias_drift * cfg.gyro_bias_drift * block_dt;
+        let r = (cfg.gyro_noise_rms * cfg.gyro_noise_rms).max(1e-12);
         for i in 0..3 {
             let d = m[i] - self.blk_first[i];
             self.blk_sum[i] += d;
@@ -181,23 +182,33 @@ impl Alignment {
         }
     }
 
-    /// The levelled attitude from the mean specific force so far (heading 0).
-    pub fn level(&self) -> Quat {
+    /// The mean specific force so far, carrier axes, g.
+    pub fn mean_force(&self) -> Vec3 {
         let inv = if self.n > 0 { 1.0 / self.n as f32 } else { 0.0 };
-        let f = [
+        [
             self.a_first[0] + self.a_sum[0] * inv,
             self.a_first[1] + self.a_sum[1] * inv,
             self.a_first[2] + self.a_sum[2] * inv,
-        ];
-        level_from(&f)
+        ]
+    }
+
+    /// The levelled attitude from the mean specific force so far (heading 0).
+    pub fn level(&self) -> Quat {
+        level_from(&self.mean_force())
     }
 
     /// Ends the alignment: the outcome, with the Earth rate at `earth_enu`
     /// (rad/s, ENU) removed from the bias.
-    pub fn finish(&self, earth_enu: &Vec3) -> AlignResult {
+    pub fn finish(&self, earth_enu: &Vec3, cfg: &AlignConfig) -> AlignResult {
         let attitude = self.level();
         let w = quat_rotate_inv(&attitude, earth_enu);
-        let earth_dps = [w[0] * RAD, w[1] * RAD, w[2] * RAD];
+        self.finish_at(attitude, [w[0] * RAD, w[1] * RAD, w[2] * RAD], cfg)
+    }
+
+    /// [`Alignment::finish`] with the levelled `attitude` and the Earth rate
+    /// in its body axes (°/s) given (the fixed-point chain computes both in
+    /// integers).
+    pub fn finish_at(&self, attitude: Quat, earth_dps: Vec3, cfg: &AlignConfig) -> AlignResult {
         let nb = self.n_blocks as f32;
         let mut std = [0.0; 3];
         if self.n_blocks >= 2 {
@@ -208,9 +219,9 @@ impl Alignment {
         }
         let (estimate, accepted) = if self.n_blocks < 2 {
             ([0.0; 3], false)
-        } else if self.cfg.zupt {
+        } else if cfg.zupt {
             let sigma = self.kf_p.iter().fold(0.0f32, |a, &p| a.max(p));
-            (self.kf_b, sqrtf(sigma) <= self.cfg.std_threshold_dps)
+            (self.kf_b, sqrtf(sigma) <= cfg.std_threshold_dps)
         } else {
             let inv = 1.0 / self.n as f32;
             let mean = [
@@ -218,7 +229,7 @@ impl Alignment {
                 self.g_sum[1] * inv,
                 self.g_sum[2] * inv,
             ];
-            let ok = std.iter().all(|&s| s <= self.cfg.std_threshold_dps);
+            let ok = std.iter().all(|&s| s <= cfg.std_threshold_dps);
             (mean, ok)
         };
         let bias_dps = if accepted {

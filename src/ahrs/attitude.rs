@@ -146,3 +146,162 @@ impl Attitude {
         self.q.rotate(&a);
     }
 }
+
+// ----- fixed point (the `fixed-point` build) -----
+
+use super::rotation::{euler_deg_q30, quat_rotate_inv_q30, up_in_body_q30, QuatFixed};
+use crate::dsp::fixed::{mul64, mul_q30, mul_shr, Coef};
+use crate::sensor::errors::{ACC_BITS, GYRO_BITS};
+
+/// [`Attitude`] in integers, for the `fixed-point` build: the same
+/// algorithm (trapezoid + two-sample coning rotation vector, Earth rate
+/// removed, Mahony tilt correction) on rates in Q36 radians per tick and a
+/// Q62 quaternion ([`QuatFixed`]).
+///
+/// Inputs: gyro in °/s·2^[`GYRO_BITS`], specific force in g·2^[`ACC_BITS`]
+/// (the fixed-point sensor scale), carrier axes. The bias set by
+/// [`AttitudeFixed::set_bias`] is subtracted in Q36 per tick, finer than the
+/// gyro's own LSB, so a static unit stays put to ~1e-4° over minutes (the
+/// residual is the rounding of three Q36 terms, ≤ 2e-11 rad per tick).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AttitudeFixed {
+    q: QuatFixed,
+    /// ENU Earth rate × dt, Q50 rad.
+    earth_tick: [i32; 3],
+    /// Gyro unit → Q36 rad per tick, Q30.
+    gyro_k: i32,
+    /// Gyro bias, Q36 rad per tick.
+    bias_tick: [i32; 3],
+    /// k_p·dt from the Q29 tilt error to Q36 rad per tick (zero: off).
+    tilt_k: Coef,
+    tilt_on: bool,
+    prev: [i32; 3],
+    has_prev: bool,
+}
+
+const Q36: f64 = 68_719_476_736.0;
+
+impl AttitudeFixed {
+    /// Starts at `q` with ticks of `dt` and the assumed Earth rate
+    /// `earth_enu` (rad/s).
+    pub fn new(q: Quat, earth_enu: Vec3, dt: f32) -> Self {
+        let dt64 = f64::from(dt);
+        let e = |w: f32| libm::round(f64::from(w) * dt64 * 1_125_899_906_842_624.0) as i32; // 2⁵⁰
+        let gyro_k =
+            core::f64::consts::PI / 180.0 * dt64 * Q36 / libm::pow(2.0, f64::from(GYRO_BITS));
+        AttitudeFixed {
+            q: QuatFixed::from_f32(&q),
+            earth_tick: earth_enu.map(e),
+            gyro_k: libm::round(gyro_k * 1_073_741_824.0) as i32,
+            bias_tick: [0; 3],
+            tilt_k: Coef::new(f64::from(1.0 / TILT_TIME_CONSTANT_S) * dt64 * 128.0),
+            tilt_on: true,
+            prev: [0; 3],
+            has_prev: false,
+        }
+    }
+
+    /// [`Attitude::set`].
+    pub fn set(&mut self, q: Quat) {
+        self.q = QuatFixed::from_f32(&q);
+    }
+
+    /// [`AttitudeFixed::set`] from a Q30 quaternion (no float arithmetic).
+    pub fn set_q30(&mut self, q: super::rotation::QuatQ30) {
+        self.q = QuatFixed::from_q30(q);
+    }
+
+    /// The gyro bias to subtract, °/s (carrier axes): one `f32` product per
+    /// axis.
+    pub fn set_bias(&mut self, bias_dps: &Vec3, dt: f32) {
+        // π/180 · 2³⁶ · dt: Q36 radians per tick per °/s.
+        let k = 1.199_381_1e9_f32 * dt;
+        self.bias_tick = bias_dps.map(|b| crate::dsp::fixed::to_fixed(b * k, 0));
+    }
+
+    /// [`Attitude::note_rate`] (gyro scaled).
+    pub fn note_rate(&mut self, gyro: &[i32; 3]) {
+        self.prev = gyro.map(|g| mul_shr(g, self.gyro_k, 30));
+        self.has_prev = true;
+    }
+
+    /// [`Attitude::set_tilt_correction`].
+    pub fn set_tilt_correction(&mut self, on: bool) {
+        self.tilt_on = on;
+    }
+
+    /// The attitude quaternion (object → ENU), q0 ≥ 0 (the C.6 form).
+    pub fn quat(&self) -> Quat {
+        canonical(&self.q.to_f32())
+    }
+
+    /// Heading (0..360), pitch, roll in degrees (C.7), by CORDIC.
+    pub fn euler_deg(&self) -> Vec3 {
+        euler_deg_q30(&self.q.get())
+    }
+
+    /// [`Attitude::update`] on scaled rates (bias not yet removed) and
+    /// specific force, carrier axes.
+    #[inline]
+    pub fn update(&mut self, gyro: &[i32; 3], acc: &[i32; 3]) {
+        let q = self.q.get();
+        let we = quat_rotate_inv_q30(&q, &self.earth_tick);
+        let mut w = [0i32; 3];
+        for i in 0..3 {
+            // Q50 → Q36.
+            let we36 = (we[i] + (1 << 13)) >> 14;
+            w[i] = mul_shr(gyro[i], self.gyro_k, 30)
+                .saturating_sub(self.bias_tick[i])
+                .saturating_sub(we36);
+        }
+        // Tilt: |f| between 0.9 and 1.1 g (each component within 1.1 g
+        // first, so the squares fit).
+        const G11: i32 = (1.1 * (1u32 << ACC_BITS) as f32) as i32;
+        if self.tilt_on && acc.iter().all(|a| a.unsigned_abs() <= G11 as u32) {
+            let f = acc.map(|a| a << (29 - ACC_BITS)); // Q29
+            let f2 = mul_q30(f[0], f[0]) + mul_q30(f[1], f[1]) + mul_q30(f[2], f[2]); // Q28
+            if f2 > (0.81 * (1u32 << 28) as f32) as i32 && f2 < (1.21 * (1u32 << 28) as f32) as i32
+            {
+                // Up axis at t_{k−1}, carried to t_k: u = u0 − (w·dt) × u0.
+                let u0 = up_in_body_q30(&q);
+                let d = [
+                    mul_shr(w[1], u0[2], 36) - mul_shr(w[2], u0[1], 36),
+                    mul_shr(w[2], u0[0], 36) - mul_shr(w[0], u0[2], 36),
+                    mul_shr(w[0], u0[1], 36) - mul_shr(w[1], u0[0], 36),
+                ];
+                let u = [u0[0] - d[0], u0[1] - d[1], u0[2] - d[2]];
+                // e = f × u, Q29.
+                let e = [
+                    mul_q30(f[1], u[2]) - mul_q30(f[2], u[1]),
+                    mul_q30(f[2], u[0]) - mul_q30(f[0], u[2]),
+                    mul_q30(f[0], u[1]) - mul_q30(f[1], u[0]),
+                ];
+                for i in 0..3 {
+                    w[i] = w[i].saturating_add(self.tilt_k.mul(e[i]));
+                }
+            }
+        }
+        // The first sample ever only opens the first interval.
+        if !self.has_prev {
+            self.prev = w;
+            self.has_prev = true;
+            return;
+        }
+        let p = self.prev;
+        self.prev = w;
+        // a = ½(p + w) + (1/12) p × w, Q36.
+        let c = [
+            mul64(p[1], w[2]) - mul64(p[2], w[1]),
+            mul64(p[2], w[0]) - mul64(p[0], w[2]),
+            mul64(p[0], w[1]) - mul64(p[1], w[0]),
+        ];
+        let mut a = [0i32; 3];
+        for i in 0..3 {
+            let half = ((i64::from(p[i]) + i64::from(w[i]) + 1) >> 1) as i32;
+            // c is Q72; /12 and → Q36.
+            let ci = ((c[i] >> 34) as i32 + 2) >> 2; // Q36 (c/2³⁶, rounded)
+            a[i] = half + mul_shr(ci, 357_913_941, 32); // ·2³²/12
+        }
+        self.q.rotate(&a);
+    }
+}

@@ -97,3 +97,51 @@ impl Mounting {
         }
     }
 }
+
+/// [`Mounting`] in Q30 for the `fixed-point` build (the snapped 0/±1
+/// entries stay exact, so axis permutations map integers exactly).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MountingFixed {
+    m: [[i32; 3]; 3],
+    identity: bool,
+}
+
+impl MountingFixed {
+    /// The Q30 matrix of `m`.
+    pub fn new(m: &Mounting) -> Self {
+        MountingFixed {
+            m: m.matrix().map(|row| row.map(super::rotation::q30)),
+            identity: m.is_identity(),
+        }
+    }
+
+    /// Sensor axes → carrier axes, |v| ≤ 2³⁰.
+    #[inline]
+    pub fn to_carrier(&self, v: &[i32; 3]) -> [i32; 3] {
+        if self.identity {
+            return *v;
+        }
+        let m = &self.m;
+        let p = crate::dsp::fixed::mul_q30;
+        [
+            p(m[0][0], v[0]) + p(m[0][1], v[1]) + p(m[0][2], v[2]),
+            p(m[1][0], v[0]) + p(m[1][1], v[1]) + p(m[1][2], v[2]),
+            p(m[2][0], v[0]) + p(m[2][1], v[1]) + p(m[2][2], v[2]),
+        ]
+    }
+
+    /// Carrier axes → sensor axes, |v| ≤ 2³⁰.
+    #[inline]
+    pub fn to_sensor(&self, v: &[i32; 3]) -> [i32; 3] {
+        if self.identity {
+            return *v;
+        }
+        let m = &self.m;
+        let p = crate::dsp::fixed::mul_q30;
+        [
+            p(m[0][0], v[0]) + p(m[1][0], v[1]) + p(m[2][0], v[2]),
+            p(m[0][1], v[0]) + p(m[1][1], v[1]) + p(m[2][1], v[2]),
+            p(m[0][2], v[0]) + p(m[1][2], v[1]) + p(m[2][2], v[2]),
+        ]
+    }
+}

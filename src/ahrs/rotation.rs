@@ -400,6 +400,238 @@ pub fn wrap_2pi(a: f32) -> f32 {
     a
 }
 
+// ----- fixed point (the `fixed-point` build) -----
+
+use crate::dsp::fixed::{atan2_q29, mul64, mul_q30, mul_shr, scaled_f32_i64, to_fixed};
+
+/// A quaternion in Q30 (1.0 = 2³⁰).
+pub type QuatQ30 = [i32; 4];
+
+/// Q30 of an `f32` quaternion component.
+pub fn q30(x: f32) -> i32 {
+    to_fixed(x, 30)
+}
+
+/// Hamilton product `a ⊗ b` in Q30 (unit quaternions).
+#[inline]
+pub fn quat_mul_q30(a: &QuatQ30, b: &QuatQ30) -> QuatQ30 {
+    let m = mul_q30;
+    [
+        m(a[0], b[0]) - m(a[1], b[1]) - m(a[2], b[2]) - m(a[3], b[3]),
+        m(a[0], b[1]) + m(a[1], b[0]) + m(a[2], b[3]) - m(a[3], b[2]),
+        m(a[0], b[2]) - m(a[1], b[3]) + m(a[2], b[0]) + m(a[3], b[1]),
+        m(a[0], b[3]) + m(a[1], b[2]) - m(a[2], b[1]) + m(a[3], b[0]),
+    ]
+}
+
+/// `v` rotated by `q*` (reference → object) for a Q30 unit `q` and
+/// |v| ≤ 2²⁹ in any unit: [`quat_rotate_inv`] in integers.
+#[inline]
+pub fn quat_rotate_inv_q30(q: &QuatQ30, v: &[i32; 3]) -> [i32; 3] {
+    // v + 2 q0 (u × v) + 2 u × (u × v) with u = −(q1, q2, q3).
+    let u = [-q[1], -q[2], -q[3]];
+    let m = mul_q30;
+    let t = [
+        2 * (m(u[1], v[2]) - m(u[2], v[1])),
+        2 * (m(u[2], v[0]) - m(u[0], v[2])),
+        2 * (m(u[0], v[1]) - m(u[1], v[0])),
+    ];
+    [
+        v[0] + m(q[0], t[0]) + m(u[1], t[2]) - m(u[2], t[1]),
+        v[1] + m(q[0], t[1]) + m(u[2], t[0]) - m(u[0], t[2]),
+        v[2] + m(q[0], t[2]) + m(u[0], t[1]) - m(u[1], t[0]),
+    ]
+}
+
+/// The reference frame's up axis in object axes (row 3 of (C.4)) for a Q30
+/// unit `q`, Q30: also gravity's specific force, in g, at attitude `q`.
+#[inline]
+pub fn up_in_body_q30(q: &QuatQ30) -> [i32; 3] {
+    let m = mul_q30;
+    [
+        2 * (m(q[1], q[3]) - m(q[0], q[2])),
+        2 * (m(q[2], q[3]) + m(q[0], q[1])),
+        (m(q[0], q[0]) + m(q[3], q[3])) - (m(q[1], q[1]) + m(q[2], q[2])),
+    ]
+}
+
+/// Heading (0..360), pitch, roll in degrees of a Q30 unit quaternion:
+/// [`euler_from_quat`] (the same θ = ±90° rule) in integers, the
+/// arctangents by CORDIC ([`atan2_q29`], ~1e-8 rad).
+pub fn euler_deg_q30(q: &QuatQ30) -> Vec3 {
+    let m = mul_q30;
+    let [q0, q1, q2, q3] = *q;
+    // The (C.4) entries (C.2) needs, Q30, |·| ≤ 1.
+    let c01 = 2 * (m(q1, q2) - m(q0, q3));
+    let c11 = (m(q0, q0) + m(q2, q2)) - (m(q1, q1) + m(q3, q3));
+    let c21 = 2 * (m(q2, q3) + m(q0, q1));
+    let horiz = mul64(c01, c01) + mul64(c11, c11);
+    const RAD_Q29: f32 = 180.0 / core::f32::consts::PI / 536_870_912.0;
+    let (heading, pitch, roll);
+    // 1e-10 in Q60, as (C.2)'s float rule.
+    if horiz < 115_292_150 {
+        let c00 = (m(q0, q0) + m(q1, q1)) - (m(q2, q2) + m(q3, q3));
+        let c02 = 2 * (m(q1, q3) + m(q0, q2));
+        let sign = if c21 > 0 { -1 } else { 1 };
+        heading = atan2_q29(sign * (c02 >> 2), c00 >> 2).0;
+        pitch = if c21 > 0 { 843_314_857 } else { -843_314_857 };
+        roll = 0;
+    } else {
+        let c20 = 2 * (m(q1, q3) - m(q0, q2));
+        let c22 = (m(q0, q0) + m(q3, q3)) - (m(q1, q1) + m(q2, q2));
+        // atan2(c21, √horiz): the first CORDIC gives K·√horiz, so feed the
+        // second K·c21 (K the CORDIC gain).
+        let (h, k_horiz) = atan2_q29(c01 >> 2, c11 >> 2);
+        heading = h;
+        let k_c21 = mul_shr(c21 >> 2, crate::dsp::fixed::CORDIC_GAIN_Q30, 30);
+        pitch = atan2_q29(k_c21, k_horiz).0;
+        roll = -atan2_q29(c20 >> 2, c22 >> 2).0;
+    }
+    let mut h = heading as f32 * RAD_Q29;
+    if h < 0.0 {
+        h += 360.0;
+    }
+    if h >= 360.0 {
+        h -= 360.0;
+    }
+    [h, pitch as f32 * RAD_Q29, roll as f32 * RAD_Q29]
+}
+
+/// [`super::alignment::level_from`] in integers: the heading-0 attitude
+/// whose up axis is along the specific force `f` (any scale, |f| < 2³⁰),
+/// Q30. Pitch and roll by CORDIC arctangents, the half-angle quaternion by
+/// CORDIC rotations (~1e-9 rad); identity for f ≈ 0.
+pub fn level_q30(f: &[i32; 3]) -> QuatQ30 {
+    use crate::dsp::fixed::{sin_cos_q30, CORDIC_GAIN_Q30};
+    // Normalise to ≤ 2²⁸ (CORDIC input range), keeping the most bits.
+    let m = f[0].unsigned_abs() | f[1].unsigned_abs() | f[2].unsigned_abs();
+    if m < 16 {
+        return [1 << 30, 0, 0, 0];
+    }
+    let up = m.leading_zeros().saturating_sub(4);
+    let down = (32 - m.leading_zeros()).saturating_sub(28);
+    let n = |v: i32| (v << up) >> down;
+    let (fx, fy, fz) = (n(f[0]), n(f[1]), n(f[2]));
+    // roll γ = atan2(−f_x, f_z); the CORDIC's K·√(f_x² + f_z²) …
+    let (roll, k_h) = atan2_q29(-fx, fz);
+    // … gives pitch θ = atan2(f_y, √(f_x² + f_z²)) against K·f_y.
+    let pitch = atan2_q29(mul_shr(fy, CORDIC_GAIN_Q30, 30), k_h).0;
+    // Qx(θ) ⊗ Qy(γ) = (cθ cγ, sθ cγ, cθ sγ, sθ sγ) with half angles.
+    let (sx, cx) = sin_cos_q30(pitch / 2);
+    let (sy, cy) = sin_cos_q30(roll / 2);
+    [
+        mul_q30(cx, cy),
+        mul_q30(sx, cy),
+        mul_q30(cx, sy),
+        mul_q30(sx, sy),
+    ]
+}
+
+/// [`QuatIntegrator`] in integers: a unit quaternion in Q62 (`i64`), turned
+/// by small body-frame rotations given in Q36 radians.
+///
+/// The increments are computed from the Q30-rounded attitude (16 exact
+/// 32 × 32 → 64 products) and added to the Q62 state, so rates far below
+/// the Q30 step (a few °/h at 2 kHz) still integrate — the role Kahan
+/// summation plays in the float integrator; the norm is restored every
+/// step from the Q62 value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct QuatFixed {
+    q: [i64; 4],
+}
+
+impl QuatFixed {
+    /// Starts at Q30 `q`.
+    pub const fn from_q30(q: QuatQ30) -> Self {
+        QuatFixed {
+            q: [
+                (q[0] as i64) << 32,
+                (q[1] as i64) << 32,
+                (q[2] as i64) << 32,
+                (q[3] as i64) << 32,
+            ],
+        }
+    }
+
+    /// Starts at `q` (`f32`), normalised (in `f64`, at set-up time).
+    pub fn from_f32(q: &Quat) -> Self {
+        let v = q.map(f64::from);
+        let n = libm::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+        if n.is_nan() || n <= 0.0 || !n.is_finite() {
+            return QuatFixed::from_q30([1 << 30, 0, 0, 0]);
+        }
+        let k = 4_611_686_018_427_387_904.0 / n; // 2⁶²
+        QuatFixed {
+            q: v.map(|x| libm::round(x * k) as i64),
+        }
+    }
+
+    /// The attitude, Q30 (rounded).
+    #[inline]
+    pub fn get(&self) -> QuatQ30 {
+        let r = |x: i64| ((x + (1 << 31)) >> 32) as i32;
+        [r(self.q[0]), r(self.q[1]), r(self.q[2]), r(self.q[3])]
+    }
+
+    /// The attitude as `f32`.
+    pub fn to_f32(&self) -> Quat {
+        let f = |x: i64| scaled_f32_i64(x, 62);
+        [f(self.q[0]), f(self.q[1]), f(self.q[2]), f(self.q[3])]
+    }
+
+    /// `q ← q ⊗ exp(a/2)` for a body-frame rotation vector `a` in Q36
+    /// radians (|a| < 0.03 rad: 2048 °/s for 0.5 ms is 0.018), with the same
+    /// 4th-order series as [`QuatIntegrator::rotate`].
+    #[inline]
+    pub fn rotate(&mut self, a: &[i32; 3]) {
+        // |a|² in Q40 (≤ 1e-3).
+        let n2 = ((mul64(a[0], a[0]) + mul64(a[1], a[1]) + mul64(a[2], a[2])) >> 32) as i32;
+        // exp(a/2) − 1 = (−n²/8 + n⁴/384, (½ − n²/48)·a): scalar Q40, vector Q36.
+        let n4 = mul_shr(n2, n2, 40);
+        let d0 = -(n2 >> 3) + mul_shr(n4, 11_184_811, 32); // 2³²/384
+        let s = (1 << 29) - mul_shr(n2, 89_478_485, 42); // ½ − n²/48, Q30 (2³²/48)
+        let d = [
+            mul_shr(s, a[0], 30),
+            mul_shr(s, a[1], 30),
+            mul_shr(s, a[2], 30),
+        ];
+        let q = self.get();
+        // q ⊗ (d0, d) in Q66: vector terms Q30·Q36, scalar terms Q30·Q40 >> 4.
+        let p = mul64;
+        let s0 = |x: i32| p(x, d0) >> 4;
+        let delta = [
+            s0(q[0]) - p(q[1], d[0]) - p(q[2], d[1]) - p(q[3], d[2]),
+            p(q[0], d[0]) + s0(q[1]) + p(q[2], d[2]) - p(q[3], d[1]),
+            p(q[0], d[1]) - p(q[1], d[2]) + s0(q[2]) + p(q[3], d[0]),
+            p(q[0], d[2]) + p(q[1], d[1]) - p(q[2], d[0]) + s0(q[3]),
+        ];
+        for i in 0..4 {
+            self.q[i] += (delta[i] + 8) >> 4;
+        }
+        self.normalize();
+    }
+
+    /// Restores |q| = 1 to first order: q ← q·(1 − (|q|² − 1)/2), |q|²
+    /// from the Q62 value (the Q30 part squared plus the cross term).
+    #[inline]
+    fn normalize(&mut self) {
+        let mut n2 = -(1i64 << 60);
+        let mut h = [0i32; 4];
+        for i in 0..4 {
+            h[i] = (self.q[i] >> 32) as i32;
+            let l = ((self.q[i] as u64 & 0xFFFF_FFFF) >> 1) as i32;
+            n2 += mul64(h[i], h[i]) + (mul64(h[i], l) >> 30);
+        }
+        // |q|² − 1 in Q60: tiny after every step.
+        let e = n2.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+        if e != 0 {
+            for i in 0..4 {
+                self.q[i] -= mul64(e, h[i]) >> 29;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

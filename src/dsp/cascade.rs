@@ -33,6 +33,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::fir::CHANNELS;
+use super::fixed::{mul64, mul_q};
 use libm::{cos, sin, tan};
 
 /// Parameters of one second-order section: ζ1 (numerator), ζ2
@@ -171,13 +172,44 @@ impl Section {
 /// Most sections: Filter1 twice, Filter2 twice, Filter3.
 pub const MAX_SECTIONS: usize = 5;
 
+/// Slots of the per-channel state ([`Cascade`]): the cascade's input one
+/// and two ticks ago, then w[n−1], w[n−2] of Filter1 (twice) and Filter2
+/// (twice), then w[n−1] of Filter3.
+const STATE: usize = 11;
+
 /// The cascade over [`CHANNELS`] channels.
+///
+/// **State.** A section's input history is the previous section's output
+/// history, y = u + w, so only the cascade's input history and each
+/// section's w are kept: the next section's u[n−1], u[n−2] are rebuilt as
+/// u[n−1] + w[n−1], u[n−2] + w[n−2] — the same additions, on the same
+/// operands, that produced them, so bit for bit the values a per-section
+/// history would hold, in 11 values per channel instead of 20. The channel
+/// loop is specialised per Filter mask (sections at fixed places, the
+/// coefficients in registers).
 #[derive(Debug, Clone)]
 pub struct Cascade {
     sections: [Section; MAX_SECTIONS],
     n: usize,
-    /// Per section: u[n−1], u[n−2], w[n−1], w[n−2], each per channel.
-    state: [[[f32; CHANNELS]; 4]; MAX_SECTIONS],
+    mask: u8,
+    /// Per channel: see [`STATE`].
+    state: [[f32; STATE]; CHANNELS],
+}
+
+/// One Filter1/2 section on sample `u` of one channel: `p` = its input
+/// history (u[n−1], u[n−2]) on entry, the next section's on return; `w` =
+/// its (w[n−1], w[n−2]).
+#[inline(always)]
+fn second_f32(s: &Section, u: f32, p: &mut [f32; 2], w: &mut [f32], last: bool) -> f32 {
+    let (w1, w2) = (w[0], w[1]);
+    let wn = s.g * (u - p[1]) - s.a1 * w1 - s.a2 * w2;
+    w[0] = wn;
+    w[1] = w1;
+    if !last {
+        p[0] += w1;
+        p[1] += w2;
+    }
+    u + wn
 }
 
 impl Cascade {
@@ -186,7 +218,8 @@ impl Cascade {
         let mut c = Cascade {
             sections: [Section::default(); MAX_SECTIONS],
             n: 0,
-            state: [[[0.0; CHANNELS]; 4]; MAX_SECTIONS],
+            mask: 0,
+            state: [[0.0; STATE]; CHANNELS],
         };
         c.configure(cfg, rate_hz, x);
         c
@@ -214,6 +247,7 @@ impl Cascade {
         if cfg.mask & 0x04 != 0 {
             push(Section::first_order(cfg.tau, fs));
         }
+        self.mask = cfg.mask & 0x07;
         self.reset(x);
     }
 
@@ -224,35 +258,54 @@ impl Cascade {
 
     /// Steady state for a constant input `x` (every section has DC gain 1).
     pub fn reset(&mut self, x: &[f32; CHANNELS]) {
-        for st in self.state[..self.n].iter_mut() {
-            *st = [*x, *x, [0.0; CHANNELS], [0.0; CHANNELS]];
+        for (st, &v) in self.state.iter_mut().zip(x) {
+            *st = [0.0; STATE];
+            st[0] = v;
+            st[1] = v;
         }
     }
 
     /// Filters one sample per channel in place.
     #[inline]
     pub fn process(&mut self, x: &mut [f32; CHANNELS]) {
-        for (s, st) in self.sections[..self.n].iter().zip(self.state.iter_mut()) {
-            let [u1, u2, w1, w2] = st;
-            if s.first_order {
-                for c in 0..CHANNELS {
-                    let u = x[c];
-                    let w = s.g * (u - u1[c]) - s.a1 * w1[c];
-                    u1[c] = u;
-                    w1[c] = w;
-                    x[c] = u + w;
-                }
-            } else {
-                for c in 0..CHANNELS {
-                    let u = x[c];
-                    let w = s.g * (u - u2[c]) - s.a1 * w1[c] - s.a2 * w2[c];
-                    u2[c] = u1[c];
-                    u1[c] = u;
-                    w2[c] = w1[c];
-                    w1[c] = w;
-                    x[c] = u + w;
-                }
+        match self.mask {
+            1 => self.run::<1>(x),
+            2 => self.run::<2>(x),
+            3 => self.run::<3>(x),
+            4 => self.run::<4>(x),
+            5 => self.run::<5>(x),
+            6 => self.run::<6>(x),
+            7 => self.run::<7>(x),
+            _ => {}
+        }
+    }
+
+    /// [`Cascade::process`] for Filter mask `M`.
+    #[inline(always)]
+    fn run<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        let s = &self.sections;
+        let f1 = s[0];
+        let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
+        let f3 = s[self.n.saturating_sub(1)];
+        for (xc, st) in x.iter_mut().zip(self.state.iter_mut()) {
+            let mut u = *xc;
+            let mut p = [st[0], st[1]];
+            st[1] = st[0];
+            st[0] = u;
+            if M & 1 != 0 {
+                u = second_f32(&f1, u, &mut p, &mut st[2..4], false);
+                u = second_f32(&f1, u, &mut p, &mut st[4..6], M & 6 == 0);
             }
+            if M & 2 != 0 {
+                u = second_f32(&f2, u, &mut p, &mut st[6..8], false);
+                u = second_f32(&f2, u, &mut p, &mut st[8..10], M & 4 == 0);
+            }
+            if M & 4 != 0 {
+                let wn = f3.g * (u - p[0]) - f3.a1 * st[10];
+                st[10] = wn;
+                u += wn;
+            }
+            *xc = u;
         }
     }
 
@@ -267,12 +320,14 @@ impl Cascade {
     }
 }
 
-/// Fraction bits of the fixed-point cascade's internal state `w`.
-const W_FRAC: u32 = 4;
-/// Fraction bits of the fixed-point coefficients.
-const Q: u32 = 24;
+/// Fraction bits of the fixed-point numerator gain g (|g| < 32).
+const QG: u32 = 26;
+/// Fraction bits of the fixed-point denominator coefficients (|a| < 2).
+const QA: u32 = 29;
 
-/// A [`Section`] with Q24 coefficients, for [`CascadeFixed`].
+/// A [`Section`] in fixed point, for [`CascadeFixed`]: g in Q26, a1 and a2 in
+/// Q29 (finer than the float path's `f32`, whose spacing near |a1| = 2 is
+/// 2.4e-7).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SectionFixed {
     g: i32,
@@ -282,44 +337,89 @@ pub struct SectionFixed {
 }
 
 impl SectionFixed {
-    /// `s` rounded to Q24 (|coefficients| < 2, so they fit with room).
+    /// `s` rounded to the fixed-point formats (g clamped to ±32).
     pub fn from_float(s: &Section) -> Self {
-        let q = |x: f32| libm::round(f64::from(x) * f64::from(1u32 << Q)) as i32;
+        let q = |x: f32, bits: u32| {
+            libm::round(f64::from(x) * f64::from(1u32 << bits))
+                .clamp(f64::from(-i32::MAX), f64::from(i32::MAX)) as i32
+        };
         SectionFixed {
-            g: q(s.g),
-            a1: q(s.a1),
-            a2: q(s.a2),
+            g: q(s.g, QG),
+            a1: q(s.a1, QA),
+            a2: q(s.a2, QA),
             first_order: s.first_order,
         }
     }
+
+    /// w[n] from the input u[n], u[n−k] and w[n−1], w[n−2], rounded and
+    /// saturated. The products are 32-bit ([`mul_q`], four `MULS` each)
+    /// while every term fits 2³⁰ — the normal case, checked on the operands
+    /// — and exact 64-bit ([`mul64`]) otherwise.
+    #[inline(always)]
+    fn w(&self, u: i32, uk: i32, w1: i32, w2: i32, second: bool) -> i32 {
+        const BIG: u32 = 1 << 29;
+        let d = u.wrapping_sub(uk);
+        let small = (u.unsigned_abs() | uk.unsigned_abs()) < BIG
+            && (w1.unsigned_abs() | w2.unsigned_abs()) < BIG
+            && self.g.unsigned_abs() < 1 << QG;
+        if small {
+            // |d| < 2³⁰, |g| < 1: |t| < 2³⁰; |a| < 2, |w| < 2²⁹: |r| < 2³¹.
+            let t = mul_q::<QG>(self.g, d);
+            let r = if second {
+                mul_q::<QA>(self.a1, w1) + mul_q::<QA>(self.a2, w2)
+            } else {
+                mul_q::<QA>(self.a1, w1)
+            };
+            return t.saturating_sub(r);
+        }
+        let gd = match u.checked_sub(uk) {
+            Some(d) => mul64(self.g, d),
+            None => mul64(self.g, u) - mul64(self.g, uk),
+        };
+        let t = (gd + (1 << (QG - 1))) >> QG;
+        let r = (mul64(self.a1, w1) + mul64(self.a2, w2) + (1 << (QA - 1))) >> QA;
+        (t - r).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+    }
+}
+
+/// One Filter1/2 section of [`CascadeFixed`] (as [`second_f32`]).
+#[inline(always)]
+fn second_fixed(s: &SectionFixed, u: i32, p: &mut [i32; 2], w: &mut [i32], last: bool) -> i32 {
+    let (w1, w2) = (w[0], w[1]);
+    let wn = s.w(u, p[1], w1, w2, true);
+    w[0] = wn;
+    w[1] = w1;
+    if !last {
+        p[0] = p[0].saturating_add(w1);
+        p[1] = p[1].saturating_add(w2);
+    }
+    u.saturating_add(wn)
 }
 
 /// The cascade in fixed point (the `fixed-point` build, for cores without an
-/// FPU): the same DC-exact sections on `i32` samples (the FIR's scale), Q24
-/// coefficients, the internal state `w` with 4 extra fraction bits in `i64`,
-/// 64-bit products (|g·d| < 2⁵⁵, |a·w| < 2⁶¹: no overflow for |x| < 2²⁹ and
-/// section gains below 16). An output beyond the `i32` range (a resonant
-/// cascade driving a full-scale signal past 16384 °/s or 2048 g) saturates.
-/// Constant input gives exactly the input back; the accuracy against an f64
-/// evaluation (better than the f32 path's) is pinned by a parity test.
+/// FPU): the same DC-exact sections and the same shared-history state
+/// layout as [`Cascade`], on `i32` samples (the FIR's scale), g in Q26 and
+/// a1, a2 in Q29, the state w in the samples' unit; products are exact
+/// 32 × 32 → 64 ([`mul64`]: four 16-bit products, no library call). A signal
+/// beyond the `i32` range (a resonant cascade driving a full-scale signal
+/// past 16384 °/s or 2048 g) saturates. Constant input gives exactly the
+/// input back; the accuracy against an f64 evaluation is pinned by a parity
+/// test.
 #[derive(Debug, Clone)]
 pub struct CascadeFixed {
-    sections: [SectionFixed; MAX_SECTIONS],
-    n: usize,
-    /// Per section, per channel: u[n−1], u[n−2] (i32) and w[n−1], w[n−2]
-    /// (Q4, i64).
-    u: [[[i32; 2]; CHANNELS]; MAX_SECTIONS],
-    w: [[[i64; 2]; CHANNELS]; MAX_SECTIONS],
+    sections: [SectionFixed; 3],
+    mask: u8,
+    /// Per channel: see [`STATE`] (the state w in Q2).
+    state: [[i32; STATE]; CHANNELS],
 }
 
 impl CascadeFixed {
     /// The cascade of `cfg` at `rate_hz`, in steady state for input `x`.
     pub fn new(cfg: &CascadeConfig, rate_hz: u32, x: &[i32; CHANNELS]) -> Self {
         let mut c = CascadeFixed {
-            sections: [SectionFixed::default(); MAX_SECTIONS],
-            n: 0,
-            u: [[[0; 2]; CHANNELS]; MAX_SECTIONS],
-            w: [[[0; 2]; CHANNELS]; MAX_SECTIONS],
+            sections: [SectionFixed::default(); 3],
+            mask: 0,
+            state: [[0; STATE]; CHANNELS],
         };
         c.configure(cfg, rate_hz, x);
         c
@@ -327,47 +427,63 @@ impl CascadeFixed {
 
     /// Re-designs (through the float design) and resets to steady state.
     pub fn configure(&mut self, cfg: &CascadeConfig, rate_hz: u32, x: &[i32; CHANNELS]) {
-        let f = Cascade::new(cfg, rate_hz, &[0.0; CHANNELS]);
-        self.n = f.sections().len();
-        for (d, s) in self.sections.iter_mut().zip(f.sections()) {
-            *d = SectionFixed::from_float(s);
-        }
+        let fs = f64::from(rate_hz);
+        self.sections = [
+            SectionFixed::from_float(&Section::second_order(&cfg.filt1, fs)),
+            SectionFixed::from_float(&Section::second_order(&cfg.filt2, fs)),
+            SectionFixed::from_float(&Section::first_order(cfg.tau, fs)),
+        ];
+        self.mask = cfg.mask & 0x07;
         self.reset(x);
     }
 
     /// Steady state for a constant input `x`.
     pub fn reset(&mut self, x: &[i32; CHANNELS]) {
-        for k in 0..self.n {
-            for c in 0..CHANNELS {
-                self.u[k][c] = [x[c]; 2];
-                self.w[k][c] = [0; 2];
-            }
+        for (st, &v) in self.state.iter_mut().zip(x) {
+            *st = [0; STATE];
+            st[0] = v;
+            st[1] = v;
         }
     }
 
     /// Filters one sample per channel in place.
     #[inline]
     pub fn process(&mut self, x: &mut [i32; CHANNELS]) {
-        const ROUND_Q: i64 = 1 << (Q - 1);
-        const ROUND_W: i64 = 1 << (W_FRAC - 1);
-        for k in 0..self.n {
-            let s = self.sections[k];
-            let (g, a1, a2) = (i64::from(s.g), i64::from(s.a1), i64::from(s.a2));
-            for c in 0..CHANNELS {
-                let u = x[c];
-                let [u1, u2] = self.u[k][c];
-                let [w1, w2] = self.w[k][c];
-                let d = i64::from(u) - i64::from(if s.first_order { u1 } else { u2 });
-                let w = if s.first_order {
-                    ((g * d) >> (Q - W_FRAC)) - ((a1 * w1 + ROUND_Q) >> Q)
-                } else {
-                    ((g * d) >> (Q - W_FRAC)) - ((a1 * w1 + a2 * w2 + ROUND_Q) >> Q)
-                };
-                self.u[k][c] = [u, u1];
-                self.w[k][c] = [w, w1];
-                let y = i64::from(u) + ((w + ROUND_W) >> W_FRAC);
-                x[c] = y.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+        match self.mask {
+            1 => self.run::<1>(x),
+            2 => self.run::<2>(x),
+            3 => self.run::<3>(x),
+            4 => self.run::<4>(x),
+            5 => self.run::<5>(x),
+            6 => self.run::<6>(x),
+            7 => self.run::<7>(x),
+            _ => {}
+        }
+    }
+
+    /// [`CascadeFixed::process`] for Filter mask `M`.
+    #[inline(always)]
+    fn run<const M: u8>(&mut self, x: &mut [i32; CHANNELS]) {
+        let [f1, f2, f3] = self.sections;
+        for (xc, st) in x.iter_mut().zip(self.state.iter_mut()) {
+            let mut u = *xc;
+            let mut p = [st[0], st[1]];
+            st[1] = st[0];
+            st[0] = u;
+            if M & 1 != 0 {
+                u = second_fixed(&f1, u, &mut p, &mut st[2..4], false);
+                u = second_fixed(&f1, u, &mut p, &mut st[4..6], M & 6 == 0);
             }
+            if M & 2 != 0 {
+                u = second_fixed(&f2, u, &mut p, &mut st[6..8], false);
+                u = second_fixed(&f2, u, &mut p, &mut st[8..10], M & 4 == 0);
+            }
+            if M & 4 != 0 {
+                let wn = f3.w(u, p[0], st[10], 0, false);
+                st[10] = wn;
+                u = u.saturating_add(wn);
+            }
+            *xc = u;
         }
     }
 }

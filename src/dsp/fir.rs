@@ -330,45 +330,132 @@ pub fn design(code: u8, internal_rate_hz: u32) -> Option<&'static FirDesign> {
     }
 }
 
-/// One symmetric stage over a channel-interleaved window `w` (oldest first,
-/// `order·stride + 1` rows), float.
-#[inline(always)]
-fn run_f32(w: &[[f32; CHANNELS]], st: &Stage, stride: usize) -> [f32; CHANNELS] {
-    let n = st.order;
-    let (lo, rest) = w.split_at(n / 2 * stride);
-    let (mid, hi) = rest.split_first().expect("window");
+/// Where the rows of one symmetric stage lie in a ring: the newest row is
+/// `end`, the oldest `start` = `end` − 2·h·L (cyclically), the centre row
+/// `start` + h·L; pair k (k = 0..h) is (`start` + k·L, `end` − k·L). The
+/// a-index wraps from pair `ka` on, the b-index from pair `kb` on, so the
+/// pairs fall in at most three runs in which both are contiguous slices.
+#[derive(Clone, Copy)]
+struct Window {
+    len: usize,
+    start: usize,
+    end: usize,
+    centre: usize,
+    ka: usize,
+    kb: usize,
+}
+
+impl Window {
+    /// A window of `h` pairs `L` rows apart ending at `end` in a ring of
+    /// `len` rows (2·h·L < `len`).
+    #[inline(always)]
+    fn new<const L: usize>(len: usize, end: usize, h: usize) -> Self {
+        let span = 2 * h * L;
+        let start = if end >= span {
+            end - span
+        } else {
+            end + len - span
+        };
+        let c = start + h * L;
+        let centre = if c >= len { c - len } else { c };
+        let ka = if start + (h - 1) * L < len {
+            h
+        } else {
+            (len - start).div_ceil(L)
+        };
+        let kb = if (h - 1) * L <= end { h } else { end / L + 1 };
+        Window {
+            len,
+            start,
+            end,
+            centre,
+            ka,
+            kb,
+        }
+    }
+
+    /// Calls `f(a, b, h_k)` for the pairs in order k = 0, 1, …
+    #[inline(always)]
+    fn pairs<T, H, const L: usize>(
+        &self,
+        ring: &[[T; CHANNELS]],
+        coefs: &[H],
+        mut f: impl FnMut(&[T; CHANNELS], &[T; CHANNELS], &H),
+    ) {
+        let (k1, k2) = if self.ka <= self.kb {
+            (self.ka, self.kb)
+        } else {
+            (self.kb, self.ka)
+        };
+        for (k0, k1) in [(0, k1), (k1, k2), (k2, coefs.len())] {
+            if k0 >= k1 {
+                continue;
+            }
+            let a0 = self.start + k0 * L - if k0 >= self.ka { self.len } else { 0 };
+            let b0 = if k0 >= self.kb {
+                self.end + self.len - k0 * L
+            } else {
+                self.end - k0 * L
+            };
+            let coefs = &coefs[k0..k1];
+            if L == 1 {
+                let a = ring[a0..].iter();
+                let b = ring[..=b0].iter().rev();
+                for ((a, b), h) in a.zip(b).zip(coefs) {
+                    f(a, b, h);
+                }
+            } else {
+                // All but the last pair as whole chunks of L rows: rows
+                // a0 + jL start the chunks from a0, rows b0 − jL end the
+                // chunks counted back from b0 (the last pair's chunk may
+                // cross the end of the ring, so it is taken by index).
+                let n = k1 - k0;
+                let a = ring[a0..a0 + (n - 1) * L].chunks_exact(L);
+                let b = ring[b0 + 1 - (n - 1) * L..=b0].rchunks_exact(L);
+                for ((a, b), h) in a.zip(b).zip(coefs) {
+                    f(&a[0], &b[L - 1], h);
+                }
+                f(
+                    &ring[a0 + (n - 1) * L],
+                    &ring[b0 - (n - 1) * L],
+                    &coefs[n - 1],
+                );
+            }
+        }
+    }
+}
+
+/// One symmetric stage with taps `L` rows apart over the ring `ring` whose
+/// newest row is `end`, float.
+///
+/// Not inlined: called with the ring as an argument, the compiler addresses
+/// the rows from the slice pointer with small offsets (inlined into the
+/// chain it re-derives every row from the chain's base with offsets beyond
+/// the VLDR range: one extra instruction per load).
+#[inline(never)]
+fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> [f32; CHANNELS] {
     let (centre, coefs) = st.half.split_last().expect("taps");
+    let w = Window::new::<L>(ring.len(), end, coefs.len());
+    let mid = &ring[w.centre];
     let mut acc = [0.0f32; CHANNELS];
     for c in 0..CHANNELS {
         acc[c] = centre * mid[c];
     }
-    if stride == 1 {
-        for ((a, b), h) in lo.iter().zip(hi.iter().rev()).zip(coefs.iter()) {
-            for c in 0..CHANNELS {
-                acc[c] += h * (a[c] + b[c]);
-            }
+    w.pairs::<_, _, L>(ring, coefs, |a, b, h| {
+        for c in 0..CHANNELS {
+            acc[c] += h * (a[c] + b[c]);
         }
-    } else {
-        // Rows 0, L, 2L… and N·L, (N−1)·L…: the first row of each L-chunk of
-        // `lo`, the last row of each L-chunk of `hi` counted from its end.
-        let pairs = lo.chunks_exact(stride).zip(hi.rchunks_exact(stride));
-        for ((a, b), h) in pairs.zip(coefs.iter()) {
-            let (a, b) = (&a[0], &b[stride - 1]);
-            for c in 0..CHANNELS {
-                acc[c] += h * (a[c] + b[c]);
-            }
-        }
-    }
+    });
     acc
 }
 
-/// One symmetric stage, fixed point (module doc), rounded to nearest.
-#[inline(always)]
-fn run_i32(w: &[[i32; CHANNELS]], st: &Stage, stride: usize) -> [i32; CHANNELS] {
-    let n = st.order;
-    let (lo, rest) = w.split_at(n / 2 * stride);
-    let (mid, hi) = rest.split_first().expect("window");
+/// One symmetric stage, fixed point (module doc), rounded to nearest (not
+/// inlined, like [`run_f32`]).
+#[inline(never)]
+fn run_i32<const L: usize>(ring: &[[i32; CHANNELS]], end: usize, st: &Stage) -> [i32; CHANNELS] {
     let (centre, coefs) = st.half_q15.split_last().expect("taps");
+    let w = Window::new::<L>(ring.len(), end, coefs.len());
+    let mid = &ring[w.centre];
     let mut acc_hi = [0i32; CHANNELS];
     let mut acc_lo = [1i32 << 14; CHANNELS];
     for c in 0..CHANNELS {
@@ -376,23 +463,13 @@ fn run_i32(w: &[[i32; CHANNELS]], st: &Stage, stride: usize) -> [i32; CHANNELS] 
         acc_hi[c] += centre * (s >> 15);
         acc_lo[c] += centre * (s & 0x7FFF);
     }
-    let mut pair = |a: &[i32; CHANNELS], b: &[i32; CHANNELS], h: i32| {
+    w.pairs::<_, _, L>(ring, coefs, |a, b, &h| {
         for c in 0..CHANNELS {
             let s = a[c] + b[c];
             acc_hi[c] += h * (s >> 15);
             acc_lo[c] += h * (s & 0x7FFF);
         }
-    };
-    if stride == 1 {
-        for ((a, b), &h) in lo.iter().zip(hi.iter().rev()).zip(coefs.iter()) {
-            pair(a, b, h);
-        }
-    } else {
-        let pairs = lo.chunks_exact(stride).zip(hi.rchunks_exact(stride));
-        for ((a, b), &h) in pairs.zip(coefs.iter()) {
-            pair(&a[0], &b[stride - 1], h);
-        }
-    }
+    });
     let mut y = [0i32; CHANNELS];
     for c in 0..CHANNELS {
         y[c] = acc_hi[c] + (acc_lo[c] >> 15);
@@ -405,9 +482,9 @@ macro_rules! bank {
         #[doc = $doc]
         #[derive(Debug, Clone)]
         pub struct $name {
-            raw: [[$t; CHANNELS]; 2 * RING],
+            raw: [[$t; CHANNELS]; RING],
             raw_pos: usize,
-            mid: [[$t; CHANNELS]; 2 * MID_RING],
+            mid: [[$t; CHANNELS]; MID_RING],
             mid_pos: usize,
             design: Option<&'static FirDesign>,
         }
@@ -416,9 +493,9 @@ macro_rules! bank {
             /// A bank whose history is all `x` (the steady state of input `x`).
             pub fn new(design: Option<&'static FirDesign>, x: &[$t; CHANNELS]) -> Self {
                 $name {
-                    raw: [*x; 2 * RING],
+                    raw: [*x; RING],
                     raw_pos: 0,
-                    mid: [*x; 2 * MID_RING],
+                    mid: [*x; MID_RING],
                     mid_pos: 0,
                     design,
                 }
@@ -434,10 +511,19 @@ macro_rules! bank {
                 self.design
             }
 
+            /// The newest input row (the last sample pushed).
+            pub fn last_input(&self) -> [$t; CHANNELS] {
+                self.raw[if self.raw_pos == 0 {
+                    RING - 1
+                } else {
+                    self.raw_pos - 1
+                }]
+            }
+
             /// Fills the histories with `x`.
             pub fn fill(&mut self, x: &[$t; CHANNELS]) {
-                self.raw = [*x; 2 * RING];
-                self.mid = [*x; 2 * MID_RING];
+                self.raw = [*x; RING];
+                self.mid = [*x; MID_RING];
             }
 
             /// Pushes one sample per channel and returns the filtered output.
@@ -445,23 +531,17 @@ macro_rules! bank {
             pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
                 let p = self.raw_pos;
                 self.raw[p] = *x;
-                self.raw[p + RING] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
-                let end = p + RING;
                 // The pre-filter runs on every tick.
-                let m = $run(&self.raw[end - PRE.order..=end], &PRE, 1);
+                let m = $run::<1>(&self.raw, p, &PRE);
                 let q = self.mid_pos;
                 self.mid[q] = m;
-                self.mid[q + MID_RING] = m;
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,
-                    Some(d) if d.stride == 1 => $run(&self.raw[end - d.order..=end], &d.stage, 1),
-                    Some(d) => {
-                        let e = q + MID_RING;
-                        let span = d.stage.order * d.stride;
-                        $run(&self.mid[e - span..=e], &d.stage, d.stride)
-                    }
+                    Some(d) if d.stride == 1 => $run::<1>(&self.raw, p, &d.stage),
+                    Some(d) if d.stride == 2 => $run::<2>(&self.mid, q, &d.stage),
+                    Some(d) => $run::<4>(&self.mid, q, &d.stage),
                 }
             }
         }
@@ -518,6 +598,8 @@ mod tests {
             };
             assert_eq!(span, d.order);
             assert!(d.stride == 1 || d.stage.order * d.stride < MID_RING);
+            // The bank runs strides 1, 2 and 4 (monomorphised).
+            assert!(matches!(d.stride, 1 | 2 | 4));
             assert!(d.stride > 1 || d.order < RING);
             let sum: f32 = (0..=d.order).map(|n| d.tap(n)).sum();
             assert!((sum - 1.0).abs() < 1e-5);

@@ -5,6 +5,7 @@
 
 pub mod cascade;
 pub mod fir;
+pub mod fixed;
 pub mod variant;
 
 pub use cascade::{Cascade, CascadeConfig, SecondOrder};

@@ -94,8 +94,9 @@ pub struct VariantAccumulator {
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
 impl VariantAccumulator {
-    /// An empty accumulator for ticks of `dt` seconds.
-    pub fn new(variant: OutputVariant, dt: f32) -> Self {
+    /// An empty accumulator for ticks of `dt` seconds whose empty-interval
+    /// output (main and filtered) is `last`.
+    pub fn new(variant: OutputVariant, dt: f32, last: &[f32; CHANNELS]) -> Self {
         VariantAccumulator {
             variant,
             dt,
@@ -104,8 +105,8 @@ impl VariantAccumulator {
             first_f: [0.0; CHANNELS],
             sum: [0.0; CHANNELS],
             sum_f: [0.0; CHANNELS],
-            last: [0.0; CHANNELS],
-            last_f: [0.0; CHANNELS],
+            last: *last,
+            last_f: *last,
             alpha: [0.0; 3],
             coning: [0.0; 3],
             upsilon: [[0.0; 3]; 2],
@@ -116,6 +117,11 @@ impl VariantAccumulator {
     /// The variant.
     pub fn variant(&self) -> OutputVariant {
         self.variant
+    }
+
+    /// The last tick's FIR output.
+    pub fn last(&self) -> [f32; CHANNELS] {
+        self.last
     }
 
     /// Starts a new interval (keeps the last values for an empty interval).
@@ -208,5 +214,356 @@ impl VariantAccumulator {
         }
         self.reset();
         out
+    }
+}
+
+// ----- fixed point (the `fixed-point` build) -----
+
+use super::fixed::{cross_i64, mul64, norm3, scale_i64, Recip};
+
+/// What [`VariantFixed::take`] returns, in the FIR's fixed-point units
+/// (gyro °/s·2¹⁷, accelerometers g·2²⁰).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VariantOutputFixed {
+    /// Gyro, acc, aux acc per the variant.
+    pub main: [i32; CHANNELS],
+    /// Cascade-filtered channels.
+    pub filtered: [i32; CHANNELS],
+    /// Ticks in the interval.
+    pub ticks: u32,
+}
+
+/// [`VariantAccumulator`] in integers, for the `fixed-point` build.
+///
+/// A "unit" is one FIR unit for one tick (gyro: 2⁻¹⁷ °/s × dt = G rad,
+/// G = dt·π/180/2¹⁷; accelerometers 2⁻²⁰ g × dt). With A = Σ gyro and
+/// U = Σ acc over the interval (exact `i64` sums) and n ticks, the float
+/// accumulator's formulas become, in output units:
+///
+/// ```text
+/// average       = Σ/n
+/// incremental   gyro = (A + ½G·C)/n,   C = Σ α_{k−1} × Δα_k
+///               acc  = (U + ½G·(A × U + S))/n,   S = Σ (α_{k−1} × Δυ_k + υ_{k−1} × Δα_k)
+/// ```
+///
+/// C and S are sums of exact 32 × 32 → 64 cross products in block floating
+/// point: α_{k−1} and υ_{k−1} enter as `i32` after a right shift s that
+/// grows by one each time the tick count doubles (s = ⌊log₂(k−1)⌋ − 1), the
+/// products enter the `i64` sums shifted by s too, and the sums are
+/// rescaled (÷4, rounded) when s grows: a full-scale input cannot overflow
+/// at any interval length, and the corrections keep ~30 significant bits.
+/// The means divide by a reciprocal ([`Recip`]). One `f32` division per
+/// output (½G/n), otherwise integers.
+#[derive(Debug, Clone)]
+pub struct VariantFixed {
+    variant: OutputVariant,
+    /// The block exponent s (LSB of C and S: 2^2s units²).
+    shift: u8,
+    /// ½·G.
+    half_g: f32,
+    n: u32,
+    last: [i32; CHANNELS],
+    last_f: [i32; CHANNELS],
+    sum: [i64; CHANNELS],
+    sum_f: [i64; CHANNELS],
+    coning: [i64; 3],
+    sculling: [[i64; 3]; 2],
+}
+
+/// `x / 2^s` rounded to nearest (half up) for 0 ≤ s < 32, in 32-bit
+/// operations (a variable 64-bit shift is a library call on ARMv6-M).
+#[inline(always)]
+fn shr64(x: i64, s: u32) -> i64 {
+    if s == 0 {
+        return x;
+    }
+    let half = (x as u32 >> (s - 1)) & 1;
+    let lo = x as u32;
+    let hi = (x >> 32) as i32;
+    let nlo = (lo >> s) | ((hi as u32) << (32 - s));
+    let nhi = hi >> s;
+    ((i64::from(nhi) << 32) | i64::from(nlo)) + i64::from(half)
+}
+
+/// α, υ of the ticks so far as `i32` at block exponent `s`.
+#[inline(always)]
+fn block(x: i64, s: u32) -> i32 {
+    shr64(x, s).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+}
+
+fn cross_shr(a: &[i32; 3], b: &[i32], s: u32) -> [i64; 3] {
+    [
+        shr64(mul64(a[1], b[2]) - mul64(a[2], b[1]), s),
+        shr64(mul64(a[2], b[0]) - mul64(a[0], b[2]), s),
+        shr64(mul64(a[0], b[1]) - mul64(a[1], b[0]), s),
+    ]
+}
+
+fn triad64(x: &[i64; CHANNELS], b: usize) -> [i64; 3] {
+    [x[b], x[b + 1], x[b + 2]]
+}
+
+impl VariantFixed {
+    /// An empty accumulator for ticks of `dt` seconds whose empty-interval
+    /// output (main and filtered) is `last`.
+    pub fn new(variant: OutputVariant, dt: f32, last: &[i32; CHANNELS]) -> Self {
+        VariantFixed {
+            variant,
+            shift: 0,
+            half_g: 0.5 * dt * DEG / 131_072.0,
+            n: 0,
+            last: *last,
+            last_f: *last,
+            sum: [0; CHANNELS],
+            sum_f: [0; CHANNELS],
+            coning: [0; 3],
+            sculling: [[0; 3]; 2],
+        }
+    }
+
+    /// The variant.
+    pub fn variant(&self) -> OutputVariant {
+        self.variant
+    }
+
+    /// The last tick's FIR output.
+    pub fn last(&self) -> [i32; CHANNELS] {
+        self.last
+    }
+
+    /// Starts a new interval (keeps the last values for an empty interval).
+    pub fn reset(&mut self) {
+        self.n = 0;
+        self.shift = 0;
+        self.sum = [0; CHANNELS];
+        self.sum_f = [0; CHANNELS];
+        self.coning = [0; 3];
+        self.sculling = [[0; 3]; 2];
+    }
+
+    /// Adds one tick: `main` = FIR outputs, `filtered` = cascade outputs.
+    #[inline]
+    pub fn add(&mut self, main: &[i32; CHANNELS], filtered: &[i32; CHANNELS]) {
+        self.last = *main;
+        self.last_f = *filtered;
+        if self.variant == OutputVariant::Instant {
+            self.n = self.n.saturating_add(1);
+            return;
+        }
+        if self.variant == OutputVariant::Incremental {
+            // α, υ before this tick at the block exponent: |Σ| < n·2^28.2,
+            // s = ⌊log₂ n⌋ − 1 keeps them within 2^30.
+            let s = u32::from(self.shift);
+            let mut h = [0i32; CHANNELS];
+            for c in 0..CHANNELS {
+                h[c] = block(self.sum[c], s);
+            }
+            let alpha = [h[0], h[1], h[2]];
+            let da = &main[0..3];
+            let c = cross_shr(&alpha, da, s);
+            for i in 0..3 {
+                self.coning[i] = self.coning[i].wrapping_add(c[i]);
+            }
+            for k in 0..2 {
+                let b = 3 + 3 * k;
+                let ups = [h[b], h[b + 1], h[b + 2]];
+                let t1 = cross_shr(&alpha, &main[b..b + 3], s);
+                let t2 = cross_shr(&ups, da, s);
+                for i in 0..3 {
+                    self.sculling[k][i] = self.sculling[k][i].wrapping_add(t1[i] + t2[i]);
+                }
+            }
+        }
+        for c in 0..CHANNELS {
+            self.sum[c] = self.sum[c].wrapping_add(i64::from(main[c]));
+            self.sum_f[c] = self.sum_f[c].wrapping_add(i64::from(filtered[c]));
+        }
+        self.n = self.n.saturating_add(1);
+        let n = self.n;
+        if n >= 4 && n & (n - 1) == 0 && self.shift < 31 {
+            // The tick count doubled: one more bit of block exponent; the
+            // sums' LSB (2^2s) grows by 4.
+            self.shift += 1;
+            let r = |x: &mut i64| *x = (*x >> 2) + ((*x >> 1) & 1);
+            self.coning.iter_mut().for_each(r);
+            self.sculling.iter_mut().flatten().for_each(r);
+        }
+    }
+
+    /// The interval's output per the variant; starts a new interval.
+    pub fn take(&mut self) -> VariantOutputFixed {
+        let n = self.n;
+        let mut out = VariantOutputFixed {
+            main: self.last,
+            filtered: self.last_f,
+            ticks: n.max(1),
+        };
+        if n > 0 && self.variant != OutputVariant::Instant {
+            let r = Recip::new(n);
+            for c in 0..CHANNELS {
+                out.main[c] = r.div_round(self.sum[c]);
+                out.filtered[c] = r.div_round(self.sum_f[c]);
+            }
+            if self.variant == OutputVariant::Incremental {
+                // Corrections ½G·(…)/n, output units.
+                let k = self.half_g / n as f32;
+                let lsb = 2 * i32::from(self.shift);
+                for i in 0..3 {
+                    out.main[i] = out.main[i].saturating_add(scale_i64(self.coning[i], lsb, k));
+                }
+                let (a, sa) = norm3(&triad64(&self.sum, 0));
+                for s in 0..2 {
+                    let b = 3 + 3 * s;
+                    let (u, su) = norm3(&triad64(&self.sum, b));
+                    let rot = cross_i64(&a, &u);
+                    for i in 0..3 {
+                        let corr = scale_i64(rot[i], (sa + su) as i32, k)
+                            .saturating_add(scale_i64(self.sculling[s][i], lsb, k));
+                        out.main[b + i] = out.main[b + i].saturating_add(corr);
+                    }
+                }
+            }
+        }
+        self.reset();
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`VariantAccumulator`]'s formulas in f64: (main, filtered).
+    fn reference(variant: OutputVariant, dt: f64, ys: &[[f64; CHANNELS]]) -> [f64; CHANNELS] {
+        let n = ys.len() as f64;
+        let last = *ys.last().unwrap();
+        match variant {
+            OutputVariant::Instant => last,
+            OutputVariant::Average => {
+                let mut m = [0.0; CHANNELS];
+                for y in ys {
+                    for c in 0..CHANNELS {
+                        m[c] += y[c] / n;
+                    }
+                }
+                m
+            }
+            OutputVariant::Incremental => {
+                let deg = core::f64::consts::PI / 180.0;
+                let cr = |a: &[f64; 3], b: &[f64; 3]| {
+                    [
+                        a[1] * b[2] - a[2] * b[1],
+                        a[2] * b[0] - a[0] * b[2],
+                        a[0] * b[1] - a[1] * b[0],
+                    ]
+                };
+                let (mut al, mut con) = ([0.0; 3], [0.0; 3]);
+                let (mut up, mut scu) = ([[0.0; 3]; 2], [[0.0; 3]; 2]);
+                for y in ys {
+                    let da = [y[0] * dt * deg, y[1] * dt * deg, y[2] * dt * deg];
+                    let c = cr(&al, &da);
+                    for s in 0..2 {
+                        let b = 3 + 3 * s;
+                        let dv = [y[b] * dt, y[b + 1] * dt, y[b + 2] * dt];
+                        let t1 = cr(&al, &dv);
+                        let t2 = cr(&up[s], &da);
+                        for i in 0..3 {
+                            scu[s][i] += 0.5 * (t1[i] + t2[i]);
+                            up[s][i] += dv[i];
+                        }
+                    }
+                    for i in 0..3 {
+                        con[i] += 0.5 * c[i];
+                        al[i] += da[i];
+                    }
+                }
+                let t = n * dt;
+                let mut m = [0.0; CHANNELS];
+                for i in 0..3 {
+                    m[i] = (al[i] + con[i]) / (t * deg);
+                }
+                for s in 0..2 {
+                    let b = 3 + 3 * s;
+                    let rot = cr(&al, &up[s]);
+                    for i in 0..3 {
+                        m[b + i] = (up[s][i] + 0.5 * rot[i] + scu[s][i]) / t;
+                    }
+                }
+                m
+            }
+        }
+    }
+
+    /// The fixed accumulator against the float formulas (in f64) on a
+    /// tumbling, vibrating input, for intervals within one sub-interval and
+    /// over several (folded) ones; and the float accumulator alike.
+    #[test]
+    fn fixed_point_matches_the_formulas_in_every_variant() {
+        let dt = 0.0005f32;
+        for variant in [
+            OutputVariant::Instant,
+            OutputVariant::Average,
+            OutputVariant::Incremental,
+        ] {
+            for n in [1u32, 2, 3, 4, 5, 20, 255, 256, 257, 700, 2000, 5000, 40_000] {
+                let mut f = VariantAccumulator::new(variant, dt, &[0.0; CHANNELS]);
+                let mut q = VariantFixed::new(variant, dt, &[0; CHANNELS]);
+                let mut ys = std::vec::Vec::new();
+                for k in 0..n {
+                    let t = k as f32 * dt;
+                    let (s, c) = (libm::sinf(30.0 * t), libm::cosf(30.0 * t));
+                    let v = [
+                        300.0 * s,
+                        300.0 * c,
+                        50.0 + 20.0 * s,
+                        2.0 * c,
+                        -1.5 * s,
+                        1.0 + 0.5 * c,
+                        20.0 * s,
+                        -30.0 * c,
+                        5.0,
+                    ];
+                    let mut yq = [0i32; CHANNELS];
+                    let mut yf = [0.0f32; CHANNELS];
+                    let mut y64 = [0.0f64; CHANNELS];
+                    for ch in 0..CHANNELS {
+                        let scale = if ch < 3 { 131_072.0 } else { 1_048_576.0 };
+                        yq[ch] = libm::roundf(v[ch] * scale) as i32;
+                        yf[ch] = yq[ch] as f32 / scale;
+                        y64[ch] = f64::from(yq[ch]) / f64::from(scale);
+                    }
+                    f.add(&yf, &yf);
+                    q.add(&yq, &yq);
+                    ys.push(y64);
+                }
+                let r = reference(variant, f64::from(dt), &ys);
+                let a = f.take();
+                let b = q.take();
+                for ch in 0..CHANNELS {
+                    let scale = if ch < 3 { 131_072.0 } else { 1_048_576.0 };
+                    let y = f64::from(b.main[ch]) / scale;
+                    // Fixed: within an output LSB (+ the f32 significand of
+                    // the corrections' factor).
+                    let tol = 1.5 / scale + 1e-7 * r[ch].abs();
+                    assert!(
+                        (r[ch] - y).abs() <= tol,
+                        "{variant:?} n {n} ch {ch}: {} vs {y}",
+                        r[ch]
+                    );
+                    // Float: its own f32 rounding.
+                    let x = f64::from(a.main[ch]);
+                    assert!(
+                        (r[ch] - x).abs() <= 1e-5 * 300.0,
+                        "{variant:?} n {n} ch {ch}: {} vs {x}",
+                        r[ch]
+                    );
+                    if variant != OutputVariant::Incremental {
+                        let yf = f64::from(b.filtered[ch]) / scale;
+                        assert!((r[ch] - yf).abs() <= tol);
+                    }
+                }
+                assert_eq!(a.ticks, b.ticks);
+            }
+        }
     }
 }

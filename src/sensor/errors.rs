@@ -32,6 +32,7 @@
 
 use super::rng::Rng;
 use crate::ahrs::rotation::{Mat3, Vec3};
+use crate::dsp::fixed::Coef;
 use crate::model::Product;
 use libm::{expf, sqrtf};
 
@@ -408,5 +409,256 @@ impl TriadEngine {
             }
         }
         (y, over)
+    }
+}
+
+/// Fraction bits of the fixed-point gyro measurement: 2¹⁹ per °/s (LSB
+/// 1.9e-6 °/s; ±4096 °/s fit an `i32`).
+pub const GYRO_BITS: u32 = 19;
+/// Fraction bits of the fixed-point accelerometer measurements: 2²³ per g
+/// (LSB 1.2e-7 g; ±256 g fit an `i32`).
+pub const ACC_BITS: u32 = 23;
+/// Truth entering the fixed-point engine is clamped to ±2³⁰ (2048 °/s,
+/// 128 g: beyond every range, so the saturation flags still see it), and
+/// each entry of M − I to ±¼, so M·truth cannot overflow.
+pub const TRUTH_LIMIT: i32 = 1 << 30;
+
+/// An entry of M − I for the fixed-point engine: clamped to ±¼ (NaN → 0).
+fn delta(x: f32) -> f64 {
+    if x.is_nan() {
+        0.0
+    } else {
+        f64::from(x.clamp(-0.25, 0.25))
+    }
+}
+
+/// [`TriadEngine`] in integers, for the `fixed-point` build: the same
+/// model and the same random draws, on measurements scaled by 2^`bits`
+/// ([`GYRO_BITS`], [`ACC_BITS`]).
+///
+/// - M − I as [`Coef`]s (14-bit mantissas: a 300 ppm scale factor is kept to
+///   0.02 ppm); the temperature terms (scale factor and bias) are set one
+///   axis at a time ([`TriadEngineFixed::set_axis_temperature`]: two `f32`
+///   products), so the chain spreads a temperature step over nine ticks
+///   instead of spending a few thousand soft-float instructions in one;
+/// - white noise: the integer Irwin–Hall sum ([`Rng::gaussian_sum`]) times
+///   one [`Coef`] (σ·√3/65536);
+/// - Gauss–Markov: `x ← x − ε·x + b·u` on a state with `gm_shift` extra
+///   fraction bits (chosen per axis so that 16 σ fill 2³⁰: the decay term
+///   ε·x, 5e-6·x at T_c = 100 s and 2 kHz, is then ~100 LSB and rounds
+///   without bias), `u` the same 16-bit uniform as the float engine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriadEngineFixed {
+    /// M − I.
+    m: [[Coef; 3]; 3],
+    identity_m: bool,
+    noisy: bool,
+    bits: u8,
+    gm_shift: [u8; 3],
+    /// Bias now, scaled.
+    bias: [i32; 3],
+    gm: [i32; 3],
+    gm_decay: [Coef; 3],
+    gm_drive: [Coef; 3],
+    sigma: [Coef; 3],
+    range: i32,
+}
+
+fn q(v: f64, bits: u32) -> i32 {
+    let x = libm::round(v * libm::pow(2.0, f64::from(bits)));
+    if x.is_nan() {
+        0
+    } else {
+        x.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+    }
+}
+
+impl TriadEngineFixed {
+    /// An engine with saturation at ±`range` (°/s or g) on measurements
+    /// scaled by 2^`bits`.
+    pub fn new(range: f32, bits: u32) -> Self {
+        TriadEngineFixed {
+            m: [[Coef::ZERO; 3]; 3],
+            identity_m: true,
+            noisy: false,
+            bits: bits as u8,
+            gm_shift: [0; 3],
+            bias: [0; 3],
+            gm: [0; 3],
+            gm_decay: [Coef::ZERO; 3],
+            gm_drive: [Coef::ZERO; 3],
+            sigma: [Coef::ZERO; 3],
+            range: q(f64::from(range), bits).max(0),
+        }
+    }
+
+    /// The scale exponent: measurements are in units of 2^−bits.
+    pub fn bits(&self) -> u32 {
+        u32::from(self.bits)
+    }
+
+    fn gm_sigma(&self, a: &AxisErrors) -> f64 {
+        f64::from(GM_SIGMA_PER_BIAS_INSTABILITY)
+            * f64::from(a.bias_instability)
+            * libm::pow(2.0, f64::from(self.bits))
+    }
+
+    /// Extra fraction bits of an axis's Gauss–Markov state: 16 σ ≈ 2³⁰.
+    fn gm_shift_for(&self, a: &AxisErrors) -> u8 {
+        let s = self.gm_sigma(a);
+        if s.is_nan() || s <= 0.0 {
+            return 0;
+        }
+        let mut k = 0u8;
+        while k < 24 && s * libm::pow(2.0, f64::from(k + 1)) <= f64::from(1u32 << 26) {
+            k += 1;
+        }
+        k
+    }
+
+    /// [`TriadEngine::configure`]: every coefficient from `e` for ticks of
+    /// `dt` at `temp_c` (float, at configuration time). The Gauss–Markov
+    /// state is kept (rescaled if its fraction bits change).
+    pub fn configure(&mut self, e: &SensorErrors, temp_c: f32, dt: f32) {
+        let scale = libm::pow(2.0, f64::from(self.bits));
+        let dt = f64::from(dt);
+        let mut noisy = false;
+        for i in 0..3 {
+            let a = &e.axes[i];
+            let shift = self.gm_shift_for(a);
+            let old = self.gm_shift[i];
+            self.gm[i] = if shift >= old {
+                self.gm[i].saturating_mul(1 << (shift - old))
+            } else {
+                self.gm[i] >> (old - shift)
+            };
+            self.gm_shift[i] = shift;
+            let sigma = f64::from(a.noise_density) / libm::sqrt(dt) * scale;
+            self.sigma[i] = Coef::new(sigma * f64::from(crate::sensor::rng::IRWIN_HALL_SCALE));
+            if a.bias_corr_time_s > 0.0 && a.bias_instability > 0.0 {
+                let k = libm::exp(-dt / f64::from(a.bias_corr_time_s));
+                let g = self.gm_sigma(a) * libm::pow(2.0, f64::from(shift));
+                self.gm_decay[i] = Coef::new(1.0 - k);
+                // u is a 16-bit signed uniform: ×√3/32768 for unit variance.
+                self.gm_drive[i] =
+                    Coef::new(g * libm::sqrt((1.0 - k * k).max(0.0)) * 1.732_050_8 / 32_768.0);
+            } else {
+                self.gm_decay[i] = Coef::ZERO;
+                self.gm_drive[i] = Coef::ZERO;
+                self.gm[i] = 0;
+            }
+            noisy |= self.sigma[i] != Coef::ZERO || self.gm_drive[i] != Coef::ZERO;
+            for j in 0..3 {
+                if i != j {
+                    self.m[i][j] = Coef::new(delta(e.misalignment[i][j]));
+                }
+            }
+        }
+        self.noisy = noisy;
+        for i in 0..3 {
+            self.set_axis_temperature(e, i, temp_c);
+        }
+    }
+
+    /// The temperature terms of axis `i` at `temp_c`: scale factor
+    /// `1 + sf + ts·ΔT` and bias `b + tb·ΔT` (two `f32` products, the same
+    /// arithmetic as [`TriadEngine::set_temperature`]).
+    pub fn set_axis_temperature(&mut self, e: &SensorErrors, i: usize, temp_c: f32) {
+        let a = &e.axes[i];
+        let dtemp = temp_c - REFERENCE_TEMPERATURE_C;
+        self.m[i][i] = Coef::from_f32(delta(a.scale_factor + a.temp_scale * dtemp) as f32);
+        self.bias[i] =
+            crate::dsp::fixed::to_fixed(a.bias + a.temp_bias * dtemp, u32::from(self.bits));
+        self.identity_m = self.m.iter().flatten().all(|c| *c == Coef::ZERO);
+    }
+    /// [`TriadEngine::randomize_gm`]: the Gauss–Markov biases drawn from
+    /// their stationary distribution (one Gaussian per axis, as the float
+    /// engine draws).
+    pub fn randomize_gm(&mut self, e: &SensorErrors, rng: &mut Rng) {
+        for i in 0..3 {
+            let a = &e.axes[i];
+            let shift = self.gm_shift_for(a);
+            self.gm_shift[i] = shift;
+            self.gm[i] = if a.bias_corr_time_s > 0.0 {
+                let g = self.gm_sigma(a) * libm::pow(2.0, f64::from(shift));
+                let k = Coef::new(g * f64::from(crate::sensor::rng::IRWIN_HALL_SCALE));
+                k.mul_small(rng.gaussian_sum())
+            } else {
+                0
+            };
+        }
+    }
+
+    /// The current Gauss–Markov bias, scaled.
+    pub fn gm_bias(&self) -> [i32; 3] {
+        let mut b = [0; 3];
+        for i in 0..3 {
+            b[i] = round_shr(self.gm[i], self.gm_shift[i]);
+        }
+        b
+    }
+
+    /// Saturation level, scaled.
+    pub fn range(&self) -> i32 {
+        self.range
+    }
+
+    /// One tick: measures `truth` (scaled, |·| ≤ [`TRUTH_LIMIT`]); returns
+    /// the measurement and a mask of the axes beyond the range (bit i =
+    /// axis i), which are clipped.
+    #[inline]
+    pub fn measure(&mut self, truth: &[i32; 3], rng: &mut Rng) -> ([i32; 3], u8) {
+        let x = truth;
+        let mut y = *x;
+        if !self.identity_m {
+            for i in 0..3 {
+                let r = &self.m[i];
+                y[i] = x[i] + r[0].mul(x[0]) + r[1].mul(x[1]) + r[2].mul(x[2]);
+            }
+        }
+        if self.noisy {
+            let u = rng.next_u32();
+            let u2 = rng.next_u32();
+            let inn = [
+                i32::from(u as u16 as i16),
+                i32::from((u >> 16) as u16 as i16),
+                i32::from(u2 as u16 as i16),
+            ];
+            for i in 0..3 {
+                let g = self.gm[i];
+                self.gm[i] = g
+                    .saturating_sub(self.gm_decay[i].mul(g))
+                    .saturating_add(self.gm_drive[i].mul_small(inn[i]));
+                let e = self.bias[i]
+                    .saturating_add(round_shr(self.gm[i], self.gm_shift[i]))
+                    .saturating_add(self.sigma[i].mul_small(rng.gaussian_sum()));
+                y[i] = y[i].saturating_add(e);
+            }
+        } else {
+            for i in 0..3 {
+                y[i] = y[i].saturating_add(self.bias[i]);
+            }
+        }
+        let mut over = 0u8;
+        for (i, v) in y.iter_mut().enumerate() {
+            if *v > self.range {
+                *v = self.range;
+                over |= 1 << i;
+            } else if *v < -self.range {
+                *v = -self.range;
+                over |= 1 << i;
+            }
+        }
+        (y, over)
+    }
+}
+
+/// `x / 2^s` rounded to nearest (half up).
+#[inline(always)]
+fn round_shr(x: i32, s: u8) -> i32 {
+    if s == 0 {
+        x
+    } else {
+        (x >> s) + ((x >> (s - 1)) & 1)
     }
 }

@@ -216,90 +216,122 @@ impl Phasor {
     }
 }
 
+/// The per-motion state of [`BuiltinMotion`].
+#[derive(Debug, Clone, PartialEq)]
+enum State {
+    /// Static: the truth and the attitude never change.
+    Static { truth: Truth, base: Quat },
+    /// Sample: the truth is in the [`Motion`].
+    Sample,
+    /// Constant rotation: the attitude.
+    Rotation { q: QuatIntegrator },
+    /// Vibration: the attitude and the phase (half-tick steps).
+    Vibration { q: QuatIntegrator, phasor: Phasor },
+    /// Coning: the base (heading) attitude, the phase, sin α/2, cos α/2 and
+    /// the phasor's actual rate (rad/s) — computed once, so a tick needs no
+    /// trigonometry; the attitude is base ⊗ cone(phase).
+    Coning {
+        base: Quat,
+        phasor: Phasor,
+        sa: f32,
+        ca: f32,
+        rate: f32,
+    },
+}
+
 /// A [`Motion`] with its running state: the built-in [`MotionSource`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuiltinMotion {
     motion: Motion,
     earth: Vec3,
-    base: Quat,
-    q: QuatIntegrator,
-    /// Phase of the vibration/coning; for vibration at half-tick steps.
-    phasor: Phasor,
     dt: f32,
     started: bool,
-    static_truth: Truth,
-    /// Coning: sin α/2, cos α/2 and the phasor's actual rate (rad/s) —
-    /// computed once, so a tick needs no trigonometry.
-    cone_s: f32,
-    cone_c: f32,
-    cone_rate: f32,
+    state: State,
+}
+
+/// Latitude and heading of a motion's site, degrees.
+fn site(motion: &Motion) -> (f32, f32) {
+    match *motion {
+        Motion::Static {
+            lat_deg,
+            heading_deg,
+        }
+        | Motion::ConstantRotation {
+            lat_deg,
+            heading_deg,
+            ..
+        }
+        | Motion::Vibration {
+            lat_deg,
+            heading_deg,
+            ..
+        }
+        | Motion::Coning {
+            lat_deg,
+            heading_deg,
+            ..
+        } => (lat_deg, heading_deg),
+        Motion::Sample(_) => (DEFAULT_LATITUDE_DEG, 0.0),
+    }
+}
+
+/// The coning quaternion at phase (cos, sin) for sin α/2, cos α/2.
+fn cone(sa: f32, ca: f32, c: f32, s: f32) -> Quat {
+    [ca, sa * c, sa * s, 0.0]
 }
 
 impl BuiltinMotion {
     /// Prepares `motion` for ticks of `dt` seconds.
     pub fn new(motion: Motion, dt: f32) -> Self {
-        let (lat, heading) = match motion {
-            Motion::Static {
-                lat_deg,
-                heading_deg,
-            }
-            | Motion::ConstantRotation {
-                lat_deg,
-                heading_deg,
-                ..
-            }
-            | Motion::Vibration {
-                lat_deg,
-                heading_deg,
-                ..
-            }
-            | Motion::Coning {
-                lat_deg,
-                heading_deg,
-                ..
-            } => (lat_deg, heading_deg),
-            Motion::Sample(_) => (DEFAULT_LATITUDE_DEG, 0.0),
-        };
+        let (lat, heading) = site(&motion);
         let earth = earth_enu(lat);
         let base = quat_from_euler(heading * DEG, 0.0, 0.0);
-        let step = match motion {
+        let state = match motion {
+            Motion::Static { .. } => {
+                let (w, f) = earth_and_gravity(&base, &earth);
+                State::Static {
+                    truth: Truth {
+                        rate_dps: w,
+                        specific_force_g: f,
+                        temperature_c: None,
+                    },
+                    base,
+                }
+            }
+            Motion::Sample(_) => State::Sample,
+            Motion::ConstantRotation { .. } => State::Rotation {
+                q: QuatIntegrator::new(base),
+            },
             // Vibration samples the rate at mid-tick: two half steps a tick.
-            Motion::Vibration { freq_hz, .. } => core::f32::consts::PI * freq_hz * dt,
-            Motion::Coning { freq_hz, .. } => core::f32::consts::TAU * freq_hz * dt,
-            _ => 0.0,
+            Motion::Vibration { freq_hz, .. } => State::Vibration {
+                q: QuatIntegrator::new(base),
+                phasor: Phasor::new(core::f32::consts::PI * freq_hz * dt),
+            },
+            Motion::Coning {
+                half_angle_deg,
+                freq_hz,
+                ..
+            } => {
+                let phasor = Phasor::new(core::f32::consts::TAU * freq_hz * dt);
+                State::Coning {
+                    base,
+                    phasor,
+                    sa: sinf(0.5 * half_angle_deg * DEG),
+                    ca: cosf(0.5 * half_angle_deg * DEG),
+                    // The phasor's actual step (its f32 step differs from
+                    // 2πf·dt in the last bits): keeps the rate consistent
+                    // with the attitude.
+                    rate: phasor.rate(dt),
+                }
+            }
         };
-        let (w, f) = earth_and_gravity(&base, &earth);
-        let mut m = BuiltinMotion {
+        BuiltinMotion {
             motion,
             earth,
-            base,
-            q: QuatIntegrator::new(base),
-            phasor: Phasor::new(step),
             dt,
             started: false,
-            static_truth: Truth {
-                rate_dps: w,
-                specific_force_g: f,
-                temperature_c: None,
-            },
-            cone_s: 0.0,
-            cone_c: 1.0,
-            cone_rate: 0.0,
-        };
-        if let Motion::Coning { half_angle_deg, .. } = motion {
-            m.cone_s = sinf(0.5 * half_angle_deg * DEG);
-            m.cone_c = cosf(0.5 * half_angle_deg * DEG);
-            // The phasor's actual step (its f32 step differs from 2πf·dt in
-            // the last bits): keeps the rate consistent with the attitude.
-            m.cone_rate = m.phasor.rate(dt);
-            m.q = QuatIntegrator::new(quat_mul(&base, &m.cone(1.0, 0.0)));
+            state,
         }
-        m
-    }
-
-    /// The coning quaternion at phase (cos, sin).
-    fn cone(&self, c: f32, s: f32) -> Quat {
-        [self.cone_c, self.cone_s * c, self.cone_s * s, 0.0]
     }
 
     /// The motion this source plays.
@@ -309,17 +341,23 @@ impl BuiltinMotion {
 
     /// Truth at the current state without advancing.
     fn current(&self) -> Truth {
-        match self.motion {
-            Motion::Static { .. } => self.static_truth,
-            Motion::Sample(t) => t,
-            Motion::ConstantRotation { rate_dps, .. } => self.with_body_rate(rate_dps, [0.0; 3]),
-            Motion::Vibration {
-                acc_amp_g,
-                rate_amp_dps,
-                ..
-            } => {
-                let s = self.phasor.s;
+        match (&self.state, self.motion) {
+            (State::Static { truth, .. }, _) => *truth,
+            (_, Motion::Sample(t)) => t,
+            (State::Rotation { q }, Motion::ConstantRotation { rate_dps, .. }) => {
+                self.with_body_rate(&q.get(), rate_dps, [0.0; 3])
+            }
+            (
+                State::Vibration { q, phasor },
+                Motion::Vibration {
+                    acc_amp_g,
+                    rate_amp_dps,
+                    ..
+                },
+            ) => {
+                let s = phasor.s;
                 self.with_body_rate(
+                    &q.get(),
                     [
                         rate_amp_dps[0] * s,
                         rate_amp_dps[1] * s,
@@ -328,23 +366,34 @@ impl BuiltinMotion {
                     [acc_amp_g[0] * s, acc_amp_g[1] * s, acc_amp_g[2] * s],
                 )
             }
-            Motion::Coning { .. } => {
-                let om = self.cone_rate;
-                let (c, s) = (self.phasor.c, self.phasor.s);
-                let qc = self.cone(c, s);
-                let sa = self.cone_s;
+            (
+                State::Coning {
+                    base,
+                    phasor,
+                    sa,
+                    ca,
+                    rate,
+                },
+                _,
+            ) => {
+                let om = *rate;
+                let (c, s) = (phasor.c, phasor.s);
+                let qc = cone(*sa, *ca, c, s);
+                let sa = *sa;
                 let qdot = [0.0, -sa * om * s, sa * om * c, 0.0];
                 let w = quat_mul(&[qc[0], -qc[1], -qc[2], -qc[3]], &qdot);
                 self.with_body_rate(
+                    &quat_mul(base, &qc),
                     [2.0 * w[1] * RAD, 2.0 * w[2] * RAD, 2.0 * w[3] * RAD],
                     [0.0; 3],
                 )
             }
+            _ => Truth::at_rest(),
         }
     }
 
-    fn with_body_rate(&self, rate_dps: Vec3, lin_acc_g: Vec3) -> Truth {
-        let (w, f) = earth_and_gravity(&self.q.get(), &self.earth);
+    fn with_body_rate(&self, q: &Quat, rate_dps: Vec3, lin_acc_g: Vec3) -> Truth {
+        let (w, f) = earth_and_gravity(q, &self.earth);
         Truth {
             rate_dps: [w[0] + rate_dps[0], w[1] + rate_dps[1], w[2] + rate_dps[2]],
             specific_force_g: [
@@ -359,33 +408,29 @@ impl BuiltinMotion {
     /// Moves the state on by one tick.
     fn advance(&mut self) {
         let dt = self.dt;
-        match self.motion {
-            Motion::Static { .. } | Motion::Sample(_) => {}
-            Motion::ConstantRotation { rate_dps, .. } => {
+        match (&mut self.state, self.motion) {
+            (State::Rotation { q }, Motion::ConstantRotation { rate_dps, .. }) => {
                 let a = [
                     rate_dps[0] * DEG * dt,
                     rate_dps[1] * DEG * dt,
                     rate_dps[2] * DEG * dt,
                 ];
-                self.q.rotate(&a);
+                q.rotate(&a);
             }
-            Motion::Vibration { rate_amp_dps, .. } => {
+            (State::Vibration { q, phasor }, Motion::Vibration { rate_amp_dps, .. }) => {
                 // Rate at mid-tick (second-order accurate attitude).
-                self.phasor.advance();
-                let s = self.phasor.s * DEG * dt;
+                phasor.advance();
+                let s = phasor.s * DEG * dt;
                 let a = [
                     rate_amp_dps[0] * s,
                     rate_amp_dps[1] * s,
                     rate_amp_dps[2] * s,
                 ];
-                self.q.rotate(&a);
-                self.phasor.advance();
+                q.rotate(&a);
+                phasor.advance();
             }
-            Motion::Coning { .. } => {
-                self.phasor.advance();
-                let qc = self.cone(self.phasor.c, self.phasor.s);
-                self.q.set(quat_mul(&self.base, &qc));
-            }
+            (State::Coning { phasor, .. }, _) => phasor.advance(),
+            _ => {}
         }
     }
 }
@@ -400,9 +445,342 @@ impl MotionSource for BuiltinMotion {
     }
 
     fn attitude(&self) -> Option<Quat> {
-        match self.motion {
-            Motion::Sample(_) => None,
-            _ => Some(canonical(&self.q.get())),
+        match &self.state {
+            State::Sample => None,
+            State::Static { base, .. } => Some(canonical(base)),
+            State::Rotation { q } | State::Vibration { q, .. } => Some(canonical(&q.get())),
+            State::Coning {
+                base,
+                phasor,
+                sa,
+                ca,
+                ..
+            } => Some(canonical(&quat_mul(
+                base,
+                &cone(*sa, *ca, phasor.c, phasor.s),
+            ))),
         }
     }
+}
+
+// ----- fixed point (the `fixed-point` build) -----
+
+use super::errors::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+use crate::ahrs::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
+use crate::dsp::fixed::{mul_q30, mul_shr, to_fixed};
+
+/// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`], specific
+/// force in g·2^[`ACC_BITS`], each clamped to ±[`TRUTH_LIMIT`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TruthFixed {
+    /// Inertial angular rate, scaled.
+    pub rate: [i32; 3],
+    /// Specific force, scaled.
+    pub force: [i32; 3],
+    /// Sensor temperature, °C, if the source knows it.
+    pub temperature_c: Option<f32>,
+}
+
+impl TruthFixed {
+    /// `t` scaled and clamped (rounded to nearest; NaN reads 0).
+    pub fn from_truth(t: &Truth) -> Self {
+        let c = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        TruthFixed {
+            rate: t.rate_dps.map(|v| c(v, GYRO_BITS)),
+            force: t.specific_force_g.map(|v| c(v, ACC_BITS)),
+            temperature_c: t.temperature_c,
+        }
+    }
+}
+
+/// `x / 2^s` rounded to nearest (half up), s ≥ 1.
+#[inline(always)]
+fn rshr(x: i32, s: u32) -> i32 {
+    (x >> s) + ((x >> (s - 1)) & 1)
+}
+
+/// Earth rate (°/s·2^GYRO_BITS) and gravity (g·2^ACC_BITS) in the body
+/// axes of Q30 attitude `q`; `earth` is the ENU Earth rate in
+/// °/s·2^(GYRO_BITS + 8).
+#[inline]
+fn earth_and_gravity_fixed(q: &QuatQ30, earth: &[i32; 3]) -> ([i32; 3], [i32; 3]) {
+    let w = quat_rotate_inv_q30(q, earth);
+    let f = up_in_body_q30(q);
+    (w.map(|v| rshr(v, 8)), f.map(|v| rshr(v, 30 - ACC_BITS)))
+}
+
+/// A unit phasor (cos φ, sin φ) in Q30 turned by a fixed step, re-normalised
+/// every step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct PhasorFixed {
+    c: i32,
+    s: i32,
+    step_c: i32,
+    step_s: i32,
+}
+
+impl PhasorFixed {
+    fn new(step: f64) -> Self {
+        PhasorFixed {
+            c: 1 << 30,
+            s: 0,
+            step_c: libm::round(libm::cos(step) * 1_073_741_824.0) as i32,
+            step_s: libm::round(libm::sin(step) * 1_073_741_824.0) as i32,
+        }
+    }
+
+    /// The angular rate the phasor actually turns at, rad/s.
+    fn rate(&self, dt: f32) -> f64 {
+        libm::atan2(f64::from(self.step_s), f64::from(self.step_c)) / f64::from(dt)
+    }
+
+    #[inline]
+    fn advance(&mut self) {
+        let m = mul_q30;
+        let c = m(self.c, self.step_c) - m(self.s, self.step_s);
+        let s = m(self.s, self.step_c) + m(self.c, self.step_s);
+        // k = 1.5 − 0.5 (c² + s²), Q30.
+        let k = (3 << 29) - ((m(c, c) + m(s, s)) >> 1);
+        self.c = m(c, k);
+        self.s = m(s, k);
+    }
+}
+
+/// The per-motion state of [`BuiltinMotionFixed`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum FixedKind {
+    /// Static and Sample: the truth never changes; the (Q30) attitude.
+    Constant { truth: TruthFixed, base: QuatQ30 },
+    /// Constant rotation: the attitude, the rotation of one tick (Q36 rad)
+    /// and the body rate (scaled).
+    Rotation {
+        q: QuatFixed,
+        step: [i32; 3],
+        rate: [i32; 3],
+    },
+    /// Vibration: the attitude, the phase, one tick's rotation at unit
+    /// phase (Q36 rad), rate and acceleration amplitudes (scaled).
+    Vibration {
+        q: QuatFixed,
+        phasor: PhasorFixed,
+        step: [i32; 3],
+        rate: [i32; 3],
+        acc: [i32; 3],
+    },
+    /// Coning: the base attitude, the phase, cos α/2 and sin α/2 (Q30); the
+    /// body rate is (−A sin φ, A cos φ, B) with A = 2Ω·cos·sin,
+    /// B = −2Ω·sin² (scaled).
+    Coning {
+        base: QuatQ30,
+        phasor: PhasorFixed,
+        cs: [i32; 2],
+        a: i32,
+        b: i32,
+    },
+}
+
+/// [`BuiltinMotion`] in integers, for the `fixed-point` build: the same
+/// motions, integrated in Q62 ([`QuatFixed`]) with integer phasors, so a
+/// tick needs no floating point. The truth agrees with the float source to
+/// the scaling's resolution (and the phasor's Q30 step).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuiltinMotionFixed {
+    motion: Motion,
+    /// ENU Earth rate, °/s·2^(GYRO_BITS + 8).
+    earth: [i32; 3],
+    started: bool,
+    kind: FixedKind,
+}
+
+impl BuiltinMotionFixed {
+    /// Prepares `motion` for ticks of `dt` seconds (float, once).
+    pub fn new(motion: Motion, dt: f32) -> Self {
+        // Set-up in float (once); only the per-tick work is integer.
+        let (lat, heading) = site(&motion);
+        let earth_f = earth_enu(lat);
+        let base_f = quat_from_euler(heading * DEG, 0.0, 0.0);
+        let earth = earth_f.map(|w| to_fixed(w * RAD, GYRO_BITS + 8).clamp(-(1 << 29), 1 << 29));
+        let base = base_f.map(crate::ahrs::rotation::q30);
+        let tick_rad = |v: f32| {
+            let x = f64::from(v) * core::f64::consts::PI / 180.0 * f64::from(dt);
+            libm::round(x * 68_719_476_736.0).clamp(-2e9, 2e9) as i32 // 2³⁶
+        };
+        let lim = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        let q = QuatFixed::from_f32(&base_f);
+        let kind = match motion {
+            Motion::Static { .. } => {
+                let (w, f) = earth_and_gravity(&base_f, &earth_f);
+                FixedKind::Constant {
+                    truth: TruthFixed::from_truth(&Truth {
+                        rate_dps: w,
+                        specific_force_g: f,
+                        temperature_c: None,
+                    }),
+                    base,
+                }
+            }
+            Motion::Sample(t) => FixedKind::Constant {
+                truth: TruthFixed::from_truth(&t),
+                base,
+            },
+            Motion::ConstantRotation { rate_dps, .. } => FixedKind::Rotation {
+                q,
+                step: rate_dps.map(tick_rad),
+                rate: rate_dps.map(|v| lim(v, GYRO_BITS)),
+            },
+            Motion::Vibration {
+                freq_hz,
+                acc_amp_g,
+                rate_amp_dps,
+                ..
+            } => FixedKind::Vibration {
+                q,
+                // Half-tick steps, as the float source.
+                phasor: PhasorFixed::new(
+                    core::f64::consts::PI * f64::from(freq_hz) * f64::from(dt),
+                ),
+                step: rate_amp_dps.map(tick_rad),
+                rate: rate_amp_dps.map(|v| lim(v, GYRO_BITS)),
+                acc: acc_amp_g.map(|v| lim(v, ACC_BITS)),
+            },
+            Motion::Coning {
+                half_angle_deg,
+                freq_hz,
+                ..
+            } => {
+                let phasor =
+                    PhasorFixed::new(core::f64::consts::TAU * f64::from(freq_hz) * f64::from(dt));
+                let half = 0.5 * f64::from(half_angle_deg) * core::f64::consts::PI / 180.0;
+                let (sa, ca) = (libm::sin(half), libm::cos(half));
+                let om = phasor.rate(dt);
+                let scale = libm::pow(2.0, f64::from(GYRO_BITS)) * 180.0 / core::f64::consts::PI;
+                let c = |v: f64| libm::round(v * scale).clamp(-1.0e9, 1.0e9) as i32;
+                FixedKind::Coning {
+                    base,
+                    phasor,
+                    cs: [
+                        libm::round(ca * 1_073_741_824.0) as i32,
+                        libm::round(sa * 1_073_741_824.0) as i32,
+                    ],
+                    a: c(2.0 * om * ca * sa),
+                    b: c(-2.0 * om * sa * sa),
+                }
+            }
+        };
+        BuiltinMotionFixed {
+            motion,
+            earth,
+            started: false,
+            kind,
+        }
+    }
+
+    /// The motion this source plays.
+    pub fn motion(&self) -> &Motion {
+        &self.motion
+    }
+
+    /// Truth of the next tick (the first call gives the initial state).
+    #[inline]
+    #[allow(clippy::should_implement_trait)]
+    pub fn next(&mut self) -> TruthFixed {
+        if self.started {
+            self.advance();
+        }
+        self.started = true;
+        self.current()
+    }
+
+    fn with_body(&self, q: &QuatQ30, rate: [i32; 3], acc: [i32; 3]) -> TruthFixed {
+        let (w, f) = earth_and_gravity_fixed(q, &self.earth);
+        let add = |a: i32, b: i32| a.saturating_add(b).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        TruthFixed {
+            rate: [add(w[0], rate[0]), add(w[1], rate[1]), add(w[2], rate[2])],
+            force: [add(f[0], acc[0]), add(f[1], acc[1]), add(f[2], acc[2])],
+            temperature_c: None,
+        }
+    }
+
+    #[inline]
+    fn current(&self) -> TruthFixed {
+        match &self.kind {
+            FixedKind::Constant { truth, .. } => *truth,
+            FixedKind::Rotation { q, rate, .. } => self.with_body(&q.get(), *rate, [0; 3]),
+            FixedKind::Vibration {
+                q,
+                phasor,
+                rate,
+                acc,
+                ..
+            } => {
+                let s = phasor.s;
+                self.with_body(
+                    &q.get(),
+                    rate.map(|r| mul_q30(r, s)),
+                    acc.map(|a| mul_q30(a, s)),
+                )
+            }
+            FixedKind::Coning {
+                base,
+                phasor,
+                cs,
+                a,
+                b,
+            } => {
+                let (c, s) = (phasor.c, phasor.s);
+                self.with_body(
+                    &cone_fixed(base, phasor, cs),
+                    [-mul_q30(*a, s), mul_q30(*a, c), *b],
+                    [0; 3],
+                )
+            }
+        }
+    }
+
+    #[inline]
+    fn advance(&mut self) {
+        match &mut self.kind {
+            FixedKind::Constant { .. } => {}
+            FixedKind::Rotation { q, step, .. } => q.rotate(step),
+            FixedKind::Vibration {
+                q, phasor, step, ..
+            } => {
+                // Rate at mid-tick (second-order accurate attitude).
+                phasor.advance();
+                let s = phasor.s;
+                q.rotate(&step.map(|a| mul_shr(a, s, 30)));
+                phasor.advance();
+            }
+            FixedKind::Coning { phasor, .. } => phasor.advance(),
+        }
+    }
+
+    /// The true attitude at the last tick (Appendix C convention, q0 ≥ 0).
+    pub fn attitude(&self) -> Option<Quat> {
+        let f = |q: QuatQ30| canonical(&q.map(|v| crate::dsp::fixed::scaled_f32(v, 30)));
+        match &self.kind {
+            FixedKind::Constant { .. } if matches!(self.motion, Motion::Sample(_)) => None,
+            FixedKind::Constant { base, .. } => Some(f(*base)),
+            FixedKind::Rotation { q, .. } | FixedKind::Vibration { q, .. } => {
+                Some(canonical(&q.to_f32()))
+            }
+            FixedKind::Coning {
+                base, phasor, cs, ..
+            } => Some(f(cone_fixed(base, phasor, cs))),
+        }
+    }
+}
+
+/// The coning attitude `base ⊗ (C, S cos φ, S sin φ, 0)`, Q30, for a base
+/// rotation about z.
+fn cone_fixed(base: &QuatQ30, phasor: &PhasorFixed, cs: &[i32; 2]) -> QuatQ30 {
+    let m = mul_q30;
+    let (x, y) = (m(cs[1], phasor.c), m(cs[1], phasor.s));
+    let [b0, _, _, b3] = *base;
+    [
+        m(b0, cs[0]),
+        m(b0, x) - m(b3, y),
+        m(b0, y) + m(b3, x),
+        m(b3, cs[0]),
+    ]
 }

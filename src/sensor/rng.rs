@@ -19,7 +19,7 @@ pub struct Rng {
 }
 
 /// √3 / 65536: scales the centred sum of four 16-bit uniforms to unit variance.
-const IRWIN_HALL_SCALE: f32 = 1.732_050_8 / 65_536.0;
+pub const IRWIN_HALL_SCALE: f32 = 1.732_050_8 / 65_536.0;
 
 impl Rng {
     /// A generator whose state is derived from `seed` with SplitMix64 (so
@@ -66,12 +66,21 @@ impl Rng {
     /// A standard normal deviate (Irwin–Hall of order 4, see the module doc).
     #[inline]
     pub fn gaussian(&mut self) -> f32 {
+        self.gaussian_sum() as f32 * IRWIN_HALL_SCALE
+    }
+
+    /// The integer behind [`Rng::gaussian`]: the centred sum of four 16-bit
+    /// uniforms, in −131 070 ..= 131 070 (standard deviation
+    /// 65 536/√3 ≈ 37 837). The fixed-point error model scales it with one
+    /// integer product.
+    #[inline]
+    pub fn gaussian_sum(&mut self) -> i32 {
         let a = self.next_u32();
         let b = self.next_u32();
         let sum = (a & 0xFFFF) as i32 + (a >> 16) as i32 + (b & 0xFFFF) as i32 + (b >> 16) as i32;
         // Each half is uniform on 0..=65535 with mean 32767.5; the sum of
         // four has mean 131070 and variance 4 · (65536² − 1)/12.
-        (sum - 131_070) as f32 * IRWIN_HALL_SCALE
+        sum - 131_070
     }
 }
 
