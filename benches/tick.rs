@@ -5,7 +5,8 @@
 //! Alignment_Angles, default errors, coning motion, attitude running.
 //! `tick/factory`: K110 at factory settings (LPF 262 Hz, cascade off),
 //! static. `output`: one output() at 100 Hz in the worst configuration.
-//! Run with `--features fixed-point` for the fixed-point FIR path.
+//! Run with `--features fixed-point` for the fixed-point chain (integer
+//! truth, error model, attitude, FIR, cascade and accumulator).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use imu_emu::chain::{ChainConfig, SignalChain};

@@ -59,34 +59,85 @@
 //!   ([`crate::ahrs::alignment`]).
 //! - USW bits 10–12 report a gyro axis (sensor axes) beyond the measurement
 //!   range at any tick of the interval the output covers.
-//! - Float path on FPU cores; the `fixed-point` feature runs the FIR (Q15
-//!   taps, `i32` samples) and the cascade (Q24, 64-bit products) in integers
-//!   for cores without an FPU; everything else stays `f32`.
+//! - Float path on FPU cores; the `fixed-point` feature (cores without an
+//!   FPU: ARMv6-M, RP2040) runs every per-tick stage in integers — see
+//!   "Fixed point" below. A seed gives the same bytes on every platform for
+//!   a given feature set; the two builds agree to the fixed-point resolution
+//!   (same random draws: gyro within ~2e-4 °/s, acc ~3e-6 g, Euler angles
+//!   ~2e-4°), not bit for bit.
+//! - `output()` with no tick since [`SignalChain::configure`] or
+//!   [`SignalChain::new`] gives the last FIR output (the accumulator keeps
+//!   it across a reconfiguration), not zeros.
+//!
+//! # Memory
+//!
+//! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
+//! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout). The
+//! FIR history is 8 136 B of it: single rings read as up to three runs
+//! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
+//! and 177 pre-filter rows of 9 channels, the minimum for the order-192
+//! design plus the 49 rows the order-48 designs need (both histories always
+//! run, so switching designs never needs a refill). The cascade keeps its
+//! input history and each section's w only (11 values a channel instead of
+//! 20, [`crate::dsp::cascade`]); the motion, the alignment and the error
+//! engines keep no copies of configuration the chain already holds; the
+//! last measurement is the FIR's newest input row. `i16` storage was
+//! rejected: the float FIR's tests pin an impulse response to 1e-7 and the
+//! fixed one a ramp exactly, which 16-bit samples cannot hold at ±2000 °/s.
+//!
+//! # Fixed point (`fixed-point` feature)
+//!
+//! Every per-tick stage is integer; the few `f32` operations left run once
+//! per output (one division) or once per temperature change (one axis a
+//! tick); trigonometry only at configuration time.
+//!
+//! | stage | representation |
+//! |---|---|
+//! | truth ([`crate::sensor::motion::BuiltinMotionFixed`]) | °/s·2¹⁹, g·2²³; attitude Q62, phasors Q30, static truth cached |
+//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::dsp::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
+//! | mounting ([`crate::ahrs::mounting::MountingFixed`]) | Q30 matrix |
+//! | attitude ([`crate::ahrs::attitude::AttitudeFixed`]) | rates in Q36 rad a tick, quaternion Q62, Euler angles by CORDIC |
+//! | FIR ([`crate::dsp::fir::FirBankFixed`]) | °/s·2¹⁷, g·2²⁰ (the sensor scale rounded), Q15 taps |
+//! | cascade ([`crate::dsp::cascade::CascadeFixed`]) | g Q26, a Q29, 32-bit products (64-bit beyond 2²⁹) |
+//! | accumulator ([`crate::dsp::variant::VariantFixed`]) | exact `i64` sums, coning/sculling in block floating point |
+//!
+//! The attitude runs every tick at full rate (no decimation): its stated
+//! bounds hold unchanged (coning 5° at 2 Hz, 10 s: 2e-4° against 1e-2°; a
+//! static unit stays within 1e-3° over 120 s). Products are exact
+//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::dsp::fixed::mul64`]),
+//! since a plain `i64` product is a library call on ARMv6-M.
 //!
 //! # Cost
 //!
-//! Instructions executed per tick, measured under QEMU (`-singlestep`
-//! trace, release + LTO), worst configuration: K120 (aux accelerometer, all
-//! 9 channels), all three cascade filters, incremental output, non-zero
-//! Alignment_Angles, coning motion, attitude running:
+//! Instructions executed, measured under QEMU (`-singlestep` trace, release
+//! build with LTO, `qemu-system-arm -M mps2-an386`; the thumbv6m image runs
+//! on that Cortex-M4 model, whose instruction count for ARMv6-M code is the
+//! same), over 64 consecutive ticks (one temperature update among them):
+//! mean / worst tick, then one `output()` after them. Worst configuration: K120
+//! (aux accelerometer, all 9 channels), all three cascade filters,
+//! incremental output, non-zero Alignment_Angles, coning motion, attitude
+//! running:
 //!
-//! | LPF | Cortex-M4F (float) | ARMv6-M (`fixed-point`, soft-float `f32`) |
+//! | LPF | Cortex-M4F (float) | ARMv6-M (`fixed-point`) |
 //! |---|---|---|
-//! | 16 Hz (192, two-stage) | 3 917 | 86 057 |
-//! | 33 Hz (96, two-stage) | 3 828 | 85 927 |
-//! | 66 Hz (48) | 4 001 | 85 935 |
-//! | 131 Hz (24) | 3 449 | 84 280 |
-//! | 262 Hz (12) | 3 173 | 83 663 |
-//! | off | 2 844 | 83 150 |
-//! | K110 factory (262 Hz, no cascade, instant) | 1 926 | 54 256 |
+//! | 16 Hz (192, two-stage) | 3 845 / 4 028 | 19 543 / 20 743 |
+//! | 33 Hz (96, two-stage) | 3 689 / 3 841 | 19 551 / 20 726 |
+//! | 66 Hz (48) | 3 784 / 3 945 | 20 227 / 21 420 |
+//! | 131 Hz (24) | 3 198 / 3 338 | 18 351 / 19 517 |
+//! | 262 Hz (12) | 2 908 / 3 062 | 17 414 / 18 593 |
+//! | off | 2 496 / 2 659 | 16 145 / 17 332 |
+//! | K110 factory (262 Hz, no cascade, instant) | 1 915 / 2 069 | 9 463 / 10 624 |
+//! | 66 Hz, constant rotation, truth in carrier axes | 3 852 / 4 012 | 21 422 / 22 615 |
+//! | 66 Hz, vibration, 1 Hz output (2000 ticks) | 3 836 / 4 063 | 21 033 / 22 772 |
 //!
-//! `output()` adds 764 (M4F) / 3 035 (v6-M). On ARMv6-M ~84 % of the
-//! instructions are inside the compiler's soft-float routines (≈ 780 `f32`
-//! operations a tick: error model, AHRS, truth, accumulator), so the cycle
-//! count on an RP2040 depends on the float library the firmware links (the
-//! RP2040 boot-ROM routines are several times faster than the generic
-//! ones). On the host (criterion, `benches/tick.rs`) a worst-case tick takes
-//! ≈ 0.31 µs and a factory tick ≈ 0.15 µs.
+//! `output()`: 796 (M4F) / 12 052–12 119 (v6-M; 8 398 averaged, 5 464
+//! instant). Worst tick + output: 4 859 (M4F), 34 891 (v6-M). The tick that
+//! ends an alignment ([`SignalChain::end_alignment`], no output in it) costs
+//! 9 046 / 29 735; an aligning tick at most 3 896 / 24 670 (the 10 ms block
+//! tick). Before this work: M4F 3 924 mean / 4 183 worst, v6-M 86 234 /
+//! 92 250 a tick and 30 291 an output (84 % of it in soft-float routines).
+//! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
+//! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
 use crate::ahrs::alignment::{level_from, AlignConfig, Alignment};
 #[cfg(not(feature = "fixed-point"))]
@@ -451,7 +502,8 @@ impl Core {
 }
 
 /// What [`SignalChain::attitude_mut`] gives: the attitude filter of this
-/// build ([`Attitude`], or [`AttitudeFixed`] with the `fixed-point` feature;
+/// build ([`crate::ahrs::attitude::Attitude`], or
+/// [`crate::ahrs::attitude::AttitudeFixed`] with the `fixed-point` feature;
 /// both have `set`, `set_tilt_correction`, `quat`, `euler_deg`).
 #[cfg(not(feature = "fixed-point"))]
 pub type ChainAttitude = Attitude;
@@ -720,7 +772,7 @@ impl SignalChain {
         #[cfg(feature = "fixed-point")]
         {
             let _ = now;
-            let truth = self.core.motion.next();
+            let truth = self.core.motion.step();
             self.process(&truth);
         }
     }

@@ -76,28 +76,14 @@ fn adev(y: &[f64], m: usize) -> f64 {
     (s / (2.0 * (n - 2 * m) as f64 * (m * m) as f64)).sqrt()
 }
 
-#[test]
-fn allan_deviation_recovers_arw_and_bias_instability_within_10_percent() {
-    // ARW 0.3 °/√h (N = 0.005 °/s/√Hz); B = 0.02 °/s; T_c = 0.5 s: the GM
-    // hump (peak 0.664·B at τ ≈ 0.95 s) stands above the white noise, and
-    // 500 s of data hold > 500 of its τ.
-    let (n_true, b_true, tc) = (0.005f32, 0.02f32, 0.5f32);
-    let (blocks, allan) = run(n_true, b_true, tc, 500.0, 42);
-    let tau0 = BLOCK as f64 / FS;
-
-    // The crate agrees with a direct overlapping computation.
-    for m in [1usize, 20, 200] {
-        let a = allan.get(m).unwrap().deviation().unwrap();
-        let b = adev(&blocks, m);
-        assert!((a / b - 1.0).abs() < 1e-4, "τ {m}: crate {a} vs direct {b}");
-    }
-
-    // Weighted linear least squares in (N², σ_GM²) over τ = 5 ms … 20 s.
+/// Weighted linear least squares of the Allan variance in (N², σ_GM²) over
+/// τ = 5 ms … 20 s (white noise plus a Gauss–Markov term of correlation time
+/// `tc`), and the (τ, σ) points fitted.
+fn fit_arw_gm(allan: &Allan, tau0: f64, tc: f32) -> (f64, f64, Vec<(f64, f64)>) {
     let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let mut points = Vec::new();
     for t in allan.iter() {
-        let m = t.tau() as usize;
-        let tau = m as f64 * tau0;
+        let tau = t.tau() as f64 * tau0;
         if tau > 20.0 {
             continue;
         }
@@ -114,6 +100,26 @@ fn allan_deviation_recovers_arw_and_bias_instability_within_10_percent() {
     let det = a11 * a22 - a12 * a12;
     let n2 = (b1 * a22 - b2 * a12) / det;
     let g2 = (a11 * b2 - a12 * b1) / det;
+    (n2, g2, points)
+}
+
+#[test]
+fn allan_deviation_recovers_arw_and_bias_instability_within_10_percent() {
+    // ARW 0.3 °/√h (N = 0.005 °/s/√Hz); B = 0.02 °/s; T_c = 0.5 s: the GM
+    // hump (peak 0.664·B at τ ≈ 0.95 s) stands above the white noise, and
+    // 500 s of data hold > 500 of its τ.
+    let (n_true, b_true, tc) = (0.005f32, 0.02f32, 0.5f32);
+    let (blocks, allan) = run(n_true, b_true, tc, 500.0, 42);
+    let tau0 = BLOCK as f64 / FS;
+
+    // The crate agrees with a direct overlapping computation.
+    for m in [1usize, 20, 200] {
+        let a = allan.get(m).unwrap().deviation().unwrap();
+        let b = adev(&blocks, m);
+        assert!((a / b - 1.0).abs() < 1e-4, "τ {m}: crate {a} vs direct {b}");
+    }
+
+    let (n2, g2, points) = fit_arw_gm(&allan, tau0, tc);
     let n_est = n2.sqrt();
     let b_est = g2.sqrt() / f64::from(GM_SIGMA_PER_BIAS_INSTABILITY);
     println!("ADEV points (τ s, σ °/s): {points:?}");
@@ -187,4 +193,114 @@ fn chain_output_noise_and_mean_match_the_model() {
         (mean - 0.1 - earth_z).abs() < 4.0 * expect_sd / (ticks as f64).sqrt(),
         "mean {mean}"
     );
+}
+
+/// `run` for the fixed-point engine (the `fixed-point` build's chain uses
+/// it): the same parameters, measurements in °/s·2¹⁹.
+fn run_fixed(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> Allan {
+    use imu_emu::sensor::errors::{TriadEngineFixed, GYRO_BITS};
+    let axis = AxisErrors {
+        noise_density: noise,
+        bias_instability: bi,
+        bias_corr_time_s: tc,
+        ..AxisErrors::default()
+    };
+    let errors = SensorErrors {
+        axes: [axis; 3],
+        misalignment: [[0.0; 3]; 3],
+    };
+    let mut e = TriadEngineFixed::new(1e9, GYRO_BITS);
+    e.configure(&errors, 25.0, (1.0 / FS) as f32);
+    let mut rng = Rng::new(seed);
+    e.randomize_gm(&errors, &mut rng);
+    let mut allan = Allan::builder()
+        .max_tau(4000)
+        .style(Style::Decade125)
+        .data_type(DataType::Frequency)
+        .build_allan();
+    let unit = 1.0 / f64::from(1u32 << GYRO_BITS);
+    for _ in 0..(seconds * FS) as usize / BLOCK {
+        let mut s = 0.0f64;
+        for _ in 0..BLOCK {
+            s += f64::from(e.measure(&[0; 3], &mut rng).0[0]) * unit;
+        }
+        allan.record(s / BLOCK as f64);
+    }
+    allan
+}
+
+/// The fixed-point engine (integer Irwin–Hall noise, integer Gauss–Markov)
+/// has the same Allan deviation: the same two-term fit recovers N and B
+/// within 10 %, and white noise alone keeps the −½ slope.
+#[test]
+fn fixed_point_engine_recovers_arw_and_bias_instability_within_10_percent() {
+    let (n_true, b_true, tc) = (0.005f32, 0.02f32, 0.5f32);
+    let allan = run_fixed(n_true, b_true, tc, 500.0, 42);
+    let tau0 = BLOCK as f64 / FS;
+    let (n2, g2, _) = fit_arw_gm(&allan, tau0, tc);
+    let n_est = n2.sqrt();
+    let b_est = g2.sqrt() / f64::from(GM_SIGMA_PER_BIAS_INSTABILITY);
+    println!("fixed point: N = {n_est:.5} (true {n_true}), B = {b_est:.5} (true {b_true})");
+    assert!(
+        (n_est / f64::from(n_true) - 1.0).abs() < 0.10,
+        "ARW: {n_est}"
+    );
+    assert!((b_est / f64::from(b_true) - 1.0).abs() < 0.10, "B: {b_est}");
+
+    let allan = run_fixed(0.01, 0.0, 0.0, 100.0, 7);
+    for m in [1usize, 10, 100, 1000] {
+        let n = allan.get(m).unwrap().deviation().unwrap() * (m as f64 * tau0).sqrt();
+        let tol = [0.05, 0.05, 0.08, 0.2][m.ilog10() as usize];
+        assert!((n / 0.01 - 1.0).abs() < tol, "τ {m}: N {n}");
+    }
+}
+
+/// Sample by sample, the fixed-point engine measures what the float engine
+/// measures from the same random draws: scale factor, misalignment, bias
+/// and its temperature terms, noise and Gauss–Markov state agree to the
+/// coefficients' 14-bit mantissas (~6e-5 of each error term) and the
+/// output's 2⁻¹⁹ °/s, whatever the truth.
+#[test]
+fn fixed_point_engine_tracks_the_float_engine() {
+    use imu_emu::sensor::errors::{TriadEngineFixed, GYRO_BITS};
+    let product = Product::parse("K120").unwrap();
+    let mut draw = Rng::new(5);
+    let errors = ErrorModel::for_product(&product, &mut draw).gyro;
+    let dt = (1.0 / FS) as f32;
+    let mut f = TriadEngine::new(2000.0);
+    let mut q = TriadEngineFixed::new(2000.0, GYRO_BITS);
+    f.configure(&errors, 31.0, dt);
+    q.configure(&errors, 31.0, dt);
+    let (mut rf, mut rq) = (Rng::new(9), Rng::new(9));
+    f.randomize_gm(&errors, &mut rf);
+    q.randomize_gm(&errors, &mut rq);
+    let scale = (1u32 << GYRO_BITS) as f32;
+    let mut worst = 0.0f32;
+    for k in 0..200_000 {
+        let t = k as f32 * 1e-3;
+        let truth = [
+            300.0 * t.sin(),
+            -50.0 + 10.0 * t.cos(),
+            1500.0 * (0.1 * t).sin(),
+        ];
+        let tq = truth.map(|v| (v * scale).round() as i32);
+        let (a, oa) = f.measure(&tq.map(|v| v as f32 / scale), &mut rf);
+        let (b, ob) = q.measure(&tq, &mut rq);
+        assert_eq!(oa, ob);
+        for i in 0..3 {
+            let d = (a[i] - b[i] as f32 / scale).abs();
+            // 6e-5 of the error terms (≤ 1.5e-3 × 1500 °/s of scale and
+            // misalignment, 0.6 °/s of noise) + the f32 rounding of the
+            // float engine at 1500 °/s + 1 LSB.
+            let tol = 6e-5 * (1.5e-3 * truth[i].abs() + 0.6) + 2e-4 + 2.0 / scale;
+            worst = worst.max(d / tol);
+            assert!(
+                d <= tol,
+                "{k} axis {i}: {} vs {}",
+                a[i],
+                b[i] as f32 / scale
+            );
+        }
+    }
+    println!("fixed vs float engine: worst {worst:.2} of the bound");
 }

@@ -27,6 +27,10 @@
 //!
 //! The AHRS runs on the sensor data before the FIR (the FIR of 5.6 filters
 //! the *transmitted* signals), so orientation is not delayed by it.
+//!
+//! [`AttitudeFixed`] is the same filter in integers for the `fixed-point`
+//! build, at the full tick rate (the attitude tests' bounds hold for both
+//! builds).
 
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
@@ -277,7 +281,7 @@ impl AttitudeFixed {
                     mul_q30(f[0], u[1]) - mul_q30(f[1], u[0]),
                 ];
                 for i in 0..3 {
-                    w[i] = w[i].saturating_add(self.tilt_k.mul(e[i]));
+                    w[i] = w[i].saturating_add(self.tilt_k.apply(e[i]));
                 }
             }
         }

@@ -26,8 +26,13 @@
 //! damping below 1e-3 is raised to 1e-3 (ζ2 = 0 would put the poles on the
 //! unit circle: an undamped oscillator). Coefficients are computed in f64
 //! at configure time; the sections run in f32 in a DC-exact form
-//! ([`Section`]).
-//! Both paths (float and fixed-point FIR) use this float cascade.
+//! ([`Section`]), or in integers in the `fixed-point` build
+//! ([`CascadeFixed`]: the same sections with Q26/Q29 coefficients).
+//!
+//! State: the cascade's input history plus each section's w (a section's
+//! input history is the previous one's output history, rebuilt exactly;
+//! see [`Cascade`]), 11 values a channel; the channel loop is specialised per
+//! Filter mask.
 
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
@@ -192,24 +197,75 @@ pub struct Cascade {
     sections: [Section; MAX_SECTIONS],
     n: usize,
     mask: u8,
-    /// Per channel: see [`STATE`].
-    state: [[f32; STATE]; CHANNELS],
+    /// Slot (see [`STATE`]) × channel, laid out by [`at`].
+    state: [f32; STATE * CHANNELS],
 }
 
-/// One Filter1/2 section on sample `u` of one channel: `p` = its input
-/// history (u[n−1], u[n−2]) on entry, the next section's on return; `w` =
-/// its (w[n−1], w[n−2]).
+/// Slot-major (each slot's nine channels contiguous: the section-by-section
+/// loop vectorises) except on ARM, where the channel-by-channel loop reads a
+/// channel's slots at small fixed offsets.
+const SLOT_MAJOR: bool = !cfg!(target_arch = "arm");
+
+/// Index of slot `k`, channel `c` in [`Cascade`]'s state.
 #[inline(always)]
-fn second_f32(s: &Section, u: f32, p: &mut [f32; 2], w: &mut [f32], last: bool) -> f32 {
-    let (w1, w2) = (w[0], w[1]);
+const fn at(k: usize, c: usize) -> usize {
+    if SLOT_MAJOR {
+        k * CHANNELS + c
+    } else {
+        c * STATE + k
+    }
+}
+
+/// One Filter1/2 section on sample `u` of channel `c`: `p` = its input
+/// history (u[n−1], u[n−2]) on entry, the next section's on return; its
+/// w[n−1], w[n−2] are slots `k`, `k + 1`.
+#[inline(always)]
+fn second_f32(
+    st: &mut [f32; STATE * CHANNELS],
+    k: usize,
+    c: usize,
+    s: &Section,
+    u: f32,
+    p: &mut [f32; 2],
+    last: bool,
+) -> f32 {
+    let (w1, w2) = (st[at(k, c)], st[at(k + 1, c)]);
     let wn = s.g * (u - p[1]) - s.a1 * w1 - s.a2 * w2;
-    w[0] = wn;
-    w[1] = w1;
+    st[at(k, c)] = wn;
+    st[at(k + 1, c)] = w1;
     if !last {
         p[0] += w1;
         p[1] += w2;
     }
     u + wn
+}
+
+/// `second_f32` for all channels at once, in whole-row loops (slots `K`,
+/// `K + 1`; `p0`, `p1` the input history rows).
+#[inline(always)]
+fn rows<const K: usize>(
+    st: &mut [f32; STATE * CHANNELS],
+    f: &Section,
+    x: &mut [f32; CHANNELS],
+    p0: &mut [f32; CHANNELS],
+    p1: &mut [f32; CHANNELS],
+    last: bool,
+) {
+    let mut wn = [0.0f32; CHANNELS];
+    for c in 0..CHANNELS {
+        wn[c] = f.g * (x[c] - p1[c]) - f.a1 * st[at(K, c)] - f.a2 * st[at(K + 1, c)];
+    }
+    if !last {
+        for c in 0..CHANNELS {
+            p0[c] += st[at(K, c)];
+            p1[c] += st[at(K + 1, c)];
+        }
+    }
+    for c in 0..CHANNELS {
+        st[at(K + 1, c)] = st[at(K, c)];
+        st[at(K, c)] = wn[c];
+        x[c] += wn[c];
+    }
 }
 
 impl Cascade {
@@ -219,7 +275,7 @@ impl Cascade {
             sections: [Section::default(); MAX_SECTIONS],
             n: 0,
             mask: 0,
-            state: [[0.0; STATE]; CHANNELS],
+            state: [0.0; STATE * CHANNELS],
         };
         c.configure(cfg, rate_hz, x);
         c
@@ -258,10 +314,10 @@ impl Cascade {
 
     /// Steady state for a constant input `x` (every section has DC gain 1).
     pub fn reset(&mut self, x: &[f32; CHANNELS]) {
-        for (st, &v) in self.state.iter_mut().zip(x) {
-            *st = [0.0; STATE];
-            st[0] = v;
-            st[1] = v;
+        self.state = [0.0; STATE * CHANNELS];
+        for (c, &v) in x.iter().enumerate() {
+            self.state[at(0, c)] = v;
+            self.state[at(1, c)] = v;
         }
     }
 
@@ -280,32 +336,81 @@ impl Cascade {
         }
     }
 
-    /// [`Cascade::process`] for Filter mask `M`.
+    /// [`Cascade::process`] for Filter mask `M`: channel by channel on ARM
+    /// (no SIMD: a channel's state stays in registers through the sections),
+    /// section by section elsewhere (the channels vectorise). The same
+    /// operations on the same operands: bit-identical (a unit test pins it).
     #[inline(always)]
     fn run<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        if cfg!(target_arch = "arm") {
+            self.run_by_channel::<M>(x)
+        } else {
+            self.run_by_section::<M>(x)
+        }
+    }
+
+    /// [`Cascade::run`] section by section.
+    #[inline(always)]
+    fn run_by_section<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
         let s = &self.sections;
         let f1 = s[0];
         let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
         let f3 = s[self.n.saturating_sub(1)];
-        for (xc, st) in x.iter_mut().zip(self.state.iter_mut()) {
-            let mut u = *xc;
-            let mut p = [st[0], st[1]];
-            st[1] = st[0];
-            st[0] = u;
+        let st = &mut self.state;
+        // The input history rows, then the same arithmetic as `second_f32`
+        // in whole-row loops (contiguous on hosts: they vectorise).
+        let (mut p0, mut p1) = ([0.0f32; CHANNELS], [0.0f32; CHANNELS]);
+        for c in 0..CHANNELS {
+            p0[c] = st[at(0, c)];
+            p1[c] = st[at(1, c)];
+            st[at(1, c)] = p0[c];
+            st[at(0, c)] = x[c];
+        }
+        if M & 1 != 0 {
+            rows::<2>(st, &f1, x, &mut p0, &mut p1, false);
+            rows::<4>(st, &f1, x, &mut p0, &mut p1, M & 6 == 0);
+        }
+        if M & 2 != 0 {
+            rows::<6>(st, &f2, x, &mut p0, &mut p1, false);
+            rows::<8>(st, &f2, x, &mut p0, &mut p1, M & 4 == 0);
+        }
+        if M & 4 != 0 {
+            for c in 0..CHANNELS {
+                let u = x[c];
+                let wn = f3.g * (u - p0[c]) - f3.a1 * st[at(10, c)];
+                st[at(10, c)] = wn;
+                x[c] = u + wn;
+            }
+        }
+    }
+
+    /// [`Cascade::run`] channel by channel.
+    #[inline(always)]
+    fn run_by_channel<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        let s = &self.sections;
+        let f1 = s[0];
+        let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
+        let f3 = s[self.n.saturating_sub(1)];
+        let st = &mut self.state;
+        for c in 0..CHANNELS {
+            let mut u = x[c];
+            let mut p = [st[at(0, c)], st[at(1, c)]];
+            st[at(1, c)] = st[at(0, c)];
+            st[at(0, c)] = u;
             if M & 1 != 0 {
-                u = second_f32(&f1, u, &mut p, &mut st[2..4], false);
-                u = second_f32(&f1, u, &mut p, &mut st[4..6], M & 6 == 0);
+                u = second_f32(st, 2, c, &f1, u, &mut p, false);
+                u = second_f32(st, 4, c, &f1, u, &mut p, M & 6 == 0);
             }
             if M & 2 != 0 {
-                u = second_f32(&f2, u, &mut p, &mut st[6..8], false);
-                u = second_f32(&f2, u, &mut p, &mut st[8..10], M & 4 == 0);
+                u = second_f32(st, 6, c, &f2, u, &mut p, false);
+                u = second_f32(st, 8, c, &f2, u, &mut p, M & 4 == 0);
             }
             if M & 4 != 0 {
-                let wn = f3.g * (u - p[0]) - f3.a1 * st[10];
-                st[10] = wn;
+                let wn = f3.g * (u - p[0]) - f3.a1 * st[at(10, c)];
+                st[at(10, c)] = wn;
                 u += wn;
             }
-            *xc = u;
+            x[c] = u;
         }
     }
 
@@ -317,6 +422,46 @@ impl Cascade {
             acc = (acc.0 * r.0 - acc.1 * r.1, acc.0 * r.1 + acc.1 * r.0);
         }
         acc
+    }
+}
+
+#[cfg(test)]
+mod order_tests {
+    use super::*;
+
+    /// Section by section and channel by channel give the same bits.
+    #[test]
+    fn both_loop_orders_are_bit_identical() {
+        let d = CascadeConfig::default();
+        for mask in 0..8u8 {
+            let cfg = CascadeConfig { mask, ..d };
+            let x0 = [0.5f32, -1.0, 3.0, 0.0, 0.1, 1.0, -0.2, 0.3, 9.0];
+            let mut a = Cascade::new(&cfg, 2000, &x0);
+            let mut b = a.clone();
+            let mut s = 0x2545_F491u32;
+            for _ in 0..5000 {
+                let mut x = x0;
+                for v in x.iter_mut() {
+                    s ^= s << 13;
+                    s ^= s >> 17;
+                    s ^= s << 5;
+                    *v += (s as f32 / u32::MAX as f32) - 0.5;
+                }
+                let mut y = x;
+                match mask {
+                    1 => (a.run_by_section::<1>(&mut x), b.run_by_channel::<1>(&mut y)),
+                    2 => (a.run_by_section::<2>(&mut x), b.run_by_channel::<2>(&mut y)),
+                    3 => (a.run_by_section::<3>(&mut x), b.run_by_channel::<3>(&mut y)),
+                    4 => (a.run_by_section::<4>(&mut x), b.run_by_channel::<4>(&mut y)),
+                    5 => (a.run_by_section::<5>(&mut x), b.run_by_channel::<5>(&mut y)),
+                    6 => (a.run_by_section::<6>(&mut x), b.run_by_channel::<6>(&mut y)),
+                    7 => (a.run_by_section::<7>(&mut x), b.run_by_channel::<7>(&mut y)),
+                    _ => ((), ()),
+                };
+                assert_eq!(x.map(f32::to_bits), y.map(f32::to_bits), "mask {mask}");
+            }
+            assert_eq!(a.state, b.state);
+        }
     }
 }
 

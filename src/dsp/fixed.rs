@@ -19,9 +19,21 @@
 //! Everything here is exact integer arithmetic: the same inputs give the same
 //! bits on every platform.
 
-/// The exact product `a · b`.
+/// The exact product `a · b` ([`mul64_parts`] on 32-bit targets, the
+/// native product — the same value — on 64-bit hosts).
 #[inline(always)]
 pub fn mul64(a: i32, b: i32) -> i64 {
+    if cfg!(target_pointer_width = "64") {
+        i64::from(a) * i64::from(b)
+    } else {
+        mul64_parts(a, b)
+    }
+}
+
+/// The exact product `a · b` from four 16 × 16 products (one `MULS` each on
+/// ARMv6-M, where a plain `i64` product is a library call).
+#[inline(always)]
+pub fn mul64_parts(a: i32, b: i32) -> i64 {
     let al = (a & 0xFFFF) as u32;
     let ah = a >> 16;
     let bl = (b & 0xFFFF) as u32;
@@ -183,8 +195,7 @@ impl Coef {
 
     /// `x · c` rounded to nearest, for any `x` (the result must fit).
     #[inline(always)]
-    #[allow(clippy::should_implement_trait)]
-    pub fn mul(self, x: i32) -> i32 {
+    pub fn apply(self, x: i32) -> i32 {
         let m = i32::from(self.m);
         // x·m / 2¹⁵ in two products: |x >> 15| ≤ 2¹⁶, |m| < 2¹⁴.
         let t = (x >> 15) * m + (((x & 0x7FFF) * m + (1 << 14)) >> 15);
@@ -199,7 +210,7 @@ impl Coef {
 
     /// `x · c` rounded to nearest for |x| < 2¹⁷ (one product: |x · m| < 2³¹).
     #[inline(always)]
-    pub fn mul_small(self, x: i32) -> i32 {
+    pub fn apply_small(self, x: i32) -> i32 {
         let p = x * i32::from(self.m);
         match u32::from(self.n) {
             0 => p,
@@ -209,15 +220,35 @@ impl Coef {
     }
 }
 
-/// `x · 2⁻ᵏ` as `f32`: `x` rounded to 24 significant bits (as `x as f32`
-/// does), the scaling exact (on the exponent; |x| ≥ 1 and k ≤ 100 keep it
-/// normal).
+/// `x · 2⁻ᵏ` as `f32`: `x` rounded to 24 significant bits exactly as
+/// `x as f32` does (to nearest, ties to even), the scaling exact (on the
+/// exponent; k ≤ 100 keeps it normal). Built from the bits: ARMv6-M's
+/// library conversion costs ~70 instructions with its `CLZ` emulation.
 #[inline]
 pub fn scaled_f32(x: i32, k: u32) -> f32 {
     if x == 0 {
         return 0.0;
     }
-    f32::from_bits((x as f32).to_bits() - (k << 23))
+    let sign = (x as u32) & 0x8000_0000;
+    let m = x.unsigned_abs();
+    let e = bit_len(m) - 1;
+    let (mant, e) = if e <= 23 {
+        (m << (23 - e), e)
+    } else {
+        let s = e - 23;
+        let mut mant = m >> s;
+        let rem = m & ((1 << s) - 1);
+        let half = 1 << (s - 1);
+        if rem > half || (rem == half && mant & 1 == 1) {
+            mant += 1;
+        }
+        if mant == 1 << 24 {
+            (mant >> 1, e + 1)
+        } else {
+            (mant, e)
+        }
+    };
+    f32::from_bits(sign | ((e + 127 - k) << 23) | (mant & 0x7F_FFFF))
 }
 
 /// [`scaled_f32`] of an `i64`.
@@ -254,9 +285,70 @@ pub fn to_fixed(v: f32, k: u32) -> i32 {
     (w + 0.5f32.copysign(w)) as i32
 }
 
-/// The exact product `a · b` of two `u32` (four 16 × 16 products).
+/// The number of significant bits of `x` (0 for 0): a few compares, where
+/// `leading_zeros` is a library call on ARMv6-M (no `CLZ`).
+#[inline(always)]
+pub fn bit_len(x: u32) -> u32 {
+    let (mut x, mut n) = (x, 0);
+    if x >= 1 << 16 {
+        x >>= 16;
+        n += 16;
+    }
+    if x >= 1 << 8 {
+        x >>= 8;
+        n += 8;
+    }
+    if x >= 1 << 4 {
+        x >>= 4;
+        n += 4;
+    }
+    if x >= 1 << 2 {
+        x >>= 2;
+        n += 2;
+    }
+    if x >= 1 << 1 {
+        x >>= 1;
+        n += 1;
+    }
+    n + x
+}
+
+/// [`bit_len`] of a `u64`.
+#[inline(always)]
+pub fn bit_len64(x: u64) -> u32 {
+    let hi = (x >> 32) as u32;
+    if hi != 0 {
+        32 + bit_len(hi)
+    } else {
+        bit_len(x as u32)
+    }
+}
+
+/// ⌊a · b / 2³²⌋ for `u32`, from below: at most 2 less than the exact
+/// value (the cross terms are shifted separately; written out exactly,
+/// LLVM turns the expression back into a 64-bit product — a library call
+/// on ARMv6-M).
+#[inline(always)]
+pub fn mulhi_u32_low(a: u32, b: u32) -> u32 {
+    let (al, ah) = (a & 0xFFFF, a >> 16);
+    let (bl, bh) = (b & 0xFFFF, b >> 16);
+    ah * bh + ((ah * bl) >> 16) + ((al * bh) >> 16)
+}
+
+/// The exact product `a · b` of two `u32` (four 16 × 16 products on 32-bit
+/// targets, the native product on 64-bit hosts).
 #[inline(always)]
 pub fn mulu64(a: u32, b: u32) -> u64 {
+    if cfg!(target_pointer_width = "64") {
+        u64::from(a) * u64::from(b)
+    } else {
+        mulu64_parts(a, b)
+    }
+}
+
+/// [`mulu64`]'s 32-bit path.
+#[inline(always)]
+pub fn mulu64_parts(a: u32, b: u32) -> u64 {
     let (al, ah) = (a & 0xFFFF, a >> 16);
     let (bl, bh) = (b & 0xFFFF, b >> 16);
     let mid = u64::from(al * bh) + u64::from(ah * bl);
@@ -292,19 +384,20 @@ impl Recip {
             ax / u64::from(n)
         } else {
             // ax < 2³¹·n: ax = a1·2³² + a0 with a1 < n/2. Two estimates
-            // from below with r ≤ 2³²/n, then at most two corrections.
+            // from below with r ≤ 2³²/n (a1·r < 2³¹), then a few
+            // corrections; everything in 32-bit products.
             let (a1, a0) = ((ax >> 32) as u32, ax as u32);
-            let mut q = u64::from(a1) * u64::from(self.r) + (mulu64(a0, self.r) >> 32);
-            let mut rem = ax - mulu64(q as u32, n);
-            // rem < (a1 + 3)·n < 2³²
-            let d = mulu64(rem as u32, self.r) >> 32;
+            let mut q = a1 * self.r + mulhi_u32_low(a0, self.r);
+            // rem < (a1 + 5)·n < 2³²
+            let mut rem = (ax - mulu64(q, n)) as u32;
+            let d = mulhi_u32_low(rem, self.r);
             q += d;
-            rem -= mulu64(d as u32, n);
-            while rem >= u64::from(n) {
+            rem -= d * n;
+            while rem >= n {
                 q += 1;
-                rem -= u64::from(n);
+                rem -= n;
             }
-            q
+            u64::from(q)
         };
         let q = q.min(i32::MAX as u64) as i32;
         if x < 0 {
@@ -326,7 +419,7 @@ pub fn scale_i64(x: i64, lsb: i32, k: f32) -> i32 {
     let bits = k.to_bits();
     let m = ((bits & 0x7F_FFFF) | 0x80_0000) as i32;
     let e = ((bits >> 23) & 0xFF) as i32 - 150;
-    let sx = (64 - x.unsigned_abs().leading_zeros()).saturating_sub(31);
+    let sx = bit_len64(x.unsigned_abs()).saturating_sub(31);
     let xs = (x >> sx) as i32;
     let p = mul64(xs, m);
     let t = sx as i32 + lsb + e;
@@ -353,7 +446,7 @@ pub fn scale_i64(x: i64, lsb: i32, k: f32) -> i32 {
 /// brings every component within 2³⁰.
 pub fn norm3(v: &[i64; 3]) -> ([i32; 3], u32) {
     let m = v[0].unsigned_abs() | v[1].unsigned_abs() | v[2].unsigned_abs();
-    let s = (64 - m.leading_zeros()).saturating_sub(30);
+    let s = bit_len64(m).saturating_sub(30);
     (
         [(v[0] >> s) as i32, (v[1] >> s) as i32, (v[2] >> s) as i32],
         s,
@@ -508,6 +601,7 @@ mod tests {
         for &a in &vals {
             for &b in &vals {
                 assert_eq!(mul64(a, b), i64::from(a) * i64::from(b), "{a} {b}");
+                assert_eq!(mul64_parts(a, b), i64::from(a) * i64::from(b), "{a} {b}");
             }
         }
         let mut s = 0x1234_5678u32;
@@ -520,6 +614,9 @@ mod tests {
         for _ in 0..100_000 {
             let (a, b) = (rnd(), rnd());
             assert_eq!(mul64(a, b), i64::from(a) * i64::from(b));
+            assert_eq!(mul64_parts(a, b), i64::from(a) * i64::from(b));
+            let (ua, ub) = (a as u32, b as u32);
+            assert_eq!(mulu64_parts(ua, ub), u64::from(ua) * u64::from(ub));
             // Any magnitudes with |a·b| < 2⁶⁰: within 1 of the rounded
             // value, and equal to it except next to a tie.
             let (a, b) = (a >> 1 >> (a as u32 & 1), b >> 1);
@@ -567,14 +664,14 @@ mod tests {
             for x in [0, 1, -1, 1000, -131_070, 131_070, 99_999] {
                 let exact = f64::from(x) * k.value();
                 assert!(
-                    (f64::from(k.mul_small(x)) - exact).abs() <= 0.5 + 1e-9,
+                    (f64::from(k.apply_small(x)) - exact).abs() <= 0.5 + 1e-9,
                     "{c} {x}"
                 );
             }
             if c.abs() <= 0.25 {
                 for x in [i32::MAX, i32::MIN, 1 << 30, -123_456_789] {
                     let exact = f64::from(x) * k.value();
-                    assert!((f64::from(k.mul(x)) - exact).abs() <= 1.0, "{c} {x}");
+                    assert!((f64::from(k.apply(x)) - exact).abs() <= 1.0, "{c} {x}");
                 }
             }
         }
@@ -589,7 +686,7 @@ mod tests {
             let c = f64::from(v) / 4_294_967_296.0;
             assert!((k.value() / c - 1.0).abs() < 1.3e-4, "{v}");
         }
-        assert_eq!(Coef::new(1e-12).mul(i32::MAX), 0);
+        assert_eq!(Coef::new(1e-12).apply(i32::MAX), 0);
     }
 
     #[test]
@@ -644,6 +741,46 @@ mod tests {
         assert_eq!(shift_i64(1 << 62, 2), i64::MAX);
         let (v, s) = norm3(&[1 << 40, -(1 << 35), 7]);
         assert_eq!((v, s), ([1 << 29, -(1 << 24), 0], 11));
+    }
+
+    #[test]
+    fn bit_tricks_match_the_library() {
+        let mut s = 0xDEAD_BEEFu32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s
+        };
+        for i in 0..200_000u32 {
+            let x = match i % 4 {
+                0 => rnd(),
+                1 => rnd() >> (rnd() % 32),
+                2 => i,
+                _ => u32::MAX - i,
+            };
+            assert_eq!(bit_len(x), 32 - x.leading_zeros(), "{x}");
+            let y = rnd();
+            let exact = ((u64::from(x) * u64::from(y)) >> 32) as u32;
+            let low = mulhi_u32_low(x, y);
+            assert!(low <= exact && exact - low <= 2, "{x} {y}");
+            let v = x as i32;
+            assert_eq!(scaled_f32(v, 0).to_bits(), (v as f32).to_bits(), "{v}");
+            assert_eq!(scaled_f32(v, 17), v as f32 / 131_072.0, "{v}");
+        }
+        for v in [
+            i32::MIN,
+            i32::MAX,
+            16_777_217,
+            16_777_219,
+            -33_554_435,
+            1,
+            -1,
+        ] {
+            assert_eq!(scaled_f32(v, 0).to_bits(), (v as f32).to_bits(), "{v}");
+        }
+        assert_eq!(bit_len64(1 << 40), 41);
+        assert_eq!(bit_len64(0), 0);
     }
 
     #[test]

@@ -26,6 +26,11 @@
 //! [`ErrorModel::for_product`] draws them once from the seed with the model's
 //! spread ([`ErrorSpec`]), so a seed is one particular unit. The host may
 //! overwrite any of them through [`crate::chain::SignalChain::errors_mut`].
+//!
+//! [`TriadEngineFixed`] is the same engine in integers for the `fixed-point`
+//! build (same random draws; `tests/signal_noise.rs` pins its Allan
+//! deviation and its sample-by-sample agreement with [`TriadEngine`]). It
+//! clamps each entry of M − I to ±¼ and truth to ±2³⁰ of its scale.
 
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
@@ -582,7 +587,7 @@ impl TriadEngineFixed {
             self.gm[i] = if a.bias_corr_time_s > 0.0 {
                 let g = self.gm_sigma(a) * libm::pow(2.0, f64::from(shift));
                 let k = Coef::new(g * f64::from(crate::sensor::rng::IRWIN_HALL_SCALE));
-                k.mul_small(rng.gaussian_sum())
+                k.apply_small(rng.gaussian_sum())
             } else {
                 0
             };
@@ -613,7 +618,7 @@ impl TriadEngineFixed {
         if !self.identity_m {
             for i in 0..3 {
                 let r = &self.m[i];
-                y[i] = x[i] + r[0].mul(x[0]) + r[1].mul(x[1]) + r[2].mul(x[2]);
+                y[i] = x[i] + r[0].apply(x[0]) + r[1].apply(x[1]) + r[2].apply(x[2]);
             }
         }
         if self.noisy {
@@ -627,11 +632,11 @@ impl TriadEngineFixed {
             for i in 0..3 {
                 let g = self.gm[i];
                 self.gm[i] = g
-                    .saturating_sub(self.gm_decay[i].mul(g))
-                    .saturating_add(self.gm_drive[i].mul_small(inn[i]));
+                    .saturating_sub(self.gm_decay[i].apply(g))
+                    .saturating_add(self.gm_drive[i].apply_small(inn[i]));
                 let e = self.bias[i]
                     .saturating_add(round_shr(self.gm[i], self.gm_shift[i]))
-                    .saturating_add(self.sigma[i].mul_small(rng.gaussian_sum()));
+                    .saturating_add(self.sigma[i].apply_small(rng.gaussian_sum()));
                 y[i] = y[i].saturating_add(e);
             }
         } else {

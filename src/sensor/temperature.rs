@@ -6,7 +6,9 @@
 //! `T(t) = ambient + self_heating · (1 − e^(−t/τ))`, defaults 25 °C, +8 °C,
 //! τ = 600 s. It is advanced every [`UPDATE_TICKS`] ticks by the exact
 //! discrete step, so it costs nothing on the other ticks. A temperature from
-//! the truth (a trajectory file) or from a fault override replaces it.
+//! the truth (a trajectory file) or from a fault override replaces it. (The
+//! `fixed-point` chain then updates the error model's temperature terms one
+//! sensor axis a tick, over the next nine ticks.)
 
 use libm::expf;
 
