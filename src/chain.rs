@@ -353,7 +353,6 @@ struct Core {
     engines: [TriadEngine; 3],
     motion: BuiltinMotion,
     mounting: Mounting,
-    fir: FirBank,
     cascade: Cascade,
     variant: VariantAccumulator,
     attitude: Attitude,
@@ -367,7 +366,6 @@ struct Core {
     engines: [TriadEngineFixed; 3],
     motion: BuiltinMotionFixed,
     mounting: MountingFixed,
-    fir: FirBankFixed,
     cascade: CascadeFixed,
     variant: VariantFixed,
     attitude: AttitudeFixed,
@@ -399,6 +397,9 @@ pub struct SignalChain {
     truth_frame: TruthFrame,
     cfg: ChainConfig,
     core: Core,
+    /// The FIR bank (outside [`Core`]: it is most of the chain's size, and
+    /// [`SignalChain::reset`] refills it in place).
+    fir: ChainFir,
     ahrs: Ahrs,
     bias: Vec3,
     bias_failed: bool,
@@ -456,7 +457,7 @@ fn fir_units(s: &[[i32; 3]; 3]) -> [i32; CHANNELS] {
 #[cfg(not(feature = "fixed-point"))]
 impl Core {
     fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
-        let x = pack(t0);
+        let x = fir_row(t0);
         Core {
             engines: [
                 TriadEngine::new(product.gyro.full_scale() as f32),
@@ -465,7 +466,6 @@ impl Core {
             ],
             motion: BuiltinMotion::new(Motion::default(), dt),
             mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
-            fir: FirBank::new(cfg.fir_design(), &x),
             cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
             variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
@@ -476,12 +476,7 @@ impl Core {
 #[cfg(feature = "fixed-point")]
 impl Core {
     fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
-        let sensor = [
-            t0[0].map(|v| to_fixed(v, GYRO_BITS)),
-            t0[1].map(|v| to_fixed(v, ACC_BITS)),
-            t0[2].map(|v| to_fixed(v, ACC_BITS)),
-        ];
-        let x = fir_units(&sensor);
+        let x = fir_row(t0);
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         Core {
             engines: [
@@ -491,7 +486,6 @@ impl Core {
             ],
             motion: BuiltinMotionFixed::new(Motion::default(), dt),
             mounting: MountingFixed::new(&mounting),
-            fir: FirBankFixed::new(cfg.fir_design(), &x),
             cascade: CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &x),
             variant: VariantFixed::new(cfg.output_variant, dt, &x),
             attitude: AttitudeFixed::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
@@ -499,6 +493,29 @@ impl Core {
             bias_fir: [0; 3],
         }
     }
+}
+
+/// The FIR bank of this build: float, or integer (`fixed-point`).
+#[cfg(not(feature = "fixed-point"))]
+type ChainFir = FirBank;
+/// The FIR bank of this build: float, or integer (`fixed-point`).
+#[cfg(feature = "fixed-point")]
+type ChainFir = FirBankFixed;
+
+/// A measurement (gyro, acc, aux acc) as a FIR input row.
+#[cfg(not(feature = "fixed-point"))]
+fn fir_row(t: &[Vec3; 3]) -> [f32; CHANNELS] {
+    pack(t)
+}
+
+/// A measurement (gyro, acc, aux acc) as a FIR input row, in FIR units.
+#[cfg(feature = "fixed-point")]
+fn fir_row(t: &[Vec3; 3]) -> [i32; CHANNELS] {
+    fir_units(&[
+        t[0].map(|v| to_fixed(v, GYRO_BITS)),
+        t[1].map(|v| to_fixed(v, ACC_BITS)),
+        t[2].map(|v| to_fixed(v, ACC_BITS)),
+    ])
 }
 
 /// What [`SignalChain::attitude_mut`] gives: the attitude filter of this
@@ -521,13 +538,54 @@ impl SignalChain {
     /// defaults until [`SignalChain::configure`]. The AHRS starts levelled,
     /// unaligned (bias 0), USW-extended bit 0 set.
     pub fn new(product: Product, seed: u64) -> Self {
+        let mut chain = Self::unpowered(product);
+        chain.reset(product, seed);
+        chain
+    }
+
+    /// A placeholder chain for `product` (zero histories, no random draws)
+    /// that [`SignalChain::reset`] turns into a powered-on one: cheap to
+    /// build in place (`Device::power_on_into`).
+    #[inline(always)]
+    pub fn unpowered(product: Product) -> Self {
+        let dt = 1.0 / product.model.internal_rate_hz as f32;
+        let cfg = ChainConfig::defaults(&product);
+        let t0 = [[0.0; 3]; 3];
+        SignalChain {
+            product,
+            dt,
+            has_aux: false,
+            rng: Rng::new(0),
+            errors: ErrorModel::default(),
+            errors_dirty: true,
+            temp_model: TemperatureModel::default(),
+            temperature: 0.0,
+            faults: Faults::default(),
+            truth_frame: TruthFrame::Sensor,
+            cfg,
+            core: Core::new(&product, &cfg, &t0, dt),
+            fir: ChainFir::new(None, &fir_row(&t0)),
+            ahrs: Ahrs::Running,
+            bias: [0.0; 3],
+            bias_failed: false,
+            sat_live: 0,
+            sat_reported: 0,
+            ticks: 0,
+            interval: dt,
+        }
+    }
+
+    /// [`SignalChain::new`] in place: the same power-on state, without a
+    /// second chain on the stack (the FIR history, most of the chain's
+    /// size, is refilled where it is; everything else is small). What a
+    /// power cycle runs on a microcontroller.
+    pub fn reset(&mut self, product: Product, seed: u64) {
         let rate_hz = product.model.internal_rate_hz;
         let dt = 1.0 / rate_hz as f32;
         let has_aux = product.model.has(Capability::AuxAccel);
         let mut rng = Rng::new(seed);
         let errors = ErrorModel::for_product(&product, &mut rng);
         let temp_model = TemperatureModel::default();
-        let temperature = temp_model.temperature_c();
         let cfg = ChainConfig::defaults(&product);
         let t0 = Truth::at_rest();
         let sensor = [
@@ -544,29 +602,50 @@ impl SignalChain {
         for (e, s) in core.engines.iter_mut().zip(sensors) {
             e.randomize_gm(s, &mut rng);
         }
-        let mut chain = SignalChain {
-            product,
-            dt,
-            has_aux,
-            rng,
-            errors,
-            errors_dirty: true,
-            temp_model,
+        // Every field, by name: a field added later cannot be forgotten.
+        let SignalChain {
+            product: product_,
+            dt: dt_,
+            has_aux: has_aux_,
+            rng: rng_,
+            errors: errors_,
+            errors_dirty,
+            temp_model: temp_model_,
             temperature,
-            faults: Faults::default(),
-            truth_frame: TruthFrame::Sensor,
-            cfg,
-            core,
-            ahrs: Ahrs::Running,
-            bias: [0.0; 3],
-            bias_failed: false,
-            sat_live: 0,
-            sat_reported: 0,
-            ticks: 0,
-            interval: dt,
-        };
-        chain.refresh_errors();
-        chain
+            faults,
+            truth_frame,
+            cfg: cfg_,
+            core: core_,
+            fir,
+            ahrs,
+            bias,
+            bias_failed,
+            sat_live,
+            sat_reported,
+            ticks,
+            interval,
+        } = self;
+        *product_ = product;
+        *dt_ = dt;
+        *has_aux_ = has_aux;
+        *rng_ = rng;
+        *errors_ = errors;
+        *errors_dirty = true;
+        *temp_model_ = temp_model;
+        *temperature = temp_model.temperature_c();
+        *faults = Faults::default();
+        *truth_frame = TruthFrame::Sensor;
+        *cfg_ = cfg;
+        *core_ = core;
+        fir.reset(cfg.fir_design(), &fir_row(&sensor));
+        *ahrs = Ahrs::Running;
+        *bias = [0.0; 3];
+        *bias_failed = false;
+        *sat_live = 0;
+        *sat_reported = 0;
+        *ticks = 0;
+        *interval = dt;
+        self.refresh_errors();
     }
 
     /// The emulated product.
@@ -585,7 +664,7 @@ impl SignalChain {
         self.cfg = *cfg;
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         let c = &mut self.core;
-        c.fir.set_design(cfg.fir_design());
+        self.fir.set_design(cfg.fir_design());
         // The cascade starts in the steady state of the last FIR output
         // (exact for a steady signal).
         let last = c.variant.last();
@@ -661,13 +740,13 @@ impl SignalChain {
         #[cfg(not(feature = "fixed-point"))]
         {
             // The FIR's newest input row is the last measurement.
-            let x = self.core.fir.last_input();
+            let x = self.fir.last_input();
             [triad(&x, 0), triad(&x, 1), triad(&x, 2)]
         }
         #[cfg(feature = "fixed-point")]
         {
             // The FIR's newest input row: the last measurement in FIR units.
-            let x = self.core.fir.last_input();
+            let x = self.fir.last_input();
             [
                 triad(&x, 0).map(|v| scaled_f32(v, 17)),
                 triad(&x, 1).map(|v| scaled_f32(v, 20)),
@@ -811,7 +890,7 @@ impl SignalChain {
             pack(&[g, a, aux])
         } else {
             // Frozen: the FIR's newest input is the last good measurement.
-            c.fir.last_input()
+            self.fir.last_input()
         };
 
         // AHRS on carrier axes, before the FIR.
@@ -833,7 +912,7 @@ impl SignalChain {
         }
 
         // Filters (sensor axes).
-        let y = c.fir.push(&sensor);
+        let y = self.fir.push(&sensor);
         let mut z = y;
         c.cascade.process(&mut z);
         c.variant.add(&y, &z);
@@ -864,7 +943,7 @@ impl SignalChain {
         } else {
             // Frozen: the FIR's newest input (FIR units) is the last good
             // measurement.
-            let x = c.fir.last_input();
+            let x = self.fir.last_input();
             let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
             [
                 triad(&x, 0).map(|v| v << g),
@@ -889,7 +968,7 @@ impl SignalChain {
         }
 
         // Filters (sensor axes).
-        let y = c.fir.push(&fir_units(&sensor));
+        let y = self.fir.push(&fir_units(&sensor));
         let mut z = y;
         c.cascade.process(&mut z);
         c.variant.add(&y, &z);

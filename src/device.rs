@@ -11,6 +11,8 @@
 //! dev.power_cycle(now);
 //! ```
 
+use core::mem::MaybeUninit;
+
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
@@ -253,8 +255,33 @@ impl<F: NorFlash> Device<F> {
     /// Powers the device on: parameters load from flash (factory defaults
     /// if it holds none), BOOT is checked, AutoStart runs (section 6).
     pub fn power_on_with(cfg: PowerOn, flash: F, now: Instant) -> Self {
-        let factory = params::factory_block(&cfg.product);
-        let mut dev = Device {
+        let mut dev = Self::unpowered(cfg, flash, now);
+        dev.cold_start(now);
+        dev
+    }
+
+    /// [`Device::power_on_with`] straight into `slot`, for microcontrollers:
+    /// the device (~12 KiB, most of it the signal chain's FIR history) is
+    /// built where it will live, with a few hundred bytes of stack, instead
+    /// of being assembled on the stack and moved.
+    pub fn power_on_into(
+        slot: &mut MaybeUninit<Self>,
+        cfg: PowerOn,
+        flash: F,
+        now: Instant,
+    ) -> &mut Self {
+        let dev = slot.write(Self::unpowered(cfg, flash, now));
+        dev.cold_start(now);
+        dev
+    }
+
+    /// A device with its flash and configuration but no power yet: every
+    /// field a placeholder that [`Device::cold_start`] sets. Cheap to build
+    /// (mostly zeros), so a caller's slot can take it in place.
+    #[inline(always)]
+    fn unpowered(cfg: PowerOn, flash: F, now: Instant) -> Self {
+        let factory = [0u8; BLOCK_LEN];
+        Device {
             flash,
             store: ParamStore::new(STORE_BASE),
             cfg,
@@ -279,10 +306,8 @@ impl<F: NorFlash> Device<F> {
             last_trigger: None,
             last_pps: None,
             pps_since_frame: false,
-            chain: SignalChain::new(cfg.product, cfg.seed),
-        };
-        dev.boot(now);
-        dev
+            chain: SignalChain::unpowered(cfg.product),
+        }
     }
 
     /// Power cycle with BOOT floating: RAM reloads from flash, the queues
@@ -294,6 +319,12 @@ impl<F: NorFlash> Device<F> {
     /// Power cycle with the BOOT input at `boot`.
     pub fn power_cycle_with(&mut self, boot: Option<Level>, now: Instant) {
         self.cfg.boot = boot;
+        self.cold_start(now);
+    }
+
+    /// Power-on, in place: everything but the flash and the configuration
+    /// starts over, then [`Device::boot`] loads the parameters.
+    fn cold_start(&mut self, now: Instant) {
         self.rx = Decoder::new();
         self.last_rx = now;
         self.tx.clear();
@@ -309,7 +340,7 @@ impl<F: NorFlash> Device<F> {
         self.last_trigger = None;
         self.last_pps = None;
         self.pps_since_frame = false;
-        self.chain = SignalChain::new(self.cfg.product, self.cfg.seed);
+        self.chain.reset(self.cfg.product, self.cfg.seed);
         self.boot(now);
     }
 

@@ -563,3 +563,53 @@ fn vendor_sdk_device_parameters_request_gets_60_bytes() {
     b.send(&[0xAA, 0x55, 0x00, 0x00, 0x08, 0x00, 0xB1, 0x6C, 0x25, 0x01]);
     assert!(b.drain().is_empty());
 }
+
+/// The same command script, from power-on at `t0` ns: every byte sent.
+fn script(dev: &mut Device<Flash>, t0: u64) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut buf = [0u8; 512];
+    let period = dev.tick_period_ns();
+    let n = Command::Data(0x95).encode(&mut buf).unwrap();
+    dev.on_rx(&buf[..n], Instant(t0));
+    for i in 1..=3000 {
+        dev.on_tick(Instant(t0 + i * period));
+        loop {
+            let n = dev.poll_tx(&mut buf);
+            if n == 0 {
+                break;
+            }
+            out.extend_from_slice(&buf[..n]);
+        }
+    }
+    out
+}
+
+/// A device built in place (`power_on_into`, what the firmware does), one
+/// built by value and one power-cycled after a history all send the same
+/// bytes: the same parameters from flash, the same seed, the same chain.
+#[test]
+fn power_on_in_place_by_value_and_power_cycle_agree() {
+    let product = Product::parse("K120").unwrap();
+    let cfg = PowerOn {
+        product,
+        boot: None,
+        seed: 7,
+    };
+    let mut b = Bench::new("K120");
+    b.save(0x0012, &[0xC8, 0x00]);
+    let flash = b.dev.flash().clone();
+
+    let mut slot = Box::new(core::mem::MaybeUninit::uninit());
+    let a = Device::power_on_into(&mut slot, cfg, flash.clone(), Instant::ZERO);
+    let expect = script(a, 0);
+    assert!(expect.len() > 10_000, "{} bytes", expect.len());
+
+    let mut v = Device::power_on_with(cfg, flash, Instant::ZERO);
+    assert_eq!(script(&mut v, 0), expect);
+
+    b.cmd(Command::Data(GA));
+    b.run_ticks(5000);
+    b.dev.power_cycle(Instant(b.now));
+    let t0 = b.now;
+    assert_eq!(script(&mut b.dev, t0), expect);
+}

@@ -516,6 +516,14 @@ macro_rules! bank {
                 }
             }
 
+            /// [`Self::new`] in place (no second bank on the stack).
+            pub fn reset(&mut self, design: Option<&'static FirDesign>, x: &[$t; CHANNELS]) {
+                self.fill(x);
+                self.raw_pos = 0;
+                self.mid_pos = 0;
+                self.design = design;
+            }
+
             /// Switches to `design`, keeping the histories.
             pub fn set_design(&mut self, design: Option<&'static FirDesign>) {
                 self.design = design;
@@ -537,8 +545,8 @@ macro_rules! bank {
 
             /// Fills the histories with `x`.
             pub fn fill(&mut self, x: &[$t; CHANNELS]) {
-                self.raw = [*x; RING];
-                self.mid = [*x; MID_RING];
+                self.raw.fill(*x);
+                self.mid.fill(*x);
             }
 
             /// Pushes one sample per channel and returns the filtered output.

@@ -549,6 +549,12 @@ fn measure(d: &mut Dut, id: u8, what: &str) -> Vec<(String, u64)> {
     );
     assert!(frames > 0);
     assert!(get("ticks") > 0);
+    // Stack budgets a board's RAM relies on (the STM32F411 has 128 KiB, of
+    // which ~19 KiB are statics): power-on builds the device in place
+    // (`fw_shell::power_on`), and the running firmware's interrupts nest
+    // on one stack.
+    assert!(get("stack_init") <= 20 * 1024, "power-on stack");
+    assert!(get("stack") <= 8 * 1024, "running stack");
     stats
 }
 

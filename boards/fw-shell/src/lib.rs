@@ -37,6 +37,8 @@
 
 pub mod pacer;
 
+use core::mem::MaybeUninit;
+
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 pub use imu_emu;
@@ -160,9 +162,9 @@ pub struct Stats {
 
 /// The firmware shell: a device and the board's peripherals.
 ///
-/// The device is borrowed, not owned: it is ~6 KiB, and a board builds it
-/// straight into a static of its own (`MaybeUninit::write` in a function of
-/// its own) so power-on does not need several copies of it on the stack.
+/// The device is borrowed, not owned: it is ~12 KiB, and a board builds it
+/// in place in a static of its own ([`power_on`]) so power-on does not need
+/// copies of it on the stack.
 pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
     dev: &'d mut Device<F>,
     uart: U,
@@ -185,10 +187,18 @@ pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
 }
 
 /// Powers a device on at `Instant::ZERO` (parameters from `flash`, BOOT
-/// from `cfg`): what a board writes into the device's static right before
-/// [`Shell::new`].
-pub fn power_on<F: NorFlash>(cfg: PowerOn, flash: F) -> Device<F> {
-    Device::power_on_with(cfg, flash, Instant::ZERO)
+/// from `cfg`) straight into `slot` (the board's static), right before
+/// [`Shell::new`]. The device is built in place
+/// ([`Device::power_on_into`]): power-on needs a few hundred bytes of
+/// stack, not copies of the ~12 KiB device. Never inlined, so its frame is
+/// gone when the board's init goes on.
+#[inline(never)]
+pub fn power_on<F: NorFlash>(
+    slot: &mut MaybeUninit<Device<F>>,
+    cfg: PowerOn,
+    flash: F,
+) -> &mut Device<F> {
+    Device::power_on_into(slot, cfg, flash, Instant::ZERO)
 }
 
 impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, U, C, T, E> {

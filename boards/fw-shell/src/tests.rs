@@ -103,7 +103,8 @@ fn shell() -> (TestShell, Shared) {
         boot: None,
         seed: 1,
     };
-    let dev = std::boxed::Box::leak(std::boxed::Box::new(power_on(cfg, RamNor::new())));
+    let slot = std::boxed::Box::leak(std::boxed::Box::new(core::mem::MaybeUninit::uninit()));
+    let dev = power_on(slot, cfg, RamNor::new());
     let s = Shell::new(
         dev,
         FakeUart(b.clone()),

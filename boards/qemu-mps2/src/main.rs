@@ -111,7 +111,7 @@ mod app {
         board::start_clock();
         UART0.init(115_200);
         UART1.init(115_200);
-        let dev = power_on(
+        let dev = fw_shell::power_on(
             cx.local.device,
             PowerOn {
                 product: cfg.product,
@@ -152,15 +152,6 @@ mod app {
     #[inline(never)]
     fn erased_flash(slot: &'static mut MaybeUninit<Flash>) -> &'static mut Flash {
         slot.write(Flash::new())
-    }
-
-    #[inline(never)]
-    fn power_on(
-        slot: &'static mut MaybeUninit<BoardDevice>,
-        cfg: PowerOn,
-        flash: &'static mut Flash,
-    ) -> &'static mut BoardDevice {
-        slot.write(fw_shell::power_on(cfg, flash))
     }
 
     #[idle]

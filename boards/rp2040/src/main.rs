@@ -151,7 +151,7 @@ mod app {
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);
         let flash = RomFlash::new(cx.local.boot2);
-        let dev = power_on(
+        let dev = fw_shell::power_on(
             cx.local.device,
             PowerOn {
                 product,
@@ -181,17 +181,6 @@ mod app {
                 extrig,
             },
         )
-    }
-
-    /// Builds the ~6 KiB device straight into its static, in a frame of
-    /// its own that is gone before init goes on.
-    #[inline(never)]
-    fn power_on(
-        slot: &'static mut MaybeUninit<BoardDevice>,
-        cfg: PowerOn,
-        flash: RomFlash,
-    ) -> &'static mut BoardDevice {
-        slot.write(fw_shell::power_on(cfg, flash))
     }
 
     #[idle]

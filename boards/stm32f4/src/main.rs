@@ -96,7 +96,7 @@ mod app {
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);
         let flash = ParamFlash(LockedFlash::new(dp.FLASH));
-        let dev = power_on(
+        let dev = fw_shell::power_on(
             cx.local.device,
             PowerOn {
                 product,
@@ -122,17 +122,6 @@ mod app {
             shell.tick_hz()
         );
         (Shared {}, Local { shell, edges_in })
-    }
-
-    /// Builds the ~6 KiB device straight into its static, in a frame of
-    /// its own that is gone before init goes on.
-    #[inline(never)]
-    fn power_on(
-        slot: &'static mut MaybeUninit<BoardDevice>,
-        cfg: PowerOn,
-        flash: ParamFlash,
-    ) -> &'static mut BoardDevice {
-        slot.write(fw_shell::power_on(cfg, flash))
     }
 
     #[idle]
