@@ -13,10 +13,18 @@ use imu_emu::device::Level;
 use imu_emu::time::Instant;
 use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
 
-/// Timer and USART1 kernel clocks with the clock tree of `main`.
-pub const TIMER_CLK_HZ: u32 = 100_000_000;
+/// System clock (and APB2; APB1 is half of it). The F411 runs at 100 MHz;
+/// the F446's APB1 may not exceed 45 MHz, so it runs at 90 MHz. Either
+/// divides 2 Mbit/s exactly (BRR 50 / 45) and gives whole timer prescalers.
+#[cfg(feature = "black-pill")]
+pub const SYSCLK_HZ: u32 = 100_000_000;
+/// System clock (and APB2; APB1 is half of it): see the Black Pill's.
+#[cfg(feature = "nucleo-f446re")]
+pub const SYSCLK_HZ: u32 = 90_000_000;
+/// Timer kernel clock: APB1 timers run at twice APB1 (its prescaler is 2).
+pub const TIMER_CLK_HZ: u32 = SYSCLK_HZ;
 /// USART1 kernel clock (APB2).
-pub const USART1_CLK_HZ: u32 = 100_000_000;
+pub const USART1_CLK_HZ: u32 = SYSCLK_HZ;
 /// TIM2 counts at 10 MHz: 100 ns per count.
 const TIM2_HZ: u32 = 10_000_000;
 const NS_PER_COUNT: u64 = 1_000_000_000 / TIM2_HZ as u64;
@@ -66,7 +74,7 @@ const CCR2: usize = 0x38;
 static TIME: Mutex<Cell<(u32, u64)>> = Mutex::new(Cell::new((0, 0)));
 
 /// Starts TIM2 free-running at 10 MHz with CH1 (PA0, 1PPS) and CH2 (PA1,
-/// EXTRIG) capturing both edges (input filter: 8 samples at 100 MHz),
+/// EXTRIG) capturing both edges (input filter: 8 samples at the timer clock),
 /// their interrupts on.
 pub fn start_time_base() {
     wr(TIM2 + CR1, 0);

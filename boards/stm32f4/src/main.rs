@@ -1,4 +1,9 @@
-//! # imu-emu on an STM32F411 "Black Pill"
+//! # imu-emu on an STM32F411 "Black Pill" or a Nucleo-F446RE
+//!
+//! One image per board, chosen by cargo feature: `black-pill` (default) or
+//! `nucleo-f446re`. Both chips have the same peripherals at the same
+//! addresses for everything used here (USART1, DMA2, TIM2/3, GPIOA/B,
+//! flash sectors 0–3 of 16 KiB), so only the clock source differs.
 //!
 //! Pinout (README "Flash it to a board"):
 //!
@@ -10,8 +15,10 @@
 //! | PB0 | TOV output |
 //! | PB1 | BOOT input, sampled at reset (driven high / low / floating) |
 //!
-//! Clocks: 25 MHz crystal → 100 MHz system, USART1 and timers at 100 MHz
-//! (2 Mbit/s divides exactly). TIM3 interrupts at the internal rate (2 kHz;
+//! Clocks: 25 MHz crystal (Black Pill) or the ST-LINK's 8 MHz MCO (Nucleo,
+//! HSE bypass) → 100 MHz system (90 MHz on the F446, whose APB1 stops at
+//! 45 MHz), USART1 and timers at the system clock (2 Mbit/s divides
+//! exactly). TIM3 interrupts at the internal rate (2 kHz;
 //! 4 kHz on the K201) and runs the shell's tick service at the top
 //! priority; TIM2 is the 10 MHz time base whose input captures stamp 1PPS
 //! and EXTRIG edges in hardware. USART1 RX is a circular DMA ring the tick
@@ -20,6 +27,11 @@
 //! at build time (`IMU_EMU_MODEL`, `IMU_EMU_SEED`, default K110 and 0).
 #![no_std]
 #![no_main]
+
+#[cfg(all(feature = "black-pill", feature = "nucleo-f446re"))]
+compile_error!("choose one board: --no-default-features --features nucleo-f446re");
+#[cfg(not(any(feature = "black-pill", feature = "nucleo-f446re")))]
+compile_error!("choose a board feature: black-pill or nucleo-f446re");
 
 mod hw;
 
@@ -39,6 +51,13 @@ mod app {
     use stm32f4xx_hal::rcc::Config;
 
     use crate::hw::{self, ParamFlash, Tim2Clock, TovPb0, Usart1Dma, RX_LEN, TX_LEN};
+
+    /// The board this image is for (the boot log names it).
+    #[cfg(feature = "black-pill")]
+    const BOARD: &str = "STM32F411 Black Pill";
+    /// The board this image is for (the boot log names it).
+    #[cfg(feature = "nucleo-f446re")]
+    const BOARD: &str = "Nucleo-F446RE";
 
     type BoardDevice = Device<ParamFlash>;
     type BoardShell =
@@ -61,11 +80,16 @@ mod app {
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
+        // System and APB2 at hw::SYSCLK_HZ, APB1 at half of it (its
+        // timers run at twice APB1: hw::TIMER_CLK_HZ = SYSCLK_HZ).
+        #[cfg(feature = "black-pill")]
+        let hse = Config::hse(25.MHz());
+        #[cfg(feature = "nucleo-f446re")]
+        let hse = Config::hse(8.MHz()).bypass_hse_oscillator();
         let mut rcc = dp.RCC.freeze(
-            Config::hse(25.MHz())
-                .sysclk(100.MHz())
-                .pclk1(50.MHz())
-                .pclk2(100.MHz()),
+            hse.sysclk(hw::SYSCLK_HZ.Hz())
+                .pclk1((hw::SYSCLK_HZ / 2).Hz())
+                .pclk2(hw::SYSCLK_HZ.Hz()),
         );
         hw::enable_clocks();
         let gpioa = dp.GPIOA.split(&mut rcc);
@@ -112,8 +136,9 @@ mod app {
         let shell = Shell::new(dev, uart, Tim2Clock, tov, edges_out);
         hw::start_tick(shell.tick_hz());
         defmt::info!(
-            "imu-emu: {} on STM32F411, BOOT {}, tick {} Hz",
+            "imu-emu: {} on {}, BOOT {}, tick {} Hz",
             product.code().as_str(),
+            BOARD,
             match boot {
                 None => "floating",
                 Some(Level::High) => "high",
