@@ -21,6 +21,15 @@ pub const SYSCLK_HZ: u32 = 100_000_000;
 /// System clock (and APB2; APB1 is half of it): see the Black Pill's.
 #[cfg(feature = "nucleo-f446re")]
 pub const SYSCLK_HZ: u32 = 90_000_000;
+/// APB1 limit of the chip (datasheets: F411 50 MHz, F446 45 MHz). The HAL
+/// checks it only at run time, by panicking in init.
+#[cfg(feature = "black-pill")]
+const APB1_MAX_HZ: u32 = 50_000_000;
+/// APB1 limit of the chip: see the Black Pill's.
+#[cfg(feature = "nucleo-f446re")]
+const APB1_MAX_HZ: u32 = 45_000_000;
+const _: () = assert!(SYSCLK_HZ / 2 <= APB1_MAX_HZ, "APB1 over its limit");
+
 /// Timer kernel clock: APB1 timers run at twice APB1 (its prescaler is 2).
 pub const TIMER_CLK_HZ: u32 = SYSCLK_HZ;
 /// USART1 kernel clock (APB2).
