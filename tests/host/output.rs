@@ -10,7 +10,7 @@ mod support;
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
-use support::{command, read_ram, save, Conn, Control, Emu};
+use support::{command, read_ram, save, Conn, Control, Emu, Frame};
 
 const DATA_RATE: u16 = 0x0012;
 const ALIGN_TIME: u16 = 0x0014;
@@ -425,4 +425,63 @@ fn a_trajectory_file_drives_what_the_device_measures() {
         "temperature from the file"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Reads `n` frames with `id` (60 s at most: a guard, not a measure).
+fn frames(c: &mut Conn, id: u8, n: usize) -> Vec<Frame> {
+    let end = Instant::now() + Duration::from_secs(60);
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let f = c.frame_before(end).expect("frames under --speed");
+        assert_eq!(f.id(), id);
+        out.push(f);
+    }
+    out
+}
+
+/// `--speed max`: device time runs as fast as the client reads, and
+/// nothing is lost for it: 30 000 GA frames (5 minutes of device time at
+/// 100 Hz) in a row, the 2 kHz counter (Table 5.7) stepping by exactly 20
+/// from each frame to the next.
+#[test]
+fn speed_max_streams_losslessly_faster_than_real_time() {
+    let emu = Emu::tcp(&["--model", "K110", "--speed", "max"]);
+    let mut c = emu.connect();
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F); // the acknowledgement
+    let first = c.frame_with_id(0x8F);
+    let mut last = u16_at(first.payload(), 24);
+    let t0 = Instant::now();
+    for f in frames(&mut c, 0x8F, 30_000) {
+        let counter = u16_at(f.payload(), 24);
+        assert_eq!(counter, last.wrapping_add(20), "frame lost or repeated");
+        last = counter;
+    }
+    // Reported, not asserted (README, Performance).
+    let wall = t0.elapsed().as_secs_f64();
+    eprintln!("--speed max: 300 s of GA at 100 Hz in {wall:.3} s");
+}
+
+/// Under `--speed max` and `--speed 20` the 1PPS generator follows device
+/// time: exactly one GAm frame in every 100 (1 s at 100 Hz) carries the
+/// 1PPS flag, with the second fraction restarting.
+#[test]
+fn speed_keeps_pps_on_device_time() {
+    for speed in ["max", "20"] {
+        let emu = Emu::tcp(&["--model", "K110", "--pps", "--speed", speed]);
+        let mut c = emu.connect();
+        c.send(&command(0x9B));
+        c.frame_with_id(0x9B);
+        let fs = frames(&mut c, 0x9B, 800);
+        let flagged: Vec<usize> = fs
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| u16_at(f.payload(), 24) & 0x0001 != 0)
+            .map(|(i, _)| i)
+            .collect();
+        assert!(flagged.len() >= 7, "--speed {speed}: {flagged:?}");
+        for w in flagged.windows(2) {
+            assert_eq!(w[1] - w[0], 100, "--speed {speed}: {flagged:?}");
+        }
+    }
 }

@@ -23,6 +23,7 @@ use imu_emu::device::{Device, PowerOn};
 use imu_emu::model::Product;
 use imu_emu::time::Instant;
 
+use crate::clock::Speed;
 use crate::flash::{FileNor, MemNor};
 use crate::runner::Runner;
 use crate::transport::{PtyTransport, TcpTransport, Transport};
@@ -83,6 +84,14 @@ pub struct Args {
     /// Seed of the device's random processes (sensor noise, …).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+
+    /// Device seconds per host second: a factor (`1` real time, `10`,
+    /// `0.5`) or `max` (as fast as the host computes and the client reads;
+    /// nothing is dropped, a slow client slows device time down). The line
+    /// rate, `--pps`, the trajectory and the control socket all follow
+    /// device time.
+    #[arg(long, value_name = "SPEED", default_value = "1")]
+    pub speed: Speed,
 }
 
 fn parse_product(s: &str) -> Result<Product, String> {
@@ -164,7 +173,7 @@ fn serve<F: NorFlash, T: Transport>(
             .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string()),
     );
 
-    let mut runner = Runner::new(dev, transport, epoch);
+    let mut runner = Runner::new(dev, transport, epoch).with_speed(args.speed);
     if let Some(c) = control {
         runner = runner.with_control(c);
     }
@@ -190,6 +199,16 @@ mod tests {
         assert_eq!(a.tcp, None);
         assert!(!a.pty);
         assert_eq!(a.seed, 0);
+        assert_eq!(a.speed, Speed::Factor(1.0));
+    }
+
+    #[test]
+    fn speed_takes_max_and_factors() {
+        let a = Args::try_parse_from(["imu-emu", "--speed", "max"]).unwrap();
+        assert_eq!(a.speed, Speed::Max);
+        let a = Args::try_parse_from(["imu-emu", "--speed", "20"]).unwrap();
+        assert_eq!(a.speed, Speed::Factor(20.0));
+        assert!(Args::try_parse_from(["imu-emu", "--speed", "0"]).is_err());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //!
 //! * [`runner`] — the loop: ticks on absolute deadlines, line-rate pacing,
 //!   input, sleeping;
+//! * [`clock`] — device time against the host clock (`--speed`);
 //! * [`pacer`] — the byte credit that models the UART line rate;
 //! * [`transport`] — TCP ([`transport::TcpTransport`]) and pty
 //!   ([`transport::PtyTransport`]) with a bounded [`backlog`];
@@ -19,6 +20,7 @@
 
 pub mod backlog;
 pub mod cli;
+pub mod clock;
 pub mod control;
 pub mod flash;
 pub mod pacer;

@@ -1,4 +1,6 @@
-//! The real-time loop: one virtual device driven by the wall clock.
+//! The loop: one virtual device driven by the wall clock — in real time,
+//! scaled, or as fast as possible ([`crate::clock`], `--speed`; every time
+//! below is device time, ns since power-on).
 //!
 //! * **Ticks** run on absolute deadlines `deadline_k = epoch + k × period`
 //!   (`period = dev.tick_period_ns()`, k = 1, 2, …), each called with its own
@@ -16,6 +18,10 @@
 //!   that produces output ([`Device::ticks_to_next_output`]), the next
 //!   `--pps` edge, or [`IDLE_WAKE`], whichever is first, then runs every
 //!   tick due in one batch. UART input wakes it at once.
+//! * **`--speed max`**: before each pass device time moves on by
+//!   [`MAX_BATCH_TICKS`] ticks unless [`MAX_BACKLOG`] bytes wait for the
+//!   client; the loop never sleeps then, it only polls the transport (or
+//!   waits for the client to read).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -25,6 +31,7 @@ use imu_emu::device::{Device, Event, Level, Pin};
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
 
+use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
 use crate::pacer::Pacer;
 use crate::trajectory::Trajectory;
@@ -40,7 +47,7 @@ pub struct Runner<F: NorFlash, T: Transport> {
     dev: Device<F>,
     transport: T,
     pacer: Pacer,
-    epoch: std::time::Instant,
+    clock: Clock,
     period_ns: u64,
     /// Ticks run so far; the next deadline is `(ticks + 1) × period`.
     ticks: u64,
@@ -58,7 +65,8 @@ pub struct Runner<F: NorFlash, T: Transport> {
 }
 
 impl<F: NorFlash, T: Transport> Runner<F, T> {
-    /// Wraps a device powered on at `Instant::ZERO` = `epoch`.
+    /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
+    /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F>, transport: T, epoch: std::time::Instant) -> Self {
         let pacer = Pacer::new(dev.line_rate(), 0);
         let period_ns = dev.tick_period_ns().max(1);
@@ -66,7 +74,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             dev,
             transport,
             pacer,
-            epoch,
+            clock: Clock::new(epoch, Speed::default()),
             period_ns,
             ticks: 0,
             buf: Box::new([0; 4096]),
@@ -85,14 +93,20 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
         self
     }
 
+    /// Runs device time at `speed` (`--speed`), from the same epoch.
+    pub fn with_speed(mut self, speed: Speed) -> Self {
+        self.clock = Clock::new(self.clock.epoch(), speed);
+        self
+    }
+
     /// Serves the control socket (pin edges, power cycle, TOV reports).
     pub fn with_control(mut self, control: Control) -> Self {
         self.control = Some(control);
         self
     }
 
-    /// Generates a 1PPS rising edge at every whole second since the epoch
-    /// (`--pps`, from the host clock).
+    /// Generates a 1PPS rising edge at every whole second of device time
+    /// (`--pps`; the host clock at `--speed 1`).
     pub fn with_pps(mut self) -> Self {
         self.next_pps_ns = Some(1_000_000_000);
         self
@@ -113,9 +127,9 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
         self.dev
     }
 
-    /// Nanoseconds since the epoch.
+    /// Device time now, ns since power-on.
     fn now_ns(&self) -> u64 {
-        u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX)
+        self.clock.now_ns()
     }
 
     fn next_deadline(&self) -> u64 {
@@ -125,12 +139,27 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     /// Runs until `stop` is set (by SIGINT/SIGTERM).
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
+            let max = self.clock.speed() == Speed::Max;
+            let client_keeps_up = self.transport.backlog_len() < MAX_BACKLOG;
+            if max && client_keeps_up {
+                let to = (self.ticks + MAX_BATCH_TICKS).saturating_mul(self.period_ns);
+                self.clock.advance_to(to);
+            }
             self.step()?;
             let now = self.now_ns();
             self.report_drops(now);
-            let wake = self.next_wake(now);
-            self.transport
-                .wait(Duration::from_nanos(wake.saturating_sub(now)))?;
+            let timeout = if max {
+                // Poll only, or wait (briefly) for the client to read.
+                if self.transport.backlog_len() < MAX_BACKLOG {
+                    Duration::ZERO
+                } else {
+                    BUSY_WAKE
+                }
+            } else {
+                self.clock
+                    .host_wait(self.next_wake(now).saturating_sub(now))
+            };
+            self.transport.wait(timeout)?;
         }
         Ok(())
     }

@@ -29,8 +29,9 @@ pub trait Transport {
     /// each received chunk to `sink`. Never blocks.
     fn receive(&mut self, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()>;
 
-    /// Queues device output and writes what the peer takes now; the rest
-    /// waits in the bounded backlog. Never blocks.
+    /// Queues device output in the bounded backlog; [`Transport::flush`]
+    /// writes it (the runner flushes once a pass, so the bytes of a batch
+    /// of ticks go out in one write). Never blocks.
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()>;
 
     /// Writes backlog bytes the peer takes now. Never blocks.

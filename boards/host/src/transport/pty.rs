@@ -107,7 +107,7 @@ impl Transport for PtyTransport {
 
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.backlog.push(bytes);
-        self.flush()
+        Ok(())
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {
@@ -237,6 +237,7 @@ mod tests {
         assert_eq!(got, [0xAA, 0x55, 0x00]); // raw: no echo, no translation
 
         t.send(&[1, 2, 0x0A, 0x0D]).unwrap();
+        t.flush().unwrap();
         let mut b = [0u8; 4];
         client.read_exact(&mut b).unwrap();
         assert_eq!(b, [1, 2, 0x0A, 0x0D]);
@@ -248,6 +249,7 @@ mod tests {
         // The client closing does not disturb the master.
         drop(client);
         t.send(&[3]).unwrap();
+        t.flush().unwrap();
         t.receive(&mut |_| {}).unwrap();
 
         drop(t);

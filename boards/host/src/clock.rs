@@ -1,0 +1,154 @@
+//! Device time against the host clock (`--speed`).
+//!
+//! The runner reads the device's time from a [`Clock`]: ns since power-on,
+//! which every tick deadline, 1PPS edge, received byte, trajectory sample
+//! and line-rate credit is measured in. The speed decides how that time
+//! follows the host's:
+//!
+//! * [`Speed::Factor`]`(k)` — device time runs `k` times as fast as the
+//!   host's (`--speed 1`, the default, is real time; `--speed 10` shows ten
+//!   seconds of data a second; `--speed 0.5` half speed). The emulated line
+//!   runs `k` times faster too: a 115 200 bit/s line carries `k` times as
+//!   many bytes a host second, so nothing a real line would not carry is
+//!   ever dropped.
+//! * [`Speed::Max`] — device time advances as fast as the host computes
+//!   and the client reads: the runner moves it on by a batch of ticks
+//!   ([`MAX_BATCH_TICKS`]) whenever less than [`MAX_BACKLOG`] bytes wait
+//!   for the client, and otherwise waits for the client to read. Nothing
+//!   is dropped for speed's sake, so a slow client slows device time down
+//!   instead (with no client connected, time stops once the backlog holds
+//!   [`MAX_BACKLOG`] bytes).
+//!
+//! Either way the device sees the same sequence of ticks and bytes at the
+//! same device times as in real time: a recorded session replays
+//! identically faster (the seed fixing the noise).
+
+use std::str::FromStr;
+use std::time::Duration;
+
+/// How fast device time runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Speed {
+    /// This many device seconds per host second (finite, > 0).
+    Factor(f64),
+    /// As fast as the host computes and the client reads.
+    Max,
+}
+
+impl Default for Speed {
+    fn default() -> Self {
+        Speed::Factor(1.0)
+    }
+}
+
+impl FromStr for Speed {
+    type Err = String;
+
+    /// `max`, or a factor such as `1`, `10`, `0.25` (finite, > 0, ≤ 1e6).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.eq_ignore_ascii_case("max") {
+            return Ok(Speed::Max);
+        }
+        match s.parse::<f64>() {
+            Ok(k) if k.is_finite() && k > 0.0 && k <= 1e6 => Ok(Speed::Factor(k)),
+            _ => Err(format!(
+                "speed must be `max` or a factor in (0, 1e6], not {s:?}"
+            )),
+        }
+    }
+}
+
+/// In [`Speed::Max`], how many ticks device time moves on at once.
+pub const MAX_BATCH_TICKS: u64 = 64;
+/// In [`Speed::Max`], device time waits while this many bytes wait for the
+/// client (well below the transport's 64 KiB backlog, which drops when
+/// full).
+pub const MAX_BACKLOG: usize = 16 * 1024;
+
+/// Device time: ns since power-on, per [`Speed`].
+#[derive(Debug, Clone)]
+pub struct Clock {
+    epoch: std::time::Instant,
+    speed: Speed,
+    /// [`Speed::Max`]: device time now.
+    virtual_ns: u64,
+}
+
+impl Clock {
+    /// Device time 0 is `epoch` (host time).
+    pub fn new(epoch: std::time::Instant, speed: Speed) -> Self {
+        Clock {
+            epoch,
+            speed,
+            virtual_ns: 0,
+        }
+    }
+
+    /// Host time of device time 0.
+    pub fn epoch(&self) -> std::time::Instant {
+        self.epoch
+    }
+
+    /// The speed.
+    pub fn speed(&self) -> Speed {
+        self.speed
+    }
+
+    /// Device time now, ns since power-on.
+    pub fn now_ns(&self) -> u64 {
+        match self.speed {
+            Speed::Factor(k) => {
+                let host = self.epoch.elapsed().as_nanos() as f64;
+                // Saturates at u64::MAX (centuries of device time).
+                (host * k) as u64
+            }
+            Speed::Max => self.virtual_ns,
+        }
+    }
+
+    /// [`Speed::Max`]: moves device time on to `ns` (never back). No
+    /// effect at a factor, where the host clock drives it.
+    pub fn advance_to(&mut self, ns: u64) {
+        if self.speed == Speed::Max {
+            self.virtual_ns = self.virtual_ns.max(ns);
+        }
+    }
+
+    /// How long the host waits for `device_ns` of device time to pass:
+    /// scaled by the factor; nothing in [`Speed::Max`] (the runner decides
+    /// there, from the backlog).
+    pub fn host_wait(&self, device_ns: u64) -> Duration {
+        match self.speed {
+            Speed::Factor(k) => Duration::from_nanos((device_ns as f64 / k).ceil() as u64),
+            Speed::Max => Duration::ZERO,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_max_and_factors() {
+        assert_eq!("max".parse::<Speed>(), Ok(Speed::Max));
+        assert_eq!("MAX".parse::<Speed>(), Ok(Speed::Max));
+        assert_eq!("10".parse::<Speed>(), Ok(Speed::Factor(10.0)));
+        assert_eq!("0.25".parse::<Speed>(), Ok(Speed::Factor(0.25)));
+        for bad in ["0", "-1", "nan", "inf", "2e6", "fast", ""] {
+            assert!(bad.parse::<Speed>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn factor_scales_waits_and_max_is_driven() {
+        let c = Clock::new(std::time::Instant::now(), Speed::Factor(4.0));
+        assert_eq!(c.host_wait(1_000_000), Duration::from_micros(250));
+        let mut m = Clock::new(std::time::Instant::now(), Speed::Max);
+        assert_eq!(m.now_ns(), 0);
+        m.advance_to(5_000);
+        m.advance_to(3_000);
+        assert_eq!(m.now_ns(), 5_000);
+        assert_eq!(m.host_wait(1_000_000), Duration::ZERO);
+    }
+}
