@@ -105,7 +105,7 @@ fn exact_at_dc_and_at_each_omega() {
             if cfg.mask & bit == 0 {
                 continue;
             }
-            let s = Section::second_order(&p, FS);
+            let s = Section::second_order(&p, FS as f32);
             let f = f64::from(p.omega) / core::f64::consts::TAU;
             let d = s.response(f, FS);
             let a = analog_second(&p, f64::from(p.omega));
@@ -116,7 +116,7 @@ fn exact_at_dc_and_at_each_omega() {
             );
         }
         if cfg.mask & 4 != 0 {
-            let s = Section::first_order(cfg.tau, FS);
+            let s = Section::first_order(cfg.tau, FS as f32);
             let w = 1.0 / f64::from(cfg.tau);
             let d = s.response(w / core::f64::consts::TAU, FS);
             let a = analog_first(f64::from(cfg.tau), w);
@@ -132,7 +132,7 @@ fn equals_the_analog_response_at_the_warped_frequency() {
             if cfg.mask & bit == 0 {
                 continue;
             }
-            let s = Section::second_order(&p, FS);
+            let s = Section::second_order(&p, FS as f32);
             let wn = f64::from(p.omega);
             let k = wn / (wn / (2.0 * FS)).tan();
             for f in [1.0, 7.0, 20.0, 50.0, 120.0, 300.0, 600.0, 900.0] {

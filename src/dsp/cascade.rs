@@ -24,22 +24,33 @@
 //! Guards: a section whose ω is at or beyond 0.9 × Nyquist is designed at
 //! 0.9 × Nyquist (the bilinear pre-warp diverges at Nyquist); a denominator
 //! damping below 1e-3 is raised to 1e-3 (ζ2 = 0 would put the poles on the
-//! unit circle: an undamped oscillator). Coefficients are computed in f64
-//! at configure time; the sections run in f32 in a DC-exact form
-//! ([`Section`]), or in integers in the `fixed-point` build
+//! unit circle: an undamped oscillator). The sections run in f32 in a
+//! DC-exact form ([`Section`]), or in integers in the `fixed-point` build
 //! ([`CascadeFixed`]: the same sections with Q26/Q29 coefficients).
+//!
+//! **Design precision: `f32`** (`tanf`), at configure time. It was f64
+//! (`tan`), which linked ≈ 5 KiB of soft-double code into the firmware
+//! images for no accuracy the stored coefficients keep: they are `f32`
+//! (or Q26/Q29 rounded from those `f32` values). The design is written in
+//! t = tan(ωT/2) = ω/K, i.e. D(s) divided by K², so no term is of order K²
+//! (1.6e7 at ω = 1 rad/s, 2 kHz) and the pole terms come out as `−2 + …`,
+//! `1 − …` with the small part computed in relative precision: a1, a2 are
+//! within a few f32 ulps of the f64 design, far inside the tolerances of
+//! `tests/signal_cascade.rs` (5e-5 at each ω, 0.1 dB / 1° to 50 Hz),
+//! which are unchanged.
 //!
 //! State: the cascade's input history plus each section's w (a section's
 //! input history is the previous one's output history, rebuilt exactly;
-//! see [`Cascade`]), 11 values a channel; the channel loop is specialised per
-//! Filter mask.
+//! see [`Cascade`]), 11 values a channel; the float channel loop is
+//! specialised per Filter mask, the integer one tests the mask at run time
+//! (flash: [`CascadeFixed::process`]).
 
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
 use super::fir::CHANNELS;
 use super::fixed::{mul64, mul_q};
-use libm::{cos, sin, tan};
+use libm::{cos, sin, tanf};
 
 /// Parameters of one second-order section: ζ1 (numerator), ζ2
 /// (denominator), ω (rad/s).
@@ -111,42 +122,38 @@ pub struct Section {
     pub first_order: bool,
 }
 
-const MAX_WARP: f64 = 0.9 * core::f64::consts::FRAC_PI_2;
+/// Largest ωT/2 a section is designed at (0.9 × Nyquist; module doc).
+const MAX_WARP: f32 = 0.9 * core::f32::consts::FRAC_PI_2;
 
 impl Section {
-    /// Filter1/Filter2 discretised at `rate_hz` (module doc).
-    pub fn second_order(p: &SecondOrder, rate_hz: f64) -> Section {
-        let t = 1.0 / rate_hz;
-        let half = (f64::from(p.omega) * t / 2.0).clamp(1e-9, MAX_WARP);
-        let w = 2.0 * half / t;
-        let k = w / tan(half);
-        let zn = f64::from(p.zeta_num).max(0.0);
-        let zd = f64::from(p.zeta_den).max(1e-3);
-        let (k2, w2) = (k * k, w * w);
-        let d0 = k2 + 2.0 * zd * w * k + w2;
-        let d1 = 2.0 * (w2 - k2);
-        let d2 = k2 - 2.0 * zd * w * k + w2;
+    /// Filter1/Filter2 discretised at `rate_hz` (module doc). In `f32`, in
+    /// the well-conditioned form of the module doc ("Design precision").
+    pub fn second_order(p: &SecondOrder, rate_hz: f32) -> Section {
+        let half = (p.omega / (2.0 * rate_hz)).clamp(1e-9, MAX_WARP);
+        // t = ω/K: D(s) of the bilinear map divided by K² is
+        // (1 + 2ζ2 t + t²) + 2(t² − 1) z⁻¹ + (1 − 2ζ2 t + t²) z⁻².
+        let t = tanf(half);
+        let zn = p.zeta_num.max(0.0);
+        let zd = p.zeta_den.max(1e-3);
+        let d0 = 1.0 + 2.0 * zd * t + t * t;
         Section {
-            g: (2.0 * (zn - zd) * w * k / d0) as f32,
-            a1: (d1 / d0) as f32,
-            a2: (d2 / d0) as f32,
+            g: 2.0 * (zn - zd) * t / d0,
+            // −2 + … and 1 − …: the small terms carry the pole positions.
+            a1: -2.0 + 4.0 * t * (zd + t) / d0,
+            a2: 1.0 - 4.0 * zd * t / d0,
             first_order: false,
         }
     }
 
     /// Filter3 discretised at `rate_hz` (pre-warped at 1/τ).
-    pub fn first_order(tau: f32, rate_hz: f64) -> Section {
-        let t = 1.0 / rate_hz;
-        let tau = f64::from(tau).max(1e-9);
-        let half = (t / (2.0 * tau)).clamp(1e-9, MAX_WARP);
-        let wc = 2.0 * half / t;
-        let k = wc / tan(half);
-        // 1/(τ' s + 1) with τ' = 1/wc (= τ unless clamped).
-        let tk = k / wc;
-        let d0 = tk + 1.0;
+    pub fn first_order(tau: f32, rate_hz: f32) -> Section {
+        let tau = tau.max(1e-9);
+        let half = (1.0 / (2.0 * tau * rate_hz)).clamp(1e-9, MAX_WARP);
+        // 1/(τ' s + 1), τ' = 1/ωc (= τ unless clamped), K τ' = 1/t.
+        let t = tanf(half);
         Section {
-            g: (-tk / d0) as f32,
-            a1: ((1.0 - tk) / d0) as f32,
+            g: -1.0 / (1.0 + t),
+            a1: -1.0 + 2.0 * t / (1.0 + t),
             a2: 0.0,
             first_order: true,
         }
@@ -284,7 +291,7 @@ impl Cascade {
     /// Re-designs the sections and puts them in steady state for input `x`
     /// (no start-up transient).
     pub fn configure(&mut self, cfg: &CascadeConfig, rate_hz: u32, x: &[f32; CHANNELS]) {
-        let fs = f64::from(rate_hz);
+        let fs = rate_hz as f32;
         self.n = 0;
         let mut push = |s: Section| {
             self.sections[self.n] = s;
@@ -484,10 +491,9 @@ pub struct SectionFixed {
 impl SectionFixed {
     /// `s` rounded to the fixed-point formats (g clamped to ±32).
     pub fn from_float(s: &Section) -> Self {
-        let q = |x: f32, bits: u32| {
-            libm::round(f64::from(x) * f64::from(1u32 << bits))
-                .clamp(f64::from(-i32::MAX), f64::from(i32::MAX)) as i32
-        };
+        // x·2^bits is exact in f32 (a power-of-two scale), so rounding it in
+        // f32 gives the same integer as in f64; beyond i32 it saturates.
+        let q = |x: f32, bits: u32| (libm::roundf(x * (1u32 << bits) as f32) as i32).max(-i32::MAX);
         SectionFixed {
             g: q(s.g, QG),
             a1: q(s.a1, QA),
@@ -517,6 +523,15 @@ impl SectionFixed {
             };
             return t.saturating_sub(r);
         }
+        self.w_wide(u, uk, w1, w2)
+    }
+
+    /// [`SectionFixed::w`] beyond 2²⁹: exact 64-bit products. Out of line
+    /// and cold (a resonant cascade near full scale): one copy in flash
+    /// instead of one per inlined section.
+    #[cold]
+    #[inline(never)]
+    fn w_wide(&self, u: i32, uk: i32, w1: i32, w2: i32) -> i32 {
         let gd = match u.checked_sub(uk) {
             Some(d) => mul64(self.g, d),
             None => mul64(self.g, u) - mul64(self.g, uk),
@@ -572,7 +587,7 @@ impl CascadeFixed {
 
     /// Re-designs (through the float design) and resets to steady state.
     pub fn configure(&mut self, cfg: &CascadeConfig, rate_hz: u32, x: &[i32; CHANNELS]) {
-        let fs = f64::from(rate_hz);
+        let fs = rate_hz as f32;
         self.sections = [
             SectionFixed::from_float(&Section::second_order(&cfg.filt1, fs)),
             SectionFixed::from_float(&Section::second_order(&cfg.filt2, fs)),
@@ -591,39 +606,30 @@ impl CascadeFixed {
         }
     }
 
-    /// Filters one sample per channel in place.
-    #[inline]
+    /// Filters one sample per channel in place. One loop for every Filter
+    /// mask, the mask tested per channel (a few predictable branches), not
+    /// one specialised copy per mask as in [`Cascade`]: on ARMv6-M each copy
+    /// of the integer sections is 0.5–3 KiB of flash (12 KiB for all seven).
     pub fn process(&mut self, x: &mut [i32; CHANNELS]) {
-        match self.mask {
-            1 => self.run::<1>(x),
-            2 => self.run::<2>(x),
-            3 => self.run::<3>(x),
-            4 => self.run::<4>(x),
-            5 => self.run::<5>(x),
-            6 => self.run::<6>(x),
-            7 => self.run::<7>(x),
-            _ => {}
+        let m = self.mask;
+        if m == 0 {
+            return;
         }
-    }
-
-    /// [`CascadeFixed::process`] for Filter mask `M`.
-    #[inline(always)]
-    fn run<const M: u8>(&mut self, x: &mut [i32; CHANNELS]) {
         let [f1, f2, f3] = self.sections;
         for (xc, st) in x.iter_mut().zip(self.state.iter_mut()) {
             let mut u = *xc;
             let mut p = [st[0], st[1]];
             st[1] = st[0];
             st[0] = u;
-            if M & 1 != 0 {
+            if m & 1 != 0 {
                 u = second_fixed(&f1, u, &mut p, &mut st[2..4], false);
-                u = second_fixed(&f1, u, &mut p, &mut st[4..6], M & 6 == 0);
+                u = second_fixed(&f1, u, &mut p, &mut st[4..6], m & 6 == 0);
             }
-            if M & 2 != 0 {
+            if m & 2 != 0 {
                 u = second_fixed(&f2, u, &mut p, &mut st[6..8], false);
-                u = second_fixed(&f2, u, &mut p, &mut st[8..10], M & 4 == 0);
+                u = second_fixed(&f2, u, &mut p, &mut st[8..10], m & 4 == 0);
             }
-            if M & 4 != 0 {
+            if m & 4 != 0 {
                 let wn = f3.w(u, p[0], st[10], 0, false);
                 st[10] = wn;
                 u = u.saturating_add(wn);
