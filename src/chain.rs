@@ -992,6 +992,14 @@ impl SignalChain {
     /// interval since the previous output, in carrier axes; restarts the
     /// interval. See [`Sample`] for units.
     pub fn output(&mut self) -> Sample {
+        self.output_with(true)
+    }
+
+    /// [`SignalChain::output`], computing the orientation only if
+    /// `attitude` (the frame carries it): without, [`Sample::quat`] is the
+    /// identity and [`Sample::euler`] zeros. Nothing else differs; the
+    /// orientation has no state of its own to advance.
+    pub fn output_with(&mut self, attitude: bool) -> Sample {
         let v = self.core.variant.take();
         self.interval = v.ticks as f32 * self.dt;
         self.sat_reported = self.sat_live;
@@ -1039,7 +1047,11 @@ impl SignalChain {
                 },
             )
         };
-        let (quat, euler) = self.orientation();
+        let (quat, euler) = if attitude {
+            self.orientation()
+        } else {
+            ([1.0, 0.0, 0.0, 0.0], [0.0; 3])
+        };
         Sample {
             gyro,
             acc,
