@@ -188,6 +188,19 @@ impl TxRing {
     }
 }
 
+/// `n · byte_ps / 1000` (ns on the wire for `n` bytes of `byte_ps` ps):
+/// split at 1000 so that, for every rate above 2.3 kbit/s, only 32-bit
+/// divisions by the constant remain (a 64-bit one is a library call on a
+/// Cortex-M).
+fn wire_ns(n: usize, byte_ps: u64) -> u64 {
+    match (u32::try_from(n), u32::try_from(byte_ps)) {
+        (Ok(n), Ok(ps)) if n < 1 << 16 => {
+            u64::from(n) * u64::from(ps / 1000) + u64::from(n * (ps % 1000) / 1000)
+        }
+        _ => n as u64 * byte_ps / 1000,
+    }
+}
+
 /// What [`queue_frame`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Queued {
@@ -977,7 +990,7 @@ impl<F: NorFlash> Device<F> {
         }
         let n = len + frame::OVERHEAD;
         let start = self.line_free_at.max(self.clock);
-        let wire_ns = n as u64 * self.byte_time_ps / 1000;
+        let wire_ns = wire_ns(n, self.byte_time_ps);
         self.line_free_at = start.plus_nanos(wire_ns);
         Some(self.line_free_at)
     }

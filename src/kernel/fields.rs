@@ -269,6 +269,28 @@ impl Field {
     /// Writes the field into `out`, which is [`Field::size`] bytes long.
     fn write_exact(self, ctx: &OutputCtx<'_>, out: &mut [u8]) {
         let s = ctx.sample;
+        // The triads first, through one call site of each writer (so
+        // that it can be inlined once).
+        let triad = match self {
+            Field::Gyro => Some((&s.gyro, ctx.product.gyro.kg(), false)),
+            Field::GyroHr => Some((&s.gyro, 100_000, true)),
+            Field::Acc => Some((&s.acc, ctx.product.accel.ka(), false)),
+            Field::AccHr => Some((&s.acc, 1_000_000, true)),
+            Field::AuxAccHr => Some((&s.aux_acc, 1_000_000, true)),
+            Field::GyroBiasCompHr => Some((&s.gyro_filtered, 100_000, true)),
+            Field::GyroBiasHr => Some((&s.gyro_bias, 100_000, true)),
+            Field::FilteredAccHr => Some((&s.acc_filtered, 1_000_000, true)),
+            Field::FilteredAuxAccHr => Some((&s.aux_acc_filtered, 1_000_000, true)),
+            _ => None,
+        };
+        if let Some((v, k, wide)) = triad {
+            if wide {
+                put3_i32(out, v, k);
+            } else {
+                put3_i16(out, v, k);
+            }
+            return;
+        }
         match self {
             Field::Euler => {
                 out[0..2].copy_from_slice(&sat_u16(heading_0_360(s.euler[0]), 100).to_le_bytes());
@@ -285,15 +307,6 @@ impl Field {
                     c.copy_from_slice(&sat_i16(q, 10_000).to_le_bytes());
                 }
             }
-            Field::Gyro => put3_i16(out, &s.gyro, ctx.product.gyro.kg()),
-            Field::GyroHr => put3_i32(out, &s.gyro, 100_000),
-            Field::Acc => put3_i16(out, &s.acc, ctx.product.accel.ka()),
-            Field::AccHr => put3_i32(out, &s.acc, 1_000_000),
-            Field::AuxAccHr => put3_i32(out, &s.aux_acc, 1_000_000),
-            Field::GyroBiasCompHr => put3_i32(out, &s.gyro_filtered, 100_000),
-            Field::GyroBiasHr => put3_i32(out, &s.gyro_bias, 100_000),
-            Field::FilteredAccHr => put3_i32(out, &s.acc_filtered, 1_000_000),
-            Field::FilteredAuxAccHr => put3_i32(out, &s.aux_acc_filtered, 1_000_000),
             Field::Zero(_) => out.fill(0),
             Field::Usw => out.copy_from_slice(&ctx.usw.to_le_bytes()),
             Field::UswExt => out.copy_from_slice(&ctx.usw_ext.to_le_bytes()),
@@ -305,6 +318,8 @@ impl Field {
             Field::SupplyVoltage => {
                 out.copy_from_slice(&sat_u16(s.supply_voltage, 100).to_le_bytes())
             }
+            // The triads, written above.
+            _ => {}
         }
     }
 }
