@@ -413,13 +413,10 @@ impl Window {
             };
             let coefs = &coefs[k0..k1];
             if L == 1 {
-                // By index over slices of one length: no iterator state
-                // to step (a size-optimised build keeps it in memory).
-                let (a, b) = (&ring[a0..], &ring[..=b0]);
-                let n = coefs.len().min(a.len()).min(b.len());
-                let (a, b, h) = (&a[..n], &b[b.len() - n..], &coefs[..n]);
-                for j in 0..n {
-                    f(&a[j], &b[n - 1 - j], &h[j]);
+                let a = ring[a0..].iter();
+                let b = ring[..=b0].iter().rev();
+                for ((a, b), h) in a.zip(b).zip(coefs) {
+                    f(a, b, h);
                 }
             } else {
                 // All but the last pair as whole chunks of L rows: rows
