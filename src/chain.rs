@@ -118,24 +118,39 @@
 //! incremental output, non-zero Alignment_Angles, coning motion, attitude
 //! running:
 //!
-//! | LPF | Cortex-M4F (float) | ARMv6-M (`fixed-point`) |
+//! | LPF | Cortex-M4F (float) | ARMv6-M (`fixed-point`)¹ |
 //! |---|---|---|
-//! | 16 Hz (192, two-stage) | 3 845 / 4 028 | 19 543 / 20 743 |
-//! | 33 Hz (96, two-stage) | 3 689 / 3 841 | 19 551 / 20 726 |
-//! | 66 Hz (48) | 3 784 / 3 945 | 20 227 / 21 420 |
-//! | 131 Hz (24) | 3 198 / 3 338 | 18 351 / 19 517 |
-//! | 262 Hz (12) | 2 908 / 3 062 | 17 414 / 18 593 |
-//! | off | 2 496 / 2 659 | 16 145 / 17 332 |
-//! | K110 factory (262 Hz, no cascade, instant) | 1 915 / 2 069 | 9 463 / 10 624 |
-//! | 66 Hz, constant rotation, truth in carrier axes | 3 852 / 4 012 | 21 422 / 22 615 |
-//! | 66 Hz, vibration, 1 Hz output (2000 ticks) | 3 836 / 4 063 | 21 033 / 22 772 |
+//! | 16 Hz (192, two-stage) | 3 843 / 4 012 | 19 543 / 20 743 |
+//! | 33 Hz (96, two-stage) | 3 687 / 3 825 | 19 551 / 20 726 |
+//! | 66 Hz (48) | 3 779 / 3 925 | 20 227 / 21 420 |
+//! | 131 Hz (24) | 3 194 / 3 321 | 18 351 / 19 517 |
+//! | 262 Hz (12) | 2 905 / 3 045 | 17 414 / 18 593 |
+//! | off | 2 495 / 2 643 | 16 145 / 17 332 |
+//! | K110 factory (262 Hz, no cascade, instant) | 1 911 / 2 052 | 9 463 / 10 624 |
+//! | 66 Hz, constant rotation, truth in carrier axes | 3 846 / 3 992 | 21 422 / 22 615 |
+//! | 66 Hz, vibration, 1 Hz output (2000 ticks) | 3 830 / 4 040 | 21 033 / 22 772 |
 //!
-//! `output()`: 796 (M4F) / 12 052–12 119 (v6-M; 8 398 averaged, 5 464
-//! instant). Worst tick + output: 4 859 (M4F), 34 891 (v6-M). The tick that
-//! ends an alignment ([`SignalChain::end_alignment`], no output in it) costs
-//! 9 046 / 29 735; an aligning tick at most 3 896 / 24 670 (the 10 ms block
-//! tick). Before this work: M4F 3 924 mean / 4 183 worst, v6-M 86 234 /
-//! 92 250 a tick and 30 291 an output (84 % of it in soft-float routines).
+//! `output()`: 790 (M4F; 671 K110 factory) / 12 052–12 119 (v6-M; 8 398
+//! averaged, 5 464 instant). Worst tick + output: 4 830 (M4F), 34 891
+//! (v6-M). The tick that ends an alignment ([`SignalChain::end_alignment`],
+//! no output in it) costs 9 045 / 29 735; an aligning tick at most 3 880 /
+//! 24 670 (the 10 ms block tick). Before the chain's performance work: M4F
+//! 3 924 mean / 4 183 worst, v6-M 86 234 / 92 250 a tick and 30 291 an
+//! output (84 % of it in soft-float routines).
+//!
+//! ¹ The v6-M column was measured before the FIR's channel loop was written
+//! out (`each_channel!`) and not re-measured.
+//!
+//! The firmware images build with `opt-level = "s"`, which does not unroll
+//! loops: the FIR's channel loop is written out for them (at opt-level 3
+//! the compiler did it already; the M4F figures above moved by 0 to −25).
+//! A whole `Device::on_tick` under the same single-step trace, opt-level
+//! "s", K110 factory settings, 2 Mbit/s (before this work in brackets):
+//! 2 124 a tick without output (3 349), ≈ 3 260 with a GA frame (5 546),
+//! 5 115–5 220 with the largest UDD frame (≈ 8 900), at most 5 480 (9 464)
+//! when the temperature update falls on an output tick. With `fixed-point`
+//! on thumbv6m: 8 962 (9 857), ≈ 12 520 GA, ≈ 19 700 UDD; worst
+//! 13 808 GA (18 819), 21 016 UDD (24 821). README "Performance".
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
@@ -1071,6 +1086,14 @@ impl SignalChain {
     /// interval since the previous output, in carrier axes; restarts the
     /// interval. See [`Sample`] for units.
     pub fn output(&mut self) -> Sample {
+        self.output_with(true)
+    }
+
+    /// [`SignalChain::output`], computing the orientation only if
+    /// `attitude` (the frame carries it): without, [`Sample::quat`] is the
+    /// identity and [`Sample::euler`] zeros. Nothing else differs; the
+    /// orientation has no state of its own to advance.
+    pub fn output_with(&mut self, attitude: bool) -> Sample {
         let v = self.core.variant.take();
         self.interval = v.ticks as f32 * self.dt;
         self.sat_reported = self.sat_live;
@@ -1118,7 +1141,11 @@ impl SignalChain {
                 },
             )
         };
-        let (quat, euler) = self.orientation();
+        let (quat, euler) = if attitude {
+            self.orientation()
+        } else {
+            ([1.0, 0.0, 0.0, 0.0], [0.0; 3])
+        };
         Sample {
             gyro,
             acc,

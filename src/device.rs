@@ -104,19 +104,30 @@ pub struct PowerOn {
     pub seed: u64,
 }
 
-/// The UART transmit queue: a byte ring filled and drained by slices.
+/// Largest frame the device sends (a UDD frame; GetDevInfo is smaller).
+const MAX_FRAME: usize = MAX_PAYLOAD + frame::OVERHEAD;
+
+/// The UART transmit queue: [`TX_CAP`] bytes (what [`TxRing::free`]
+/// counts) in a buffer [`MAX_FRAME`] bytes longer, so that a frame is always
+/// written in place in one piece ([`TxRing::push_frame`]): one that starts
+/// near the end runs on past [`TX_CAP`], that point becomes the end of the
+/// ring until the reader has passed it, and the next frame starts at 0.
 struct TxRing {
-    buf: [u8; TX_CAP],
+    buf: [u8; TX_CAP + MAX_FRAME],
     head: usize,
     len: usize,
+    /// Where the bytes wrap to 0: [`TX_CAP`], or the end of a frame that ran
+    /// past it (until the reader passes it).
+    end: usize,
 }
 
 impl TxRing {
     const fn new() -> Self {
         TxRing {
-            buf: [0; TX_CAP],
+            buf: [0; TX_CAP + MAX_FRAME],
             head: 0,
             len: 0,
+            end: TX_CAP,
         }
     }
 
@@ -131,27 +142,115 @@ impl TxRing {
     fn clear(&mut self) {
         self.head = 0;
         self.len = 0;
+        self.end = TX_CAP;
     }
 
-    /// Appends `bytes` (the caller checked [`TxRing::free`]).
-    fn push(&mut self, bytes: &[u8]) {
-        let n = bytes.len().min(self.free());
-        let tail = (self.head + self.len) % TX_CAP;
-        let first = n.min(TX_CAP - tail);
-        self.buf[tail..tail + first].copy_from_slice(&bytes[..first]);
-        self.buf[..n - first].copy_from_slice(&bytes[first..n]);
+    /// Appends an `n`-byte frame that `fill` writes in place (the caller
+    /// checked [`TxRing::free`]); nothing is queued if `fill` returns
+    /// `false` or the frame is longer than [`MAX_FRAME`].
+    ///
+    /// The tail is always below [`TX_CAP`]; written after the reader's
+    /// bytes it may run into the extra bytes, written before them (wrapped)
+    /// it ends at or below `head − (end − TX_CAP)` since at most [`TX_CAP`]
+    /// bytes are queued, so it never meets them.
+    fn push_frame(&mut self, n: usize, fill: impl FnOnce(&mut [u8]) -> bool) -> bool {
+        if n > self.free().min(MAX_FRAME) {
+            return false;
+        }
+        let mut tail = self.head + self.len;
+        if tail >= self.end {
+            tail -= self.end;
+        }
+        let Some(f) = self.buf.get_mut(tail..tail + n) else {
+            return false;
+        };
+        if !fill(f) {
+            return false;
+        }
+        if tail + n >= TX_CAP {
+            self.end = tail + n;
+        }
         self.len += n;
+        true
     }
 
     /// Moves up to `out.len()` bytes out.
     fn pop(&mut self, out: &mut [u8]) -> usize {
         let n = out.len().min(self.len);
-        let first = n.min(TX_CAP - self.head);
+        let first = n.min(self.end - self.head);
         out[..first].copy_from_slice(&self.buf[self.head..self.head + first]);
         out[first..n].copy_from_slice(&self.buf[..n - first]);
-        self.head = (self.head + n) % TX_CAP;
+        self.head += n;
+        if self.head >= self.end {
+            self.head -= self.end;
+            self.end = TX_CAP;
+        }
         self.len -= n;
         n
+    }
+}
+
+/// `n · byte_ps / 1000` (ns on the wire for `n` bytes of `byte_ps` ps):
+/// split at 1000 so that, for every rate above 2.3 kbit/s, only 32-bit
+/// divisions by the constant remain (a 64-bit one is a library call on a
+/// Cortex-M).
+fn wire_ns(n: usize, byte_ps: u64) -> u64 {
+    match (u32::try_from(n), u32::try_from(byte_ps)) {
+        (Ok(n), Ok(ps)) if n < 1 << 16 => {
+            u64::from(n) * u64::from(ps / 1000) + u64::from(n * (ps % 1000) / 1000)
+        }
+        _ => n as u64 * byte_ps / 1000,
+    }
+}
+
+/// What [`queue_frame`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Queued {
+    /// The frame is queued.
+    Yes,
+    /// No room in the queue: dropped whole.
+    Full,
+    /// Not sent (the payload writer refused, or no valid length field).
+    No,
+}
+
+/// Queues a device frame (`type 1`, Table 5.2) with a `len`-byte payload
+/// that `fill` writes straight into the queue (`false`: send nothing).
+fn queue_frame(
+    tx: &mut TxRing,
+    id: u8,
+    len: usize,
+    fill: impl FnOnce(&mut [u8]) -> bool,
+) -> Queued {
+    let Ok(len_field) = u16::try_from(len + 6) else {
+        return Queued::No;
+    };
+    let n = len + frame::OVERHEAD;
+    if tx.free() < n {
+        return Queued::Full;
+    }
+    let len_field = len_field.to_le_bytes();
+    let queued = tx.push_frame(n, |f| {
+        let (body, sum) = f.split_at_mut(6 + len);
+        let (head, payload) = body.split_at_mut(6);
+        head.copy_from_slice(&[
+            frame::HEADER[0],
+            frame::HEADER[1],
+            TYPE_DATA,
+            id,
+            len_field[0],
+            len_field[1],
+        ]);
+        if !fill(payload) {
+            return false;
+        }
+        sum.copy_from_slice(&frame::checksum(&body[2..]).to_le_bytes());
+        true
+    });
+    if queued {
+        Queued::Yes
+    } else {
+        Queued::No
     }
 }
 
@@ -161,11 +260,16 @@ impl TxRing {
 struct Layout {
     header: heapless::Vec<u8, { 1 + params::UDD_MAX_TYPES }>,
     fields: heapless::Vec<Field, { params::UDD_MAX_TYPES }>,
+    /// Payload bytes (header and fields).
+    len: usize,
+    /// Whether a field carries the orientation (Euler angles, quaternion):
+    /// the chain computes it only then.
+    attitude: bool,
 }
 
 impl Layout {
     fn payload_len(&self) -> usize {
-        self.header.len() + fields::payload_len(&self.fields)
+        self.len
     }
 }
 
@@ -772,6 +876,8 @@ impl<F: NorFlash> Device<F> {
                 }
             }
         }
+        l.len = l.header.len() + fields::payload_len(&l.fields);
+        l.attitude = l.fields.iter().any(|f| f.is_attitude());
         l
     }
 
@@ -833,7 +939,7 @@ impl<F: NorFlash> Device<F> {
         let Some(stream) = self.stream.as_ref() else {
             return;
         };
-        let sample = self.chain.output();
+        let sample = self.chain.output_with(stream.layout.attitude);
         let status = self.chain.status();
         let product = self.cfg.product;
         // Second fraction (5.2.3.1): ns since the current second began,
@@ -868,15 +974,15 @@ impl<F: NorFlash> Device<F> {
             second_fraction_ns: into_second as u32,
             imu_time_ns: now.since(self.powered_at),
         };
-        let mut payload = [0u8; MAX_PAYLOAD];
         let layout = &stream.layout;
-        let at = layout.header.len();
-        payload[..at].copy_from_slice(&layout.header);
         let tov = stream.tov;
-        let Some(n) = fields::write_all(&layout.fields, &ctx, &mut payload[at..]) else {
-            return;
-        };
-        if let Some(end) = self.send(code, &payload[..at + n]) {
+        let len = layout.payload_len();
+        let queued = queue_frame(&mut self.tx, code, len, |out| {
+            let (head, body) = out.split_at_mut(layout.header.len());
+            head.copy_from_slice(&layout.header);
+            fields::write_all(&layout.fields, &ctx, body) == Some(body.len())
+        });
+        if let Some(end) = self.sent(queued, len) {
             self.pps_since_frame = false;
             if tov {
                 let _ = self.events.push_back(Event::Tov {
@@ -895,28 +1001,27 @@ impl<F: NorFlash> Device<F> {
     /// Returns when its last bit will have left the line, assuming the UART
     /// sends the queue back to back at the current line rate.
     fn send(&mut self, id: u8, payload: &[u8]) -> Option<Instant> {
-        let n = payload.len() + frame::OVERHEAD;
-        let len_field = u16::try_from(payload.len() + 6).ok()?;
-        if self.tx.free() < n {
-            self.tx_dropped = self.tx_dropped.wrapping_add(1);
-            return None;
+        let queued = queue_frame(&mut self.tx, id, payload.len(), |out| {
+            out.copy_from_slice(payload);
+            true
+        });
+        self.sent(queued, payload.len())
+    }
+
+    /// Accounts for a [`queue_frame`] of a `len`-byte payload: counts a
+    /// dropped frame; when queued, when its last bit will have left the line.
+    fn sent(&mut self, queued: Queued, len: usize) -> Option<Instant> {
+        match queued {
+            Queued::Yes => {}
+            Queued::Full => {
+                self.tx_dropped = self.tx_dropped.wrapping_add(1);
+                return None;
+            }
+            Queued::No => return None,
         }
-        // Table 5.2, written straight into the queue.
-        let len = len_field.to_le_bytes();
-        let head = [
-            frame::HEADER[0],
-            frame::HEADER[1],
-            TYPE_DATA,
-            id,
-            len[0],
-            len[1],
-        ];
-        let sum = frame::checksum(&head[2..]).wrapping_add(frame::checksum(payload));
-        self.tx.push(&head);
-        self.tx.push(payload);
-        self.tx.push(&sum.to_le_bytes());
+        let n = len + frame::OVERHEAD;
         let start = self.line_free_at.max(self.clock);
-        let wire_ns = n as u64 * self.byte_time_ps / 1000;
+        let wire_ns = wire_ns(n, self.byte_time_ps);
         self.line_free_at = start.plus_nanos(wire_ns);
         Some(self.line_free_at)
     }

@@ -390,7 +390,7 @@ pub fn canonical(q: &Quat) -> Quat {
 /// `a` wrapped into [0, 2π).
 pub fn wrap_2pi(a: f32) -> f32 {
     const TAU: f32 = core::f32::consts::TAU;
-    let mut a = a % TAU;
+    let mut a = small_rem(a, TAU);
     if a < 0.0 {
         a += TAU;
     }
@@ -398,6 +398,24 @@ pub fn wrap_2pi(a: f32) -> f32 {
         a -= TAU;
     }
     a
+}
+
+/// `a % m` (`m > 0`) with the usual case, `|a| < m` where the remainder
+/// is `a` itself, taken without the library call.
+pub(crate) fn small_rem(a: f32, m: f32) -> f32 {
+    if -m < a && a < m {
+        a
+    } else {
+        rem(a, m)
+    }
+}
+
+/// `a % m` out of line: written inline, the compiler evaluates the
+/// library call on both sides of [`small_rem`]'s test.
+#[cold]
+#[inline(never)]
+fn rem(a: f32, m: f32) -> f32 {
+    a % m
 }
 
 // ----- fixed point (the `fixed-point` build) -----

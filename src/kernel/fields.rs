@@ -81,64 +81,122 @@ pub enum Field {
 /// platform. NaN gives 0; ±∞ and huge values give a magnitude beyond any
 /// field, which the callers saturate.
 pub fn scale_round(x: f32, k: u32) -> i64 {
-    let bits = x.to_bits();
-    let negative = bits >> 31 != 0;
-    let exp = ((bits >> 23) & 0xFF) as i32;
-    let frac = bits & 0x7F_FFFF;
-    if exp == 0xFF {
-        return match (frac != 0, negative) {
-            (true, _) => 0,
-            (false, true) => i64::MIN,
-            (false, false) => i64::MAX,
-        };
+    if x.is_infinite() {
+        return if x < 0.0 { i64::MIN } else { i64::MAX };
     }
-    // x = m · 2^e exactly.
-    let (m, e) = if exp == 0 {
-        (frac, -149)
-    } else {
-        (frac | 0x80_0000, exp - 150)
-    };
-    let p = u64::from(m) * u64::from(k); // < 2^56
-    let magnitude = if e >= 0 {
-        if e > 6 {
-            1 << 62
-        } else {
-            p << e
-        }
-    } else {
-        let sh = (-e) as u32;
-        if sh > 60 {
-            0
-        } else {
-            (p + (1 << (sh - 1))) >> sh
-        }
-    };
-    let magnitude = magnitude.min(1 << 62) as i64;
-    if negative {
+    let magnitude = scaled_magnitude(x, k).min(1 << 62) as i64;
+    if x.is_sign_negative() {
         -magnitude
     } else {
         magnitude
     }
 }
 
+/// `|x| · k` rounded half up, exactly ([`scale_round`]'s magnitude): NaN
+/// gives 0, ∞ and products of 2^62 or more give at least 2^62.
+#[inline(always)]
+fn scaled_magnitude(x: f32, k: u32) -> u64 {
+    let bits = x.to_bits();
+    let exp = (bits >> 23) & 0xFF;
+    let frac = bits & 0x7F_FFFF;
+    if exp == 0xFF {
+        return if frac != 0 { 0 } else { 1 << 62 };
+    }
+    // |x| = m · 2^(biased − 150) exactly (subnormals: biased 1, no
+    // implicit bit).
+    let (m, biased) = if exp == 0 {
+        (frac, 1)
+    } else {
+        (frac | 0x80_0000, exp)
+    };
+    let p = u64::from(m) * u64::from(k); // < 2^56
+    if biased <= 150 {
+        // Right by s = 150 − biased, rounding half up:
+        // (p + 2^(s−1)) >> s = ((p >> (s−1)) + 1) >> 1.
+        match 150 - biased {
+            0 => p,
+            s @ 1..=60 => ((p >> (s - 1)) + 1) >> 1,
+            _ => 0,
+        }
+    } else {
+        match biased - 150 {
+            e @ 1..=6 => p << e,
+            _ => 1 << 62,
+        }
+    }
+}
+
+/// [`scaled_magnitude`] on the FPU when the single-precision product
+/// decides it, else `None`. `a = fl(|x|·k)` is within half an ulp of the
+/// exact product (`k < 2^24` is exact in f32), and half an ulp is at most
+/// `a · 2^-24`; below 2^23 the fraction `f = a − ⌊a⌋` is exact. If `f` is
+/// farther than that from ½, the exact product lies on the same side of the
+/// half-integer and rounds like `a`; otherwise the integer path decides.
+#[cfg(not(feature = "fixed-point"))]
+#[inline(always)]
+fn fast_magnitude(x: f32, k: u32) -> Option<u32> {
+    if k >= 1 << 24 {
+        return None;
+    }
+    let a = x.abs() * k as f32;
+    if a < 8_388_608.0 {
+        let n = a as u32;
+        let f = a - n as f32;
+        if (f - 0.5).abs() > a * (1.0 / 16_777_216.0) {
+            return Some(n + u32::from(f > 0.5));
+        }
+    }
+    None
+}
+
+/// Without an FPU (`fixed-point`) float products are library calls: the
+/// integer path always.
+#[cfg(feature = "fixed-point")]
+#[inline(always)]
+fn fast_magnitude(_x: f32, _k: u32) -> Option<u32> {
+    None
+}
+
+/// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
+/// `-lo_limit` and `hi_limit`: the callers' saturation without 64-bit
+/// signed compares.
+#[inline(always)]
+fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
+    // Zero and subnormals (|x·k| < 2^-94) round to 0 (most often an
+    // output the model does not have).
+    if x.to_bits() & 0x7F80_0000 == 0 {
+        return 0;
+    }
+    let m = match fast_magnitude(x, k) {
+        Some(m) => m,
+        None => scaled_magnitude(x, k).min(1 << 31) as u32,
+    };
+    if x.is_sign_negative() {
+        // −2^31 wraps to itself: i32::MIN.
+        (m.min(lo_limit) as i32).wrapping_neg()
+    } else {
+        m.min(hi_limit) as i32
+    }
+}
+
 /// `x · k`, rounded (see [`scale_round`]), saturated at the i32 limits.
 pub fn sat_i32(x: f32, k: u32) -> i32 {
-    scale_round(x, k).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+    sat_signed(x, k, 1 << 31, i32::MAX as u32)
 }
 
 /// `x · k`, rounded (see [`scale_round`]), saturated at the i16 limits.
 pub fn sat_i16(x: f32, k: u32) -> i16 {
-    scale_round(x, k).clamp(i64::from(i16::MIN), i64::from(i16::MAX)) as i16
+    sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16
 }
 
 /// `x · k`, rounded (see [`scale_round`]), saturated at the u16 limits.
 pub fn sat_u16(x: f32, k: u32) -> u16 {
-    scale_round(x, k).clamp(0, i64::from(u16::MAX)) as u16
+    sat_signed(x, k, 0, u32::from(u16::MAX)) as u16
 }
 
 /// Heading in [0, 360) degrees (the f32 remainder is exact).
 fn heading_0_360(h: f32) -> f32 {
-    let h = h % 360.0;
+    let h = crate::ahrs::rotation::small_rem(h, 360.0);
     if h < 0.0 {
         h + 360.0
     } else {
@@ -146,20 +204,24 @@ fn heading_0_360(h: f32) -> f32 {
     }
 }
 
-fn put3_i32(out: &mut [u8], v: [f32; 3], k: u32) {
-    for (c, x) in out.chunks_exact_mut(4).zip(v) {
-        c.copy_from_slice(&sat_i32(x, k).to_le_bytes());
+/// Three [`sat_i32`] values (the saturation inlined: one call a triad).
+fn put3_i32(out: &mut [u8], v: &[f32; 3], k: u32) {
+    for (c, &x) in out.chunks_exact_mut(4).zip(v) {
+        c.copy_from_slice(&sat_signed(x, k, 1 << 31, i32::MAX as u32).to_le_bytes());
     }
 }
 
-fn put3_i16(out: &mut [u8], v: [f32; 3], k: u32) {
-    for (c, x) in out.chunks_exact_mut(2).zip(v) {
-        c.copy_from_slice(&sat_i16(x, k).to_le_bytes());
+/// Three [`sat_i16`] values (the saturation inlined: one call a triad).
+fn put3_i16(out: &mut [u8], v: &[f32; 3], k: u32) {
+    for (c, &x) in out.chunks_exact_mut(2).zip(v) {
+        let y = sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16;
+        c.copy_from_slice(&y.to_le_bytes());
     }
 }
 
 impl Field {
     /// Size in bytes (Table 5.15 "Size").
+    #[inline(always)]
     pub const fn size(self) -> usize {
         match self {
             Field::Euler => 6,
@@ -185,16 +247,50 @@ impl Field {
         }
     }
 
+    /// Whether the field carries the orientation ([`Sample::euler`],
+    /// [`Sample::quat`]).
+    pub const fn is_attitude(self) -> bool {
+        matches!(self, Field::Euler | Field::EulerHr | Field::Quat)
+    }
+
     /// Writes the field into `out[..self.size()]`; returns the size, or 0
     /// if `out` is too short (nothing written).
     pub fn write(self, ctx: &OutputCtx<'_>, out: &mut [u8]) -> usize {
         let n = self.size();
-        let Some(out) = out.get_mut(..n) else {
-            return 0;
-        };
+        match out.get_mut(..n) {
+            Some(out) => {
+                self.write_exact(ctx, out);
+                n
+            }
+            None => 0,
+        }
+    }
+
+    /// Writes the field into `out`, which is [`Field::size`] bytes long.
+    fn write_exact(self, ctx: &OutputCtx<'_>, out: &mut [u8]) {
         let s = ctx.sample;
-        let kg = ctx.product.gyro.kg();
-        let ka = ctx.product.accel.ka();
+        // The triads first, through one call site of each writer (so
+        // that it can be inlined once).
+        let triad = match self {
+            Field::Gyro => Some((&s.gyro, ctx.product.gyro.kg(), false)),
+            Field::GyroHr => Some((&s.gyro, 100_000, true)),
+            Field::Acc => Some((&s.acc, ctx.product.accel.ka(), false)),
+            Field::AccHr => Some((&s.acc, 1_000_000, true)),
+            Field::AuxAccHr => Some((&s.aux_acc, 1_000_000, true)),
+            Field::GyroBiasCompHr => Some((&s.gyro_filtered, 100_000, true)),
+            Field::GyroBiasHr => Some((&s.gyro_bias, 100_000, true)),
+            Field::FilteredAccHr => Some((&s.acc_filtered, 1_000_000, true)),
+            Field::FilteredAuxAccHr => Some((&s.aux_acc_filtered, 1_000_000, true)),
+            _ => None,
+        };
+        if let Some((v, k, wide)) = triad {
+            if wide {
+                put3_i32(out, v, k);
+            } else {
+                put3_i16(out, v, k);
+            }
+            return;
+        }
         match self {
             Field::Euler => {
                 out[0..2].copy_from_slice(&sat_u16(heading_0_360(s.euler[0]), 100).to_le_bytes());
@@ -211,15 +307,6 @@ impl Field {
                     c.copy_from_slice(&sat_i16(q, 10_000).to_le_bytes());
                 }
             }
-            Field::Gyro => put3_i16(out, s.gyro, kg),
-            Field::GyroHr => put3_i32(out, s.gyro, 100_000),
-            Field::Acc => put3_i16(out, s.acc, ka),
-            Field::AccHr => put3_i32(out, s.acc, 1_000_000),
-            Field::AuxAccHr => put3_i32(out, s.aux_acc, 1_000_000),
-            Field::GyroBiasCompHr => put3_i32(out, s.gyro_filtered, 100_000),
-            Field::GyroBiasHr => put3_i32(out, s.gyro_bias, 100_000),
-            Field::FilteredAccHr => put3_i32(out, s.acc_filtered, 1_000_000),
-            Field::FilteredAuxAccHr => put3_i32(out, s.aux_acc_filtered, 1_000_000),
             Field::Zero(_) => out.fill(0),
             Field::Usw => out.copy_from_slice(&ctx.usw.to_le_bytes()),
             Field::UswExt => out.copy_from_slice(&ctx.usw_ext.to_le_bytes()),
@@ -231,8 +318,9 @@ impl Field {
             Field::SupplyVoltage => {
                 out.copy_from_slice(&sat_u16(s.supply_voltage, 100).to_le_bytes())
             }
+            // The triads, written above.
+            _ => {}
         }
-        n
     }
 }
 
@@ -246,10 +334,8 @@ pub fn payload_len(fields: &[Field]) -> usize {
 pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
     let mut at = 0;
     for f in fields {
-        let n = f.write(ctx, out.get_mut(at..)?);
-        if n != f.size() {
-            return None;
-        }
+        let n = f.size();
+        f.write_exact(ctx, out.get_mut(at..at + n)?);
         at += n;
     }
     Some(at)
@@ -292,7 +378,19 @@ mod tests {
                 continue;
             }
             for &k in &scales {
-                assert_eq!(scale_round(x, k), reference(x, k), "{x:e} x {k}");
+                let r = reference(x, k);
+                assert_eq!(scale_round(x, k), r, "{x:e} x {k}");
+                // The saturating forms (their FPU fast path included).
+                let clamp = |lo: i64, hi: i64| r.clamp(lo, hi);
+                assert_eq!(
+                    i64::from(sat_i32(x, k)),
+                    clamp(i32::MIN.into(), i32::MAX.into())
+                );
+                assert_eq!(
+                    i64::from(sat_i16(x, k)),
+                    clamp(i16::MIN.into(), i16::MAX.into())
+                );
+                assert_eq!(i64::from(sat_u16(x, k)), clamp(0, u16::MAX.into()));
             }
         }
         assert_eq!(scale_round(0.5, 1), 1);

@@ -16,10 +16,25 @@ pub const TYPE_COMMAND: u8 = 0x00;
 pub const TYPE_DATA: u8 = 0x01;
 
 /// Wrapping 16-bit sum of `bytes` (Table 5.2 "Checksum").
+///
+/// Four bytes at a time: a word's even and odd bytes are added in the two
+/// 16-bit lanes of a `u32` (folded every 128 words, before a lane can
+/// carry), about a third of the instructions of a byte loop.
 pub fn checksum(bytes: &[u8]) -> u16 {
-    bytes
-        .iter()
-        .fold(0u16, |s, &b| s.wrapping_add(u16::from(b)))
+    let mut total = 0u32;
+    for block in bytes.chunks(512) {
+        let words = block.chunks_exact(4);
+        for &b in words.remainder() {
+            total = total.wrapping_add(u32::from(b));
+        }
+        let mut lanes = 0u32;
+        for w in words {
+            let w = u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
+            lanes += (w & 0x00FF_00FF) + ((w >> 8) & 0x00FF_00FF);
+        }
+        total = total.wrapping_add((lanes & 0xFFFF) + (lanes >> 16));
+    }
+    total as u16
 }
 
 /// A decoded frame borrowing the decoder's buffer.

@@ -338,15 +338,10 @@ impl TriadEngine {
     /// multiplications).
     pub fn set_temperature(&mut self, e: &SensorErrors, temp_c: f32) {
         let dtemp = temp_c - REFERENCE_TEMPERATURE_C;
-        for i in 0..3 {
-            let a = &e.axes[i];
-            for j in 0..3 {
-                self.m[i][j] = if i == j {
-                    1.0 + a.scale_factor + a.temp_scale * dtemp
-                } else {
-                    e.misalignment[i][j]
-                };
-            }
+        // The misalignment off the diagonal, the scale on it.
+        self.m = e.misalignment;
+        for (i, a) in e.axes.iter().enumerate() {
+            self.m[i][i] = 1.0 + a.scale_factor + a.temp_scale * dtemp;
             self.bias[i] = a.bias + a.temp_bias * dtemp;
         }
         self.identity_m = self.m == crate::ahrs::rotation::MAT3_IDENTITY;

@@ -184,6 +184,9 @@ pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
     /// TOV edges waiting for their time.
     tov_queue: Deque<(Level, Instant), 8>,
     stats: Stats,
+    /// Bytes on their way between the UART and the device (a field, not a
+    /// local: a local array is zeroed at every call).
+    buf: [u8; CHUNK],
 }
 
 /// Powers a device on at `Instant::ZERO` (parameters from `flash`, BOOT
@@ -223,6 +226,7 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
             pending_baud: None,
             tov_queue: Deque::new(),
             stats: Stats::default(),
+            buf: [0; CHUNK],
         };
         shell.tov.set(Level::Low);
         shell.uart.set_baud(rate);
@@ -332,14 +336,13 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
 
         let now = self.now().max(t0);
         let mut rx = 0;
-        let mut buf = [0u8; CHUNK];
         loop {
-            let n = self.uart.read(&mut buf);
+            let n = self.uart.read(&mut self.buf);
             if n == 0 {
                 break;
             }
             rx += n;
-            self.dev.on_rx(&buf[..n], Instant::from_nanos(now));
+            self.dev.on_rx(&self.buf[..n], Instant::from_nanos(now));
         }
         self.stats.rx_bytes += rx as u64;
         after_rx(self.dev);
@@ -382,7 +385,6 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     /// UART, then acts on events.
     fn pump_tx(&mut self, at: u64) {
         self.pacer.advance(at);
-        let mut buf = [0u8; CHUNK];
         loop {
             if let Some(rate) = self.pending_baud {
                 if !self.uart.tx_idle() {
@@ -392,17 +394,13 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
                 self.pacer.set_rate(rate, at);
                 self.pending_baud = None;
             }
-            let room = self
-                .pacer
-                .available()
-                .min(self.uart.tx_room())
-                .min(buf.len());
+            let room = self.pacer.available().min(self.uart.tx_room()).min(CHUNK);
             if room == 0 {
                 break;
             }
-            let n = self.dev.poll_tx(&mut buf[..room]);
+            let n = self.dev.poll_tx(&mut self.buf[..room]);
             if n > 0 {
-                self.uart.write(&buf[..n]);
+                self.uart.write(&self.buf[..n]);
                 self.pacer.consume(n);
                 self.stats.tx_bytes += n as u64;
             }
