@@ -41,7 +41,12 @@ macro_rules! both {
         mod qemu {
             suite!(crate::target::Kind::Qemu; $($case),*);
             // QEMU only: the firmware's own figures.
-            suite!(crate::target::Kind::Qemu; tick_cost_ga_2khz_at_2_mbaud, tick_cost_largest_udd);
+            suite!(
+                crate::target::Kind::Qemu;
+                tick_cost_ga_2khz_at_2_mbaud,
+                tick_cost_largest_udd,
+                tick_cost_worst_case
+            );
         }
     };
 }
