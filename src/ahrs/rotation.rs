@@ -16,7 +16,8 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use libm::{atan2f, cosf, sinf, sqrtf};
+use crate::math::{atan2f, cosf, sinf};
+use libm::sqrtf;
 
 /// A 3-vector.
 pub type Vec3 = [f32; 3];
@@ -388,9 +389,18 @@ pub fn canonical(q: &Quat) -> Quat {
 }
 
 /// `a` wrapped into [0, 2π).
+///
+/// Within one turn either side of [0, 2π) (every arctangent) this adds or
+/// subtracts 2π once, which is what `a % 2π` would give; further out it
+/// first subtracts a whole number of turns (not exact, but keeps `fmodf` and its
+/// 64-bit division out of the firmware).
 pub fn wrap_2pi(a: f32) -> f32 {
     const TAU: f32 = core::f32::consts::TAU;
-    let mut a = a % TAU;
+    let mut a = if (-TAU..2.0 * TAU).contains(&a) {
+        a
+    } else {
+        a - TAU * (a / TAU) as i32 as f32
+    };
     if a < 0.0 {
         a += TAU;
     }

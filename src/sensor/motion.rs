@@ -29,8 +29,8 @@ use crate::ahrs::rotation::{
     canonical, quat_from_euler, quat_mul, quat_rotate_inv, Quat, QuatIntegrator, Vec3,
     QUAT_IDENTITY,
 };
+use crate::math::{cosf, sinf};
 use crate::time::Instant;
-use libm::{cosf, sinf};
 
 /// g in m/s², as the ICD defines it (Table 5.5 note 1).
 pub const G: f32 = 9.8106;
@@ -207,7 +207,7 @@ impl Phasor {
     }
     /// The angular rate the phasor actually turns at, rad/s.
     fn rate(&self, dt: f32) -> f32 {
-        libm::atan2f(self.step_s, self.step_c) / dt
+        crate::math::atan2f(self.step_s, self.step_c) / dt
     }
 
     #[inline]
