@@ -36,7 +36,18 @@ compile_error!("choose a board feature: black-pill or nucleo-f446re");
 mod hw;
 
 use defmt_rtt as _;
-use panic_probe as _;
+
+/// Logs where the panic happened (and its message when that is a plain
+/// string, as every panic of this firmware's own code is) over defmt, then
+/// stops at `udf`. Not panic-probe's handler: rendering a formatted message
+/// links `core::fmt` (≈ 2 KiB) for messages no code of this image produces.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    let (file, line) = info.location().map_or(("?", 0), |l| (l.file(), l.line()));
+    let msg = info.message().as_str().unwrap_or("(formatted message)");
+    defmt::error!("panicked at {=str}:{=u32}: {=str}", file, line, msg);
+    cortex_m::asm::udf()
+}
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
