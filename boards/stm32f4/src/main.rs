@@ -37,15 +37,11 @@ mod hw;
 
 use defmt_rtt as _;
 
-/// Logs where the panic happened (and its message when that is a plain
-/// string, as every panic of this firmware's own code is) over defmt, then
-/// stops at `udf`. Not panic-probe's handler: rendering a formatted message
-/// links `core::fmt` (≈ 2 KiB) for messages no code of this image produces.
+/// Logs the panic in one defmt line ([`fw_shell::panic`]: no `core::fmt`),
+/// then stops at `udf` (probe-rs shows the backtrace).
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    let (file, line) = info.location().map_or(("?", 0), |l| (l.file(), l.line()));
-    let msg = info.message().as_str().unwrap_or("(formatted message)");
-    defmt::error!("panicked at {=str}:{=u32}: {=str}", file, line, msg);
+    fw_shell::panic::log(info);
     cortex_m::asm::udf()
 }
 
