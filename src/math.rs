@@ -1,4 +1,6 @@
-//! `f32` trigonometry in `f32` arithmetic only.
+//! `f32` trigonometry in `f32` arithmetic only, and the few `f64`
+//! functions the fixed-point build's configuration maths needs
+//! ([`exp2i`], [`sincos`]) without libm's large-argument machinery.
 //!
 //! libm's `sinf`/`cosf`/`tanf`/`asinf` evaluate their kernels in `f64`
 //! (and `rem_pio2f` reduces in `f64`), which on a single-precision FPU
@@ -186,6 +188,76 @@ pub fn asinf(x: f32) -> f32 {
     }
 }
 
+/// 2ⁿ exactly, from the exponent bits (no `pow`); `n` is clamped to the
+/// normal range −1022 … 1023.
+pub fn exp2i(n: i32) -> f64 {
+    f64::from_bits(((n.clamp(-1022, 1023) + 1023) as u64) << 52)
+}
+
+/// (sin x, cos x) in `f64` for the fixed-point build's configuration
+/// maths: fdlibm's kernels after a three-part Cody–Waite reduction by π/2
+/// (fdlibm's medium-size path, accurate for |x| < 2¹⁹·π/2 — every caller
+/// passes an angle of at most a turn), ≤ 1 ulp against libm. Unlike libm's
+/// `sin`/`cos` it never needs `rem_pio2_large` (≈ 2.3 KiB on ARMv6-M).
+/// Non-finite `x` gives NaNs; huge `x` bounded garbage.
+pub fn sincos(x: f64) -> (f64, f64) {
+    const PIO2_1: f64 = 1.570_796_326_734_125_6e0;
+    const PIO2_1T: f64 = 6.077_100_506_506_192_6e-11;
+    const PIO2_2: f64 = 6.077_100_506_303_966e-11;
+    const PIO2_2T: f64 = 2.022_266_248_795_950_6e-21;
+    let (q, r) = if x.abs() <= core::f64::consts::FRAC_PI_4 {
+        (0, x)
+    } else {
+        let kf = x * core::f64::consts::FRAC_2_PI;
+        let k = if kf.is_nan() {
+            kf
+        } else {
+            let t = (kf.abs() + 0.5) as i64 as f64;
+            if kf < 0.0 {
+                -t
+            } else {
+                t
+            }
+        };
+        let r = (x - k * PIO2_1) - k * PIO2_1T;
+        let r = if (kf.abs() as u64) < (1 << 16) {
+            r
+        } else {
+            // fdlibm's second step: 33 more bits of π/2.
+            let t = x - k * PIO2_1;
+            let w = k * PIO2_2;
+            let t2 = t - w;
+            let w = k * PIO2_2T - ((t - t2) - w);
+            t2 - w
+        };
+        ((k as i64 & 3) as u32, r.clamp(-0.8, 0.8))
+    };
+    let z = r * r;
+    let sn = r + r
+        * z
+        * (-1.666_666_666_666_663_2e-1
+            + z * (8.333_333_333_322_49e-3
+                + z * (-1.984_126_982_985_795e-4
+                    + z * (2.755_731_370_707_006_8e-6
+                        + z * (-2.505_076_025_340_686_3e-8 + z * 1.589_690_995_211_55e-10)))));
+    let hz = 0.5 * z;
+    let w = 1.0 - hz;
+    let cr = z
+        * z
+        * (4.166_666_666_666_66e-2
+            + z * (-1.388_888_888_887_411e-3
+                + z * (2.480_158_728_947_673e-5
+                    + z * (-2.755_731_435_139_066_3e-7
+                        + z * (2.087_572_321_298_175e-9 + z * -1.135_964_755_778_819_5e-11)))));
+    let cs = w + (((1.0 - w) - hz) + cr);
+    match q {
+        0 => (sn, cs),
+        1 => (cs, -sn),
+        2 => (-sn, -cs),
+        _ => (-cs, sn),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -228,6 +300,27 @@ mod tests {
         // Huge arguments stay defined (bounded, no panic).
         for x in [1e10f32, -3e38, f32::MAX] {
             assert!(sinf(x).abs() <= 1.5 && cosf(x).abs() <= 1.5, "{x}");
+        }
+    }
+
+    #[test]
+    fn f64_sincos_within_1_ulp_and_exp2i_exact() {
+        let (mut worst, mut worst_a) = (0.0f64, 0.0f64);
+        for i in -400_000..=400_000 {
+            let x = f64::from(i) * 2.5e-5 + 1e-9;
+            let (s, c) = sincos(x);
+            for (got, exact) in [(s, libm::sin(x)), (c, libm::cos(x))] {
+                worst_a = worst_a.max((got - exact).abs());
+                if exact.abs() > 1e-3 {
+                    worst = worst.max((got - exact).abs() / (exact.abs() * f64::EPSILON));
+                }
+            }
+        }
+        std::eprintln!("f64 sincos: {worst} ulp, {worst_a:e} absolute");
+        assert!(worst <= 1.0 && worst_a <= 2.3e-16, "{worst} {worst_a}");
+        assert!(sincos(f64::NAN).0.is_nan() && sincos(f64::INFINITY).1.is_nan());
+        for n in [-1022, -30, 0, 1, 26, 50, 1023] {
+            assert_eq!(exp2i(n), libm::pow(2.0, f64::from(n)));
         }
     }
 
