@@ -29,6 +29,7 @@ pub mod chain;
 pub mod device;
 pub mod dsp;
 pub mod kernel;
+pub mod math;
 pub mod model;
 pub mod nor;
 pub mod sensor;

@@ -38,7 +38,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::rotation::{quat_from_euler, quat_rotate_inv, Quat, Vec3};
-use libm::{asinf, atan2f, sqrtf};
+use crate::math::{asinf, atan2f};
+use libm::sqrtf;
 
 const RAD: f32 = 180.0 / core::f32::consts::PI;
 

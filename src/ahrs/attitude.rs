@@ -192,7 +192,7 @@ impl AttitudeFixed {
         let dt64 = f64::from(dt);
         let e = |w: f32| libm::round(f64::from(w) * dt64 * 1_125_899_906_842_624.0) as i32; // 2⁵⁰
         let gyro_k =
-            core::f64::consts::PI / 180.0 * dt64 * Q36 / libm::pow(2.0, f64::from(GYRO_BITS));
+            core::f64::consts::PI / 180.0 * dt64 * Q36 / crate::math::exp2i(GYRO_BITS as i32);
         AttitudeFixed {
             q: QuatFixed::from_f32(&q),
             earth_tick: earth_enu.map(e),

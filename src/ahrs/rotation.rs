@@ -16,7 +16,8 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use libm::{atan2f, cosf, sinf, sqrtf};
+use crate::math::{atan2f, cosf, sinf};
+use libm::sqrtf;
 
 /// A 3-vector.
 pub type Vec3 = [f32; 3];

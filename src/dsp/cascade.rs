@@ -28,7 +28,8 @@
 //! DC-exact form ([`Section`]), or in integers in the `fixed-point` build
 //! ([`CascadeFixed`]: the same sections with Q26/Q29 coefficients).
 //!
-//! **Design precision: `f32`** (`tanf`), at configure time. It was f64
+//! **Design precision: `f32`** ([`crate::math::tanf`], f32 throughout),
+//! at configure time. It was f64
 //! (`tan`), which linked ≈ 5 KiB of soft-double code into the firmware
 //! images for no accuracy the stored coefficients keep: they are `f32`
 //! (or Q26/Q29 rounded from those `f32` values). The design is written in
@@ -50,7 +51,8 @@
 
 use super::fir::CHANNELS;
 use super::fixed::{mul64, mul_q};
-use libm::{cos, sin, tanf};
+use crate::math::tanf;
+use libm::{cos, sin};
 
 /// Parameters of one second-order section: ζ1 (numerator), ζ2
 /// (denominator), ω (rad/s).

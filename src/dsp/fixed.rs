@@ -190,7 +190,7 @@ impl Coef {
 
     /// The multiplier's value.
     pub fn value(self) -> f64 {
-        f64::from(self.m) / libm::pow(2.0, f64::from(self.n))
+        f64::from(self.m) / crate::math::exp2i(self.n as i32)
     }
 
     /// `x · c` rounded to nearest, for any `x` (the result must fit).

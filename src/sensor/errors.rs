@@ -465,7 +465,7 @@ pub struct TriadEngineFixed {
 }
 
 fn q(v: f64, bits: u32) -> i32 {
-    let x = libm::round(v * libm::pow(2.0, f64::from(bits)));
+    let x = libm::round(v * crate::math::exp2i(bits as i32));
     if x.is_nan() {
         0
     } else {
@@ -500,7 +500,7 @@ impl TriadEngineFixed {
     fn gm_sigma(&self, a: &AxisErrors) -> f64 {
         f64::from(GM_SIGMA_PER_BIAS_INSTABILITY)
             * f64::from(a.bias_instability)
-            * libm::pow(2.0, f64::from(self.bits))
+            * crate::math::exp2i(self.bits as i32)
     }
 
     /// Extra fraction bits of an axis's Gauss–Markov state: 16 σ ≈ 2³⁰.
@@ -510,7 +510,7 @@ impl TriadEngineFixed {
             return 0;
         }
         let mut k = 0u8;
-        while k < 24 && s * libm::pow(2.0, f64::from(k + 1)) <= f64::from(1u32 << 26) {
+        while k < 24 && s * crate::math::exp2i((k + 1) as i32) <= f64::from(1u32 << 26) {
             k += 1;
         }
         k
@@ -520,7 +520,7 @@ impl TriadEngineFixed {
     /// `dt` at `temp_c` (float, at configuration time). The Gauss–Markov
     /// state is kept (rescaled if its fraction bits change).
     pub fn configure(&mut self, e: &SensorErrors, temp_c: f32, dt: f32) {
-        let scale = libm::pow(2.0, f64::from(self.bits));
+        let scale = crate::math::exp2i(self.bits as i32);
         let dt = f64::from(dt);
         let mut noisy = false;
         for i in 0..3 {
@@ -537,7 +537,7 @@ impl TriadEngineFixed {
             self.sigma[i] = Coef::new(sigma * f64::from(crate::sensor::rng::IRWIN_HALL_SCALE));
             if a.bias_corr_time_s > 0.0 && a.bias_instability > 0.0 {
                 let k = libm::exp(-dt / f64::from(a.bias_corr_time_s));
-                let g = self.gm_sigma(a) * libm::pow(2.0, f64::from(shift));
+                let g = self.gm_sigma(a) * crate::math::exp2i(shift as i32);
                 self.gm_decay[i] = Coef::new(1.0 - k);
                 // u is a 16-bit signed uniform: ×√3/32768 for unit variance.
                 self.gm_drive[i] =
@@ -580,7 +580,7 @@ impl TriadEngineFixed {
             let shift = self.gm_shift_for(a);
             self.gm_shift[i] = shift;
             self.gm[i] = if a.bias_corr_time_s > 0.0 {
-                let g = self.gm_sigma(a) * libm::pow(2.0, f64::from(shift));
+                let g = self.gm_sigma(a) * crate::math::exp2i(shift as i32);
                 let k = Coef::new(g * f64::from(crate::sensor::rng::IRWIN_HALL_SCALE));
                 k.apply_small(rng.gaussian_sum())
             } else {

@@ -29,8 +29,8 @@ use crate::ahrs::rotation::{
     canonical, quat_from_euler, quat_mul, quat_rotate_inv, Quat, QuatIntegrator, Vec3,
     QUAT_IDENTITY,
 };
+use crate::math::{cosf, sinf};
 use crate::time::Instant;
-use libm::{cosf, sinf};
 
 /// g in m/s², as the ICD defines it (Table 5.5 note 1).
 pub const G: f32 = 9.8106;
@@ -207,7 +207,7 @@ impl Phasor {
     }
     /// The angular rate the phasor actually turns at, rad/s.
     fn rate(&self, dt: f32) -> f32 {
-        libm::atan2f(self.step_s, self.step_c) / dt
+        crate::math::atan2f(self.step_s, self.step_c) / dt
     }
 
     #[inline]
@@ -525,11 +525,12 @@ struct PhasorFixed {
 
 impl PhasorFixed {
     fn new(step: f64) -> Self {
+        let (sn, cs) = crate::math::sincos(step);
         PhasorFixed {
             c: 1 << 30,
             s: 0,
-            step_c: libm::round(libm::cos(step) * 1_073_741_824.0) as i32,
-            step_s: libm::round(libm::sin(step) * 1_073_741_824.0) as i32,
+            step_c: libm::round(cs * 1_073_741_824.0) as i32,
+            step_s: libm::round(sn * 1_073_741_824.0) as i32,
         }
     }
 
@@ -655,9 +656,9 @@ impl BuiltinMotionFixed {
                 let phasor =
                     PhasorFixed::new(core::f64::consts::TAU * f64::from(freq_hz) * f64::from(dt));
                 let half = 0.5 * f64::from(half_angle_deg) * core::f64::consts::PI / 180.0;
-                let (sa, ca) = (libm::sin(half), libm::cos(half));
+                let (sa, ca) = crate::math::sincos(half);
                 let om = phasor.rate(dt);
-                let scale = libm::pow(2.0, f64::from(GYRO_BITS)) * 180.0 / core::f64::consts::PI;
+                let scale = crate::math::exp2i(GYRO_BITS as i32) * 180.0 / core::f64::consts::PI;
                 let c = |v: f64| libm::round(v * scale).clamp(-1.0e9, 1.0e9) as i32;
                 FixedKind::Coning {
                     base,

@@ -36,6 +36,8 @@
 #![forbid(unsafe_code)]
 
 pub mod pacer;
+#[cfg(feature = "defmt")]
+pub mod panic;
 
 use core::mem::MaybeUninit;
 

@@ -175,7 +175,7 @@ impl Persist {
             None => false,
         };
         if !ok || !semi::rename(&tmp, path) {
-            semi::eprintln(format_args!("imu-emu: could not write the flash file"));
+            semi::eprintln("imu-emu: could not write the flash file");
         }
     }
 }

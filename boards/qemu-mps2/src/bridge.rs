@@ -19,8 +19,6 @@
 //! (`stack` = the running firmware's stack high-water mark in bytes,
 //! `stack_init` = what power-on used). Other bytes are ignored.
 
-use core::fmt::Write as _;
-
 use fw_shell::Edge;
 use heapless::spsc::{Consumer, Producer};
 use imu_emu::device::{Level, Pin};
@@ -28,6 +26,7 @@ use imu_emu::device::{Level, Pin};
 use crate::app::BoardShell;
 use crate::board;
 use crate::mps2::UART1;
+use crate::semi;
 
 /// ISR side: stamps edges, forwards commands.
 pub fn on_byte(b: u8, edges: &mut Producer<'static, Edge>, cmds: &mut Producer<'static, u8>) {
@@ -81,27 +80,27 @@ impl Bridge {
 
 fn report(shell: &mut BoardShell) {
     let s = shell.stats();
-    let mut line: heapless::String<320> = heapless::String::new();
-    let _ = writeln!(
-        line,
-        "S ticks={} services={} on_tick_max_ns={} tick_max_ns={} service_max_ns={} \
-         service_batch_max_ns={} service_rx_max_ns={} batch_max={} tx={} rx={} dropped={} \
-         stack={} stack_init={}",
-        s.ticks,
-        s.services,
-        s.max_on_tick_ns,
-        s.max_tick_ns,
-        s.max_service_ns,
-        s.max_batch_service_ns,
-        s.max_service_rx_ns,
-        s.max_batch,
-        s.tx_bytes,
-        s.rx_bytes,
-        shell.device().tx_dropped(),
-        stack_used(),
-        INIT_STACK.load(core::sync::atomic::Ordering::Relaxed),
-    );
-    for &b in line.as_bytes() {
+    let stack_init = INIT_STACK.load(core::sync::atomic::Ordering::Relaxed);
+    let fields: [(&str, u64); 13] = [
+        ("S ticks=", s.ticks),
+        (" services=", s.services),
+        (" on_tick_max_ns=", s.max_on_tick_ns),
+        (" tick_max_ns=", s.max_tick_ns),
+        (" service_max_ns=", s.max_service_ns),
+        (" service_batch_max_ns=", s.max_batch_service_ns),
+        (" service_rx_max_ns=", s.max_service_rx_ns),
+        (" batch_max=", u64::from(s.max_batch)),
+        (" tx=", s.tx_bytes),
+        (" rx=", s.rx_bytes),
+        (" dropped=", u64::from(shell.device().tx_dropped())),
+        (" stack=", stack_used() as u64),
+        (" stack_init=", stack_init as u64),
+    ];
+    let line = fields
+        .iter()
+        .fold(semi::Line::default(), |l, &(k, v)| l.str(k).dec(v))
+        .str("\n");
+    for &b in line.bytes() {
         UART1.put_wait(b);
     }
 }

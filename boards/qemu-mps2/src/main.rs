@@ -93,7 +93,11 @@ mod app {
         let cfg = match Config::parse(text) {
             Ok(c) => c,
             Err(e) => {
-                semi::eprintln(format_args!("imu-emu: bad argument {:?}", e.0));
+                semi::Line::default()
+                    .str("imu-emu: bad argument \"")
+                    .str(e.0)
+                    .str("\"")
+                    .eprintln();
                 semi::exit(2);
             }
         };
@@ -127,11 +131,13 @@ mod app {
         let shell = Shell::new(dev, uart, Mps2Clock, BridgeTov, edges_out);
         let period = SYSCLK_HZ / shell.tick_hz();
         TIMER0_REGS.start(period - 1, true);
-        semi::eprintln(format_args!(
-            "imu-emu: {} on mps2-an386, tick {} Hz",
-            cfg.product.code(),
-            shell.tick_hz()
-        ));
+        semi::Line::default()
+            .str("imu-emu: ")
+            .str(&cfg.product.code())
+            .str(" on mps2-an386, tick ")
+            .dec(u64::from(shell.tick_hz()))
+            .str(" Hz")
+            .eprintln();
         (
             Shared {},
             Local {
@@ -197,12 +203,29 @@ mod app {
 
 #[cortex_m_rt::exception]
 unsafe fn HardFault(ef: &cortex_m_rt::ExceptionFrame) -> ! {
-    semi::eprintln(format_args!("imu-emu: hard fault at pc {:#010x}", ef.pc()));
+    semi::Line::default()
+        .str("imu-emu: hard fault at pc ")
+        .hex(ef.pc())
+        .eprintln();
     semi::exit(3)
 }
 
+/// Reports where the panic happened and its message when that is a plain
+/// string; a formatted message is not rendered, so the image carries no
+/// `core::fmt` machinery (none of the firmware's own code panics).
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
-    semi::eprintln(format_args!("imu-emu: {info}"));
+    let mut line = semi::Line::default().str("imu-emu: panicked");
+    if let Some(l) = info.location() {
+        line = line
+            .str(" at ")
+            .str(l.file())
+            .str(":")
+            .dec(u64::from(l.line()));
+    }
+    if let Some(m) = info.message().as_str() {
+        line = line.str(": ").str(m);
+    }
+    line.eprintln();
     semi::exit(1)
 }

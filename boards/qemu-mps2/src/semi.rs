@@ -79,21 +79,66 @@ pub fn rename(from: &[u8], to: &[u8]) -> bool {
     r == 0
 }
 
-/// Writes a line to QEMU's stderr (SYS_WRITE to handle 2 is not portable;
-/// `:tt` opened for append is the semihosting stderr).
-pub fn eprintln(args: core::fmt::Arguments<'_>) {
-    struct W(File);
-    impl core::fmt::Write for W {
-        fn write_str(&mut self, s: &str) -> core::fmt::Result {
-            self.0.write_all(s.as_bytes());
-            Ok(())
+/// A text line built without `core::fmt` (whose formatting machinery,
+/// ≈ 3 KiB, the image would otherwise carry only for these messages).
+/// Text beyond the capacity is cut.
+#[derive(Default)]
+pub struct Line(heapless::Vec<u8, 320>);
+
+impl Line {
+    /// Appends `s`.
+    pub fn str(mut self, s: &str) -> Self {
+        for &b in s.as_bytes() {
+            let _ = self.0.push(b);
+        }
+        self
+    }
+
+    /// Appends `v` in decimal.
+    pub fn dec(mut self, v: u64) -> Self {
+        let mut digits = [0u8; 20];
+        let (mut i, mut v) = (digits.len(), v);
+        loop {
+            i -= 1;
+            digits[i] = b'0' + (v % 10) as u8;
+            v /= 10;
+            if v == 0 {
+                break;
+            }
+        }
+        let _ = self.0.extend_from_slice(&digits[i..]);
+        self
+    }
+
+    /// Appends `v` as `0x` and eight hex digits.
+    pub fn hex(mut self, v: u32) -> Self {
+        let _ = self.0.extend_from_slice(b"0x");
+        for k in (0..8).rev() {
+            let _ = self
+                .0
+                .push(b"0123456789abcdef"[(v >> (4 * k)) as usize & 15]);
+        }
+        self
+    }
+
+    /// The line so far.
+    pub fn bytes(&self) -> &[u8] {
+        &self.0
+    }
+
+    /// Writes the line to QEMU's stderr (SYS_WRITE to handle 2 is not
+    /// portable; `:tt` opened for append is the semihosting stderr).
+    pub fn eprintln(self) {
+        if let Some(mut f) = File::open(b":tt", nr::open::W_APPEND) {
+            let _ = f.write_all(&self.0);
+            let _ = f.write_all(b"\n");
         }
     }
-    if let Some(f) = File::open(b":tt", nr::open::W_APPEND) {
-        let mut w = W(f);
-        let _ = core::fmt::write(&mut w, args);
-        let _ = w.0.write_all(b"\n");
-    }
+}
+
+/// Writes `s` as a line to QEMU's stderr.
+pub fn eprintln(s: &str) {
+    Line::default().str(s).eprintln();
 }
 
 /// Exits QEMU with `code` (SYS_EXIT, ADP_Stopped_ApplicationExit).

@@ -24,7 +24,14 @@
 mod hw;
 
 use defmt_rtt as _;
-use panic_probe as _;
+
+/// Logs the panic in one defmt line ([`fw_shell::panic`]: no `core::fmt`),
+/// then stops at `udf` (probe-rs shows the backtrace).
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    fw_shell::panic::log(info);
+    cortex_m::asm::udf()
+}
 
 /// The second-stage bootloader for the Pico's W25Q16JV flash.
 #[link_section = ".boot2"]

@@ -36,7 +36,14 @@ compile_error!("choose a board feature: black-pill or nucleo-f446re");
 mod hw;
 
 use defmt_rtt as _;
-use panic_probe as _;
+
+/// Logs the panic in one defmt line ([`fw_shell::panic`]: no `core::fmt`),
+/// then stops at `udf` (probe-rs shows the backtrace).
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    fw_shell::panic::log(info);
+    cortex_m::asm::udf()
+}
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
