@@ -585,8 +585,8 @@ impl QuatFixed {
         }
     }
 
-    /// The attitude, Q30 (rounded).
-    #[inline]
+    /// The attitude, Q30 (rounded; out of line: several callers, flash).
+    #[inline(never)]
     pub fn get(&self) -> QuatQ30 {
         let r = |x: i64| ((x + (1 << 31)) >> 32) as i32;
         [r(self.q[0]), r(self.q[1]), r(self.q[2]), r(self.q[3])]

@@ -20,7 +20,7 @@
 //! bits on every platform.
 //!
 //! **Out of line in the `fixed-point` build.** The products ([`mul64_parts`],
-//! [`mul_q30`], [`mul_q`]), the conversions ([`scaled_f32`], [`to_fixed`])
+//! [`mul_shr`], [`mul_q30`], [`mul_q`]), the conversions ([`scaled_f32`], [`to_fixed`])
 //! and [`bit_len`] are `#[inline(never)]` there (inlined otherwise): inlined
 //! at their ~80 call sites they were 9.2 KiB of the RP2040 image's flash;
 //! a call costs the worst-case device tick ≈ 6 % more instructions
@@ -54,7 +54,8 @@ pub fn mul64_parts(a: i32, b: i32) -> i64 {
 
 /// `a · b / 2^s` rounded to nearest (half up), 1 ≤ `s` ≤ 62; the result must
 /// fit an `i32`.
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn mul_shr(a: i32, b: i32, s: u32) -> i32 {
     ((mul64(a, b) + (1i64 << (s - 1))) >> s) as i32
 }
