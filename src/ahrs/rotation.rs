@@ -463,8 +463,9 @@ pub fn quat_rotate_inv_q30(q: &QuatQ30, v: &[i32; 3]) -> [i32; 3] {
 }
 
 /// The reference frame's up axis in object axes (row 3 of (C.4)) for a Q30
-/// unit `q`, Q30: also gravity's specific force, in g, at attitude `q`.
-#[inline]
+/// unit `q`, Q30: also gravity's specific force, in g, at attitude `q`
+/// (out of line: two callers, RP2040 flash).
+#[inline(never)]
 pub fn up_in_body_q30(q: &QuatQ30) -> [i32; 3] {
     let m = mul_q30;
     [

@@ -224,8 +224,10 @@ fn put3_i16(out: &mut [u8], v: &[f32; 3], k: u32) {
 }
 
 impl Field {
-    /// Size in bytes (Table 5.15 "Size").
-    #[inline(always)]
+    /// Size in bytes (Table 5.15 "Size"; out of line in the `fixed-point`
+    /// build, RP2040 flash).
+    #[cfg_attr(feature = "fixed-point", inline(never))]
+    #[cfg_attr(not(feature = "fixed-point"), inline(always))]
     pub const fn size(self) -> usize {
         match self {
             Field::Euler => 6,
