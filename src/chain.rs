@@ -452,7 +452,7 @@ fn earth_assumed_fixed() -> [i32; 3] {
 
 /// FIR units (°/s·2¹⁷, g·2²⁰) of a fixed-point measurement, rounded.
 #[cfg(feature = "fixed-point")]
-#[inline]
+#[inline(never)]
 fn fir_units(s: &[[i32; 3]; 3]) -> [i32; CHANNELS] {
     let r = |x: i32, k: u32| (x >> k) + ((x >> (k - 1)) & 1);
     let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);

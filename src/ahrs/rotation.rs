@@ -463,8 +463,9 @@ pub fn quat_rotate_inv_q30(q: &QuatQ30, v: &[i32; 3]) -> [i32; 3] {
 }
 
 /// The reference frame's up axis in object axes (row 3 of (C.4)) for a Q30
-/// unit `q`, Q30: also gravity's specific force, in g, at attitude `q`.
-#[inline]
+/// unit `q`, Q30: also gravity's specific force, in g, at attitude `q`
+/// (out of line: two callers, RP2040 flash).
+#[inline(never)]
 pub fn up_in_body_q30(q: &QuatQ30) -> [i32; 3] {
     let m = mul_q30;
     [
@@ -585,8 +586,8 @@ impl QuatFixed {
         }
     }
 
-    /// The attitude, Q30 (rounded).
-    #[inline]
+    /// The attitude, Q30 (rounded; out of line: several callers, flash).
+    #[inline(never)]
     pub fn get(&self) -> QuatQ30 {
         let r = |x: i64| ((x + (1 << 31)) >> 32) as i32;
         [r(self.q[0]), r(self.q[1]), r(self.q[2]), r(self.q[3])]

@@ -68,6 +68,11 @@
 //! exactly. The difference from the float path is bounded by
 //! [`FirDesign::fixed_error_gain`] × max|x| + 2 LSB (rounding of the input, of
 //! P's output and of the output), pinned by a parity test.
+//! The fixed-point stage has two out-of-line copies, one for taps one row
+//! apart and one for both strides of the two-stage designs (the stride a
+//! run-time value there, the rows indexed one pair at a time): the
+//! `fixed-point` build is for small flash, and a copy per stride in runs
+//! cost 2.8 KiB more (the float stage keeps one per stride).
 
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
@@ -352,6 +357,7 @@ pub fn design(code: u8, internal_rate_hz: u32) -> Option<&'static FirDesign> {
 #[derive(Clone, Copy)]
 struct Window {
     len: usize,
+    l: usize,
     start: usize,
     end: usize,
     centre: usize,
@@ -360,26 +366,28 @@ struct Window {
 }
 
 impl Window {
-    /// A window of `h` pairs `L` rows apart ending at `end` in a ring of
-    /// `len` rows (2·h·L < `len`).
+    /// A window of `h` pairs `l` rows apart ending at `end` in a ring of
+    /// `len` rows (2·h·l < `len`; inlined: `l` is a constant except in
+    /// [`run_i32_strided`]).
     #[inline(always)]
-    fn new<const L: usize>(len: usize, end: usize, h: usize) -> Self {
-        let span = 2 * h * L;
+    fn new(len: usize, end: usize, h: usize, l: usize) -> Self {
+        let span = 2 * h * l;
         let start = if end >= span {
             end - span
         } else {
             end + len - span
         };
-        let c = start + h * L;
+        let c = start + h * l;
         let centre = if c >= len { c - len } else { c };
-        let ka = if start + (h - 1) * L < len {
+        let ka = if start + (h - 1) * l < len {
             h
         } else {
-            (len - start).div_ceil(L)
+            (len - start).div_ceil(l)
         };
-        let kb = if (h - 1) * L <= end { h } else { end / L + 1 };
+        let kb = if (h - 1) * l <= end { h } else { end / l + 1 };
         Window {
             len,
+            l,
             start,
             end,
             centre,
@@ -390,12 +398,13 @@ impl Window {
 
     /// Calls `f(a, b, h_k)` for the pairs in order k = 0, 1, …
     #[inline(always)]
-    fn pairs<T, H, const L: usize>(
+    fn pairs<T, H>(
         &self,
         ring: &[[T; CHANNELS]],
         coefs: &[H],
         mut f: impl FnMut(&[T; CHANNELS], &[T; CHANNELS], &H),
     ) {
+        let l = self.l;
         let (k1, k2) = if self.ka <= self.kb {
             (self.ka, self.kb)
         } else {
@@ -405,14 +414,14 @@ impl Window {
             if k0 >= k1 {
                 continue;
             }
-            let a0 = self.start + k0 * L - if k0 >= self.ka { self.len } else { 0 };
+            let a0 = self.start + k0 * l - if k0 >= self.ka { self.len } else { 0 };
             let b0 = if k0 >= self.kb {
-                self.end + self.len - k0 * L
+                self.end + self.len - k0 * l
             } else {
-                self.end - k0 * L
+                self.end - k0 * l
             };
             let coefs = &coefs[k0..k1];
-            if L == 1 {
+            if l == 1 {
                 let a = ring[a0..].iter();
                 let b = ring[..=b0].iter().rev();
                 for ((a, b), h) in a.zip(b).zip(coefs) {
@@ -424,17 +433,45 @@ impl Window {
                 // chunks counted back from b0 (the last pair's chunk may
                 // cross the end of the ring, so it is taken by index).
                 let n = k1 - k0;
-                let a = ring[a0..a0 + (n - 1) * L].chunks_exact(L);
-                let b = ring[b0 + 1 - (n - 1) * L..=b0].rchunks_exact(L);
+                let a = ring[a0..a0 + (n - 1) * l].chunks_exact(l);
+                let b = ring[b0 + 1 - (n - 1) * l..=b0].rchunks_exact(l);
                 for ((a, b), h) in a.zip(b).zip(coefs) {
-                    f(&a[0], &b[L - 1], h);
+                    f(&a[0], &b[l - 1], h);
                 }
                 f(
-                    &ring[a0 + (n - 1) * L],
-                    &ring[b0 - (n - 1) * L],
+                    &ring[a0 + (n - 1) * l],
+                    &ring[b0 - (n - 1) * l],
                     &coefs[n - 1],
                 );
             }
+        }
+    }
+}
+
+impl Window {
+    /// [`Self::pairs`] in the same order, one pair at a time with the rows
+    /// indexed and wrapped: one copy of `f`'s body where [`Self::pairs`]
+    /// has two for strides above 1 (the strided fixed-point stage, module
+    /// doc).
+    #[inline(always)]
+    fn pairs_by_index<T, H>(
+        &self,
+        ring: &[[T; CHANNELS]],
+        coefs: &[H],
+        mut f: impl FnMut(&[T; CHANNELS], &[T; CHANNELS], &H),
+    ) {
+        let (mut a, mut b) = (self.start, self.end);
+        for h in coefs {
+            f(&ring[a], &ring[b], h);
+            a += self.l;
+            if a >= self.len {
+                a -= self.len;
+            }
+            b = if b >= self.l {
+                b - self.l
+            } else {
+                b + self.len - self.l
+            };
         }
     }
 }
@@ -467,23 +504,67 @@ macro_rules! each_channel {
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> [f32; CHANNELS] {
-    let (centre, coefs) = st.half.split_last().expect("taps");
-    let w = Window::new::<L>(ring.len(), end, coefs.len());
+    // Every stage has taps; no `expect`, whose panic would bring `&str`
+    // formatting into the firmware (0.7 KiB on the RP2040).
+    let Some((centre, coefs)) = st.half.split_last() else {
+        return [0.0f32; CHANNELS];
+    };
+    let w = Window::new(ring.len(), end, coefs.len(), L);
     let mid = &ring[w.centre];
     let mut acc = [0.0f32; CHANNELS];
     each_channel!(c => acc[c] = centre * mid[c]);
-    w.pairs::<_, _, L>(ring, coefs, |a, b, &h| {
+    w.pairs(ring, coefs, |a, b, &h| {
         each_channel!(c => acc[c] += h * (a[c] + b[c]));
     });
     acc
 }
 
-/// One symmetric stage, fixed point (module doc), rounded to nearest (not
-/// inlined, like [`run_f32`]).
+/// [`run_f32`] for the two-stage designs' prototypes (stride 2 or 4).
+#[inline(always)]
+fn run_f32_strided(
+    ring: &[[f32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+    stride: usize,
+) -> [f32; CHANNELS] {
+    if stride == 2 {
+        run_f32::<2>(ring, end, st)
+    } else {
+        run_f32::<4>(ring, end, st)
+    }
+}
+
+/// [`run_i32`] with taps one row apart (the pre-filter, the one-stage
+/// designs).
 #[inline(never)]
-fn run_i32<const L: usize>(ring: &[[i32; CHANNELS]], end: usize, st: &Stage) -> [i32; CHANNELS] {
-    let (centre, coefs) = st.half_q15.split_last().expect("taps");
-    let w = Window::new::<L>(ring.len(), end, coefs.len());
+fn run_i32_1(ring: &[[i32; CHANNELS]], end: usize, st: &Stage) -> [i32; CHANNELS] {
+    run_i32(ring, end, st, 1)
+}
+
+/// [`run_i32`] for the two-stage designs' prototypes, stride 2 or 4: one
+/// copy for both strides (the `fixed-point` build is for small flash: a
+/// copy per stride was 1.9 KiB more; module doc).
+#[inline(never)]
+fn run_i32_strided(
+    ring: &[[i32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+    stride: usize,
+) -> [i32; CHANNELS] {
+    run_i32(ring, end, st, if stride == 2 { 2 } else { 4 })
+}
+
+/// One symmetric stage with taps `l` rows apart, fixed point (module doc),
+/// rounded to nearest (out of line through [`run_i32_1`] and
+/// [`run_i32_strided`], like [`run_f32`]).
+#[inline(always)]
+fn run_i32(ring: &[[i32; CHANNELS]], end: usize, st: &Stage, l: usize) -> [i32; CHANNELS] {
+    // Every stage has taps; no `expect`, whose panic would bring `&str`
+    // formatting into the firmware (0.7 KiB on the RP2040).
+    let Some((centre, coefs)) = st.half_q15.split_last() else {
+        return [0i32; CHANNELS];
+    };
+    let w = Window::new(ring.len(), end, coefs.len(), l);
     let mid = &ring[w.centre];
     let mut acc_hi = [0i32; CHANNELS];
     let mut acc_lo = [1i32 << 14; CHANNELS];
@@ -492,13 +573,24 @@ fn run_i32<const L: usize>(ring: &[[i32; CHANNELS]], end: usize, st: &Stage) -> 
         acc_hi[c] += centre * (s >> 15);
         acc_lo[c] += centre * (s & 0x7FFF);
     }
-    w.pairs::<_, _, L>(ring, coefs, |a, b, &h| {
-        each_channel!(c => {
-            let s = a[c] + b[c];
-            acc_hi[c] += h * (s >> 15);
-            acc_lo[c] += h * (s & 0x7FFF);
-        });
-    });
+    // A closure per call (one shared by reference is compiled out of line:
+    // a call per pair, the accumulators in memory).
+    macro_rules! mac {
+        () => {
+            |a: &[i32; CHANNELS], b: &[i32; CHANNELS], &h: &i32| {
+                each_channel!(c => {
+                    let s = a[c] + b[c];
+                    acc_hi[c] += h * (s >> 15);
+                    acc_lo[c] += h * (s & 0x7FFF);
+                });
+            }
+        };
+    }
+    if l == 1 {
+        w.pairs(ring, coefs, mac!());
+    } else {
+        w.pairs_by_index(ring, coefs, mac!());
+    }
     let mut y = [0i32; CHANNELS];
     for c in 0..CHANNELS {
         y[c] = acc_hi[c] + (acc_lo[c] >> 15);
@@ -507,7 +599,7 @@ fn run_i32<const L: usize>(ring: &[[i32; CHANNELS]], end: usize, st: &Stage) -> 
 }
 
 macro_rules! bank {
-    ($name:ident, $t:ty, $run:ident, $doc:literal) => {
+    ($name:ident, $t:ty, $run1:expr, $strided:ident, $doc:literal) => {
         #[doc = $doc]
         #[derive(Debug, Clone)]
         pub struct $name {
@@ -570,15 +662,14 @@ macro_rules! bank {
                 self.raw[p] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
                 // The pre-filter runs on every tick.
-                let m = $run::<1>(&self.raw, p, &PRE);
+                let m = $run1(&self.raw, p, &PRE);
                 let q = self.mid_pos;
                 self.mid[q] = m;
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,
-                    Some(d) if d.stride == 1 => $run::<1>(&self.raw, p, &d.stage),
-                    Some(d) if d.stride == 2 => $run::<2>(&self.mid, q, &d.stage),
-                    Some(d) => $run::<4>(&self.mid, q, &d.stage),
+                    Some(d) if d.stride == 1 => $run1(&self.raw, p, &d.stage),
+                    Some(d) => $strided(&self.mid, q, &d.stage, d.stride),
                 }
             }
         }
@@ -588,13 +679,15 @@ macro_rules! bank {
 bank!(
     FirBank,
     f32,
-    run_f32,
+    run_f32::<1>,
+    run_f32_strided,
     "The float FIR over [`CHANNELS`] channels."
 );
 bank!(
     FirBankFixed,
     i32,
-    run_i32,
+    run_i32_1,
+    run_i32_strided,
     "The fixed-point FIR over [`CHANNELS`] channels (module doc); samples |x| < 2²⁹."
 );
 

@@ -3,8 +3,8 @@
 //! instructions and a plain `i64` product one of ~40.
 //!
 //! - [`mul64`]: the exact 64-bit product of two `i32` from four 16 × 16
-//!   products (one `MULS` each on a Cortex-M0+), inlined;
-//!   [`mul_shr`] rounds it down by a shift.
+//!   products (one `MULS` each on a Cortex-M0+); [`mul_shr`] rounds it
+//!   down by a shift.
 //! - [`mul_q30`]: the product of two Q30 numbers of magnitude ≤ 1 (unit
 //!   quaternions, rotation matrices), exactly rounded, in 32-bit arithmetic.
 //! - [`Coef`]: a constant multiplier with a 14-bit mantissa and a shift
@@ -18,6 +18,14 @@
 //!
 //! Everything here is exact integer arithmetic: the same inputs give the same
 //! bits on every platform.
+//!
+//! **Out of line in the `fixed-point` build.** The products ([`mul64_parts`],
+//! [`mul_shr`], [`mul_q30`], [`mul_q`]), the conversions ([`scaled_f32`], [`to_fixed`])
+//! and [`bit_len`] are `#[inline(never)]` there (inlined otherwise): inlined
+//! at their ~80 call sites they were 9.2 KiB of the RP2040 image's flash;
+//! a call costs the worst-case device tick ≈ 6 % more instructions
+//! (largest UDD 20 944 → 22 221, GA 13 735 → 14 486 under QEMU), far inside
+//! the RP2040's 62 500 cycles.
 
 /// The exact product `a · b` ([`mul64_parts`] on 32-bit targets, the
 /// native product — the same value — on 64-bit hosts).
@@ -32,7 +40,8 @@ pub fn mul64(a: i32, b: i32) -> i64 {
 
 /// The exact product `a · b` from four 16 × 16 products (one `MULS` each on
 /// ARMv6-M, where a plain `i64` product is a library call).
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn mul64_parts(a: i32, b: i32) -> i64 {
     let al = (a & 0xFFFF) as u32;
     let ah = a >> 16;
@@ -45,7 +54,8 @@ pub fn mul64_parts(a: i32, b: i32) -> i64 {
 
 /// `a · b / 2^s` rounded to nearest (half up), 1 ≤ `s` ≤ 62; the result must
 /// fit an `i32`.
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn mul_shr(a: i32, b: i32, s: u32) -> i32 {
     ((mul64(a, b) + (1i64 << (s - 1))) >> s) as i32
 }
@@ -56,7 +66,8 @@ pub fn mul_shr(a: i32, b: i32, s: u32) -> i32 {
 /// cross terms are summed at 2⁻¹² of the result's LSB, so the result is
 /// the correctly rounded one except within 1e-3 LSB of a tie (never off by
 /// more than 1).
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn mul_q30(a: i32, b: i32) -> i32 {
     let al = (a & 0xFFFF) as u32;
     let ah = a >> 16;
@@ -72,7 +83,8 @@ pub fn mul_q30(a: i32, b: i32) -> i32 {
 /// `a · b / 2^S` rounded to nearest, in 32-bit arithmetic, for
 /// 19 ≤ S ≤ 32: [`mul_q30`] at another binary point (the result must fit an
 /// `i32`; within 1 of the correctly rounded value).
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn mul_q<const S: u32>(a: i32, b: i32) -> i32 {
     let al = (a & 0xFFFF) as u32;
     let ah = a >> 16;
@@ -224,7 +236,8 @@ impl Coef {
 /// `x as f32` does (to nearest, ties to even), the scaling exact (on the
 /// exponent; k ≤ 100 keeps it normal). Built from the bits: ARMv6-M's
 /// library conversion costs ~70 instructions with its `CLZ` emulation.
-#[inline]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline)]
 pub fn scaled_f32(x: i32, k: u32) -> f32 {
     if x == 0 {
         return 0.0;
@@ -262,7 +275,8 @@ pub fn scaled_f32_i64(x: i64, k: u32) -> f32 {
 
 /// `v · 2ᵏ` rounded to nearest (half away from zero), saturated to the `i32`
 /// range; NaN gives 0.
-#[inline]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline)]
 pub fn to_fixed(v: f32, k: u32) -> i32 {
     let bits = v.to_bits();
     let exp = (bits >> 23) & 0xFF;
@@ -287,7 +301,8 @@ pub fn to_fixed(v: f32, k: u32) -> i32 {
 
 /// The number of significant bits of `x` (0 for 0): a few compares, where
 /// `leading_zeros` is a library call on ARMv6-M (no `CLZ`).
-#[inline(always)]
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline(always))]
 pub fn bit_len(x: u32) -> u32 {
     let (mut x, mut n) = (x, 0);
     if x >= 1 << 16 {

@@ -366,7 +366,9 @@ impl ParamSpec {
         }
     }
 
-    /// Reads float number `i` of a float parameter from `block`.
+    /// Reads float number `i` of a float parameter from `block` (out of
+    /// line: configuration code, several callers).
+    #[inline(never)]
     pub fn read_f32(&self, block: &Block, i: usize) -> f32 {
         let at = usize::from(self.id) + 4 * i;
         match block.get(at..at + 4) {

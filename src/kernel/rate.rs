@@ -21,8 +21,12 @@ pub fn max_rate(baud: u32, payload_len: usize, internal_hz: u32) -> u32 {
 /// The rate a stream actually runs at: the configured Data_Rate, lowered to
 /// [`max_rate`] when it does not fit the line (5.2.8, Table 5.21 bit 3).
 pub fn effective_rate(data_rate: u32, baud: u32, payload_len: usize, internal_hz: u32) -> u32 {
+    // max/min rather than `clamp`, whose min > max panic would bring
+    // `u32`'s `Debug` formatting into the firmware (0.4 KiB); the same
+    // value for every internal rate ≥ 1.
     data_rate
-        .clamp(1, internal_hz)
+        .max(1)
+        .min(internal_hz)
         .min(max_rate(baud, payload_len, internal_hz))
 }
 

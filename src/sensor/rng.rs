@@ -43,7 +43,8 @@ impl Rng {
     }
 
     /// The next 32 random bits.
-    #[inline]
+    #[cfg_attr(feature = "fixed-point", inline(never))]
+    #[cfg_attr(not(feature = "fixed-point"), inline)]
     pub fn next_u32(&mut self) -> u32 {
         let s = &mut self.s;
         let result = s[0].wrapping_add(s[3]).rotate_left(7).wrapping_add(s[0]);
@@ -73,7 +74,8 @@ impl Rng {
     /// uniforms, in −131 070 ..= 131 070 (standard deviation
     /// 65 536/√3 ≈ 37 837). The fixed-point error model scales it with one
     /// integer product.
-    #[inline]
+    #[cfg_attr(feature = "fixed-point", inline(never))]
+    #[cfg_attr(not(feature = "fixed-point"), inline)]
     pub fn gaussian_sum(&mut self) -> i32 {
         let a = self.next_u32();
         let b = self.next_u32();

@@ -43,7 +43,9 @@ pub fn micros() -> u64 {
     }
 }
 
-/// Now, in ns.
+/// Now, in ns (out of line: the tick, the shell and the edge interrupt
+/// read it; 0.35 KiB of flash inlined).
+#[inline(never)]
 pub fn now() -> Instant {
     Instant::from_micros(micros())
 }
