@@ -28,6 +28,8 @@ pub mod ahrs;
 pub mod chain;
 pub mod device;
 pub mod dsp;
+pub mod framing;
+pub mod isb;
 pub mod kernel;
 pub mod math;
 pub mod model;

@@ -5,16 +5,22 @@
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::{self, Decoder};
 
+/// The KERNEL vectors (the file's first section).
 fn vectors() -> Vec<(String, Vec<u8>)> {
+    section(false)
+}
+
+/// The vectors of one section: KERNEL, or ISB (after `# ISB`).
+fn section(isb: bool) -> Vec<(String, Vec<u8>)> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/spec/vectors.txt");
     let text = std::fs::read_to_string(path).expect("shared/spec/vectors.txt beside the clone");
     let mut out = Vec::new();
-    let mut kernel = true;
+    let mut in_isb = false;
     for line in text.lines() {
         if line.starts_with("# ISB") {
-            kernel = false;
+            in_isb = true;
         }
-        if line.starts_with('#') || line.trim().is_empty() || !kernel {
+        if line.starts_with('#') || line.trim().is_empty() || in_isb != isb {
             continue;
         }
         let (meaning, hex) = line.split_once('|').expect("meaning | hex");
@@ -110,4 +116,54 @@ fn typed_commands_encode_to_the_icd_bytes() {
     .encode(&mut out)
     .unwrap();
     assert_eq!(&out[n - 2..n], &[0x84, 0x04]);
+}
+
+#[test]
+fn all_11_isb_vectors_are_read() {
+    // 3 from the protocol page, 8 from the vendor SDK (NOTES.md "ISB").
+    assert_eq!(section(true).len(), 11);
+}
+
+/// Every ISB hex string: one packet, the type its meaning names, and the
+/// same bytes re-encoded (checksum included).
+#[test]
+fn every_isb_vector_decodes_and_re_encodes_byte_for_byte() {
+    use imu_emu::isb::packet::{self, PacketType};
+    for (meaning, bytes) in section(true) {
+        let mut d = packet::Decoder::<{ packet::MAX_PACKET }>::new();
+        let mut input = &bytes[..];
+        let p = d
+            .next_packet(&mut input)
+            .unwrap_or_else(|| panic!("{meaning}: no packet"));
+        assert!(input.is_empty(), "{meaning}: trailing bytes");
+        let expect = match meaning.split(':').nth(1).unwrap_or("").trim() {
+            m if m.starts_with("stop broadcasts, all") => PacketType::StopBroadcastsAllPorts,
+            m if m.starts_with("stop broadcasts, current") => PacketType::StopBroadcastsCurrentPort,
+            m if m.starts_with("RMC") || m.starts_with("SET") => PacketType::SetData,
+            m if m.starts_with("GET") => PacketType::GetData,
+            m if m.starts_with("STOP_DID") => PacketType::StopDidBroadcast,
+            m if m.starts_with("ACK") => PacketType::Ack,
+            m if m.starts_with("NACK") => PacketType::Nack,
+            m => panic!("{meaning}: no expected type for {m:?}"),
+        };
+        assert_eq!(p.kind(), Some(expect), "{meaning}");
+        let (flags, did, payload) = (p.flags, p.did, p.payload.to_vec());
+        let mut out = [0u8; 64];
+        let n = packet::encode(flags, did, &payload, &mut out).unwrap();
+        assert_eq!(&out[..n], &bytes[..], "{meaning}: re-encode");
+    }
+}
+
+/// The SDK's SET of FLASH_CONFIG carries an offset (flag 0x20):
+/// startupImuDtMs = 2 at offset 12.
+#[test]
+fn isb_set_with_offset_splits_offset_and_data() {
+    use imu_emu::isb::packet;
+    let bytes = [
+        0xef, 0x49, 0x25, 0x0c, 0x06, 0x00, 0x0c, 0x00, 0x02, 0x00, 0x00, 0x00, 0x7d, 0xb5,
+    ];
+    let mut d = packet::Decoder::<64>::new();
+    let p = d.next_packet(&mut &bytes[..]).unwrap();
+    assert_eq!(p.did, 12);
+    assert_eq!(p.offset_and_data(), Some((12, &[2u8, 0, 0, 0][..])));
 }

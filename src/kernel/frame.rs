@@ -4,6 +4,8 @@
 //! `len = payload_len + 6` and `sum` is the wrapping 16-bit sum of every byte
 //! from `type` through the last payload byte.
 
+use crate::framing::{Framing, Scanner};
+
 /// The two header bytes.
 pub const HEADER: [u8; 2] = [0xAA, 0x55];
 /// Bytes a frame adds around its payload (header 2, type, id, len 2, sum 2).
@@ -67,161 +69,54 @@ pub fn encode(msg_type: u8, id: u8, payload: &[u8], out: &mut [u8]) -> Option<us
     Some(total)
 }
 
+/// The KERNEL rules for the shared [`Scanner`]: header `AA 55`, length
+/// field at bytes 4–5 (≥ 6), the 16-bit sum of type through payload.
+#[derive(Debug, Clone, Copy)]
+pub struct Kernel;
+
+impl Framing for Kernel {
+    const PREAMBLE: [u8; 2] = HEADER;
+    const HEADER_LEN: usize = 6;
+
+    #[inline]
+    fn total_len(header: &[u8]) -> Option<usize> {
+        let len_field = u16::from_le_bytes([header[4], header[5]]);
+        (len_field >= MIN_LEN_FIELD).then_some(usize::from(len_field) + 2)
+    }
+
+    #[inline]
+    fn check(packet: &[u8]) -> bool {
+        let n = packet.len();
+        checksum(&packet[2..n - 2]) == u16::from_le_bytes([packet[n - 2], packet[n - 1]])
+    }
+}
+
 /// Streaming frame decoder with a bounded buffer of `CAP` bytes; `CAP` is
 /// the largest frame (payload + 8) it accepts.
 ///
-/// Bytes may arrive in any chunking: the decoder only decides about a
-/// candidate frame once it holds all of it, so the frames found depend on the
-/// byte sequence alone. A candidate is dropped one byte at a time — its
-/// first byte is skipped and the scan restarts right after it — when its
-/// second byte is not `0x55`, its length field is < 6 or larger than `CAP`
-/// allows, or its checksum is wrong; so the next good frame right after a bad
-/// one (or inside its bytes) is found. [`Decoder::abandon`] drops a candidate
-/// that was cut short (the device calls it after an idle gap).
-#[derive(Debug, Clone)]
-pub struct Decoder<const CAP: usize> {
-    buf: [u8; CAP],
-    /// Valid bytes are `buf[start..end]`.
-    start: usize,
-    end: usize,
-    /// Total frame length of a candidate just returned, to skip next time.
-    consumed: usize,
-    /// Count of candidates dropped (bad length, checksum, abandoned).
-    errors: u32,
-}
+/// Bytes may arrive in any chunking (the [`crate::framing`] scanner): a
+/// candidate is dropped one byte at a time — its first byte is skipped and
+/// the scan restarts right after it — when its second byte is not `0x55`,
+/// its length field is < 6 or larger than `CAP` allows, or its checksum is
+/// wrong; so the next good frame right after a bad one (or inside its
+/// bytes) is found. [`Scanner::abandon`] drops a candidate that was cut
+/// short (the device calls it after an idle gap).
+pub type Decoder<const CAP: usize> = Scanner<Kernel, CAP>;
 
-impl<const CAP: usize> Default for Decoder<CAP> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl<const CAP: usize> Decoder<CAP> {
-    /// An empty decoder.
-    pub const fn new() -> Self {
-        Decoder {
-            buf: [0; CAP],
-            start: 0,
-            end: 0,
-            consumed: 0,
-            errors: 0,
-        }
-    }
-
-    /// Number of dropped candidates so far (for diagnostics and tests).
-    pub fn errors(&self) -> u32 {
-        self.errors
-    }
-
-    /// Whether bytes of an incomplete candidate are held.
-    pub fn has_partial(&self) -> bool {
-        self.consumed == 0 && self.start < self.end
-    }
-
-    /// Drops the current candidate (e.g. a frame cut short, detected by an
-    /// idle gap) and rescans the bytes after its first byte.
-    pub fn abandon(&mut self) {
-        self.skip_consumed();
-        if self.start < self.end {
-            self.start += 1;
-            self.errors = self.errors.wrapping_add(1);
-        }
-    }
-
-    fn skip_consumed(&mut self) {
-        self.start += self.consumed;
-        self.consumed = 0;
-    }
-
+impl<const CAP: usize> Scanner<Kernel, CAP> {
     /// Feeds bytes from `input` (advancing it past what was taken) and
     /// returns the next complete, valid frame, if any. Call in a loop until
     /// it returns `None`; then all of `input` has been taken.
     pub fn next_frame<'s>(&'s mut self, input: &mut &[u8]) -> Option<Frame<'s>> {
-        self.skip_consumed();
-        loop {
-            // Scan what is buffered.
-            match self.scan() {
-                Scan::Found(total) => {
-                    self.consumed = total;
-                    let b = &self.buf[self.start..self.start + total];
-                    let plen = total - OVERHEAD;
-                    return Some(Frame {
-                        msg_type: b[2],
-                        id: b[3],
-                        payload: &b[6..6 + plen],
-                        checksum: u16::from_le_bytes([b[6 + plen], b[7 + plen]]),
-                    });
-                }
-                Scan::NeedMore => {}
-            }
-            if input.is_empty() {
-                return None;
-            }
-            // Compact and take as many bytes as fit.
-            if self.start > 0 {
-                self.buf.copy_within(self.start..self.end, 0);
-                self.end -= self.start;
-                self.start = 0;
-            }
-            let room = CAP - self.end;
-            let n = room.min(input.len());
-            self.buf[self.end..self.end + n].copy_from_slice(&input[..n]);
-            self.end += n;
-            *input = &input[n..];
-        }
+        let b = self.next_raw(input)?;
+        let n = b.len();
+        Some(Frame {
+            msg_type: b[2],
+            id: b[3],
+            payload: &b[6..n - 2],
+            checksum: u16::from_le_bytes([b[n - 2], b[n - 1]]),
+        })
     }
-
-    /// Advances `start` past garbage and bad candidates; reports a complete
-    /// valid frame at `start`, or that more bytes are needed.
-    fn scan(&mut self) -> Scan {
-        loop {
-            let avail = &self.buf[self.start..self.end];
-            match avail.iter().position(|&b| b == HEADER[0]) {
-                None => {
-                    self.start = self.end;
-                    return Scan::NeedMore;
-                }
-                Some(0) => {}
-                Some(i) => self.start += i,
-            }
-            let avail = &self.buf[self.start..self.end];
-            if avail.len() < 2 {
-                return Scan::NeedMore;
-            }
-            if avail[1] != HEADER[1] {
-                self.drop_candidate();
-                continue;
-            }
-            if avail.len() < 6 {
-                return Scan::NeedMore;
-            }
-            let len_field = usize::from(u16::from_le_bytes([avail[4], avail[5]]));
-            let total = len_field + 2;
-            if len_field < usize::from(MIN_LEN_FIELD) || total > CAP {
-                self.drop_candidate();
-                continue;
-            }
-            if avail.len() < total {
-                return Scan::NeedMore;
-            }
-            let sum = u16::from_le_bytes([avail[total - 2], avail[total - 1]]);
-            if checksum(&avail[2..total - 2]) != sum {
-                self.drop_candidate();
-                continue;
-            }
-            return Scan::Found(total);
-        }
-    }
-
-    fn drop_candidate(&mut self) {
-        self.start += 1;
-        self.errors = self.errors.wrapping_add(1);
-    }
-}
-
-enum Scan {
-    Found(usize),
-    NeedMore,
 }
 
 #[cfg(test)]

@@ -1,0 +1,167 @@
+//! The streaming packet scanner both wire protocols share: KERNEL frames
+//! ([`crate::kernel::frame`], ICD Table 5.2) and ISB packets
+//! ([`crate::isb::packet`], the ISB protocol page). Each protocol says, in a
+//! [`Framing`], what its two preamble bytes are, how long a packet is from
+//! its first bytes, and whether a complete packet's check bytes are right;
+//! [`Scanner`] does the rest the same way for both.
+//!
+//! Bytes may arrive in any chunking: the scanner only decides about a
+//! candidate packet once it holds all of it, so the packets found depend on
+//! the byte sequence alone. A candidate is dropped one byte at a time — its
+//! first byte is skipped and the scan restarts right after it — when its
+//! second byte is not the second preamble byte, its length is invalid or
+//! larger than the buffer, or its check fails; so the next good packet right
+//! after a bad one (or inside its bytes) is found. The buffer is bounded
+//! (`CAP` bytes, the largest packet accepted); nothing is allocated.
+
+use core::marker::PhantomData;
+
+/// What a wire protocol tells the [`Scanner`].
+pub trait Framing {
+    /// The two bytes every packet starts with.
+    const PREAMBLE: [u8; 2];
+    /// Bytes from the start of a packet needed to know its length.
+    const HEADER_LEN: usize;
+    /// Total packet length from its first [`Framing::HEADER_LEN`] bytes, or
+    /// `None` if the header is invalid.
+    fn total_len(header: &[u8]) -> Option<usize>;
+    /// Whether a complete candidate packet's check bytes are right.
+    fn check(packet: &[u8]) -> bool;
+}
+
+/// Streaming packet scanner with a bounded buffer of `CAP` bytes (module
+/// doc).
+#[derive(Debug, Clone)]
+pub struct Scanner<F: Framing, const CAP: usize> {
+    buf: [u8; CAP],
+    /// Valid bytes are `buf[start..end]`.
+    start: usize,
+    end: usize,
+    /// Total length of a packet just returned, to skip next time.
+    consumed: usize,
+    /// Count of candidates dropped (bad length, check, abandoned).
+    errors: u32,
+    framing: PhantomData<F>,
+}
+
+impl<F: Framing, const CAP: usize> Default for Scanner<F, CAP> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
+    /// An empty scanner.
+    pub const fn new() -> Self {
+        Scanner {
+            buf: [0; CAP],
+            start: 0,
+            end: 0,
+            consumed: 0,
+            errors: 0,
+            framing: PhantomData,
+        }
+    }
+
+    /// Number of dropped candidates so far (for diagnostics and tests).
+    pub fn errors(&self) -> u32 {
+        self.errors
+    }
+
+    /// Whether bytes of an incomplete candidate are held.
+    pub fn has_partial(&self) -> bool {
+        self.consumed == 0 && self.start < self.end
+    }
+
+    /// Drops the current candidate (e.g. a packet cut short, detected by an
+    /// idle gap) and rescans the bytes after its first byte.
+    pub fn abandon(&mut self) {
+        self.skip_consumed();
+        if self.start < self.end {
+            self.start += 1;
+            self.errors = self.errors.wrapping_add(1);
+        }
+    }
+
+    fn skip_consumed(&mut self) {
+        self.start += self.consumed;
+        self.consumed = 0;
+    }
+
+    /// Feeds bytes from `input` (advancing it past what was taken) and
+    /// returns the next complete, valid packet (all its bytes), if any.
+    /// Call in a loop until it returns `None`; then all of `input` has been
+    /// taken. (Each protocol adds a typed reader on top: `next_frame`,
+    /// `next_packet`.)
+    pub fn next_raw<'s>(&'s mut self, input: &mut &[u8]) -> Option<&'s [u8]> {
+        self.skip_consumed();
+        loop {
+            if let Some(total) = self.scan() {
+                self.consumed = total;
+                return Some(&self.buf[self.start..self.start + total]);
+            }
+            if input.is_empty() {
+                return None;
+            }
+            // Compact and take as many bytes as fit.
+            if self.start > 0 {
+                self.buf.copy_within(self.start..self.end, 0);
+                self.end -= self.start;
+                self.start = 0;
+            }
+            let room = CAP - self.end;
+            let n = room.min(input.len());
+            self.buf[self.end..self.end + n].copy_from_slice(&input[..n]);
+            self.end += n;
+            *input = &input[n..];
+        }
+    }
+
+    /// Advances `start` past garbage and bad candidates; the total length of
+    /// a complete valid packet at `start`, or `None` if more bytes are
+    /// needed.
+    fn scan(&mut self) -> Option<usize> {
+        loop {
+            let avail = &self.buf[self.start..self.end];
+            match avail.iter().position(|&b| b == F::PREAMBLE[0]) {
+                None => {
+                    self.start = self.end;
+                    return None;
+                }
+                Some(0) => {}
+                Some(i) => self.start += i,
+            }
+            let avail = &self.buf[self.start..self.end];
+            if avail.len() < 2 {
+                return None;
+            }
+            if avail[1] != F::PREAMBLE[1] {
+                self.drop_candidate();
+                continue;
+            }
+            if avail.len() < F::HEADER_LEN {
+                return None;
+            }
+            let total = match F::total_len(&avail[..F::HEADER_LEN]) {
+                Some(t) if t <= CAP => t,
+                _ => {
+                    self.drop_candidate();
+                    continue;
+                }
+            };
+            if avail.len() < total {
+                return None;
+            }
+            if !F::check(&avail[..total]) {
+                self.drop_candidate();
+                continue;
+            }
+            return Some(total);
+        }
+    }
+
+    fn drop_candidate(&mut self) {
+        self.start += 1;
+        self.errors = self.errors.wrapping_add(1);
+    }
+}
