@@ -139,7 +139,9 @@
 //! output (84 % of it in soft-float routines).
 //!
 //! ¹ The v6-M column was measured before the FIR's channel loop was written
-//! out (`each_channel!`) and not re-measured.
+//! out (`each_channel!`) and before the fixed-point multiply/convert
+//! helpers went out of line to fit the rp2040 image in 64 KiB (+10–14 % on
+//! the whole device tick, README "Performance"); not re-measured since.
 //!
 //! The firmware images build with `opt-level = "s"`, which does not unroll
 //! loops: the FIR's channel loop is written out for them (at opt-level 3
