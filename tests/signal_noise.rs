@@ -27,21 +27,24 @@ fn gm_avar(x: f64) -> f64 {
     (2.0 / x) * (1.0 - (3.0 - 4.0 * (-x).exp() + (-2.0 * x).exp()) / (2.0 * x))
 }
 
-fn run(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> (Vec<f64>, Allan) {
+/// One gyro triad's errors: white noise `noise`, bias instability `bi`
+/// with correlation time `tc`, nothing else.
+fn white_and_gm(noise: f32, bi: f32, tc: f32) -> SensorErrors {
     let axis = AxisErrors {
         noise_density: noise,
         bias_instability: bi,
         bias_corr_time_s: tc,
         ..AxisErrors::default()
     };
-    let errors = SensorErrors {
+    SensorErrors {
         axes: [axis; 3],
         misalignment: [[0.0; 3]; 3],
-    };
-    let mut e = TriadEngine::new(1e9);
-    e.configure(&errors, 25.0, (1.0 / FS) as f32);
-    let mut rng = Rng::new(seed);
-    e.randomize_gm(&errors, &mut rng);
+    }
+}
+
+/// `seconds` of `sample` (°/s, one a tick) averaged over [`BLOCK`]s: the
+/// block means and their Allan variance.
+fn record_blocks(seconds: f64, mut sample: impl FnMut() -> f64) -> (Vec<f64>, Allan) {
     let mut allan = Allan::builder()
         .max_tau(4000)
         .style(Style::Decade125)
@@ -50,15 +53,20 @@ fn run(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> (Vec<f64>, Alla
     let n = (seconds * FS) as usize / BLOCK;
     let mut blocks = Vec::with_capacity(n);
     for _ in 0..n {
-        let mut s = 0.0f64;
-        for _ in 0..BLOCK {
-            s += f64::from(e.measure(&[0.0; 3], &mut rng).0[0]);
-        }
-        let m = s / BLOCK as f64;
+        let m = (0..BLOCK).map(|_| sample()).sum::<f64>() / BLOCK as f64;
         allan.record(m);
         blocks.push(m);
     }
     (blocks, allan)
+}
+
+fn run(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> (Vec<f64>, Allan) {
+    let errors = white_and_gm(noise, bi, tc);
+    let mut e = TriadEngine::new(1e9);
+    e.configure(&errors, 25.0, (1.0 / FS) as f32);
+    let mut rng = Rng::new(seed);
+    e.randomize_gm(&errors, &mut rng);
+    record_blocks(seconds, || f64::from(e.measure(&[0.0; 3], &mut rng).0[0]))
 }
 
 /// Overlapping Allan deviation of frequency data `y` at `m` samples.
@@ -199,34 +207,14 @@ fn chain_output_noise_and_mean_match_the_model() {
 /// it): the same parameters, measurements in °/s·2¹⁹.
 fn run_fixed(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> Allan {
     use imu_emu::sensor::errors::{TriadEngineFixed, GYRO_BITS};
-    let axis = AxisErrors {
-        noise_density: noise,
-        bias_instability: bi,
-        bias_corr_time_s: tc,
-        ..AxisErrors::default()
-    };
-    let errors = SensorErrors {
-        axes: [axis; 3],
-        misalignment: [[0.0; 3]; 3],
-    };
+    let errors = white_and_gm(noise, bi, tc);
     let mut e = TriadEngineFixed::new(1e9, GYRO_BITS);
     e.configure(&errors, 25.0, (1.0 / FS) as f32);
     let mut rng = Rng::new(seed);
     e.randomize_gm(&errors, &mut rng);
-    let mut allan = Allan::builder()
-        .max_tau(4000)
-        .style(Style::Decade125)
-        .data_type(DataType::Frequency)
-        .build_allan();
     let unit = 1.0 / f64::from(1u32 << GYRO_BITS);
-    for _ in 0..(seconds * FS) as usize / BLOCK {
-        let mut s = 0.0f64;
-        for _ in 0..BLOCK {
-            s += f64::from(e.measure(&[0; 3], &mut rng).0[0]) * unit;
-        }
-        allan.record(s / BLOCK as f64);
-    }
-    allan
+    let sample = || f64::from(e.measure(&[0; 3], &mut rng).0[0]) * unit;
+    record_blocks(seconds, sample).1
 }
 
 /// The fixed-point engine (integer Irwin–Hall noise, integer Gauss–Markov)
