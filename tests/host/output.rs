@@ -485,3 +485,19 @@ fn speed_keeps_pps_on_device_time() {
         }
     }
 }
+
+/// A bad `--speed` is refused before anything listens: exit status 2 (the
+/// usage error) and a message naming the option, on the real binary.
+#[test]
+fn bad_speed_values_are_refused_at_start() {
+    for bad in ["0", "-3", "fast", "inf", "2e6"] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+            .args(["--tcp", "127.0.0.1:0", &format!("--speed={bad}")])
+            .output()
+            .expect("run imu-emu");
+        assert_eq!(out.status.code(), Some(2), "--speed {bad}");
+        assert!(out.stdout.is_empty(), "--speed {bad}: listened anyway");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--speed"), "--speed {bad}: {err}");
+    }
+}
