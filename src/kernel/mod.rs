@@ -1,9 +1,12 @@
 //! The KERNEL protocol personality (ICD section 5, Appendix A).
 
 pub mod command;
+pub mod device;
 pub mod fields;
 pub mod formats;
 pub mod frame;
 pub mod params;
 pub mod rate;
 pub mod udd;
+
+pub use device::Kernel;
