@@ -234,7 +234,7 @@ impl<F: NorFlash> Shell<F> {
         self.line.switch_rate_after_queued(bps);
     }
 
-    /// Queues a board event (dropped if [`EVENTS`] are waiting).
+    /// Queues a board event (dropped if 16 are already waiting).
     pub fn push_event(&mut self, ev: Event) {
         let _ = self.events.push_back(ev);
     }

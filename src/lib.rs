@@ -2,13 +2,26 @@
 //!
 //! A sans-IO, `no_std`, allocation-free emulator of the Inertial Labs KERNEL
 //! IMU family, implementing the KERNEL Interface Control Document rev 1.42
-//! ("the ICD"). Boards hand the core bytes, ticks, pin edges and time; the
-//! core hands back bytes and events. It never reads a clock or a port.
+//! ("the ICD"), built so that a second protocol (the Inertial Sense IMX
+//! over ISB) sits beside it. Boards hand the core bytes, ticks, pin edges
+//! and time; the core hands back bytes and events. It never reads a clock
+//! or a port. `ARCHITECTURE.md` in the repository explains the layers.
 //!
-//! The one entry point is [`device::Device`]:
+//! ## The whole API a board or a unit test needs
+//!
+//! | name | what |
+//! |---|---|
+//! | [`Device`] | the emulated unit: a [`Shell`] carrying one [`Personality`] ([`Kernel`] by default) |
+//! | [`PowerOn`], [`Product`] | what is fixed at power-on: the product (model + ranges, ICD 3.2.2), BOOT, seed |
+//! | [`Device::on_rx`], [`Device::on_tick`], [`Device::on_pin`] | bytes in, one internal-rate tick, a pin edge ([`Pin`], [`Level`]) |
+//! | [`Device::poll_tx`], [`Device::poll_event`] | bytes out, board actions ([`Event`]: line rate, TOV) |
+//! | [`Device::power_cycle_with`], [`Device::mode`] ([`Mode`]), [`Device::ticks_to_next_output`] | power, state, when to wake |
+//! | [`Device::chain_mut`] ([`SignalChain`]) | motion ([`Motion`]), error model, faults ([`Faults`]) |
+//! | [`Instant`] | time, ns on the board's clock |
+//! | [`RamNor`] | a NOR flash in RAM for tests and hosts (any `embedded-storage` `NorFlash` works) |
 //!
 //! ```
-//! use imu_emu::{device::Device, model::Product, nor::RamNor, time::Instant};
+//! use imu_emu::{Device, Instant, Product, RamNor};
 //! let product = Product::parse("K110").unwrap();
 //! let mut dev = Device::power_on(product, RamNor::<8192>::new(), Instant::ZERO);
 //! // GetDevInfo (ICD 5.3.3)
@@ -17,6 +30,16 @@
 //! let n = dev.poll_tx(&mut out);
 //! assert_eq!(n, 8 + 166); // header, type, id, length, 166-byte payload, checksum
 //! ```
+//!
+//! ## Internal modules
+//!
+//! The modules below are public so that tests, benchmarks and tools can
+//! reach the stages and the protocol codecs (e.g. [`kernel::frame`] to
+//! decode what the device sends, [`isb::packet`]); they are the product's
+//! insides, documented but not a stable interface. Protocol-free: [`chain`],
+//! [`sensor`], [`dsp`], [`ahrs`], [`math`], [`store`], [`nor`], [`line`](mod@line),
+//! [`framing`], [`time`]; the shell: [`device`], [`personality`]; the
+//! personalities: [`kernel`], [`isb`] (its packet layer so far).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -39,3 +62,12 @@ pub mod personality;
 pub mod sensor;
 pub mod store;
 pub mod time;
+
+pub use chain::{Faults, SignalChain};
+pub use device::{Device, Event, Level, Mode, Pin, PowerOn, Shell};
+pub use kernel::Kernel;
+pub use model::Product;
+pub use nor::RamNor;
+pub use personality::Personality;
+pub use sensor::Motion;
+pub use time::Instant;
