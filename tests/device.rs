@@ -613,3 +613,35 @@ fn power_on_in_place_by_value_and_power_cycle_agree() {
     let t0 = b.now;
     assert_eq!(script(&mut b.dev, t0), expect);
 }
+
+/// Time flag 0x0001 ("1PPS received between the last and current frame",
+/// Table 5.8 note 2) of a stream's first frame covers the time since the
+/// data command: an edge while idle, or during an earlier stream after its
+/// last frame, is not reported (README "Protocol notes").
+#[test]
+fn a_pps_edge_before_the_data_command_is_not_flagged_in_the_first_frame() {
+    let mut b = Bench::new("K110");
+    b.run_ticks(100);
+    b.dev
+        .on_pin(imu_emu::device::Pin::Pps, Level::High, Instant(b.now));
+    b.run_ticks(100);
+    b.cmd(Command::Data(0x9B));
+    let f = b.run_ticks(20);
+    assert_eq!(f[0].id, 0x9B);
+    assert_eq!(f[1].payload.len(), 32, "{f:?}");
+    assert_eq!(u16_at(&f[1].payload, 24) & 0x0001, 0);
+    // An edge after the command is flagged in the next frame, once.
+    b.dev
+        .on_pin(imu_emu::device::Pin::Pps, Level::High, Instant(b.now));
+    let f = b.run_ticks(40);
+    assert_eq!(u16_at(&f[0].payload, 24) & 0x0001, 0x0001);
+    assert_eq!(u16_at(&f[1].payload, 24) & 0x0001, 0);
+    // Stop, an edge while idle, a new stream: not flagged.
+    b.cmd(Command::Stop);
+    b.dev
+        .on_pin(imu_emu::device::Pin::Pps, Level::High, Instant(b.now));
+    b.run_ticks(10);
+    b.cmd(Command::Data(0x9B));
+    let f = b.run_ticks(20);
+    assert_eq!(u16_at(&f[1].payload, 24) & 0x0001, 0, "{f:?}");
+}

@@ -480,6 +480,11 @@ impl Kernel {
         }
         let layout = self.layout(sh, code);
         let divisor = self.divisor_for(sh, &layout);
+        // The first frame's "1PPS received between the last and current
+        // frame" (Table 5.8 time flags) covers the time since this data
+        // command: a 1PPS edge while idle is not reported (README
+        // "Protocol notes").
+        sh.clear_pps_flag();
         self.stream = Some(Stream {
             code,
             divisor,
