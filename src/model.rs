@@ -3,7 +3,8 @@
 //! Sources: ICD section 2.1 (models), 3.2.2 (product codes), Table 4.1 notes
 //! (EXTRIG, BOOT polarity), Table 4.3 (internal rate), 5.2 (K201 formats),
 //! Table 5.6 (KG/KA), Table 5.15 notes (per-model UDD types), Table 5.24
-//! (Sensors_Measurement_Range nibbles, LPF codes), NOTES.md.
+//! (Sensors_Measurement_Range nibbles, LPF codes), and
+//! `docs/protocol-facts.md` "KERNEL numbers that must agree".
 
 /// Gyroscope measurement range option of a product code (`G450`, …).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -137,7 +138,7 @@ pub struct ModelSpec {
     pub internal_rate_hz: u32,
     /// Data command codes the model runs (Table 5.16; 5.2 for K201).
     pub formats: &'static [u8],
-    /// Only the UDD types marked `*` in Table 5.15 (K201, NOTES.md).
+    /// Only the UDD types marked `*` in Table 5.15 (K201, `docs/protocol-facts.md`).
     pub udd_starred_only: bool,
     /// Optional features the model has.
     pub caps: &'static [Capability],

@@ -279,14 +279,15 @@ impl Session {
         } else {
             "float"
         };
-        let path: PathBuf = [
-            env!("CARGO_MANIFEST_DIR"),
-            "tests/data/sessions",
-            variant,
-            &format!("{name}.txt"),
-        ]
-        .iter()
-        .collect();
+        // The package directory cargo runs the test in (set at run time
+        // too), so a binary built from another copy of the tree still
+        // reads this copy's fixtures.
+        let root = std::env::var_os("CARGO_MANIFEST_DIR")
+            .map_or_else(|| env!("CARGO_MANIFEST_DIR").into(), PathBuf::from);
+        let path = root
+            .join("tests/data/sessions")
+            .join(variant)
+            .join(format!("{name}.txt"));
         if std::env::var_os("IMU_EMU_BLESS").is_some_and(|v| v == "1") {
             std::fs::create_dir_all(path.parent().unwrap()).unwrap();
             std::fs::write(&path, &self.out).unwrap();

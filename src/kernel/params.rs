@@ -1,4 +1,5 @@
-//! The parameter block (ICD 5.3.7 Table 5.24, cleaned in NOTES.md) — every
+//! The parameter block (ICD 5.3.7 Table 5.24, cleaned in
+//! `docs/protocol-facts.md`) — every
 //! parameter is one row of [`PARAMS`].
 //!
 //! A parameter ID is the byte offset of the parameter in the device's

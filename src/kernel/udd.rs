@@ -16,7 +16,8 @@ pub struct UddType {
     pub field: Field,
     /// Marked `*` in Table 5.15: the only types a K201 takes (note 5).
     pub starred: bool,
-    /// Model feature the type needs (Table 5.14/5.15 notes, NOTES.md).
+    /// Model feature the type needs (Table 5.14/5.15 notes,
+    /// `docs/protocol-facts.md` "KERNEL numbers that must agree").
     pub requires: Option<Capability>,
     /// Carries orientation: a UDD stream with it waits for alignment.
     pub orientation: bool,
@@ -222,7 +223,7 @@ pub fn check(payload: &[u8], product: &Product) -> Checked {
 }
 
 /// The 8-byte reply to a config message (Table 5.20 as corrected in
-/// NOTES.md): checksum of the received message (0 if refused), error bits,
+/// `docs/protocol-facts.md`): checksum of the received message (0 if refused), error bits,
 /// wrong-type bitmap, maximum data rate (u16), reserved.
 pub fn config_reply(checksum: u16, errors: u8, wrong_types: u16, max_rate: u16) -> [u8; 8] {
     let c = checksum.to_le_bytes();
