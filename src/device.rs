@@ -891,11 +891,11 @@ impl<F: NorFlash> Device<F> {
 
     fn start_stream(&mut self, code: u8) {
         let orientation = match formats::find(code) {
-            Some(f) => f.orientation,
+            Some(f) => f.carries_attitude(),
             None => self
                 .udd_config_now()
                 .iter()
-                .any(|&c| udd::find(c).is_some_and(|t| t.orientation)),
+                .any(|&c| udd::find(c).is_some_and(|t| t.carries_attitude())),
         };
         let align_s = u64::from(params::INITIAL_ALIGNMENT_TIME.read_int(&self.ram));
         let internal = u64::from(self.cfg.product.model.internal_rate_hz);
