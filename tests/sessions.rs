@@ -879,3 +879,57 @@ fn k110_robust() {
     s.ticks(20);
     s.check("k110_robust");
 }
+
+/// K220 (high grade, aux accelerometer): GAA and a UDD configuration with
+/// the aux and filtered high-g types.
+#[test]
+fn k220_aux() {
+    let mut s = Session::new("k220_aux", "K220", 2202);
+    s.rx(&cmd(GET_DEV_INFO), "GetDevInfo");
+    s.rx(&cmd(GAA), "GAA");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.rx(
+        &frame(&[UDD_CONFIG, 4, 0x02, 0x2F, 0x92, 0x2E]),
+        "UDD config aux, filtered high-g, gyro bias",
+    );
+    s.rx(&cmd(UDD), "UDD");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k220_aux");
+}
+
+/// K210 (high grade, no aux accelerometer): GAAm (aux fields zero), GA at
+/// 200 Hz.
+#[test]
+fn k210_ga() {
+    let mut s = Session::new("k210_ga", "K210", 2101);
+    s.rx(&cmd(GAAM), "GAAm (no aux accelerometer: zero)");
+    s.seconds(0.05);
+    s.rx(
+        &save(DATA_RATE, &200u16.to_le_bytes()),
+        "SaveFlash Data_Rate 200",
+    );
+    s.rx(&cmd(GA), "GA (switch, 200 Hz)");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k210_ga");
+}
+
+/// K110M: BOOT is active low (Table 4.4 pin 9), so high is a normal start.
+#[test]
+fn k110m_boot() {
+    let mut s = Session::new("k110m_boot", "K110M", 1110);
+    s.rx(&save(AUTO_START, &[GAM]), "SaveFlash Auto_Start GAm");
+    s.power_on(Some(Level::Low));
+    s.rx(
+        &cmd(GET_DEV_INFO),
+        "GetDevInfo in firmware update (no answer)",
+    );
+    s.seconds(0.03);
+    s.power_on(Some(Level::High));
+    s.seconds(0.05);
+    s.rx(&cmd(GET_DEV_INFO), "GetDevInfo mid-stream");
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k110m_boot");
+}
