@@ -1,6 +1,6 @@
 //! The device: a shell that owns what every emulated IMU shares, carrying
-//! one protocol personality — the one sans-IO entry point (DESIGN.md "One
-//! entry point"; ARCHITECTURE.md "Shell and personalities").
+//! one protocol personality — the one sans-IO entry point
+//! (ARCHITECTURE.md "Shell and personalities").
 //!
 //! ```text
 //! let mut dev = Device::power_on(product, flash, now);   // the KERNEL

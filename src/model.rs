@@ -3,7 +3,8 @@
 //! Sources: ICD section 2.1 (models), 3.2.2 (product codes), Table 4.1 notes
 //! (EXTRIG, BOOT polarity), Table 4.3 (internal rate), 5.2 (K201 formats),
 //! Table 5.6 (KG/KA), Table 5.15 notes (per-model UDD types), Table 5.24
-//! (Sensors_Measurement_Range nibbles, LPF codes), NOTES.md.
+//! (Sensors_Measurement_Range nibbles, LPF codes), and
+//! `docs/protocol-facts.md` "KERNEL numbers that must agree".
 
 /// Gyroscope measurement range option of a product code (`G450`, …).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,6 +127,20 @@ pub enum Capability {
     Extrig,
 }
 
+/// Grade of a model's inertial sensors: which error spread the sensor
+/// error model draws its units from (`crate::sensor::ErrorSpec::for_product`
+/// gives the figures). The ICD gives no noise figures: the grades are the
+/// emulator's three classes of the models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SensorGrade {
+    /// K100, K102, K201: gyro ARW 0.24 °/√h, bias instability 3 °/h.
+    Entry,
+    /// K108, K110, K110M, K120: gyro ARW 0.2 °/√h, bias instability 2 °/h.
+    Mid,
+    /// K210, K220: gyro ARW 0.1 °/√h, bias instability 1 °/h.
+    High,
+}
+
 /// One row of the model table.
 #[derive(Debug, PartialEq, Eq)]
 pub struct ModelSpec {
@@ -137,7 +152,7 @@ pub struct ModelSpec {
     pub internal_rate_hz: u32,
     /// Data command codes the model runs (Table 5.16; 5.2 for K201).
     pub formats: &'static [u8],
-    /// Only the UDD types marked `*` in Table 5.15 (K201, NOTES.md).
+    /// Only the UDD types marked `*` in Table 5.15 (K201, `docs/protocol-facts.md`).
     pub udd_starred_only: bool,
     /// Optional features the model has.
     pub caps: &'static [Capability],
@@ -151,6 +166,8 @@ pub struct ModelSpec {
     /// (K100: pull-up, Table 4.1 note 4; K110M: Table 4.4 pin 9). Others:
     /// held high (note 5).
     pub boot_active_low: bool,
+    /// Grade of the inertial sensors (the sensor error model's spread).
+    pub grade: SensorGrade,
     /// IMU_type byte of GetDevInfo (Table 5.17). The ICD gives no values;
     /// the emulator uses the model number (100, 102, …; 111 for K110M,
     /// 201 wraps to 201) so host software can tell models apart.
@@ -194,6 +211,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: true,
+        grade: SensorGrade::Entry,
         imu_type: 100,
     },
     ModelSpec {
@@ -206,6 +224,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
+        grade: SensorGrade::Entry,
         imu_type: 102,
     },
     ModelSpec {
@@ -218,6 +237,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
+        grade: SensorGrade::Mid,
         imu_type: 108,
     },
     ModelSpec {
@@ -230,6 +250,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
+        grade: SensorGrade::Mid,
         imu_type: 110,
     },
     ModelSpec {
@@ -242,6 +263,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: true,
+        grade: SensorGrade::Mid,
         imu_type: 111,
     },
     ModelSpec {
@@ -254,6 +276,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
+        grade: SensorGrade::Mid,
         imu_type: 120,
     },
     ModelSpec {
@@ -266,6 +289,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: K201_LPF,
         products: G2000_A40,
         boot_active_low: false,
+        grade: SensorGrade::Entry,
         imu_type: 201,
     },
     ModelSpec {
@@ -278,6 +302,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
+        grade: SensorGrade::High,
         imu_type: 210,
     },
     ModelSpec {
@@ -290,6 +315,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
+        grade: SensorGrade::High,
         imu_type: 220,
     },
 ];
@@ -407,6 +433,26 @@ impl Product {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_model_row_carries_its_sensor_grade() {
+        use SensorGrade::*;
+        let expect = [
+            ("K100", Entry),
+            ("K102", Entry),
+            ("K108", Mid),
+            ("K110", Mid),
+            ("K110M", Mid),
+            ("K120", Mid),
+            ("K201", Entry),
+            ("K210", High),
+            ("K220", High),
+        ];
+        assert_eq!(MODELS.len(), expect.len());
+        for (m, (short, grade)) in MODELS.iter().zip(expect) {
+            assert_eq!((m.short, m.grade), (short, grade));
+        }
+    }
 
     #[test]
     fn bare_names_take_the_first_product_code_of_3_2_2() {

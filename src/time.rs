@@ -1,7 +1,7 @@
 //! Time as the core sees it: nanoseconds on the board's monotonic clock.
 //!
 //! The core never reads a clock; every call that needs time receives an
-//! [`Instant`] from the board (DESIGN.md, "One entry point, sans-IO").
+//! [`Instant`] from the board (sans-IO: see the crate front page).
 
 /// A point in time, in nanoseconds since an epoch the board chooses (usually
 /// the moment it powered the device on). Monotonic: boards never go back.

@@ -1,6 +1,7 @@
-//! Every hex string of the ICD (and NOTES.md) is a golden test: decode it,
-//! re-encode it, compare bytes. The vectors are read from
-//! `../shared/spec/vectors.txt` (one `meaning | hex` per line).
+//! Every hex string of the ICD and of the ISB protocol page / vendor SDK is
+//! a golden test: decode it, re-encode it, compare bytes. The vectors are
+//! read from the repository's `tests/data/vectors.txt` (one `meaning | hex`
+//! per line; the facts behind them are in `docs/protocol-facts.md`).
 
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::{self, Decoder};
@@ -12,8 +13,15 @@ fn vectors() -> Vec<(String, Vec<u8>)> {
 
 /// The vectors of one section: KERNEL, or ISB (after `# ISB`).
 fn section(isb: bool) -> Vec<(String, Vec<u8>)> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/spec/vectors.txt");
-    let text = std::fs::read_to_string(path).expect("shared/spec/vectors.txt beside the clone");
+    // The package directory cargo runs the test in (it sets the variable at
+    // run time too), so a binary built from another copy of the tree still
+    // reads this copy's file.
+    let root = std::env::var_os("CARGO_MANIFEST_DIR").map_or_else(
+        || env!("CARGO_MANIFEST_DIR").into(),
+        std::path::PathBuf::from,
+    );
+    let text = std::fs::read_to_string(root.join("tests/data/vectors.txt"))
+        .expect("tests/data/vectors.txt in the repository");
     let mut out = Vec::new();
     let mut in_isb = false;
     for line in text.lines() {
@@ -120,7 +128,7 @@ fn typed_commands_encode_to_the_icd_bytes() {
 
 #[test]
 fn all_11_isb_vectors_are_read() {
-    // 3 from the protocol page, 8 from the vendor SDK (NOTES.md "ISB").
+    // 3 from the protocol page, 8 from the vendor SDK (docs/protocol-facts.md "ISB").
     assert_eq!(section(true).len(), 11);
 }
 

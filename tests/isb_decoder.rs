@@ -1,4 +1,4 @@
-//! The ISB packet decoder (NOTES.md "ISB"): any chunking gives the same
+//! The ISB packet decoder (`docs/protocol-facts.md` "ISB"): any chunking gives the same
 //! packets, a bad checksum or size is dropped silently and the scan resumes
 //! on the next byte, so garbage never hides a good packet.
 

@@ -18,7 +18,7 @@
 //!
 //! The scripts use only the public `Device` entry points (power-on with a
 //! seed and BOOT level, `on_rx`, `on_tick`, `on_pin`, `poll_tx`,
-//! `poll_event`, `tick_period_ns`, `into_flash`) and build their command
+//! `poll_event`, `tick_period_ns`, `tx_dropped`, `into_flash`) and build their command
 //! frames by hand from the ICD (Table 5.2 framing), so they survive a
 //! reorganisation of the crate. A power cycle is a fresh power-on with the
 //! same flash, seed and time line.
@@ -30,7 +30,9 @@
 //! * `tx` — bytes from `poll_tx`, hex, one line per frame (the lines
 //!   concatenated are the exact stream),
 //! * `ev` — an event from `poll_event`,
-//! * `end` — the last tick run.
+//! * `stall` / `resume` — the board stops / starts again reading `poll_tx`
+//!   and `poll_event` (a stalled board lets the TX queue fill),
+//! * `end` — the last tick run, with `tx_dropped`.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -123,6 +125,9 @@ struct Session {
     seed: u64,
     period: u64,
     tick: u64,
+    /// Whether the board reads what the device sends after every step
+    /// (off: a board that stalls, so the TX queue fills).
+    reading: bool,
     out: String,
 }
 
@@ -150,6 +155,7 @@ impl Session {
             seed,
             period: 0,
             tick: 0,
+            reading: true,
             out: String::new(),
         };
         let _ = writeln!(
@@ -201,6 +207,9 @@ impl Session {
     /// Records everything the device has to say now: TX bytes (one line per
     /// frame) and events, in the order the board would take them.
     fn drain(&mut self) {
+        if !self.reading {
+            return;
+        }
         let mut buf = [0u8; 8192];
         loop {
             let n = self.dev().poll_tx(&mut buf);
@@ -233,6 +242,19 @@ impl Session {
                 return;
             }
         }
+    }
+
+    /// The board stops reading TX bytes and events (they queue up).
+    fn stall(&mut self) {
+        self.line("stall", "the board stops reading");
+        self.reading = false;
+    }
+
+    /// The board reads again, and takes everything queued.
+    fn resume(&mut self) {
+        self.line("resume", "the board reads again");
+        self.reading = true;
+        self.drain();
     }
 
     /// Bytes from the host at the current tick's time.
@@ -273,20 +295,22 @@ impl Session {
 
     /// Compares the transcript with its fixture (or rewrites it).
     fn check(mut self, name: &str) {
-        self.line("end", "");
+        let dropped = self.dev().tx_dropped();
+        self.line("end", &format!("tx_dropped {dropped}"));
         let variant = if cfg!(feature = "fixed-point") {
             "fixed"
         } else {
             "float"
         };
-        let path: PathBuf = [
-            env!("CARGO_MANIFEST_DIR"),
-            "tests/data/sessions",
-            variant,
-            &format!("{name}.txt"),
-        ]
-        .iter()
-        .collect();
+        // The package directory cargo runs the test in (set at run time
+        // too), so a binary built from another copy of the tree still
+        // reads this copy's fixtures.
+        let root = std::env::var_os("CARGO_MANIFEST_DIR")
+            .map_or_else(|| env!("CARGO_MANIFEST_DIR").into(), PathBuf::from);
+        let path = root
+            .join("tests/data/sessions")
+            .join(variant)
+            .join(format!("{name}.txt"));
         if std::env::var_os("IMU_EMU_BLESS").is_some_and(|v| v == "1") {
             std::fs::create_dir_all(path.parent().unwrap()).unwrap();
             std::fs::write(&path, &self.out).unwrap();
@@ -756,4 +780,156 @@ fn k100_misc() {
     s.power_on(Some(Level::High));
     s.rx(&cmd(GET_DEV_INFO), "GetDevInfo");
     s.check("k100_misc");
+}
+
+/// K110 with a board that stalls: the TX queue fills and whole frames are
+/// dropped (counted), a reply to a command is dropped too; CommitBaudRate
+/// with bytes queued: the line-rate switch comes after them.
+#[test]
+fn k110_backpressure() {
+    let mut s = Session::new("k110_backpressure", "K110", 1107);
+    s.rx(&cmd(GA), "GA");
+    s.seconds(0.05);
+    s.stall();
+    s.seconds(0.6);
+    s.rx(&cmd(GET_DEV_INFO), "GetDevInfo with the queue full");
+    s.ticks(3);
+    s.resume();
+    s.seconds(0.05);
+    s.stall();
+    s.rx(
+        &save(BAUD_RATE, &[0x0A]),
+        "SaveFlash Baud_Rate 0x0A (921600)",
+    );
+    s.seconds(0.05);
+    s.rx(&cmd(COMMIT_BAUD_RATE), "CommitBaudRate with frames queued");
+    s.seconds(0.02);
+    s.resume();
+    s.seconds(0.02);
+    s.stall();
+    s.rx(&cmd(STOP), "Stop");
+    s.rx(
+        &save(BAUD_RATE, &[0x00]),
+        "SaveFlash Baud_Rate 0x00 (115200)",
+    );
+    s.rx(&cmd(COMMIT_BAUD_RATE), "CommitBaudRate");
+    s.rx(&cmd(GET_BIT), "GetBIT after the switch");
+    s.resume();
+    s.check("k110_backpressure");
+}
+
+/// K110 and a sloppy host: garbage before a frame (its false header holds
+/// the scan until its checksum fails, then the frames inside are found), a
+/// bad checksum, a frame of the device's own type, several frames in one read, Stop five times,
+/// commands mid-stream at 2 Mbaud and 2 kHz, a format switch mid-stream.
+#[test]
+fn k110_robust() {
+    let mut s = Session::new("k110_robust", "K110", 1108);
+    let mut garbage = vec![0x00, 0xFF, 0xAA, 0xAA, 0x55, 0x55, 0xAA, 0x55, 0x00];
+    garbage.extend_from_slice(&cmd(GET_DEV_INFO));
+    s.rx(
+        &garbage,
+        "garbage ending in a false header (its length field holds the scan), then GetDevInfo",
+    );
+    let mut bad = cmd(GET_BIT);
+    bad[8] ^= 0x01;
+    s.rx(&bad, "GetBIT with a bad checksum (dropped)");
+    s.rx(
+        &[0xAA, 0x55, 0x01, 0x00, 0x07, 0x00, 0x12, 0x1A, 0x00],
+        "a type-1 frame (ignored)",
+    );
+    let mut two = cmd(GET_BIT);
+    two.extend_from_slice(&read(DATA_RATE, 2));
+    s.rx(&two, "GetBIT and ReadRAM in one read");
+    let stops: Vec<u8> = (0..5).flat_map(|_| cmd(STOP)).collect();
+    s.rx(&stops, "Stop five times");
+    s.rx(
+        &save(BAUD_RATE, &[0x0B]),
+        "SaveFlash Baud_Rate 0x0B (2 Mbaud)",
+    );
+    s.rx(&cmd(COMMIT_BAUD_RATE), "CommitBaudRate");
+    s.rx(
+        &save(DATA_RATE, &2000u16.to_le_bytes()),
+        "SaveFlash Data_Rate 2000",
+    );
+    s.rx(&cmd(GA), "GA at 2 kHz");
+    s.ticks(10);
+    s.rx(&cmd(GET_BIT), "GetBIT mid-stream");
+    s.ticks(3);
+    s.rx(&read(DATA_RATE, 2), "ReadRAM Data_Rate mid-stream");
+    s.rx(
+        &save(DATA_RATE, &500u16.to_le_bytes()),
+        "SaveFlash Data_Rate 500 mid-stream",
+    );
+    s.rx(
+        &read(DATA_RATE, 2),
+        "ReadRAM Data_Rate (RAM unchanged while streaming)",
+    );
+    s.ticks(4);
+    let info = cmd(GET_DEV_INFO);
+    s.rx(&info[..3], "GetDevInfo, 3 bytes");
+    s.ticks(1);
+    s.rx(&info[3..], "GetDevInfo, the rest");
+    s.ticks(2);
+    s.rx(&cmd(GAM), "GAm mid-stream (switch, new Data_Rate)");
+    s.ticks(12);
+    s.rx(&cmd(GAM), "GAm again (restart)");
+    s.ticks(6);
+    s.rx(&stops, "Stop five times");
+    s.ticks(20);
+    s.check("k110_robust");
+}
+
+/// K220 (high grade, aux accelerometer): GAA and a UDD configuration with
+/// the aux and filtered high-g types.
+#[test]
+fn k220_aux() {
+    let mut s = Session::new("k220_aux", "K220", 2202);
+    s.rx(&cmd(GET_DEV_INFO), "GetDevInfo");
+    s.rx(&cmd(GAA), "GAA");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.rx(
+        &frame(&[UDD_CONFIG, 4, 0x02, 0x2F, 0x92, 0x2E]),
+        "UDD config aux, filtered high-g, gyro bias",
+    );
+    s.rx(&cmd(UDD), "UDD");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k220_aux");
+}
+
+/// K210 (high grade, no aux accelerometer): GAAm (aux fields zero), GA at
+/// 200 Hz.
+#[test]
+fn k210_ga() {
+    let mut s = Session::new("k210_ga", "K210", 2101);
+    s.rx(&cmd(GAAM), "GAAm (no aux accelerometer: zero)");
+    s.seconds(0.05);
+    s.rx(
+        &save(DATA_RATE, &200u16.to_le_bytes()),
+        "SaveFlash Data_Rate 200",
+    );
+    s.rx(&cmd(GA), "GA (switch, 200 Hz)");
+    s.seconds(0.1);
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k210_ga");
+}
+
+/// K110M: BOOT is active low (Table 4.4 pin 9), so high is a normal start.
+#[test]
+fn k110m_boot() {
+    let mut s = Session::new("k110m_boot", "K110M", 1110);
+    s.rx(&save(AUTO_START, &[GAM]), "SaveFlash Auto_Start GAm");
+    s.power_on(Some(Level::Low));
+    s.rx(
+        &cmd(GET_DEV_INFO),
+        "GetDevInfo in firmware update (no answer)",
+    );
+    s.seconds(0.03);
+    s.power_on(Some(Level::High));
+    s.seconds(0.05);
+    s.rx(&cmd(GET_DEV_INFO), "GetDevInfo mid-stream");
+    s.rx(&cmd(STOP), "Stop");
+    s.check("k110m_boot");
 }

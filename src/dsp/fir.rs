@@ -18,7 +18,8 @@
 //! Coefficients are computed at compile time by `const fn` (own Taylor
 //! sine/cosine in f64): no run-time cost, they live in flash. Every stage is
 //! symmetric, so the phase is exactly linear and the group delay is N/2
-//! samples = N/(2·f_s), Table 5.29's delay (NOTES.md). The stop band beyond
+//! samples = N/(2·f_s), Table 5.29's delay
+//! (`docs/protocol-facts.md`). The stop band beyond
 //! 3.2× the bandwidth is at least 64 dB down.
 //!
 //! **Two-stage (interpolated) structure for the long orders.** Orders 192

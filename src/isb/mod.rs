@@ -1,5 +1,6 @@
 //! The Inertial Sense ISB protocol, the second device personality
-//! (`shared/spec/isb-protocol.txt`, facts in NOTES.md "ISB").
+//! (the Inertial Sense ISB protocol page, protocol 2.1; the facts the code uses
+//! are in `docs/protocol-facts.md` "ISB").
 //!
 //! So far the wire layer: [`packet`] (header, checksum, encoding, the
 //! streaming decoder). The device behind it (data sets, GET/SET, RMC

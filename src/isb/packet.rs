@@ -1,4 +1,5 @@
-//! ISB packets (ISB protocol page "Packet structure"; NOTES.md "ISB").
+//! ISB packets (ISB protocol page "Packet structure";
+//! `docs/protocol-facts.md` "ISB").
 //!
 //! `EF 49 | flags | did | size u16 LE | payload | a b`: the low nibble of
 //! `flags` is the [`PacketType`]; flag [`FLAG_OFFSET`] means the payload

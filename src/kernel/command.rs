@@ -19,7 +19,7 @@ pub const UDD_CONFIG: u8 = 0x96;
 pub const GET_UDD_STRUCT: u8 = 0x97;
 /// CommitBaudRate (5.3.9).
 pub const COMMIT_BAUD_RATE: u8 = 0xC2;
-/// Vendor INS SDK "device parameters" request (NOTES.md; not in the ICD).
+/// Vendor INS SDK "device parameters" request (`docs/protocol-facts.md`; not in the ICD).
 pub const DEVICE_PARAMETERS: u8 = 0x41;
 
 /// A command, borrowing value bytes from the frame.
@@ -36,7 +36,8 @@ pub enum Command<'a> {
     /// User_Def_Data_config: the configuration message follows.
     UddConfig,
     /// The configuration message (Table 5.19 payload `N, list…`), with or
-    /// without a leading 0x96 (NOTES.md: both accepted).
+    /// without a leading 0x96 (`docs/protocol-facts.md`
+    /// "KERNEL User Defined Data": both accepted).
     UddConfigMessage(&'a [u8]),
     /// Get_User_Def_Data_struct.
     GetUddStruct,

@@ -259,7 +259,7 @@ impl Kernel {
         let parsed = Command::parse(payload);
         if core::mem::take(&mut self.udd_pending) {
             // The message after User_Def_Data_config is the configuration,
-            // unless it is itself a command (5.3.5, NOTES.md).
+            // unless it is itself a command (5.3.5, docs/protocol-facts.md).
             match parsed {
                 Ok(Command::Unknown(_)) | Err(_) => return self.udd_config(sh, payload, checksum),
                 _ => {}
@@ -458,13 +458,11 @@ impl Kernel {
     }
 
     fn start_stream<F: NorFlash>(&mut self, sh: &mut Shell<F>, code: u8) {
-        let orientation = match formats::find(code) {
-            Some(f) => f.orientation,
-            None => self
-                .udd_config_now(sh)
-                .iter()
-                .any(|&c| udd::find(c).is_some_and(|t| t.orientation)),
-        };
+        let layout = self.layout(sh, code);
+        let divisor = self.divisor_for(sh, &layout);
+        // A stream with orientation starts after the initial alignment
+        // (5.3.1).
+        let orientation = layout.attitude;
         let align_s = u64::from(params::INITIAL_ALIGNMENT_TIME.read_int(&self.ram));
         let product = sh.product();
         let internal = u64::from(product.model.internal_rate_hz);
@@ -478,8 +476,6 @@ impl Kernel {
                 chain.skip_alignment();
             }
         }
-        let layout = self.layout(sh, code);
-        let divisor = self.divisor_for(sh, &layout);
         // The first frame's "1PPS received between the last and current
         // frame" (Table 5.8 time flags) covers the time since this data
         // command: a 1PPS edge while idle is not reported (README
@@ -552,7 +548,7 @@ impl Kernel {
         }
     }
 
-    /// Reply to the vendor INS SDK's 0x41 request (NOTES.md): 60 bytes.
+    /// Reply to the vendor INS SDK's 0x41 request (docs/protocol-facts.md): 60 bytes.
     fn device_parameters(&self) -> [u8; 60] {
         let mut p = [0u8; 60];
         let rate = params::DATA_RATE.read_int(&self.ram) as u16;

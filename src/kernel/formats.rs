@@ -15,9 +15,6 @@ pub struct FormatSpec {
     pub name: &'static str,
     /// Payload layout, in order.
     pub fields: &'static [Field],
-    /// Carries orientation or quaternion: starts after initial alignment
-    /// (5.3.1).
-    pub orientation: bool,
 }
 
 /// The seven fixed formats.
@@ -27,7 +24,6 @@ pub static FORMATS: &[FormatSpec] = &[
     FormatSpec {
         code: 0x33,
         name: "Orientation",
-        orientation: true,
         fields: &[
             Euler,
             Gyro,
@@ -43,28 +39,24 @@ pub static FORMATS: &[FormatSpec] = &[
     FormatSpec {
         code: 0x8F,
         name: "GA",
-        orientation: false,
         fields: &[GyroHr, AccHr, Counter, Usw, Zero(2), Temperature],
     },
     // Table 5.8: gyro HR, acc HR, time flag, second fraction, temperature — 32.
     FormatSpec {
         code: 0x9B,
         name: "GAm",
-        orientation: false,
         fields: &[GyroHr, AccHr, TimeFlags, SecondFraction, Temperature],
     },
     // Table 5.11: gyro, acc1, acc2 (aux), reserved, USW, reserved, temp — 44.
     FormatSpec {
         code: 0xA5,
         name: "GAA",
-        orientation: false,
         fields: &[GyroHr, AccHr, AuxAccHr, Zero(2), Usw, Zero(2), Temperature],
     },
     // Table 5.12: gyro, acc1, acc2, time flag, second fraction, temp — 44.
     FormatSpec {
         code: 0xA6,
         name: "GAAm",
-        orientation: false,
         fields: &[
             GyroHr,
             AccHr,
@@ -79,7 +71,6 @@ pub static FORMATS: &[FormatSpec] = &[
     FormatSpec {
         code: 0x82,
         name: "Quaternion",
-        orientation: true,
         fields: &[Euler, Quat, Zero(14), Usw, Zero(2), Temperature],
     },
     // Table 5.10: HR angles, gyro HR, acc HR, mag 0, counter, reserved, USW,
@@ -87,7 +78,6 @@ pub static FORMATS: &[FormatSpec] = &[
     FormatSpec {
         code: 0x81,
         name: "Calibrated HR",
-        orientation: true,
         fields: &[
             EulerHr,
             GyroHr,
@@ -117,6 +107,13 @@ impl FormatSpec {
     pub fn payload_len(&self) -> usize {
         super::fields::payload_len(self.fields)
     }
+
+    /// Whether the format carries the orientation (a field with Euler
+    /// angles or the quaternion, [`Field::is_attitude`]): such a stream
+    /// starts after the initial alignment (5.3.1).
+    pub fn carries_attitude(&self) -> bool {
+        self.fields.iter().any(|f| f.is_attitude())
+    }
 }
 
 /// Payload of the AutoStart announcement (section 6): the message
@@ -141,5 +138,16 @@ mod tests {
         for (code, len) in expect {
             assert_eq!(find(code).unwrap().payload_len(), len, "{code:#x}");
         }
+    }
+
+    #[test]
+    fn orientation_quaternion_and_calibrated_hr_carry_the_attitude() {
+        // 5.3.1: these three wait for the initial alignment.
+        let with: std::vec::Vec<u8> = FORMATS
+            .iter()
+            .filter(|f| f.carries_attitude())
+            .map(|f| f.code)
+            .collect();
+        assert_eq!(with, [0x33, 0x82, 0x81]);
     }
 }

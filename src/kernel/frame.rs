@@ -1,4 +1,5 @@
-//! KERNEL framing (ICD Table 5.2, Table 5.3; NOTES.md "framing").
+//! KERNEL framing (ICD Table 5.2, Table 5.3; `docs/protocol-facts.md`
+//! "KERNEL framing").
 //!
 //! `AA 55 | type | id | len u16 LE | payload | sum u16 LE`, where
 //! `len = payload_len + 6` and `sum` is the wrapping 16-bit sum of every byte

@@ -1,5 +1,6 @@
 //! The KERNEL protocol personality (ICD section 5, Appendix A).
 
+pub mod block;
 pub mod command;
 pub mod device;
 pub mod fields;

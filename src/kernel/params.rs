@@ -1,4 +1,5 @@
-//! The parameter block (ICD 5.3.7 Table 5.24, cleaned in NOTES.md) — every
+//! The parameter block (ICD 5.3.7 Table 5.24, cleaned in
+//! `docs/protocol-facts.md`) — every
 //! parameter is one row of [`PARAMS`].
 //!
 //! A parameter ID is the byte offset of the parameter in the device's
@@ -8,12 +9,7 @@
 
 use crate::model::{Capability, Product};
 
-/// Length of the parameter block (the highest ID, Hold-off_Time 0x05FE,
-/// ends at 0x0600).
-pub const BLOCK_LEN: usize = crate::store::PARAM_BLOCK_LEN;
-
-/// The parameter block: all parameters at their ID offsets, LSB first.
-pub type Block = [u8; BLOCK_LEN];
+pub use super::block::{Block, BLOCK_LEN, UDD_CONFIG_OFFSET, UDD_MAX_TYPES};
 
 /// Value type of a parameter (Table 5.24 "Value").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -300,13 +296,6 @@ pub static PARAMS: &[ParamSpec] = &[
     POLARITY,
     HOLD_OFF_TIME,
 ];
-
-/// Emulator-private region of the block (no Table 5.24 ID points into it,
-/// so SaveFlash/ReadRAM cannot reach it): the UDD configuration (5.3.5),
-/// `N` then up to [`UDD_MAX_TYPES`] type codes, persisted with the rest.
-pub const UDD_CONFIG_OFFSET: usize = 0x0100;
-/// Most UDD types in one configuration (the Table 5.20 bitmap has 16 bits).
-pub const UDD_MAX_TYPES: usize = 16;
 
 /// Line rates of the Baud_Rate codes 0x00..=0x10 (Table 5.24).
 pub const BAUD_RATES: [u32; 17] = [

@@ -1,8 +1,8 @@
 //! User Defined Data (ICD 5.2.8, Tables 5.13–5.15, 5.19–5.21): the type
 //! table — one row per type — configuration checking and the config reply.
 
+use super::block::{Block, UDD_CONFIG_OFFSET, UDD_MAX_TYPES};
 use super::fields::Field;
-use super::params::{Block, UDD_CONFIG_OFFSET, UDD_MAX_TYPES};
 use crate::model::{Capability, Product};
 
 /// One UDD type of Table 5.15.
@@ -16,10 +16,17 @@ pub struct UddType {
     pub field: Field,
     /// Marked `*` in Table 5.15: the only types a K201 takes (note 5).
     pub starred: bool,
-    /// Model feature the type needs (Table 5.14/5.15 notes, NOTES.md).
+    /// Model feature the type needs (Table 5.14/5.15 notes,
+    /// `docs/protocol-facts.md` "KERNEL numbers that must agree").
     pub requires: Option<Capability>,
-    /// Carries orientation: a UDD stream with it waits for alignment.
-    pub orientation: bool,
+}
+
+impl UddType {
+    /// Whether the type carries the orientation ([`Field::is_attitude`]):
+    /// a UDD stream with it waits for the initial alignment (5.3.1).
+    pub fn carries_attitude(&self) -> bool {
+        self.field.is_attitude()
+    }
 }
 
 const fn t(
@@ -35,7 +42,6 @@ const fn t(
         field,
         starred,
         requires,
-        orientation: matches!(field, Field::Euler | Field::EulerHr | Field::Quat),
     }
 }
 
@@ -222,7 +228,7 @@ pub fn check(payload: &[u8], product: &Product) -> Checked {
 }
 
 /// The 8-byte reply to a config message (Table 5.20 as corrected in
-/// NOTES.md): checksum of the received message (0 if refused), error bits,
+/// `docs/protocol-facts.md`): checksum of the received message (0 if refused), error bits,
 /// wrong-type bitmap, maximum data rate (u16), reserved.
 pub fn config_reply(checksum: u16, errors: u8, wrong_types: u16, max_rate: u16) -> [u8; 8] {
     let c = checksum.to_le_bytes();
@@ -261,6 +267,16 @@ mod tests {
         for (code, size) in expect {
             assert_eq!(find(code).unwrap().field.size(), size, "{code:#x}");
         }
+    }
+
+    #[test]
+    fn orientation_types_carry_the_attitude() {
+        let with: std::vec::Vec<u8> = UDD_TYPES
+            .iter()
+            .filter(|t| t.carries_attitude())
+            .map(|t| t.code)
+            .collect();
+        assert_eq!(with, [0x07, 0x08, 0x09]);
     }
 
     #[test]

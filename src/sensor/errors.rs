@@ -38,7 +38,7 @@
 use super::rng::Rng;
 use crate::ahrs::rotation::{Mat3, Vec3};
 use crate::dsp::fixed::Coef;
-use crate::model::Product;
+use crate::model::{Product, SensorGrade};
 use libm::{expf, sqrtf};
 
 /// σ_GM / B: makes the Gauss–Markov Allan peak equal 0.6643 · B (module doc).
@@ -130,7 +130,7 @@ pub const fn arw_to_density(arw_deg_per_rt_h: f32) -> f32 {
 
 /// VRW in m/s/√h → noise density in g/√Hz.
 pub const fn vrw_to_density(vrw_m_s_per_rt_h: f32) -> f32 {
-    vrw_m_s_per_rt_h / 60.0 / super::motion::G
+    vrw_m_s_per_rt_h / 60.0 / super::units::G
 }
 
 /// ICD 2.2: "non-orthogonality between axes … in the order of 0.01°".
@@ -175,15 +175,16 @@ const AUX_SPEC: SensorSpec = SensorSpec {
 };
 
 impl ErrorSpec {
-    /// The emulator's default spread for `product`'s model. These are
-    /// plausible values for tactical-grade MEMS IMUs of each class — not
-    /// Inertial Labs datasheet figures; put your unit's datasheet here:
+    /// The emulator's default spread for `product`'s model, by the grade
+    /// its model row carries ([`SensorGrade`]). These are plausible values
+    /// for tactical-grade MEMS IMUs of each class — not Inertial Labs
+    /// datasheet figures; put your unit's datasheet here:
     ///
-    /// | models | gyro ARW °/√h | gyro B °/h | acc VRW m/s/√h | acc B µg |
+    /// | grade (models) | gyro ARW °/√h | gyro B °/h | acc VRW m/s/√h | acc B µg |
     /// |---|---|---|---|---|
-    /// | K100, K102, K201 | 0.24 | 3 | 0.04 | 10 |
-    /// | K108, K110, K110M, K120 | 0.2 | 2 | 0.03 | 7 |
-    /// | K210, K220 | 0.1 | 1 | 0.02 | 5 |
+    /// | Entry (K100, K102, K201) | 0.24 | 3 | 0.04 | 10 |
+    /// | Mid (K108, K110, K110M, K120) | 0.2 | 2 | 0.03 | 7 |
+    /// | High (K210, K220) | 0.1 | 1 | 0.02 | 5 |
     /// | aux (K120, K220) | — | — | 0.3 | 200 |
     ///
     /// All: T_c 100 s; turn-on bias 1σ 0.05 °/s, 1 mg (aux 5 mg); scale
@@ -191,10 +192,10 @@ impl ErrorSpec {
     /// temperature coefficients 1e-4 °/s/°C, 10 µg/°C (aux 100 µg/°C),
     /// 10 ppm/°C (aux 20 ppm/°C).
     pub fn for_product(product: &Product) -> ErrorSpec {
-        let (gyro, acc) = match product.model.short {
-            "K108" | "K110" | "K110M" | "K120" => (gyro_spec(0.2, 2.0), acc_spec(0.03, 7.0)),
-            "K210" | "K220" => (gyro_spec(0.1, 1.0), acc_spec(0.02, 5.0)),
-            _ => (gyro_spec(0.24, 3.0), acc_spec(0.04, 10.0)),
+        let (gyro, acc) = match product.model.grade {
+            SensorGrade::Entry => (gyro_spec(0.24, 3.0), acc_spec(0.04, 10.0)),
+            SensorGrade::Mid => (gyro_spec(0.2, 2.0), acc_spec(0.03, 7.0)),
+            SensorGrade::High => (gyro_spec(0.1, 1.0), acc_spec(0.02, 5.0)),
         };
         ErrorSpec {
             gyro,
@@ -412,16 +413,7 @@ impl TriadEngine {
     }
 }
 
-/// Fraction bits of the fixed-point gyro measurement: 2¹⁹ per °/s (LSB
-/// 1.9e-6 °/s; ±4096 °/s fit an `i32`).
-pub const GYRO_BITS: u32 = 19;
-/// Fraction bits of the fixed-point accelerometer measurements: 2²³ per g
-/// (LSB 1.2e-7 g; ±256 g fit an `i32`).
-pub const ACC_BITS: u32 = 23;
-/// Truth entering the fixed-point engine is clamped to ±2³⁰ (2048 °/s,
-/// 128 g: beyond every range, so the saturation flags still see it), and
-/// each entry of M − I to ±¼, so M·truth cannot overflow.
-pub const TRUTH_LIMIT: i32 = 1 << 30;
+pub use super::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
 
 /// An entry of M − I for the fixed-point engine: clamped to ±¼ (NaN → 0).
 fn delta(x: f32) -> f64 {

@@ -32,8 +32,7 @@ use crate::ahrs::rotation::{
 use crate::math::{cosf, sinf};
 use crate::time::Instant;
 
-/// g in m/s², as the ICD defines it (Table 5.5 note 1).
-pub const G: f32 = 9.8106;
+pub use super::units::G;
 /// Earth rotation rate, °/h (sidereal, 15.041 °/h).
 pub const EARTH_RATE_DEG_PER_H: f32 = 15.041;
 /// Earth rotation rate, rad/s.
@@ -469,7 +468,7 @@ impl MotionSource for BuiltinMotion {
 
 // ----- fixed point (the `fixed-point` build) -----
 
-use super::errors::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+use super::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
 use crate::ahrs::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
 use crate::dsp::fixed::{mul_q30, mul_shr, to_fixed};
 
