@@ -405,6 +405,40 @@ fn data_whole_set_has_no_offset_flag_a_part_has_one() {
     assert_eq!(encode_data(1, &img, 0, 84, &mut out[..91]), None);
 }
 
+#[test]
+fn every_served_set_goes_out_whole_and_in_parts_and_comes_back_through_the_classifier() {
+    for set in &did::DATA_SETS {
+        let img: Vec<u8> = (0..set.size).map(|i| i as u8 ^ set.did).collect();
+        let mut out = [0u8; 400];
+        let mut bytes = Vec::new();
+        let n = encode_data(set.did, &img, 0, set.size, &mut out).unwrap();
+        bytes.extend(&out[..n]);
+        let n = encode_data(set.did, &img, 4, set.size - 4, &mut out).unwrap();
+        bytes.extend(&out[..n]);
+        let mut part = 4u16.to_le_bytes().to_vec();
+        part.extend(&img[4..]);
+        assert_eq!(
+            events(&bytes, &[5]),
+            vec![
+                Ev::Pkt(4, set.did, img.clone()),
+                Ev::Pkt(0x24, set.did, part)
+            ],
+            "{}",
+            set.name
+        );
+        let p = set.source.period_ms(1, 4);
+        assert_eq!(
+            p,
+            match set.did {
+                3 | 58 => 4,
+                _ => 1,
+            },
+            "{}",
+            set.name
+        );
+    }
+}
+
 // ---- FLASH_CONFIG checksum -----------------------------------------------
 
 #[test]
@@ -424,21 +458,24 @@ fn flash_checksum_matches_a_hand_computation() {
     // gpsMinimumElevation 10° (f32 0x3E32B8C2), magInterferenceThreshold
     // 3.0 (0x40400000), magCalibrationQualityThreshold 10.0 (0x41200000),
     // gnssCn0Minimum 30 and gnssCn0DynMinOffset 20 (word 0x0000141E).
-    let hand = 1
-        ^ 1
-        ^ 4
-        ^ 0x000E_1000
-        ^ 0x000E_1000
-        ^ 0x000E_1000
-        ^ 8
-        ^ 0x46
-        ^ 1000
-        ^ 200
-        ^ 0x33
-        ^ 0x3E32_B8C2
-        ^ 0x4040_0000
-        ^ 0x4120_0000
-        ^ 0x0000_141E;
+    let words: [u32; 15] = [
+        1,
+        1,
+        4,
+        0x000E_1000,
+        0x000E_1000,
+        0x000E_1000,
+        8,
+        0x46,
+        1000,
+        200,
+        0x33,
+        0x3E32_B8C2,
+        0x4040_0000,
+        0x4120_0000,
+        0x0000_141E,
+    ];
+    let hand = words.iter().fold(0, |x, w| x ^ w);
     assert_eq!(hand, 0x3F5C_BF85);
     let cfg = FlashConfig::factory();
     assert_eq!(cfg.checksum(), hand);

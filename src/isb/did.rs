@@ -77,6 +77,19 @@ pub enum Source {
     Millisecond,
 }
 
+impl Source {
+    /// The source period in ms for these FLASH_CONFIG values
+    /// (`startupImuDtMs`, `startupNavDtMs`); a stream with period multiple
+    /// `n` sends every `n ×` this.
+    pub const fn period_ms(self, startup_imu_dt_ms: u32, startup_nav_dt_ms: u32) -> u32 {
+        match self {
+            Source::NavDt => startup_nav_dt_ms,
+            Source::ImuDt => startup_imu_dt_ms,
+            Source::Millisecond => 1,
+        }
+    }
+}
+
 /// A half-open byte range `[start, end)` inside a data set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Range {

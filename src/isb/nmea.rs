@@ -249,7 +249,9 @@ impl<const CAP: usize> Input<CAP> {
         self.mode != Mode::Idle
     }
 
-    /// Drops whatever part of a message is held (e.g. after an idle gap).
+    /// Drops whatever part of a message is held (e.g. after an idle gap);
+    /// the bytes of an ISB candidate are dropped one by one, each counted in
+    /// [`Input::isb_errors`], so none of them is rescanned later.
     pub fn abandon(&mut self) {
         match self.mode {
             Mode::Isb => {
