@@ -2,8 +2,21 @@
 //! (the Inertial Sense ISB protocol page, protocol 2.1; the facts the code uses
 //! are in `docs/protocol-facts.md` "ISB").
 //!
-//! So far the wire layer: [`packet`] (header, checksum, encoding, the
-//! streaming decoder). The device behind it (data sets, GET/SET, RMC
-//! streaming) is not built yet.
+//! The protocol layer, pure and table-driven, no device yet:
+//! - [`packet`]: header, checksum, encoding, the streaming decoder;
+//! - [`did`]: DID numbers and the table of the data sets the emulated
+//!   IMX-5 (IMU mode) serves, with the NACK rule;
+//! - [`sets`]: byte layouts of those data sets, status bits, RMC bits and
+//!   options, FLASH_CONFIG defaults and checksum (`docs/isb-data-sets.md`);
+//! - [`message`]: GET_DATA / SET_DATA / stop requests, ACK / NACK and DATA
+//!   encoders;
+//! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
+//!   and [`nmea::Input`], the one place every received byte goes.
+//!
+//! The device behind it (streams, RMC, flash persistence) is not built yet.
 
+pub mod did;
+pub mod message;
+pub mod nmea;
 pub mod packet;
+pub mod sets;

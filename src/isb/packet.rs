@@ -119,6 +119,34 @@ pub fn encode(flags: u8, did: u8, payload: &[u8], out: &mut [u8]) -> Option<usiz
     Some(total)
 }
 
+/// Encodes a packet whose payload is `prefix` then `data` (e.g. the `u16`
+/// offset of a [`FLAG_OFFSET`] payload, then the data) into `out` without
+/// assembling the payload first; returns its length, or `None` if `out` is
+/// too small or the packet longer than [`MAX_PACKET`].
+pub fn encode_parts(
+    flags: u8,
+    did: u8,
+    prefix: &[u8],
+    data: &[u8],
+    out: &mut [u8],
+) -> Option<usize> {
+    let len = prefix.len().checked_add(data.len())?;
+    let total = len.checked_add(OVERHEAD)?;
+    if total > MAX_PACKET {
+        return None;
+    }
+    let out = out.get_mut(..total)?;
+    out[..2].copy_from_slice(&PREAMBLE);
+    out[2] = flags;
+    out[3] = did;
+    out[4..6].copy_from_slice(&(len as u16).to_le_bytes());
+    out[6..6 + prefix.len()].copy_from_slice(prefix);
+    out[6 + prefix.len()..6 + len].copy_from_slice(data);
+    let sum = checksum(&out[..6 + len]);
+    out[6 + len..].copy_from_slice(&sum);
+    Some(total)
+}
+
 /// The ISB rules for the shared [`Scanner`].
 #[derive(Debug, Clone, Copy)]
 pub struct Isb;

@@ -1,0 +1,307 @@
+//! Data set identifiers (DIDs) and the table of the data sets the emulated
+//! IMX-5 in IMU mode serves (NOTES.md "ISB"; the SDK's `data_sets.h`,
+//! protocol 2.1; `docs/isb-data-sets.md` has every layout with offsets).
+//!
+//! One [`DataSet`] row per supported DID says how big the set is, which
+//! source period its streams count in ([`Source`]), which bytes a SET_DATA
+//! may change ([`DataSet::writable`]) and its RMC bit. The rule for DIDs
+//! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
+//! DID 95, silence for any other DID the table does not hold.
+
+use super::sets;
+
+/// Count of DIDs (including the null DID 0): `DID_COUNT` in `data_sets.h`.
+/// A GET or SET of a DID at or above it is NACKed (NOTES.md "ISB").
+pub const DID_COUNT: u16 = 132;
+
+/// Null (invalid) DID.
+pub const NULL: u8 = 0;
+/// `dev_info_t`: device information (NOTES.md "ISB").
+pub const DEV_INFO: u8 = 1;
+/// `system_fault_t`: system fault information (not served).
+pub const SYS_FAULT: u8 = 2;
+/// `pimu_t`: preintegrated IMU (coning and sculling integrals).
+pub const PIMU: u8 = 3;
+/// `ins_1_t`: INS output, Euler (not served in IMU mode).
+pub const INS_1: u8 = 4;
+/// `ins_2_t`: INS output, quaternion (not served in IMU mode).
+pub const INS_2: u8 = 5;
+/// `system_command_t`: system commands.
+pub const SYS_CMD: u8 = 7;
+/// `rmc_t`: realtime message controller.
+pub const RMC: u8 = 9;
+/// `sys_params_t`: system parameters.
+pub const SYS_PARAMS: u8 = 10;
+/// `sys_sensors_t`: system sensors (not served).
+pub const SYS_SENSORS: u8 = 11;
+/// `nvm_flash_cfg_t`: flash configuration.
+pub const FLASH_CONFIG: u8 = 12;
+/// `magnetometer_t` (not served: no magnetometer in the model).
+pub const MAGNETOMETER: u8 = 52;
+/// `barometer_t` (not served: no barometer in the model).
+pub const BAROMETER: u8 = 53;
+/// `imu3_t` uncalibrated triple IMU (not served).
+pub const IMU3_UNCAL: u8 = 57;
+/// `imu_t`: IMU data at the navigation period.
+pub const IMU: u8 = 58;
+/// `bit_t`: built-in self-test.
+pub const BIT: u8 = 64;
+/// `strobe_in_time_t`: time stamp of a strobe input (EXTRIG) edge.
+pub const STROBE_IN_TIME: u8 = 68;
+/// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (NOTES.md: the
+/// IMX firmware counts DIDs only to 100 and answers 95 with a NACK).
+pub const REFERENCE_IMU: u8 = 95;
+/// `imu3_t` triple IMU (not served).
+pub const IMU3_RAW: u8 = 96;
+/// `imu_t`: IMU data at the IMU sample period.
+pub const IMU_RAW: u8 = 97;
+/// GPX flash configuration (not served: no GPX on board; the vendor tool
+/// asks for it and tolerates silence).
+pub const GPX_FLASH_CFG: u8 = 121;
+/// GPX status (not served, as [`GPX_FLASH_CFG`]).
+pub const GPX_STATUS: u8 = 123;
+
+/// The period a stream of a data set counts in: a GET_DATA `period` is a
+/// multiple of it (ISB page "Data Source Update Rates"; NOTES.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// `FLASH_CONFIG.startupNavDtMs` (default 4 ms): IMU and PIMU. The
+    /// page's table says `startupImuDtMs`; the SDK and NOTES.md say
+    /// `startupNavDtMs` — the SDK is followed (NOTES.md "ISB").
+    NavDt,
+    /// `FLASH_CONFIG.startupImuDtMs` (default 1 ms): IMU_RAW, which
+    /// `data_sets.h` describes as the IMU data for periods faster than the
+    /// navigation period.
+    ImuDt,
+    /// 1 ms: every other DID (ISB page, "All other DIDs 1ms").
+    Millisecond,
+}
+
+impl Source {
+    /// The source period in ms for these FLASH_CONFIG values
+    /// (`startupImuDtMs`, `startupNavDtMs`); a stream with period multiple
+    /// `n` sends every `n ×` this.
+    pub const fn period_ms(self, startup_imu_dt_ms: u32, startup_nav_dt_ms: u32) -> u32 {
+        match self {
+            Source::NavDt => startup_nav_dt_ms,
+            Source::ImuDt => startup_imu_dt_ms,
+            Source::Millisecond => 1,
+        }
+    }
+}
+
+/// A half-open byte range `[start, end)` inside a data set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Range {
+    /// First byte.
+    pub start: u16,
+    /// One past the last byte.
+    pub end: u16,
+}
+
+impl Range {
+    /// The range `[start, end)`.
+    pub const fn new(start: u16, end: u16) -> Self {
+        Range { start, end }
+    }
+
+    /// Whether byte `i` lies in the range.
+    pub const fn contains(&self, i: u16) -> bool {
+        self.start <= i && i < self.end
+    }
+}
+
+/// One data set the emulated IMX serves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DataSet {
+    /// Its DID.
+    pub did: u8,
+    /// The C type name in `data_sets.h`, for diagnostics.
+    pub name: &'static str,
+    /// Size of the packed struct, bytes.
+    pub size: u16,
+    /// What a stream period multiplies.
+    pub source: Source,
+    /// The byte ranges a SET_DATA may change; every other byte is read-only
+    /// (a SET may only carry its current value there, see
+    /// [`crate::isb::message::apply_set`]).
+    pub writable: &'static [Range],
+    /// Its bit in `rmc_t.bits`, 0 when it has none.
+    pub rmc_bit: u64,
+}
+
+impl DataSet {
+    /// Whether byte `i` of the set may be changed by a SET_DATA.
+    pub fn is_writable(&self, i: u16) -> bool {
+        self.writable.iter().any(|r| r.contains(i))
+    }
+}
+
+const NONE: &[Range] = &[];
+const ALL_RMC: &[Range] = &[Range::new(0, sets::rmc::SIZE as u16)];
+const ALL_SYS_CMD: &[Range] = &[Range::new(0, sets::sys_cmd::SIZE as u16)];
+/// SYS_PARAMS: only `genFaultCode` ("set to zero to reset fault code",
+/// `data_sets.h`); the rest is the device's report.
+const SYS_PARAMS_W: &[Range] = &[Range::new(
+    sets::sys_params::GEN_FAULT_CODE as u16,
+    sets::sys_params::GEN_FAULT_CODE as u16 + 4,
+)];
+/// FLASH_CONFIG: everything but `size`. The `checksum` word is accepted
+/// (the vendor tool's `-flashCfg=` path uploads the checksum it computed
+/// itself, NOTES.md) but the device recomputes it after every write, so
+/// what stays is always the XOR of bytes 8..287.
+const FLASH_W: &[Range] = &[Range::new(
+    sets::flash::CHECKSUM as u16,
+    sets::flash::SIZE as u16,
+)];
+/// BIT: the `command` byte starts a test; the rest is the result.
+const BIT_W: &[Range] = &[Range::new(0, 1)];
+
+/// The data sets of the emulated IMX-5 in IMU mode, by DID.
+pub const DATA_SETS: [DataSet; 10] = [
+    DataSet {
+        did: DEV_INFO,
+        name: "dev_info_t",
+        size: sets::dev_info::SIZE as u16,
+        source: Source::Millisecond,
+        writable: NONE,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: PIMU,
+        name: "pimu_t",
+        size: sets::pimu::SIZE as u16,
+        source: Source::NavDt,
+        writable: NONE,
+        rmc_bit: sets::rmc::BITS_PIMU,
+    },
+    DataSet {
+        did: SYS_CMD,
+        name: "system_command_t",
+        size: sets::sys_cmd::SIZE as u16,
+        source: Source::Millisecond,
+        writable: ALL_SYS_CMD,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: RMC,
+        name: "rmc_t",
+        size: sets::rmc::SIZE as u16,
+        source: Source::Millisecond,
+        writable: ALL_RMC,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: SYS_PARAMS,
+        name: "sys_params_t",
+        size: sets::sys_params::SIZE as u16,
+        source: Source::Millisecond,
+        writable: SYS_PARAMS_W,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: FLASH_CONFIG,
+        name: "nvm_flash_cfg_t",
+        size: sets::flash::SIZE as u16,
+        source: Source::Millisecond,
+        writable: FLASH_W,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: IMU,
+        name: "imu_t",
+        size: sets::imu::SIZE as u16,
+        source: Source::NavDt,
+        writable: NONE,
+        rmc_bit: sets::rmc::BITS_IMU,
+    },
+    DataSet {
+        did: BIT,
+        name: "bit_t",
+        size: sets::bit::SIZE as u16,
+        source: Source::Millisecond,
+        writable: BIT_W,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: STROBE_IN_TIME,
+        name: "strobe_in_time_t",
+        size: sets::strobe::SIZE as u16,
+        source: Source::Millisecond,
+        writable: NONE,
+        rmc_bit: sets::rmc::BITS_STROBE_IN_TIME,
+    },
+    DataSet {
+        did: IMU_RAW,
+        name: "imu_t",
+        size: sets::imu::SIZE as u16,
+        source: Source::ImuDt,
+        writable: NONE,
+        rmc_bit: sets::rmc::BITS_IMU_RAW,
+    },
+];
+
+/// The table row of `did`, if the emulated IMX serves it.
+pub fn lookup(did: u16) -> Option<&'static DataSet> {
+    DATA_SETS.iter().find(|s| u16::from(s.did) == did)
+}
+
+/// Whether a GET_DATA or SET_DATA of `did` is answered with a NACK: DID ≥
+/// [`DID_COUNT`] (NOTES.md "ISB") and DID 95 (NOTES.md "what the vendor's
+/// command-line tool needs").
+pub const fn is_nacked(did: u16) -> bool {
+    did >= DID_COUNT || did == REFERENCE_IMU as u16
+}
+
+/// How the device treats a request for a DID.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Class {
+    /// Answer with a NACK ([`is_nacked`]).
+    Nack,
+    /// In range but not served: no reply at all (NOTES.md "ISB").
+    Unsupported,
+    /// Served: its table row.
+    Supported(&'static DataSet),
+}
+
+/// Classifies a DID ([`Class`]).
+pub fn classify(did: u16) -> Class {
+    if is_nacked(did) {
+        return Class::Nack;
+    }
+    match lookup(did) {
+        Some(s) => Class::Supported(s),
+        None => Class::Unsupported,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_nack_rule() {
+        assert!(is_nacked(132));
+        assert!(is_nacked(255));
+        assert!(is_nacked(0xFFFF));
+        assert!(is_nacked(95));
+        assert!(!is_nacked(131));
+        assert!(!is_nacked(94));
+        assert!(!is_nacked(0));
+        assert_eq!(classify(0), Class::Unsupported);
+        assert_eq!(classify(121), Class::Unsupported);
+        assert_eq!(classify(95), Class::Nack);
+        assert!(matches!(classify(58), Class::Supported(s) if s.size == 36));
+    }
+
+    #[test]
+    fn every_row_is_consistent() {
+        for s in &DATA_SETS {
+            assert!(u16::from(s.did) < DID_COUNT && !is_nacked(u16::from(s.did)));
+            assert_eq!(lookup(u16::from(s.did)), Some(s));
+            for r in s.writable {
+                assert!(r.start < r.end && r.end <= s.size, "{}", s.name);
+            }
+        }
+    }
+}
