@@ -237,18 +237,21 @@ impl<const N: usize> Schedule<N> {
         if next <= now {
             return Some(now);
         }
-        let mut at = dev
+        let at = dev
             .ticks_to_next_output()
             .map(|k| (self.ticks + k.max(1)).saturating_mul(self.period_ns));
-        let queued = dev.tx_len();
-        if queued > 0 {
-            let line = self.pacer.ready_at(queued).max(now);
-            at = Some(at.map_or(line, |a| a.min(line)));
+        let line = if self.pending_rate.is_some() {
+            // The line waits for the UART to go idle: look again at the
+            // next tick.
+            Some(next)
+        } else {
+            let queued = dev.tx_len();
+            (queued > 0).then(|| self.pacer.ready_at(queued).max(now))
+        };
+        match (at, line) {
+            (Some(a), Some(l)) => Some(a.min(l)),
+            (a, l) => a.or(l),
         }
-        if self.pending_rate.is_some() {
-            at = Some(at.map_or(next, |a| a.min(next)));
-        }
-        at
     }
 
     /// Acts on the device's pending events (after a power cycle, a pin
@@ -312,5 +315,253 @@ impl<const N: usize> Schedule<N> {
             sent += n;
         }
         Ok(sent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::model::Product;
+    use crate::nor::RamNor;
+
+    type Dev = Device<RamNor<8192>>;
+
+    /// A board that records what the schedule did.
+    #[derive(Default)]
+    struct Fake {
+        rx: Vec<u8>,
+        tx: Vec<u8>,
+        /// (bytes written before, new rate) of every line-rate switch.
+        rates: Vec<(usize, u32)>,
+        /// Deadline of every tick run.
+        ticks: Vec<u64>,
+        busy: bool,
+    }
+
+    impl Port<RamNor<8192>> for Fake {
+        type Error = core::convert::Infallible;
+        fn tx_room(&mut self) -> usize {
+            usize::MAX
+        }
+        fn write(&mut self, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.tx.extend_from_slice(bytes);
+            Ok(())
+        }
+        fn tx_idle(&mut self) -> bool {
+            !self.busy
+        }
+        fn set_line_rate(&mut self, bps: u32) -> Result<(), Self::Error> {
+            self.rates.push((self.tx.len(), bps));
+            Ok(())
+        }
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+            let n = buf.len().min(self.rx.len());
+            buf[..n].copy_from_slice(&self.rx[..n]);
+            self.rx.drain(..n);
+            Ok(n)
+        }
+        fn tick(&mut self, dev: &mut Dev, deadline: Instant) -> Result<(), Self::Error> {
+            self.ticks.push(deadline.as_nanos());
+            dev.on_tick(deadline);
+            Ok(())
+        }
+    }
+
+    const ALL: Limits = Limits {
+        max_ticks: u32::MAX,
+        max_rx: usize::MAX,
+        early_ns: 0,
+    };
+
+    fn k110() -> Dev {
+        Device::power_on(
+            Product::parse("K110").unwrap(),
+            RamNor::new(),
+            Instant::ZERO,
+        )
+    }
+
+    /// A command frame (ICD Table 5.2, type 0, id 0).
+    fn command(payload: &[u8]) -> Vec<u8> {
+        let len = (payload.len() + 6) as u16;
+        let mut f = std::vec![0xAA, 0x55, 0, 0];
+        f.extend_from_slice(&len.to_le_bytes());
+        f.extend_from_slice(payload);
+        let s = f[2..]
+            .iter()
+            .fold(0u16, |s, &x| s.wrapping_add(u16::from(x)));
+        f.extend_from_slice(&s.to_le_bytes());
+        f
+    }
+
+    fn save_flash(id: u16, value: &[u8]) -> Vec<u8> {
+        let mut p = std::vec![0xB2, 0xFF];
+        p.extend_from_slice(&id.to_le_bytes());
+        p.extend_from_slice(&(value.len() as u16).to_le_bytes());
+        p.extend_from_slice(value);
+        command(&p)
+    }
+
+    /// The 2 kHz counters (payload offset 24) of the GA frames (Table 5.6)
+    /// in `tx` after `skip` bytes; panics on anything else.
+    fn ga_counters(tx: &[u8], skip: usize) -> Vec<u16> {
+        tx[skip..]
+            .chunks(40)
+            .filter(|f| f.len() == 40)
+            .map(|f| {
+                assert_eq!(&f[..6], &[0xAA, 0x55, 0x01, 0x8F, 0x26, 0x00]);
+                u16::from_le_bytes([f[30], f[31]])
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ticks_run_on_absolute_deadlines_in_order() {
+        let mut dev = k110();
+        let mut s = Schedule::<64>::new(&dev);
+        let mut p = Fake::default();
+        let pass = s
+            .poll(&mut dev, &mut p, 5 * 500_000 + 499_999, &ALL)
+            .unwrap();
+        assert_eq!((pass.ticks, pass.behind), (5, false));
+        assert_eq!(
+            p.ticks,
+            [500_000, 1_000_000, 1_500_000, 2_000_000, 2_500_000]
+        );
+        assert_eq!(s.time(), 2_999_999);
+        // A tick due a little ahead runs early only with the slack.
+        let early = Limits { early_ns: 1, ..ALL };
+        s.poll(&mut dev, &mut p, 2_999_998, &ALL).unwrap();
+        assert_eq!(s.ticks(), 5);
+        s.poll(&mut dev, &mut p, 2_999_999, &early).unwrap();
+        assert_eq!(p.ticks.last(), Some(&3_000_000));
+    }
+
+    #[test]
+    fn catch_up_is_capped_and_the_line_never_runs_ahead_of_the_ticks_due() {
+        // GA at 250 Hz on 115 200 bit/s: 87 % of the line. A 200 ms stall
+        // caught up 16 ticks a pass must lose no frame.
+        let mut dev = k110();
+        let mut s = Schedule::<64>::new(&dev);
+        let mut rx = save_flash(0x0012, &250u16.to_le_bytes());
+        rx.extend(command(&[0x8F]));
+        let mut p = Fake {
+            rx,
+            ..Fake::default()
+        };
+        let mut now = 0;
+        while now < 500_000_000 {
+            now += 500_000;
+            s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        }
+        now += 200_000_000;
+        let cap = Limits {
+            max_ticks: 16,
+            ..ALL
+        };
+        let mut passes = 0;
+        loop {
+            let pass = s.poll(&mut dev, &mut p, now, &cap).unwrap();
+            passes += 1;
+            if !pass.behind {
+                break;
+            }
+            assert_eq!(pass.ticks, 16);
+            assert_eq!(
+                s.time(),
+                s.ticks() * 500_000,
+                "the line waits for the ticks"
+            );
+            assert_eq!(s.lag(now), now - s.time());
+        }
+        assert_eq!(passes, 25); // 400 ticks due, 16 a pass
+        assert_eq!((s.lag(now), s.time()), (0, now));
+        for _ in 0..2000 {
+            now += 500_000;
+            s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        }
+        assert_eq!(dev.tx_dropped(), 0);
+        let counters = ga_counters(&p.tx, 20);
+        assert!(counters.len() > 420, "{}", counters.len());
+        for w in counters.windows(2) {
+            assert_eq!(w[1].wrapping_sub(w[0]), 8);
+        }
+    }
+
+    #[test]
+    fn input_per_pass_is_bounded() {
+        let mut dev = k110();
+        let mut s = Schedule::<64>::new(&dev);
+        let mut p = Fake {
+            rx: std::vec![0; 10_000],
+            ..Fake::default()
+        };
+        let lim = Limits {
+            max_rx: 4096,
+            ..ALL
+        };
+        assert_eq!(s.poll(&mut dev, &mut p, 0, &lim).unwrap().rx, 4096);
+        assert_eq!(s.poll(&mut dev, &mut p, 0, &lim).unwrap().rx, 4096);
+        assert_eq!(s.poll(&mut dev, &mut p, 0, &lim).unwrap().rx, 1808);
+        assert_eq!(s.poll(&mut dev, &mut p, 0, &lim).unwrap().rx, 0);
+    }
+
+    #[test]
+    fn a_line_rate_switch_follows_the_bytes_queued_before_it() {
+        let mut dev = k110();
+        let mut s = Schedule::<64>::new(&dev);
+        let mut rx = save_flash(0x03B2, &[0x0B]); // Baud_Rate 2 000 000
+        rx.extend(command(&[0xC2])); // CommitBaudRate
+        rx.extend(command(&[0x12])); // GetDevInfo: 174 bytes
+        let mut p = Fake {
+            rx,
+            busy: true,
+            ..Fake::default()
+        };
+        let mut now = 0;
+        for _ in 0..20 {
+            now += 500_000;
+            s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        }
+        // The SaveFlash acknowledgement left at 115 200; the switch waits
+        // for the UART to go idle.
+        assert_eq!((p.tx.len(), p.rates.len(), s.line_rate()), (10, 0, 115_200));
+        assert_eq!(s.poll_at(&dev, now), Some(now + 500_000));
+        p.busy = false;
+        now += 500_000;
+        s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        assert_eq!(p.rates, [(10, 2_000_000)]);
+        // The credit restarted at the switch: 100 bytes a tick at 2 Mbit/s.
+        assert_eq!(p.tx.len(), 10);
+        now += 500_000;
+        s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        assert_eq!(p.tx.len(), 110);
+        now += 500_000;
+        s.poll(&mut dev, &mut p, now, &ALL).unwrap();
+        assert_eq!(p.tx.len(), 184);
+        assert_eq!(&p.tx[10..14], &[0xAA, 0x55, 0x01, 0x12]);
+    }
+
+    #[test]
+    fn poll_at_is_the_next_output_tick_or_when_the_line_carries_the_queue() {
+        let mut dev = k110();
+        let mut s = Schedule::<64>::new(&dev);
+        let mut p = Fake::default();
+        // Idle, nothing queued: nothing scheduled; a due tick: now.
+        assert_eq!(s.poll_at(&dev, 0), None);
+        assert_eq!(s.poll_at(&dev, 500_000), Some(500_000));
+        // GA at 100 Hz: after its acknowledgement, frames every 20 ticks.
+        p.rx = command(&[0x8F]);
+        s.poll(&mut dev, &mut p, 0, &ALL).unwrap();
+        // The 10-byte acknowledgement waits for line credit: 10 bytes at
+        // 115 200 bit/s = ⌈868 055.5⌉ ns.
+        assert_eq!(dev.tx_len(), 10);
+        assert_eq!(s.poll_at(&dev, 0), Some(868_056));
+        s.poll(&mut dev, &mut p, 868_056, &ALL).unwrap();
+        assert_eq!((p.tx.len(), dev.tx_len()), (10, 0));
+        let k = dev.ticks_to_next_output().unwrap();
+        assert_eq!(s.poll_at(&dev, 868_056), Some((s.ticks() + k) * 500_000));
     }
 }
