@@ -115,8 +115,12 @@ pub struct Pass {
 #[derive(Debug, Clone)]
 pub struct Schedule<const N: usize> {
     period_ns: u64,
-    /// Ticks run since power-on; the next deadline is `(ticks + 1) × period`.
+    /// Ticks run since power-on.
     ticks: u64,
+    /// Deadline of the last tick run (0 before the first): `ticks × period`,
+    /// kept by addition (a 64-bit multiply is a library call on a
+    /// Cortex-M0+).
+    last_tick_ns: u64,
     pacer: Pacer,
     /// A line-rate switch waiting for [`Port::tx_idle`].
     pending_rate: Option<u32>,
@@ -132,6 +136,7 @@ impl<const N: usize> Schedule<N> {
         Schedule {
             period_ns: dev.tick_period_ns().max(1),
             ticks: 0,
+            last_tick_ns: 0,
             pacer: Pacer::new(dev.line_rate(), 0),
             pending_rate: None,
             time: 0,
@@ -146,6 +151,7 @@ impl<const N: usize> Schedule<N> {
     pub fn restart<F: NorFlash>(&mut self, dev: &Device<F>) {
         self.period_ns = dev.tick_period_ns().max(1);
         self.ticks = 0;
+        self.last_tick_ns = 0;
         self.pacer = Pacer::new(self.pacer.rate(), 0);
         self.pending_rate = None;
         self.time = 0;
@@ -163,7 +169,7 @@ impl<const N: usize> Schedule<N> {
 
     /// Deadline of the next tick, ns.
     pub fn next_deadline(&self) -> u64 {
-        (self.ticks + 1).saturating_mul(self.period_ns)
+        self.last_tick_ns.saturating_add(self.period_ns)
     }
 
     /// Device time the schedule has reached: the last pass's `now`, or the
@@ -176,7 +182,7 @@ impl<const N: usize> Schedule<N> {
     /// are due (0 when caught up): the backlog a board may cap.
     pub fn lag(&self, now: u64) -> u64 {
         if self.next_deadline() <= now {
-            now - self.ticks.saturating_mul(self.period_ns)
+            now - self.last_tick_ns
         } else {
             0
         }
@@ -204,14 +210,11 @@ impl<const N: usize> Schedule<N> {
             pass.tx += self.pump(dev, port, deadline)?;
             port.tick(dev, at)?;
             self.ticks += 1;
+            self.last_tick_ns = deadline;
             pass.ticks += 1;
         }
         pass.behind = self.next_deadline() <= now;
-        let t = if pass.behind {
-            self.ticks.saturating_mul(self.period_ns)
-        } else {
-            now
-        };
+        let t = if pass.behind { self.last_tick_ns } else { now };
         self.time = self.time.max(t);
         let at = Instant::from_nanos(self.time);
 
@@ -239,7 +242,7 @@ impl<const N: usize> Schedule<N> {
         }
         let at = dev
             .ticks_to_next_output()
-            .map(|k| (self.ticks + k.max(1)).saturating_mul(self.period_ns));
+            .map(|k| (self.last_tick_ns).saturating_add(k.max(1).saturating_mul(self.period_ns)));
         let line = if self.pending_rate.is_some() {
             // The line waits for the UART to go idle: look again at the
             // next tick.

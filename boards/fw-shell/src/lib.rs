@@ -266,9 +266,8 @@ impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U,
             // oldest pair's edge.
             self.tov_queue.pop_front();
         }
+        // Applied from the next tick on (and at the end of the service).
         let _ = self.tov_queue.push_back((level, at));
-        let now = self.now();
-        self.apply_tov(now);
         Ok(())
     }
 
@@ -279,6 +278,7 @@ impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U,
             self.now()
         };
         self.deliver_edges(dev, deadline.as_nanos());
+        self.apply_tov(deadline.as_nanos());
         Ok(())
     }
 
