@@ -22,10 +22,11 @@
 //!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
 //!   (at most once a second) and counts it in [`Stats::tx_dropped`].
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
-//!   output, or when the line can carry what is queued), the next `--pps`
-//!   edge or [`IDLE_WAKE`], whichever is first; [`BUSY_WAKE`] while bytes
-//!   wait for the client; not at all while ticks are due. UART input wakes
-//!   it at once.
+//!   output, or when the line can carry what is queued — but not before the
+//!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
+//!   or [`IDLE_WAKE`], whichever is first; [`BUSY_WAKE`] while bytes wait
+//!   for the client; not at all while ticks are due. UART input wakes it at
+//!   once.
 //! * **`--speed max`**: before each pass device time moves on by
 //!   [`MAX_BATCH_TICKS`] ticks unless [`MAX_BACKLOG`] bytes wait for the
 //!   client; the loop never sleeps then, it only polls the transport (or
@@ -292,12 +293,16 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     /// When to wake next, ns since the epoch (see the module docs).
     fn next_wake(&self, now: u64) -> u64 {
         let idle_until = now.saturating_add(IDLE_WAKE.as_nanos() as u64);
+        let busy_until = now.saturating_add(BUSY_WAKE.as_nanos() as u64);
+        // Output the line can carry before the next tick waits for it (or
+        // for BUSY_WAKE, if sooner): bytes leave in batches, as ticks run.
+        let batch = busy_until.min(self.sched.next_deadline());
         let mut wake = self
             .sched
             .poll_at(&self.dev, now)
-            .map_or(idle_until, |t| t.min(idle_until));
+            .map_or(idle_until, |t| t.max(batch).min(idle_until));
         if self.io.transport.backlog_len() > 0 {
-            wake = wake.min(now.saturating_add(BUSY_WAKE.as_nanos() as u64));
+            wake = wake.min(busy_until);
         }
         if let Some(pps) = self.io.next_pps_ns {
             // Delivered before the first tick at or after it.
