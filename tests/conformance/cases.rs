@@ -636,7 +636,7 @@ fn measure(d: &mut Dut, id: u8, what: &str) -> Vec<(String, u64)> {
 /// The tick's cost bounds, in instructions: the whole tick interrupt
 /// (`service_max_ns`: one tick with its TX pump, RX drain and events) and
 /// `Device::on_tick` alone. Each is ≈ 20 % above the figure measured when
-/// it was set (the worst over 1 s, three runs; figures in the README), so a
+/// it was set (the worst over 1 s, five runs; figures in the README), so a
 /// change that makes the tick markedly dearer fails here and has to say so.
 fn assert_cost(stats: &[(String, u64)], interrupt: u64, on_tick: u64) {
     let get = |k: &str| stats.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();
@@ -658,7 +658,7 @@ pub fn tick_cost_ga_2khz_at_2_mbaud(kind: Kind) {
     save(&mut d.c, DATA_RATE, &2000u16.to_le_bytes());
     start_ga(&mut d.c);
     let stats = measure(&mut d, GA, "GA at 2000 Hz, 2 Mbit/s");
-    // Measured 5 680 (on_tick 3 720), three runs.
+    // Measured 5 640–5 680 (on_tick 3 680–3 720), five runs.
     assert_cost(&stats, 6_800, 4_500);
 }
 
@@ -673,7 +673,7 @@ pub fn tick_cost_largest_udd(kind: Kind) {
     ];
     stream_udd_at_2_mbaud(&mut d, &types, 145);
     let stats = measure(&mut d, UDD, "largest UDD (145 B) at 1000 Hz, 2 Mbit/s");
-    // Measured 9 680–9 800 (on_tick 5 560–5 720), three runs.
+    // Measured 9 680–9 800 (on_tick 5 560–5 760), five runs.
     assert_cost(&stats, 11_800, 6_900);
 }
 
@@ -703,7 +703,7 @@ pub fn tick_cost_worst_case(kind: Kind) {
         UDD,
         "worst case (K120, LPF 16 Hz, all cascade filters, incremental, mounting, UDD 155 B at 1000 Hz)",
     );
-    // Measured 12 600–12 720 (on_tick 8 280–8 520), three runs.
+    // Measured 12 520–12 720 (on_tick 8 280–8 520), five runs.
     assert_cost(&stats, 15_300, 10_200);
 }
 
