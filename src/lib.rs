@@ -59,6 +59,7 @@ pub mod math;
 pub mod model;
 pub mod nor;
 pub mod personality;
+pub mod schedule;
 pub mod sensor;
 pub mod store;
 pub mod time;

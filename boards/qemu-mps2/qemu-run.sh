@@ -6,7 +6,10 @@
 #   UART0 (the KERNEL protocol) on tcp 127.0.0.1:${IMU_EMU_PORT:-7000}
 #     QEMU waits for the first client before the firmware starts, so the
 #     client sees everything from power-on (e.g. the AutoStart message);
-#   UART1 (the pin bridge) on tcp 127.0.0.1:${IMU_EMU_BRIDGE_PORT:-7001}.
+#   UART1 (the pin bridge) on tcp 127.0.0.1:${IMU_EMU_BRIDGE_PORT:-7001};
+#   both sockets with nodelay=on (TCP_NODELAY), so a reply leaves when the
+#   firmware writes it, as on a wire (without it Nagle holds small writes
+#   back ~40 ms).
 # IMU_EMU_QEMU_ARGS adds QEMU options (e.g. "-icount shift=0").
 # Ctrl-C stops QEMU; with flash=FILE the next run is a power cycle.
 set -eu
@@ -22,7 +25,7 @@ done
 echo "imu-emu on QEMU mps2-an386: KERNEL UART on tcp 127.0.0.1:$port (waiting for a client), pin bridge on tcp 127.0.0.1:$bridge" >&2
 # shellcheck disable=SC2086 # IMU_EMU_QEMU_ARGS is a list of options
 exec qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic -monitor none \
-    -serial "tcp:127.0.0.1:$port,server=on,wait=on" \
-    -serial "tcp:127.0.0.1:$bridge,server=on,wait=off" \
+    -serial "tcp:127.0.0.1:$port,server=on,wait=on,nodelay=on" \
+    -serial "tcp:127.0.0.1:$bridge,server=on,wait=off,nodelay=on" \
     -semihosting-config "$semi" ${IMU_EMU_QEMU_ARGS:-} \
     -kernel "$elf"

@@ -1,5 +1,6 @@
 //! The TX ring and the line model of the device shell (see [`Line`]).
 
+use super::pacer::{byte_time_ps, wire_ns};
 use crate::time::Instant;
 
 /// Device TX queue (the UART buffer): frames that do not fit are dropped
@@ -90,19 +91,6 @@ impl TxRing {
     }
 }
 
-/// `n · byte_ps / 1000` (ns on the wire for `n` bytes of `byte_ps` ps):
-/// split at 1000 so that, for every rate above 2.3 kbit/s, only 32-bit
-/// divisions by the constant remain (a 64-bit one is a library call on a
-/// Cortex-M).
-fn wire_ns(n: usize, byte_ps: u64) -> u64 {
-    match (u32::try_from(n), u32::try_from(byte_ps)) {
-        (Ok(n), Ok(ps)) if n < 1 << 16 => {
-            u64::from(n) * u64::from(ps / 1000) + u64::from(n * (ps % 1000) / 1000)
-        }
-        _ => n as u64 * byte_ps / 1000,
-    }
-}
-
 /// What [`Line::push_frame`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Queued {
@@ -146,7 +134,7 @@ impl Line {
             tx: TxRing::new(),
             dropped: 0,
             rate: 115_200,
-            byte_time_ps: 10_000_000_000_000 / 115_200,
+            byte_time_ps: byte_time_ps(115_200),
             free_at: now,
             switch: None,
         }
@@ -211,7 +199,7 @@ impl Line {
     /// rate a personality's rate rule reads).
     pub fn set_rate(&mut self, bps: u32) {
         self.rate = bps.max(1);
-        self.byte_time_ps = 10_000_000_000_000 / u64::from(self.rate);
+        self.byte_time_ps = byte_time_ps(self.rate);
     }
 
     /// Switches to `bps` after the bytes queued so far: the model's rate

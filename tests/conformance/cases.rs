@@ -515,6 +515,76 @@ pub fn boot_asserted_at_power_on_silences_the_device(kind: Kind) {
     assert_eq!(d.c.frame().id(), GET_BIT);
 }
 
+// ----- latency -----
+
+/// A reply leaves when the device writes it, as on a wire (issue 13: QEMU's
+/// UART socket without `nodelay=on` held small writes back ~40 ms, so a rig
+/// measured latencies no real KERNEL has, and the last frame came 40–50 ms
+/// after Stop).
+///
+/// * Idle: a ReadRAM answer (10 bytes, 0.9 ms at 115 200 bit/s; the request
+///   1.2 ms) comes back within a few ms.
+/// * Streaming GA at 100 Hz, from the device's own clock: each frame's 2 kHz
+///   counter says at which tick the device sent it; its arrival time less
+///   that tick's time is the frame's latency up to a constant (the earliest
+///   frame's). Frames held back in bursts show up as a latency spread of up
+///   to the hold time; prompt frames all arrive within about a ms of it.
+///
+/// Medians over many samples, so one late wakeup of a loaded host does not
+/// decide.
+pub fn replies_and_frames_leave_without_delay(kind: Kind) {
+    let mut d = Dut::start(kind, Opts::default());
+    let c = &mut d.c;
+    let ask = read_ram(DATA_RATE, 2);
+    let answer = frame(1, 0xB1, &100u16.to_le_bytes());
+    let mut rtt = Vec::new();
+    for _ in 0..21 {
+        let t0 = Instant::now();
+        c.send(&ask);
+        assert_eq!(c.frame().bytes, answer);
+        rtt.push(t0.elapsed());
+        sleep(Duration::from_millis(5));
+    }
+    rtt.sort();
+    let reply = rtt[rtt.len() / 2];
+    eprintln!(
+        "ReadRAM round trip: median {reply:?}, max {:?}",
+        rtt[rtt.len() - 1]
+    );
+    assert!(
+        reply < Duration::from_millis(15),
+        "median round trip {reply:?}"
+    );
+
+    start_ga(c);
+    let first = ga_frame(c);
+    let t0 = Instant::now();
+    let c0 = u16_at(first.payload(), 24);
+    // (arrival − device send time) per frame, µs, up to a constant.
+    let mut lat: Vec<i64> = Vec::new();
+    let mut ticks: u64 = 0;
+    let mut prev = c0;
+    while lat.len() < 200 {
+        let f = ga_frame(c);
+        let arrived = t0.elapsed().as_micros() as i64;
+        let k = u16_at(f.payload(), 24);
+        ticks += u64::from(k.wrapping_sub(prev));
+        prev = k;
+        lat.push(arrived - (ticks * 500) as i64);
+    }
+    c.send(&command(STOP));
+    let best = *lat.iter().min().unwrap();
+    let mut above: Vec<i64> = lat.iter().map(|l| l - best).collect();
+    above.sort();
+    let spread = above[above.len() / 2];
+    eprintln!(
+        "GA frame latency above the earliest: median {spread} µs, 90 % {} µs, max {} µs",
+        above[above.len() * 9 / 10],
+        above[above.len() - 1]
+    );
+    assert!(spread < 5_000, "median frame latency spread {spread} µs");
+}
+
 // ----- QEMU only: the firmware's tick cost -----
 
 /// Starts the firmware with `-icount shift=0` (one instruction = 1 ns of
@@ -563,6 +633,24 @@ fn measure(d: &mut Dut, id: u8, what: &str) -> Vec<(String, u64)> {
     stats
 }
 
+/// The tick's cost bounds, in instructions: the whole tick interrupt
+/// (`service_max_ns`: one tick with its TX pump, RX drain and events) and
+/// `Device::on_tick` alone. Each is ≈ 20 % above the figure measured when
+/// it was set (the worst over 1 s, five runs; figures in the README), so a
+/// change that makes the tick markedly dearer fails here and has to say so.
+fn assert_cost(stats: &[(String, u64)], interrupt: u64, on_tick: u64) {
+    let get = |k: &str| stats.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();
+    let (s, t) = (get("service_max_ns"), get("on_tick_max_ns"));
+    assert!(
+        s < interrupt,
+        "{s} instructions per tick interrupt (bound {interrupt})"
+    );
+    assert!(
+        t < on_tick,
+        "{t} instructions per on_tick (bound {on_tick})"
+    );
+}
+
 pub fn tick_cost_ga_2khz_at_2_mbaud(kind: Kind) {
     assert_eq!(kind, Kind::Qemu);
     let mut d = icount_dut("K110");
@@ -570,10 +658,8 @@ pub fn tick_cost_ga_2khz_at_2_mbaud(kind: Kind) {
     save(&mut d.c, DATA_RATE, &2000u16.to_le_bytes());
     start_ga(&mut d.c);
     let stats = measure(&mut d, GA, "GA at 2000 Hz, 2 Mbit/s");
-    let max = stats.iter().find(|(k, _)| k == "service_max_ns").unwrap().1;
-    // A sanity bound far above the 5000-instruction budget (reported,
-    // not enforced, while the signal chain grows).
-    assert!(max < 200_000, "{max} instructions per tick");
+    // Measured 5 640–5 680 (on_tick 3 680–3 720), five runs.
+    assert_cost(&stats, 6_800, 4_500);
 }
 
 pub fn tick_cost_largest_udd(kind: Kind) {
@@ -587,8 +673,8 @@ pub fn tick_cost_largest_udd(kind: Kind) {
     ];
     stream_udd_at_2_mbaud(&mut d, &types, 145);
     let stats = measure(&mut d, UDD, "largest UDD (145 B) at 1000 Hz, 2 Mbit/s");
-    let max = stats.iter().find(|(k, _)| k == "service_max_ns").unwrap().1;
-    assert!(max < 200_000, "{max} instructions per tick");
+    // Measured 9 680–9 800 (on_tick 5 560–5 760), five runs.
+    assert_cost(&stats, 11_800, 6_900);
 }
 
 /// The guide's worst case: every filter on (LPF 16 Hz = the order-192 FIR,
@@ -617,8 +703,8 @@ pub fn tick_cost_worst_case(kind: Kind) {
         UDD,
         "worst case (K120, LPF 16 Hz, all cascade filters, incremental, mounting, UDD 155 B at 1000 Hz)",
     );
-    let max = stats.iter().find(|(k, _)| k == "service_max_ns").unwrap().1;
-    assert!(max < 200_000, "{max} instructions per tick");
+    // Measured 12 520–12 720 (on_tick 8 280–8 520), five runs.
+    assert_cost(&stats, 15_300, 10_200);
 }
 
 /// 2 Mbit/s, no alignment, 2000 Hz asked; UDD `types` configured and

@@ -71,4 +71,5 @@ both!(
     extrig_sends_one_frame_per_edge,
     tov_pulses_high_then_low_for_every_frame,
     boot_asserted_at_power_on_silences_the_device,
+    replies_and_frames_leave_without_delay,
 );

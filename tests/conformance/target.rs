@@ -324,9 +324,11 @@ impl Qemu {
         cmd.args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
             .args(["-nographic", "-monitor", "none"])
             .arg("-serial")
-            .arg(format!("tcp:127.0.0.1:{uart},server=on,wait=on"))
+            // nodelay=on: replies leave when the firmware writes them
+            // (Nagle would hold small writes back ~40 ms).
+            .arg(format!("tcp:127.0.0.1:{uart},server=on,wait=on,nodelay=on"))
             .arg("-serial")
-            .arg(format!("tcp:127.0.0.1:{pins},server=on,wait=on"))
+            .arg(format!("tcp:127.0.0.1:{pins},server=on,wait=on,nodelay=on"))
             .arg("-semihosting-config")
             .arg(&semi)
             .args(&opts.qemu_args)

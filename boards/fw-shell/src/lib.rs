@@ -13,17 +13,23 @@
 //! | `NorFlash` | the flash the parameter store lives in (2 sectors at offset 0) |
 //!
 //! The board calls [`Shell::service`] from its tick interrupt (the highest
-//! priority, 2 kHz; 4 kHz on the K201, [`Shell::tick_hz`]). One call:
+//! priority, 2 kHz; 4 kHz on the K201, [`Shell::tick_hz`]). One call is one
+//! pass of the core's tick/pump schedule ([`imu_emu::schedule`], the same
+//! code the host runner runs), with this crate's traits as its
+//! [`imu_emu::schedule::Port`]:
 //!
 //! 1. runs every tick that is due on the absolute schedule
 //!    `deadline_k = epoch + k × period` (a late interrupt catches up, capped
 //!    at [`MAX_CATCH_UP`] per call), each with its own deadline as `now`;
 //!    before each tick it delivers the pin edges stamped at or before that
-//!    deadline and moves the bytes the line carried by then;
-//! 2. feeds the bytes the UART received into `on_rx`;
-//! 3. drains `poll_tx` into the UART at the line rate ([`pacer`]): bytes
-//!    allowed = elapsed × `line_rate()/10` with a fractional accumulator,
-//!    never more than the UART's room, never blocking;
+//!    deadline and moves the bytes the line carried by then — while ticks
+//!    are still due the line never runs ahead of them, so a catch-up after
+//!    a stall loses no frame the line had time for;
+//! 2. feeds at most [`MAX_RX`] bytes the UART received into `on_rx`;
+//! 3. drains `poll_tx` into the UART at the line rate
+//!    ([`imu_emu::line::Pacer`]): bytes allowed = elapsed × `line_rate()/10`
+//!    with a fractional accumulator, never more than the UART's room, never
+//!    blocking;
 //! 4. acts on events: `LineRate` → the UART switches once everything before
 //!    it has left the wire ([`Uart::tx_idle`]); `Tov` → the pin edge is
 //!    applied at its time (at the first service at or after it).
@@ -35,7 +41,6 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod pacer;
 #[cfg(feature = "defmt")]
 pub mod panic;
 
@@ -44,10 +49,9 @@ use core::mem::MaybeUninit;
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 pub use imu_emu;
-use imu_emu::device::{Device, Event, Level, Pin, PowerOn};
+use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::schedule::{Limits, Port, Schedule};
 use imu_emu::time::Instant;
-
-use crate::pacer::Pacer;
 
 /// Most ticks one [`Shell::service`] call runs (catching up after a stall,
 /// e.g. a flash erase); the rest run on the next calls.
@@ -56,6 +60,9 @@ pub const MAX_CATCH_UP: u32 = 16;
 /// is run now: interrupts derived from the same clock may fire a few ns
 /// early.
 pub const EARLY_SLACK_DIV: u64 = 8;
+/// Most received bytes one [`Shell::service`] call feeds to the device
+/// (2.5 tick periods of a 2 Mbit/s line): a flood never starves the tick.
+pub const MAX_RX: usize = 256;
 /// Bytes moved per UART read/write chunk.
 const CHUNK: usize = 128;
 
@@ -169,6 +176,12 @@ pub struct Stats {
 /// copies of it on the stack.
 pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
     dev: &'d mut Device<F>,
+    sched: Schedule<CHUNK>,
+    io: Io<U, C, T, E>,
+}
+
+/// The board's peripherals as the schedule's [`Port`].
+struct Io<U, C, T, E> {
     uart: U,
     clock: C,
     tov: T,
@@ -177,18 +190,162 @@ pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
     lookahead: Option<Edge>,
     /// Clock reading at power-on: the device's `Instant::ZERO`.
     epoch: u64,
-    period_ns: u64,
-    /// Ticks run since power-on; the next deadline is `(ticks+1) × period`.
-    ticks: u64,
-    pacer: Pacer,
-    /// A line-rate switch waiting for the UART to go idle.
-    pending_baud: Option<u32>,
     /// TOV edges waiting for their time.
     tov_queue: Deque<(Level, Instant), 8>,
     stats: Stats,
-    /// Bytes on their way between the UART and the device (a field, not a
-    /// local: a local array is zeroed at every call).
-    buf: [u8; CHUNK],
+    /// Device time the current service call started at.
+    service_start: u64,
+    /// Ticks run so far in the current service call.
+    batch: u32,
+    /// When the current tick started (its edges, TX pump and `on_tick`).
+    tick_start: u64,
+}
+
+impl<U: Uart, C: Clock, T: TovPin, E: EdgeSource> Io<U, C, T, E> {
+    /// Device time now (ns since power-on).
+    fn now(&mut self) -> u64 {
+        self.clock.now().as_nanos().saturating_sub(self.epoch)
+    }
+
+    /// Delivers the edges stamped at or before `until` (device time).
+    fn deliver_edges<F: NorFlash>(&mut self, dev: &mut Device<F>, until: u64) {
+        loop {
+            let edge = match self.lookahead.take().or_else(|| self.edges.pop()) {
+                Some(e) => e,
+                None => return,
+            };
+            let at = edge.at.as_nanos().saturating_sub(self.epoch);
+            if at > until {
+                self.lookahead = Some(edge);
+                return;
+            }
+            dev.on_pin(edge.pin, edge.level, Instant::from_nanos(at));
+        }
+    }
+
+    /// Drives the TOV edges whose time has come.
+    fn apply_tov(&mut self, now: u64) {
+        while let Some(&(level, when)) = self.tov_queue.front() {
+            if when.as_nanos() > now {
+                break;
+            }
+            self.tov.set(level);
+            self.tov_queue.pop_front();
+        }
+    }
+}
+
+impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U, C, T, E> {
+    type Error = core::convert::Infallible;
+
+    fn tx_room(&mut self) -> usize {
+        self.uart.tx_room()
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<(), Self::Error> {
+        self.uart.write(bytes);
+        Ok(())
+    }
+
+    fn tx_idle(&mut self) -> bool {
+        self.uart.tx_idle()
+    }
+
+    fn set_line_rate(&mut self, bps: u32) -> Result<(), Self::Error> {
+        self.uart.set_baud(bps);
+        Ok(())
+    }
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        Ok(self.uart.read(buf))
+    }
+
+    fn tov(&mut self, level: Level, at: Instant) -> Result<(), Self::Error> {
+        if self.tov_queue.is_full() {
+            // Too many frames in flight to keep every edge: drop the
+            // oldest pair's edge.
+            self.tov_queue.pop_front();
+        }
+        // Applied from the next tick on (and at the end of the service).
+        let _ = self.tov_queue.push_back((level, at));
+        Ok(())
+    }
+
+    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+        self.tick_start = if self.batch == 0 {
+            self.service_start
+        } else {
+            self.now()
+        };
+        self.deliver_edges(dev, deadline.as_nanos());
+        self.apply_tov(deadline.as_nanos());
+        Ok(())
+    }
+
+    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+        let a = self.now();
+        dev.on_tick(deadline);
+        let b = self.now();
+        let s = &mut self.stats;
+        s.max_on_tick_ns = s.max_on_tick_ns.max(b - a);
+        s.max_tick_ns = s.max_tick_ns.max(b.saturating_sub(self.tick_start));
+        self.batch += 1;
+        Ok(())
+    }
+
+    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> Result<(), Self::Error> {
+        self.deliver_edges(dev, at.as_nanos());
+        Ok(())
+    }
+}
+
+/// [`Io`] with a one-shot hook run right after the received bytes.
+struct Hooked<'a, IO, H> {
+    io: &'a mut IO,
+    after_rx: Option<H>,
+}
+
+impl<F, U, C, T, E, H> Port<F> for Hooked<'_, Io<U, C, T, E>, H>
+where
+    F: NorFlash,
+    U: Uart,
+    C: Clock,
+    T: TovPin,
+    E: EdgeSource,
+    H: FnOnce(&mut Device<F>),
+{
+    type Error = core::convert::Infallible;
+
+    fn tx_room(&mut self) -> usize {
+        Port::<F>::tx_room(self.io)
+    }
+    fn write(&mut self, bytes: &[u8]) -> Result<(), Self::Error> {
+        Port::<F>::write(self.io, bytes)
+    }
+    fn tx_idle(&mut self) -> bool {
+        Port::<F>::tx_idle(self.io)
+    }
+    fn set_line_rate(&mut self, bps: u32) -> Result<(), Self::Error> {
+        Port::<F>::set_line_rate(self.io, bps)
+    }
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        Port::<F>::read(self.io, buf)
+    }
+    fn tov(&mut self, level: Level, at: Instant) -> Result<(), Self::Error> {
+        Port::<F>::tov(self.io, level, at)
+    }
+    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+        self.io.before_tick(dev, deadline)
+    }
+    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+        self.io.tick(dev, deadline)
+    }
+    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> Result<(), Self::Error> {
+        if let Some(hook) = self.after_rx.take() {
+            hook(dev);
+        }
+        self.io.after_rx(dev, at)
+    }
 }
 
 /// Powers a device on at `Instant::ZERO` (parameters from `flash`, BOOT
@@ -212,27 +369,28 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     /// line rate at once.
     pub fn new(dev: &'d mut Device<F>, uart: U, mut clock: C, tov: T, edges: E) -> Self {
         let epoch = clock.now().as_nanos();
-        let period_ns = dev.tick_period_ns().max(1);
         let rate = dev.line_rate();
+        let sched = Schedule::new(dev);
         let mut shell = Shell {
             dev,
-            uart,
-            clock,
-            tov,
-            edges,
-            lookahead: None,
-            epoch,
-            period_ns,
-            ticks: 0,
-            pacer: Pacer::new(rate, 0),
-            pending_baud: None,
-            tov_queue: Deque::new(),
-            stats: Stats::default(),
-            buf: [0; CHUNK],
+            sched,
+            io: Io {
+                uart,
+                clock,
+                tov,
+                edges,
+                lookahead: None,
+                epoch,
+                tov_queue: Deque::new(),
+                stats: Stats::default(),
+                service_start: 0,
+                batch: 0,
+                tick_start: 0,
+            },
         };
-        shell.tov.set(Level::Low);
-        shell.uart.set_baud(rate);
-        shell.handle_events(0);
+        shell.io.tov.set(Level::Low);
+        shell.io.uart.set_baud(rate);
+        let _ = shell.sched.events(shell.dev, &mut shell.io);
         shell
     }
 
@@ -243,28 +401,25 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     #[inline(never)]
     #[cold]
     pub fn power_cycle(&mut self, boot: Option<Level>) {
-        self.epoch = self.clock.now().as_nanos();
+        self.io.epoch = self.io.clock.now().as_nanos();
         self.dev.power_cycle_with(boot, Instant::ZERO);
-        self.ticks = 0;
-        self.lookahead = None;
-        while self.edges.pop().is_some() {}
-        self.tov_queue.clear();
-        self.tov.set(Level::Low);
-        self.pending_baud = None;
-        self.period_ns = self.dev.tick_period_ns().max(1);
-        self.pacer = Pacer::new(self.dev.line_rate(), 0);
-        self.handle_events(0);
+        self.sched.restart(self.dev);
+        self.io.lookahead = None;
+        while self.io.edges.pop().is_some() {}
+        self.io.tov_queue.clear();
+        self.io.tov.set(Level::Low);
+        let _ = self.sched.events(self.dev, &mut self.io);
     }
 
     /// Rate at which [`Shell::service`] should be called, Hz (the internal
     /// rate: 2000, 4000 on the K201). Calling it faster is harmless.
     pub fn tick_hz(&self) -> u32 {
-        (1_000_000_000 / self.period_ns) as u32
+        (1_000_000_000 / self.sched.period_ns()) as u32
     }
 
     /// Tick period, ns.
     pub fn tick_period_ns(&self) -> u64 {
-        self.period_ns
+        self.sched.period_ns()
     }
 
     /// The device.
@@ -279,31 +434,27 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
 
     /// The UART.
     pub fn uart_mut(&mut self) -> &mut U {
-        &mut self.uart
+        &mut self.io.uart
     }
 
     /// The clock.
     pub fn clock_mut(&mut self) -> &mut C {
-        &mut self.clock
+        &mut self.io.clock
     }
 
     /// Timing figures so far.
     pub fn stats(&self) -> Stats {
-        self.stats
+        self.io.stats
     }
 
     /// Forgets the timing figures.
     pub fn reset_stats(&mut self) {
-        self.stats = Stats::default();
+        self.io.stats = Stats::default();
     }
 
     /// Device time now (ns since power-on).
     pub fn now(&mut self) -> u64 {
-        self.clock.now().as_nanos().saturating_sub(self.epoch)
-    }
-
-    fn next_deadline(&self) -> u64 {
-        (self.ticks + 1).saturating_mul(self.period_ns)
+        self.io.now()
     }
 
     /// The tick service: call from the tick interrupt (see the crate docs).
@@ -317,137 +468,37 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     /// persist the flash image, so a client that saw a SaveFlash
     /// acknowledgement can cut the power at once).
     pub fn service_with(&mut self, after_rx: impl FnOnce(&mut Device<F>)) {
-        let t0 = self.now();
-        let slack = self.period_ns / EARLY_SLACK_DIV;
-        let mut batch = 0;
-        while batch < MAX_CATCH_UP && self.next_deadline() <= t0 + slack {
-            let deadline = self.next_deadline();
-            let start = if batch == 0 { t0 } else { self.now() };
-            self.deliver_edges(deadline);
-            self.pump_tx(deadline);
-            let a = self.now();
-            self.dev.on_tick(Instant::from_nanos(deadline));
-            let b = self.now();
-            self.stats.max_on_tick_ns = self.stats.max_on_tick_ns.max(b - a);
-            self.stats.max_tick_ns = self.stats.max_tick_ns.max(b.saturating_sub(start));
-            self.ticks += 1;
-            batch += 1;
-        }
-        self.stats.ticks += u64::from(batch);
-        self.stats.max_batch = self.stats.max_batch.max(batch);
+        let t0 = self.io.now();
+        self.io.service_start = t0;
+        self.io.batch = 0;
+        let limits = Limits {
+            max_ticks: MAX_CATCH_UP,
+            max_rx: MAX_RX,
+            early_ns: self.sched.period_ns() / EARLY_SLACK_DIV,
+        };
+        let mut port = Hooked {
+            io: &mut self.io,
+            after_rx: Some(after_rx),
+        };
+        let Ok(pass) = self.sched.poll(self.dev, &mut port, t0, &limits);
+        let now = self.io.now();
+        self.io.apply_tov(now);
 
-        let now = self.now().max(t0);
-        let mut rx = 0;
-        loop {
-            let n = self.uart.read(&mut self.buf);
-            if n == 0 {
-                break;
-            }
-            rx += n;
-            self.dev.on_rx(&self.buf[..n], Instant::from_nanos(now));
-        }
-        self.stats.rx_bytes += rx as u64;
-        after_rx(self.dev);
-        self.deliver_edges(now);
-        self.pump_tx(now);
-        self.apply_tov(now);
-
-        let t1 = self.now();
-        self.stats.services += 1;
-        let took = t1.saturating_sub(t0);
-        let slot = if rx > 0 {
-            &mut self.stats.max_service_rx_ns
-        } else if batch > 1 {
-            &mut self.stats.max_batch_service_ns
+        let s = &mut self.io.stats;
+        s.ticks += u64::from(pass.ticks);
+        s.max_batch = s.max_batch.max(pass.ticks);
+        s.rx_bytes += pass.rx as u64;
+        s.tx_bytes += pass.tx as u64;
+        s.services += 1;
+        let took = now.saturating_sub(t0);
+        let slot = if pass.rx > 0 {
+            &mut s.max_service_rx_ns
+        } else if pass.ticks > 1 {
+            &mut s.max_batch_service_ns
         } else {
-            &mut self.stats.max_service_ns
+            &mut s.max_service_ns
         };
         *slot = (*slot).max(took);
-    }
-
-    /// Delivers the edges stamped at or before `until` (device time).
-    fn deliver_edges(&mut self, until: u64) {
-        loop {
-            let edge = match self.lookahead.take().or_else(|| self.edges.pop()) {
-                Some(e) => e,
-                None => return,
-            };
-            let at = edge.at.as_nanos().saturating_sub(self.epoch);
-            if at > until {
-                self.lookahead = Some(edge);
-                return;
-            }
-            self.dev
-                .on_pin(edge.pin, edge.level, Instant::from_nanos(at));
-            self.handle_events(at);
-        }
-    }
-
-    /// Moves the bytes the line can carry by `at` from the device to the
-    /// UART, then acts on events.
-    fn pump_tx(&mut self, at: u64) {
-        self.pacer.advance(at);
-        loop {
-            if let Some(rate) = self.pending_baud {
-                if !self.uart.tx_idle() {
-                    break;
-                }
-                self.uart.set_baud(rate);
-                self.pacer.set_rate(rate, at);
-                self.pending_baud = None;
-            }
-            let room = self.pacer.available().min(self.uart.tx_room()).min(CHUNK);
-            if room == 0 {
-                break;
-            }
-            let n = self.dev.poll_tx(&mut self.buf[..room]);
-            if n > 0 {
-                self.uart.write(&self.buf[..n]);
-                self.pacer.consume(n);
-                self.stats.tx_bytes += n as u64;
-            }
-            let switched = self.handle_events(at);
-            if n == 0 && !switched {
-                break;
-            }
-        }
-        self.handle_events(at);
-    }
-
-    /// Acts on device events; whether a line-rate switch came.
-    fn handle_events(&mut self, at: u64) -> bool {
-        let mut switched = false;
-        while let Some(ev) = self.dev.poll_event() {
-            match ev {
-                Event::LineRate(bps) => {
-                    if bps != self.pacer.rate() || self.pending_baud.is_some() {
-                        self.pending_baud = Some(bps);
-                    }
-                    switched = true;
-                }
-                Event::Tov { level, at: when } => {
-                    if self.tov_queue.is_full() {
-                        // Too many frames in flight to keep every edge:
-                        // drop the oldest pair's edge.
-                        self.tov_queue.pop_front();
-                    }
-                    let _ = self.tov_queue.push_back((level, when));
-                }
-            }
-        }
-        self.apply_tov(at);
-        switched
-    }
-
-    /// Drives the TOV edges whose time has come.
-    fn apply_tov(&mut self, now: u64) {
-        while let Some(&(level, when)) = self.tov_queue.front() {
-            if when.as_nanos() > now {
-                break;
-            }
-            self.tov.set(level);
-            self.tov_queue.pop_front();
-        }
     }
 }
 

@@ -22,6 +22,12 @@
 //! Either way the device sees the same sequence of ticks and bytes at the
 //! same device times as in real time: a recorded session replays
 //! identically faster (the seed fixing the noise).
+//!
+//! A factor the host cannot compute (or a stalled host) would leave device
+//! time ever further behind the clock: the runner then holds the clock back
+//! ([`Clock::hold_back`]) so device time lags by at most
+//! [`crate::runner::MAX_LAG`] — device time runs as fast as the host
+//! computes, every tick still runs, and the backlog of ticks stays bounded.
 
 use std::str::FromStr;
 use std::time::Duration;
@@ -72,6 +78,8 @@ pub struct Clock {
     speed: Speed,
     /// [`Speed::Max`]: device time now.
     virtual_ns: u64,
+    /// [`Speed::Factor`]: device time held back so far ([`Clock::hold_back`]).
+    held_ns: u64,
 }
 
 impl Clock {
@@ -81,6 +89,7 @@ impl Clock {
             epoch,
             speed,
             virtual_ns: 0,
+            held_ns: 0,
         }
     }
 
@@ -100,7 +109,7 @@ impl Clock {
             Speed::Factor(k) => {
                 let host = self.epoch.elapsed().as_nanos() as f64;
                 // Saturates at u64::MAX (centuries of device time).
-                (host * k) as u64
+                ((host * k) as u64).saturating_sub(self.held_ns)
             }
             Speed::Max => self.virtual_ns,
         }
@@ -112,6 +121,20 @@ impl Clock {
         if self.speed == Speed::Max {
             self.virtual_ns = self.virtual_ns.max(ns);
         }
+    }
+
+    /// [`Speed::Factor`]: device time from now on runs `ns` behind the
+    /// factor (the host could not keep up). No effect in [`Speed::Max`],
+    /// which never runs ahead of the ticks.
+    pub fn hold_back(&mut self, ns: u64) {
+        if let Speed::Factor(_) = self.speed {
+            self.held_ns = self.held_ns.saturating_add(ns);
+        }
+    }
+
+    /// Device time held back so far, ns.
+    pub fn held_back_ns(&self) -> u64 {
+        self.held_ns
     }
 
     /// How long the host waits for `device_ns` of device time to pass:
@@ -150,5 +173,22 @@ mod tests {
         m.advance_to(3_000);
         assert_eq!(m.now_ns(), 5_000);
         assert_eq!(m.host_wait(1_000_000), Duration::ZERO);
+        m.hold_back(1_000);
+        assert_eq!((m.now_ns(), m.held_back_ns()), (5_000, 0));
+    }
+
+    #[test]
+    fn held_back_time_stays_behind() {
+        // At 1e6 device seconds a host second, a 1 s hold is 1 µs of host
+        // time: the clock reads at least 1 s less than the factor gives.
+        let epoch = std::time::Instant::now();
+        let mut c = Clock::new(epoch, Speed::Factor(1e6));
+        c.hold_back(1_000_000_000);
+        std::thread::sleep(Duration::from_millis(1));
+        let before = (epoch.elapsed().as_nanos() as f64 * 1e6) as u64;
+        let now = c.now_ns();
+        let after = (epoch.elapsed().as_nanos() as f64 * 1e6) as u64;
+        assert!(now + 1_000_000_000 >= before && now + 1_000_000_000 <= after);
+        assert_eq!(c.held_back_ns(), 1_000_000_000);
     }
 }

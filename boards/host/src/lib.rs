@@ -3,10 +3,11 @@
 //! Runs one virtual KERNEL IMU ([`imu_emu::device::Device`]) in real time
 //! and exposes its UART on a TCP port or a pseudo-terminal:
 //!
-//! * [`runner`] — the loop: ticks on absolute deadlines, line-rate pacing,
-//!   input, sleeping;
+//! * [`runner`] — the loop: the core's shared tick/pump schedule
+//!   ([`imu_emu::schedule`]: ticks on absolute deadlines, line-rate pacing
+//!   with [`imu_emu::line::Pacer`], input) with bounded work per pass, and
+//!   sleeping;
 //! * [`clock`] — device time against the host clock (`--speed`);
-//! * [`pacer`] — the byte credit that models the UART line rate;
 //! * [`transport`] — TCP ([`transport::TcpTransport`]) and pty
 //!   ([`transport::PtyTransport`]) with a bounded [`backlog`];
 //! * [`flash`] — the device's NOR flash, optionally written through to a
@@ -23,7 +24,6 @@ pub mod cli;
 pub mod clock;
 pub mod control;
 pub mod flash;
-pub mod pacer;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;

@@ -2,22 +2,31 @@
 //! scaled, or as fast as possible ([`crate::clock`], `--speed`; every time
 //! below is device time, ns since power-on).
 //!
-//! * **Ticks** run on absolute deadlines `deadline_k = epoch + k × period`
-//!   (`period = dev.tick_period_ns()`, k = 1, 2, …), each called with its own
-//!   deadline as `now`, so sleep error never accumulates; when the loop is
-//!   late it runs every due tick (catching up).
-//! * **Output** leaves the device's TX queue only as fast as the emulated
-//!   line carries it ([`crate::pacer`]). Before each tick the line is
-//!   advanced to that tick's deadline and drained, so a late wakeup catches
-//!   up output and ticks in their real order and the device's queue holds
-//!   what a real UART's would.
-//! * **Input** is fed with `dev.on_rx(bytes, now)` as soon as the transport
-//!   wakes the loop (`ppoll`), after the ticks due by then.
-//! * **Sleeping**: while bytes are queued the loop wakes every
-//!   [`BUSY_WAKE`]; otherwise it sleeps until the deadline of the next tick
-//!   that produces output ([`Device::ticks_to_next_output`]), the next
-//!   `--pps` edge, or [`IDLE_WAKE`], whichever is first, then runs every
-//!   tick due in one batch. UART input wakes it at once.
+//! Each pass is one [`Schedule::poll`] of the core's shared tick/pump
+//! schedule ([`imu_emu::schedule`], the same code the firmware shell runs):
+//! ticks on absolute deadlines `k × period`, each with its own deadline as
+//! `now`; before each tick the line is advanced to that deadline and the
+//! device's TX queue drained at the line rate ([`imu_emu::line::Pacer`]);
+//! input after the ticks due; a line-rate switch after the bytes queued
+//! before it. This board adds:
+//!
+//! * **Bounded work per pass**: at most [`MAX_TICKS_PER_PASS`] ticks and
+//!   [`MAX_RX_PER_PASS`] received bytes, so a flood of input never starves
+//!   the ticks and SIGINT/SIGTERM stop the loop within one pass.
+//! * **Bounded lag**: when the host cannot keep up (a `--speed` factor
+//!   beyond what it computes, a stalled host) device time is held back so
+//!   it lags the clock by at most [`MAX_LAG`] ([`Clock::hold_back`]): every
+//!   tick still runs in order and no frame is lost, device time just runs
+//!   slower than asked. Logged on stderr (at most once a second).
+//! * **Visible loss**: a frame the device's TX queue could not take is
+//!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
+//!   (at most once a second) and counts it in [`Stats::tx_dropped`].
+//! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
+//!   output, or when the line can carry what is queued — but not before the
+//!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
+//!   or [`IDLE_WAKE`], whichever is first; [`BUSY_WAKE`] while bytes wait
+//!   for the client; not at all while ticks are due. UART input wakes it at
+//!   once.
 //! * **`--speed max`**: before each pass device time moves on by
 //!   [`MAX_BATCH_TICKS`] ticks unless [`MAX_BACKLOG`] bytes wait for the
 //!   client; the loop never sleeps then, it only polls the transport (or
@@ -27,35 +36,72 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
-use imu_emu::device::{Device, Event, Level, Pin};
+use imu_emu::device::{Device, Level, Pin};
+use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
-use crate::pacer::Pacer;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 
-/// Wake interval while the device streams or has output queued.
+/// Wake interval while bytes wait for the client.
 pub const BUSY_WAKE: Duration = Duration::from_millis(1);
 /// Wake interval while the device is idle with nothing queued.
 pub const IDLE_WAKE: Duration = Duration::from_millis(10);
+/// Most ticks one pass runs (128 ms of device time at 2 kHz).
+pub const MAX_TICKS_PER_PASS: u32 = 256;
+/// Most received bytes one pass feeds to the device.
+pub const MAX_RX_PER_PASS: usize = 4096;
+/// How far device time may lag the clock before the clock is held back.
+/// Below the transport's 64 KiB backlog at 2 Mbit/s (≈ 330 ms of line), so
+/// the output of a whole catch-up fits it even if the client reads late.
+pub const MAX_LAG: Duration = Duration::from_millis(200);
+/// Bytes crossing between the transport and the device at once.
+const CHUNK: usize = 4096;
 
-/// The board: a device, its line pacer and a transport.
+const LIMITS: Limits = Limits {
+    max_ticks: MAX_TICKS_PER_PASS,
+    max_rx: MAX_RX_PER_PASS,
+    early_ns: 0,
+};
+
+/// What the runner counted so far.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Stats {
+    /// Ticks run.
+    pub ticks: u64,
+    /// Bytes received from the client and fed to the device.
+    pub rx_bytes: u64,
+    /// Bytes the line carried to the transport.
+    pub tx_bytes: u64,
+    /// Frames the device dropped whole because its TX queue was full
+    /// ([`Device::tx_dropped`]).
+    pub tx_dropped: u32,
+    /// Device time held back because the host could not keep up, ns.
+    pub held_back_ns: u64,
+}
+
+/// The board: a device, the shared schedule, a transport and the pins.
 pub struct Runner<F: NorFlash, T: Transport> {
     dev: Device<F>,
-    transport: T,
-    pacer: Pacer,
+    sched: Box<Schedule<CHUNK>>,
+    io: HostPort<T>,
     clock: Clock,
-    period_ns: u64,
-    /// Ticks run so far; the next deadline is `(ticks + 1) × period`.
-    ticks: u64,
-    buf: Box<[u8; 4096]>,
-    /// Device frames dropped (TX queue full) already reported on stderr.
+    stats: Stats,
+    /// Device frames dropped already reported on stderr.
     reported_drops: u32,
-    /// When drops were last reported, ns since the epoch.
-    reported_at_ns: u64,
+    /// Held-back device time already reported on stderr.
+    reported_held_ns: u64,
+    /// When loss or lag was last reported (host time).
+    reported_at: Option<std::time::Instant>,
+}
+
+/// What the schedule drives on this board: the transport, the control
+/// socket, the `--pps` generator and the trajectory.
+struct HostPort<T: Transport> {
+    transport: T,
     /// The control socket (`--control`), if any.
     control: Option<Control>,
     /// Next 1PPS edge of the `--pps` generator, ns since the epoch.
@@ -64,32 +110,102 @@ pub struct Runner<F: NorFlash, T: Transport> {
     trajectory: Option<Trajectory>,
 }
 
+impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
+    type Error = anyhow::Error;
+
+    fn tx_room(&mut self) -> usize {
+        // The transport's backlog takes everything the line carries.
+        usize::MAX
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        self.transport.send(bytes)
+    }
+
+    fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
+        eprintln!("imu-emu: line rate {bps} bit/s");
+        self.transport.set_line_rate(bps)
+    }
+
+    fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+        let mut n = 0;
+        self.transport.receive(buf.len(), &mut |bytes| {
+            let k = bytes.len().min(buf.len() - n);
+            buf[n..n + k].copy_from_slice(&bytes[..k]);
+            n += k;
+        })?;
+        Ok(n)
+    }
+
+    fn tov(&mut self, level: Level, at: Instant) -> anyhow::Result<()> {
+        // The host board has no TOV pin: edges go to the control client.
+        if let Some(ctl) = self.control.as_mut() {
+            let l = if level == Level::High { "high" } else { "low" };
+            ctl.say(&format!("tov {l} {}\n", at.as_nanos()));
+        }
+        Ok(())
+    }
+
+    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> anyhow::Result<()> {
+        let deadline = deadline.as_nanos();
+        while let Some(pps) = self.next_pps_ns.filter(|&p| p <= deadline) {
+            dev.on_pin(Pin::Pps, Level::High, Instant::from_nanos(pps));
+            self.next_pps_ns = Some(pps + 1_000_000_000);
+        }
+        Ok(())
+    }
+
+    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> anyhow::Result<()> {
+        if let Some(t) = self.trajectory.as_mut() {
+            let truth = t.at(deadline.as_nanos() as f64 * 1e-9);
+            dev.chain_mut().set_motion(Motion::Sample(truth));
+        }
+        dev.on_tick(deadline);
+        Ok(())
+    }
+
+    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> anyhow::Result<()> {
+        if let Some(ctl) = self.control.as_mut() {
+            ctl.poll(&mut |cmd| {
+                match cmd {
+                    control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
+                    control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
+                    control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+                    control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+                }
+                Ok(())
+            })?;
+        }
+        Ok(())
+    }
+}
+
 impl<F: NorFlash, T: Transport> Runner<F, T> {
     /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F>, transport: T, epoch: std::time::Instant) -> Self {
-        let pacer = Pacer::new(dev.line_rate(), 0);
-        let period_ns = dev.tick_period_ns().max(1);
+        let sched = Box::new(Schedule::new(&dev));
         Runner {
             dev,
-            transport,
-            pacer,
+            sched,
+            io: HostPort {
+                transport,
+                control: None,
+                next_pps_ns: None,
+                trajectory: None,
+            },
             clock: Clock::new(epoch, Speed::default()),
-            period_ns,
-            ticks: 0,
-            buf: Box::new([0; 4096]),
+            stats: Stats::default(),
             reported_drops: 0,
-            reported_at_ns: 0,
-            control: None,
-            next_pps_ns: None,
-            trajectory: None,
+            reported_held_ns: 0,
+            reported_at: None,
         }
     }
 
     /// Replays `t` as the motion the device measures: before each tick the
     /// sample for that tick's time is handed to the signal chain.
     pub fn with_trajectory(mut self, t: Trajectory) -> Self {
-        self.trajectory = Some(t);
+        self.io.trajectory = Some(t);
         self
     }
 
@@ -101,14 +217,14 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
 
     /// Serves the control socket (pin edges, power cycle, TOV reports).
     pub fn with_control(mut self, control: Control) -> Self {
-        self.control = Some(control);
+        self.io.control = Some(control);
         self
     }
 
     /// Generates a 1PPS rising edge at every whole second of device time
     /// (`--pps`; the host clock at `--speed 1`).
     pub fn with_pps(mut self) -> Self {
-        self.next_pps_ns = Some(1_000_000_000);
+        self.io.next_pps_ns = Some(1_000_000_000);
         self
     }
 
@@ -119,7 +235,16 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
 
     /// The transport.
     pub fn transport(&self) -> &T {
-        &self.transport
+        &self.io.transport
+    }
+
+    /// What the runner counted so far (loss, lag, traffic).
+    pub fn stats(&self) -> Stats {
+        Stats {
+            tx_dropped: self.dev.tx_dropped(),
+            held_back_ns: self.clock.held_back_ns(),
+            ..self.stats
+        }
     }
 
     /// Gives the device back (e.g. to inspect its flash).
@@ -132,25 +257,26 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
         self.clock.now_ns()
     }
 
-    fn next_deadline(&self) -> u64 {
-        (self.ticks + 1).saturating_mul(self.period_ns)
-    }
-
-    /// Runs until `stop` is set (by SIGINT/SIGTERM).
+    /// Runs until `stop` is set (by SIGINT/SIGTERM): checked before every
+    /// pass, and a pass does bounded work.
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
             let max = self.clock.speed() == Speed::Max;
-            let client_keeps_up = self.transport.backlog_len() < MAX_BACKLOG;
+            let client_keeps_up = self.io.transport.backlog_len() < MAX_BACKLOG;
             if max && client_keeps_up {
-                let to = (self.ticks + MAX_BATCH_TICKS).saturating_mul(self.period_ns);
+                let to =
+                    (self.sched.ticks() + MAX_BATCH_TICKS).saturating_mul(self.sched.period_ns());
                 self.clock.advance_to(to);
             }
-            self.step()?;
+            let pass = self.step()?;
             let now = self.now_ns();
-            self.report_drops(now);
-            let timeout = if max {
+            self.report();
+            let timeout = if pass.behind || pass.rx == MAX_RX_PER_PASS {
+                // More is due or waiting: go on at once.
+                Duration::ZERO
+            } else if max {
                 // Poll only, or wait (briefly) for the client to read.
-                if self.transport.backlog_len() < MAX_BACKLOG {
+                if self.io.transport.backlog_len() < MAX_BACKLOG {
                     Duration::ZERO
                 } else {
                     BUSY_WAKE
@@ -159,132 +285,77 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 self.clock
                     .host_wait(self.next_wake(now).saturating_sub(now))
             };
-            self.transport.wait(timeout)?;
+            self.io.transport.wait(timeout)?;
         }
         Ok(())
     }
 
-    /// When to wake next, ns since the epoch: while output is queued,
-    /// [`BUSY_WAKE`] from now (the pacer hands it out as the line allows);
-    /// otherwise at the deadline of the next tick that produces output, the
-    /// next `--pps` edge or [`IDLE_WAKE`] from now, whichever comes first —
-    /// never before the next tick deadline, so ticks run in batches on the
-    /// absolute schedule.
+    /// When to wake next, ns since the epoch (see the module docs).
     fn next_wake(&self, now: u64) -> u64 {
-        let busy_until = now.saturating_add(BUSY_WAKE.as_nanos() as u64);
         let idle_until = now.saturating_add(IDLE_WAKE.as_nanos() as u64);
-        let mut wake = if self.dev.tx_len() > 0 || self.transport.backlog_len() > 0 {
-            busy_until
-        } else {
-            match self.dev.ticks_to_next_output() {
-                Some(k) => (self.ticks + k)
-                    .saturating_mul(self.period_ns)
-                    .min(idle_until),
-                None => idle_until,
-            }
-        };
-        if let Some(pps) = self.next_pps_ns {
-            wake = wake.min(pps);
+        let busy_until = now.saturating_add(BUSY_WAKE.as_nanos() as u64);
+        // Output the line can carry before the next tick waits for it (or
+        // for BUSY_WAKE, if sooner): bytes leave in batches, as ticks run.
+        let batch = busy_until.min(self.sched.next_deadline());
+        let mut wake = self
+            .sched
+            .poll_at(&self.dev, now)
+            .map_or(idle_until, |t| t.max(batch).min(idle_until));
+        if self.io.transport.backlog_len() > 0 {
+            wake = wake.min(busy_until);
         }
-        wake.max(self.next_deadline())
+        if let Some(pps) = self.io.next_pps_ns {
+            // Delivered before the first tick at or after it.
+            wake = wake.min(pps.max(self.sched.next_deadline()));
+        }
+        wake.max(now)
     }
 
     /// Tells stderr, at most once a second, that the device dropped frames
     /// because its TX queue overflowed (the line is too slow for the
-    /// output, e.g. after a catch-up or with EXTRIG bursts).
-    fn report_drops(&mut self, now_ns: u64) {
+    /// output, e.g. with EXTRIG bursts), or that device time was held back
+    /// because the host could not keep up.
+    fn report(&mut self) {
         let dropped = self.dev.tx_dropped();
-        if dropped != self.reported_drops && now_ns >= self.reported_at_ns + 1_000_000_000 {
-            eprintln!(
-                "imu-emu: device TX queue overflowed: {} frames dropped so far",
-                dropped
-            );
+        let held = self.clock.held_back_ns();
+        if dropped == self.reported_drops && held == self.reported_held_ns {
+            return;
+        }
+        let host_now = std::time::Instant::now();
+        if self
+            .reported_at
+            .is_some_and(|t| host_now.duration_since(t) < Duration::from_secs(1))
+        {
+            return;
+        }
+        if dropped != self.reported_drops {
+            eprintln!("imu-emu: device TX queue overflowed: {dropped} frames dropped so far");
             self.reported_drops = dropped;
-            self.reported_at_ns = now_ns;
         }
+        if held != self.reported_held_ns {
+            eprintln!(
+                "imu-emu: the host cannot keep up: device time held back by {} ms so far",
+                held / 1_000_000
+            );
+            self.reported_held_ns = held;
+        }
+        self.reported_at = Some(host_now);
     }
 
-    /// One pass: due ticks (with output paced up to each), output up to
-    /// now, input, output again.
-    pub fn step(&mut self) -> anyhow::Result<()> {
+    /// One pass of the shared schedule at the clock's time, then the
+    /// transport flushed and the lag bounded.
+    pub fn step(&mut self) -> anyhow::Result<Pass> {
         let now = self.now_ns();
-        while self.next_deadline() <= now {
-            let deadline = self.next_deadline();
-            while let Some(pps) = self.next_pps_ns.filter(|&p| p <= deadline) {
-                self.dev
-                    .on_pin(Pin::Pps, Level::High, Instant::from_nanos(pps));
-                self.next_pps_ns = Some(pps + 1_000_000_000);
-            }
-            self.pump_tx(deadline)?;
-            if let Some(t) = self.trajectory.as_mut() {
-                let truth = t.at(deadline as f64 * 1e-9);
-                self.dev.chain_mut().set_motion(Motion::Sample(truth));
-            }
-            self.dev.on_tick(Instant::from_nanos(deadline));
-            self.ticks += 1;
+        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, &LIMITS)?;
+        self.stats.ticks += u64::from(pass.ticks);
+        self.stats.rx_bytes += pass.rx as u64;
+        self.stats.tx_bytes += pass.tx as u64;
+        self.io.transport.flush()?;
+        let max_lag = MAX_LAG.as_nanos() as u64;
+        let lag = self.sched.lag(now);
+        if lag > max_lag {
+            self.clock.hold_back(lag - max_lag);
         }
-        self.pump_tx(now)?;
-
-        let t = Instant::from_nanos(now);
-        let dev = &mut self.dev;
-        self.transport.receive(&mut |bytes| dev.on_rx(bytes, t))?;
-        if let Some(ctl) = self.control.as_mut() {
-            let dev = &mut self.dev;
-            ctl.poll(&mut |cmd| {
-                match cmd {
-                    control::Command::Edge(pin, level) => dev.on_pin(pin, level, t),
-                    control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, t),
-                    control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-                    control::Command::Motion(m) => dev.chain_mut().set_motion(m),
-                }
-                Ok(())
-            })?;
-        }
-        self.pump_tx(now)?;
-        self.transport.flush()
-    }
-
-    /// Moves bytes the line can carry by `at_ns` from the device to the
-    /// transport, then acts on device events.
-    fn pump_tx(&mut self, at_ns: u64) -> anyhow::Result<()> {
-        self.pacer.advance(at_ns);
-        loop {
-            let room = self.pacer.available().min(self.buf.len());
-            if room == 0 {
-                break;
-            }
-            let n = self.dev.poll_tx(&mut self.buf[..room]);
-            if n == 0 {
-                break;
-            }
-            self.pacer.consume(n);
-            self.transport.send(&self.buf[..n])?;
-            // A line-rate switch restarts the credit: the bytes after it go
-            // at the new rate.
-            self.handle_events(at_ns)?;
-        }
-        self.handle_events(at_ns)
-    }
-
-    /// Acts on pending device events.
-    fn handle_events(&mut self, at_ns: u64) -> anyhow::Result<()> {
-        while let Some(ev) = self.dev.poll_event() {
-            match ev {
-                Event::LineRate(bps) => {
-                    eprintln!("imu-emu: line rate {bps} bit/s");
-                    self.pacer.set_rate(bps, at_ns);
-                    self.transport.set_line_rate(bps)?;
-                }
-                // The host board has no TOV pin: edges go to the control
-                // client, if any.
-                Event::Tov { level, at } => {
-                    if let Some(ctl) = self.control.as_mut() {
-                        let l = if level == Level::High { "high" } else { "low" };
-                        ctl.say(&format!("tov {l} {}\n", at.as_nanos()));
-                    }
-                }
-            }
-        }
-        Ok(())
+        Ok(pass)
     }
 }

@@ -25,9 +25,11 @@ pub trait Transport {
     /// a signal arrives, or `timeout` passes (sub-millisecond precision).
     fn wait(&mut self, timeout: Duration) -> anyhow::Result<()>;
 
-    /// Accepts pending connections and reads everything available, handing
-    /// each received chunk to `sink`. Never blocks.
-    fn receive(&mut self, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()>;
+    /// Accepts pending connections and reads what is available, at most
+    /// `max` bytes (the runner bounds its work per pass: a flood must not
+    /// starve the ticks), handing each received chunk to `sink`. Never
+    /// blocks.
+    fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()>;
 
     /// Queues device output in the bounded backlog; [`Transport::flush`]
     /// writes it (the runner flushes once a pass, so the bytes of a batch

@@ -90,12 +90,20 @@ impl Transport for PtyTransport {
         poll_fds(&mut fds, timeout)
     }
 
-    fn receive(&mut self, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
+    fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let mut buf = [0u8; 4096];
+        let mut got = 0;
         loop {
-            match self.master.read(&mut buf) {
+            let want = (max - got).min(buf.len());
+            if want == 0 {
+                return Ok(());
+            }
+            match self.master.read(&mut buf[..want]) {
                 Ok(0) => return Ok(()),
-                Ok(n) => sink(&buf[..n]),
+                Ok(n) => {
+                    got += n;
+                    sink(&buf[..n]);
+                }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 // Cannot happen while the slave is held open; be tolerant.
@@ -229,7 +237,8 @@ mod tests {
         let mut got = vec![];
         for _ in 0..100 {
             t.wait(Duration::from_millis(10)).unwrap();
-            t.receive(&mut |b| got.extend_from_slice(b)).unwrap();
+            t.receive(usize::MAX, &mut |b| got.extend_from_slice(b))
+                .unwrap();
             if got.len() == 3 {
                 break;
             }
@@ -250,7 +259,7 @@ mod tests {
         drop(client);
         t.send(&[3]).unwrap();
         t.flush().unwrap();
-        t.receive(&mut |_| {}).unwrap();
+        t.receive(usize::MAX, &mut |_| {}).unwrap();
 
         drop(t);
         assert!(std::fs::symlink_metadata(&link).is_err());

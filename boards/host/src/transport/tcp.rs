@@ -105,7 +105,7 @@ impl Transport for TcpTransport {
         poll_fds(&mut fds, timeout)
     }
 
-    fn receive(&mut self, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
+    fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let had = self.client.as_ref().map(|(_, p)| *p);
         self.accept_all()?;
         if self.client.as_ref().map(|(_, p)| *p) != had {
@@ -113,10 +113,18 @@ impl Transport for TcpTransport {
             self.flush()?;
         }
         let mut buf = [0u8; 4096];
+        let mut got = 0;
         while let Some((stream, _)) = &mut self.client {
-            match stream.read(&mut buf) {
+            let want = (max - got).min(buf.len());
+            if want == 0 {
+                break;
+            }
+            match stream.read(&mut buf[..want]) {
                 Ok(0) => self.drop_client("disconnected"),
-                Ok(n) => sink(&buf[..n]),
+                Ok(n) => {
+                    got += n;
+                    sink(&buf[..n]);
+                }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(e) => self.drop_client(&format!("dropped: {e}")),
