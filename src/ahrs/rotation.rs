@@ -198,7 +198,8 @@ impl QuatIntegrator {
     #[inline]
     pub fn rotate(&mut self, a: &Vec3) {
         let n2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-        if !(n2 <= SERIES_MAX_N2) {
+        // NaN (a non-finite step) also takes the guarded path.
+        if n2 > SERIES_MAX_N2 || n2.is_nan() {
             self.rotate_large(a);
             return;
         }
