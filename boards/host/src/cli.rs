@@ -87,7 +87,7 @@ pub struct Args {
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
 
-    /// Allow --tcp / --control on a non-loopback address (0.0.0.0, [::], a
+    /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
     /// power-cycle the device and inject faults: the program says so on
     /// stderr at start.

@@ -522,7 +522,10 @@ mod tests {
         std::thread::sleep(std::time::Duration::from_millis(50));
         let per_poll = polls_until(&mut ctl, 1000);
         assert_eq!(per_poll.iter().sum::<usize>(), 1000);
-        assert!(per_poll.iter().all(|&k| k <= MAX_COMMANDS_PER_POLL), "{per_poll:?}");
+        assert!(
+            per_poll.iter().all(|&k| k <= MAX_COMMANDS_PER_POLL),
+            "{per_poll:?}"
+        );
         assert_eq!(per_poll[0], MAX_COMMANDS_PER_POLL);
         let mut r = std::io::BufReader::new(client);
         let mut line = String::new();
