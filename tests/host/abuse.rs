@@ -258,12 +258,13 @@ fn a_line_without_a_newline_does_not_grow_memory() {
     assert_eq!(line, "ok\n");
 }
 
-/// With the descriptor table full (the process runs under `prlimit
-/// --nofile=6`: stdin/out/err, the two listeners and one client), a
-/// second UART client and a control client make `accept()` fail with
-/// EMFILE: the process keeps running, the current client keeps its stream
-/// without a gap, the message is rate-limited (at most once a second per
-/// listener), and once a descriptor is free the control client is served.
+/// With the descriptor table full (once the first client is served, the
+/// process's descriptor limit is lowered to its lowest free descriptor
+/// with `prlimit --pid`), a second UART client and a control client make
+/// `accept()` fail with EMFILE: the process keeps running, the current
+/// client keeps its stream without a gap, the message is rate-limited (at
+/// most once a second per listener), and once a descriptor is free the
+/// control client is served.
 #[test]
 fn accept_failing_with_emfile_is_transient_and_rate_limited() {
     if Command::new("prlimit").arg("--version").output().is_err() {
@@ -272,19 +273,21 @@ fn accept_failing_with_emfile_is_transient_and_rate_limited() {
     }
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
-    let mut emu = Emu::start_under(
-        &["prlimit", "--nofile=6:6", "--"],
-        &[
-            "--tcp",
-            "127.0.0.1:0",
-            "--model",
-            "K110",
-            "--control",
-            &addr,
-        ],
-    );
+    let mut emu = Emu::tcp(&["--model", "K110", "--control", &addr]);
     let mut c = emu.connect();
     let first = start_ga(&mut c);
+    let pid = emu.pid();
+    let open: Vec<u32> = std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_str().unwrap().parse().unwrap())
+        .collect();
+    let lowest_free = (0..).find(|n| !open.contains(n)).unwrap();
+    let limit = format!("--nofile={lowest_free}:{lowest_free}");
+    let st = Command::new("prlimit")
+        .args(["--pid", &pid.to_string(), &limit])
+        .status()
+        .unwrap();
+    assert!(st.success(), "prlimit --pid {pid} {limit}");
     // Queued by the kernel, but the emulator cannot take them.
     let ctl = TcpStream::connect(&addr).unwrap();
     let second = TcpStream::connect(emu.addr()).unwrap();

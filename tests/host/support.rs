@@ -297,16 +297,6 @@ impl Emu {
         Emu::start_command(cmd)
     }
 
-    /// Starts `imu-emu` with `args` under a wrapper that execs it (e.g.
-    /// `prlimit --nofile=6:6 --`), so the process is the emulator's.
-    pub fn start_under(wrapper: &[&str], args: &[&str]) -> Emu {
-        let mut cmd = Command::new(wrapper[0]);
-        cmd.args(&wrapper[1..])
-            .arg(env!("CARGO_BIN_EXE_imu-emu"))
-            .args(args);
-        Emu::start_command(cmd)
-    }
-
     /// Runs `cmd` (an `imu-emu` command line) and waits for its first
     /// stdout line.
     pub fn start_command(mut cmd: Command) -> Emu {
