@@ -221,6 +221,7 @@ fn a_line_without_a_newline_does_not_grow_memory() {
     let port = free_port();
     let addr = format!("127.0.0.1:{port}");
     let emu = Emu::tcp(&["--model", "K110", "--control", &addr]);
+    let _uart = emu.connect(); // powers the device on
     let mut ctl = Control::connect(&addr);
     assert_eq!(ctl.cmd("pps"), "ok");
     let (_, hwm0) = rss_kb(emu.pid());

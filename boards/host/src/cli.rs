@@ -94,6 +94,13 @@ pub struct Args {
     #[arg(long)]
     pub allow_remote: bool,
 
+    /// When the device powers on: `connect` (default) when the first
+    /// client connects (TCP) or first opens the pty, so it sees the
+    /// AutoStart announcement; `now` at start (what it sends before a
+    /// client connects is lost, as on a real line).
+    #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
+    pub power_on: PowerOnAt,
+
     /// Seed of the device's random processes (sensor noise, …).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
@@ -105,6 +112,15 @@ pub struct Args {
     /// device time.
     #[arg(long, value_name = "SPEED", default_value = "1")]
     pub speed: Speed,
+}
+
+/// When the device powers on (`--power-on`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PowerOnAt {
+    /// When the first client connects (TCP) or first opens the pty.
+    Connect,
+    /// At program start.
+    Now,
 }
 
 fn parse_product(s: &str) -> Result<Product, String> {
@@ -253,15 +269,6 @@ fn serve<F: NorFlash, T: Transport>(
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    let epoch = std::time::Instant::now();
-    let cfg = PowerOn {
-        product: args.model,
-        boot: None,
-        seed: args.seed,
-    };
-    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
-    transport.set_line_rate(dev.line_rate())?;
-
     let trajectory = match &args.trajectory {
         Some(path) => {
             let t = crate::trajectory::Trajectory::load(path, args.trajectory_loop)?;
@@ -274,7 +281,7 @@ fn serve<F: NorFlash, T: Transport>(
         }
         None => None,
     };
-    let control = match &args.control {
+    let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
@@ -285,8 +292,36 @@ fn serve<F: NorFlash, T: Transport>(
     }
     out.flush()?;
     drop(out);
+
+    if args.power_on == PowerOnAt::Connect {
+        eprintln!("imu-emu: the device powers on when a client connects (--power-on now: at once)");
+        while !transport.poll_client()? {
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                eprintln!("imu-emu: stopped");
+                return Ok(());
+            }
+            if let Some(c) = control.as_mut() {
+                c.poll(&mut |_| {
+                    Err(
+                        "the device is off: it powers on when a client connects to the UART \
+                         (or use --power-on now)"
+                            .to_owned(),
+                    )
+                })?;
+            }
+            transport.wait(crate::runner::IDLE_WAKE)?;
+        }
+    }
+    let epoch = std::time::Instant::now();
+    let cfg = PowerOn {
+        product: args.model,
+        boot: None,
+        seed: args.seed,
+    };
+    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
+    transport.set_line_rate(dev.line_rate())?;
     eprintln!(
-        "imu-emu: {} at {} bit/s, internal rate {} Hz, flash {}",
+        "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
         args.model.code(),
         dev.line_rate(),
         args.model.model.internal_rate_hz,
@@ -322,6 +357,11 @@ mod tests {
         assert!(!a.pty);
         assert_eq!(a.seed, 0);
         assert_eq!(a.speed, Speed::Factor(1.0));
+        assert_eq!(a.power_on, PowerOnAt::Connect);
+        assert!(!a.allow_remote);
+        let a = Args::try_parse_from(["imu-emu", "--power-on", "now"]).unwrap();
+        assert_eq!(a.power_on, PowerOnAt::Now);
+        assert!(Args::try_parse_from(["imu-emu", "--power-on", "later"]).is_err());
     }
 
     #[test]

@@ -20,7 +20,7 @@
 //!   tick due in one batch. UART input wakes it at once.
 //! * **`--speed max`**: before each pass device time moves on by
 //!   [`MAX_BATCH_TICKS`] ticks unless [`MAX_BACKLOG`] bytes wait for the
-//!   client; the loop never sleeps then, it only polls the transport (or
+//!   client or none is connected; the loop never sleeps then, it only polls the transport (or
 //!   waits for the client to read).
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -140,7 +140,9 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
             let max = self.clock.speed() == Speed::Max;
-            let client_keeps_up = self.transport.backlog_len() < MAX_BACKLOG;
+            // Nobody to read (output would be dropped): time waits.
+            let client_keeps_up =
+                self.transport.connected() && self.transport.backlog_len() < MAX_BACKLOG;
             if max && client_keeps_up {
                 let to = (self.ticks + MAX_BATCH_TICKS).saturating_mul(self.period_ns);
                 self.clock.advance_to(to);
@@ -150,7 +152,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             self.report_drops(now);
             let timeout = if max {
                 // Poll only, or wait (briefly) for the client to read.
-                if self.transport.backlog_len() < MAX_BACKLOG {
+                if self.transport.connected() && self.transport.backlog_len() < MAX_BACKLOG {
                     Duration::ZERO
                 } else {
                     BUSY_WAKE

@@ -5,7 +5,8 @@
 //! transport's descriptors with a timeout up to the next tick deadline),
 //! takes host → device bytes with [`Transport::receive`], and hands paced
 //! device → host bytes to [`Transport::send`]. Output the peer cannot take
-//! right now is kept in a bounded [`crate::backlog::Backlog`].
+//! right now is kept in a bounded [`crate::backlog::Backlog`]; output while
+//! no client is connected is dropped, as on a real line.
 
 use std::time::Duration;
 
@@ -42,6 +43,18 @@ pub trait Transport {
 
     /// Bytes waiting in the backlog.
     fn backlog_len(&self) -> usize;
+
+    /// Whether a client is connected (a TCP client accepted, the pty's
+    /// slave open), as of the last [`Transport::wait`],
+    /// [`Transport::receive`] or [`Transport::poll_client`]. While none is,
+    /// [`Transport::send`] drops the bytes, as a real line loses what
+    /// nobody reads.
+    fn connected(&self) -> bool;
+
+    /// Takes a pending connection (TCP) or notices that the pty was
+    /// opened, without reading anything; whether a client is connected.
+    /// Never blocks. (The device powers on when this first says yes.)
+    fn poll_client(&mut self) -> anyhow::Result<bool>;
 }
 
 /// Converts a timeout into the `ppoll` time spec (rounded up to 1 µs so a

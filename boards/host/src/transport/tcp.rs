@@ -1,15 +1,18 @@
 //! TCP transport: the device's UART on a listening socket.
 //!
 //! One client at a time; a new connection replaces (closes) the old one and
-//! the device keeps its state. A client that closes its sending side
+//! the device keeps its state. As on a real line, what the device sends
+//! while no client is connected is dropped, and so is what a client did not
+//! take before it went: a new client starts with the live stream (possibly
+//! mid-frame: resynchronise on `AA 55`). A client that closes its sending side
 //! (`shutdown(SHUT_WR)`) keeps receiving the stream, as on a real line; it
 //! is dropped when a write to it fails or the socket reports a hang-up.
 //! `accept()` failing for lack of resources (EMFILE, …) is transient: the
 //! listener pauses briefly and the message is rate-limited
-//! ([`super::AcceptGuard`]). While no client is connected — and whenever
-//! the client does not keep up — output goes into the bounded backlog, which
-//! is delivered first to the next client (so a client connecting right after
-//! start still sees the AutoStart announcement).
+//! ([`super::AcceptGuard`]). Output the client does not take at once (a
+//! slow reader) waits in the bounded backlog. The device powers on when the
+//! first client connects (unless `--power-on now`), so that client still
+//! sees the AutoStart announcement.
 
 use std::io::{self, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -75,6 +78,8 @@ impl TcpTransport {
                     } else {
                         eprintln!("imu-emu: client {peer} connected");
                     }
+                    // What the old client did not take is not the new one's.
+                    self.backlog.clear();
                     self.read_closed = false;
                     self.hung_up = false;
                 }
@@ -88,8 +93,9 @@ impl TcpTransport {
 
     fn drop_client(&mut self, why: &str) {
         if let Some((_, peer)) = self.client.take() {
-            eprintln!("imu-emu: client {peer} {why}");
+            eprintln!("imu-emu: client {peer} {why}; output is dropped until a client connects");
         }
+        self.backlog.clear();
         self.read_closed = false;
         self.hung_up = false;
     }
@@ -163,7 +169,10 @@ impl Transport for TcpTransport {
     }
 
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.backlog.push(bytes);
+        // A real line loses what nobody reads.
+        if self.client.is_some() {
+            self.backlog.push(bytes);
+        }
         Ok(())
     }
 
@@ -183,5 +192,14 @@ impl Transport for TcpTransport {
 
     fn backlog_len(&self) -> usize {
         self.backlog.len()
+    }
+
+    fn connected(&self) -> bool {
+        self.client.is_some()
+    }
+
+    fn poll_client(&mut self) -> anyhow::Result<bool> {
+        self.accept_all()?;
+        Ok(self.client.is_some())
     }
 }
