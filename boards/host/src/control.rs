@@ -15,7 +15,7 @@
 //! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
 //!
 //! The device's TOV output (4.1.4) is reported to the client as lines
-//! `tov high <ns>` / `tov low <ns>` (ns since the program started), in the
+//! `tov high <ns>` / `tov low <ns>` (device time, ns since power-on), in the
 //! order the device produces them.
 //!
 //! Limits (a hostile or broken client cannot stall the device or grow its
