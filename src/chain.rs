@@ -885,6 +885,7 @@ impl SignalChain {
 
     #[cfg(not(feature = "fixed-point"))]
     fn process(&mut self, truth: &Truth) {
+        let truth = &truth.bounded();
         self.begin_tick(truth.temperature_c);
         let c = &mut self.core;
         // Sensors (sensor axes).

@@ -192,10 +192,17 @@ impl QuatIntegrator {
         *self = QuatIntegrator::new(q);
     }
 
-    /// `q ← q ⊗ exp(a/2)` for a small body-frame rotation vector `a` (rad).
+    /// `q ← q ⊗ exp(a/2)` for a body-frame rotation vector `a` (rad): the
+    /// series for a small one, [`QuatIntegrator::rotate_large`] beyond
+    /// [`SERIES_MAX_N2`] (where the series would diverge).
     #[inline]
     pub fn rotate(&mut self, a: &Vec3) {
         let n2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        // NaN (a non-finite step) also takes the guarded path.
+        if n2 > SERIES_MAX_N2 || n2.is_nan() {
+            self.rotate_large(a);
+            return;
+        }
         // exp(a/2) − 1, without the cancellation of cos − 1.
         let d = [
             -n2 * (1.0 / 8.0) + n2 * n2 * (1.0 / 384.0),
@@ -220,6 +227,36 @@ impl QuatIntegrator {
                 self.lo[i] *= k;
             }
         }
+    }
+}
+
+/// Largest |a|² (|a| = 0.1 rad) [`QuatIntegrator::rotate`] turns by the
+/// series (truncation below 1e-11); beyond, e.g. an absurd rate such as
+/// 1e6 °/s at 2 kHz (8.7 rad a tick), the series diverges, the attitude
+/// would grow to ∞ and NaN, and every measured axis with it.
+pub const SERIES_MAX_N2: f32 = 0.01;
+
+impl QuatIntegrator {
+    /// `q ← q ⊗ exp(a/2)` for any rotation vector, with trigonometry: the
+    /// angle is taken in `f64` and reduced modulo 4π, so even a step of
+    /// 1e33 rad keeps a unit attitude. A non-finite angle leaves the
+    /// attitude unchanged (no turn is defined). Restarts the compensation.
+    #[cold]
+    pub fn rotate_large(&mut self, a: &Vec3) {
+        let v = [f64::from(a[0]), f64::from(a[1]), f64::from(a[2])];
+        let n = libm::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if !n.is_finite() || n == 0.0 {
+            return;
+        }
+        let half = libm::fmod(0.5 * n, core::f64::consts::TAU) as f32;
+        let (s, c) = crate::math::sincosf(half);
+        let step = [
+            c,
+            s * (v[0] / n) as f32,
+            s * (v[1] / n) as f32,
+            s * (v[2] / n) as f32,
+        ];
+        *self = QuatIntegrator::new(quat_normalize(&quat_mul(&self.hi, &step)));
     }
 }
 

@@ -57,7 +57,31 @@ pub struct Truth {
     pub temperature_c: Option<f32>,
 }
 
+/// Largest angular rate handed to the sensor model, °/s: 2048, beyond every
+/// gyro range (the float counterpart of the fixed-point `TRUTH_LIMIT`).
+pub const TRUTH_RATE_LIMIT_DPS: f32 = 2048.0;
+/// Largest specific force handed to the sensor model, g: 128, beyond every
+/// accelerometer range.
+pub const TRUTH_FORCE_LIMIT_G: f32 = 128.0;
+
 impl Truth {
+    /// The truth as the sensor model takes it: each rate clamped to
+    /// ±[`TRUTH_RATE_LIMIT_DPS`], each specific force to
+    /// ±[`TRUTH_FORCE_LIMIT_G`] — still beyond every range, so the axes
+    /// saturate and the USW range bits (ICD Table 5.26, bits 10–12) are set
+    /// as on a real sensor — and NaN read as 0 (as the fixed-point
+    /// [`TruthFixed::from_truth`]). Without it an infinite or huge input
+    /// (a trajectory value of 3.5e38) turns into NaN in the mounting and
+    /// misalignment products (∞·0, ∞ − ∞), which read as 0 with no flag.
+    pub fn bounded(&self) -> Truth {
+        let c = |v: f32, lim: f32| if v.is_nan() { 0.0 } else { v.clamp(-lim, lim) };
+        Truth {
+            rate_dps: self.rate_dps.map(|v| c(v, TRUTH_RATE_LIMIT_DPS)),
+            specific_force_g: self.specific_force_g.map(|v| c(v, TRUTH_FORCE_LIMIT_G)),
+            temperature_c: self.temperature_c,
+        }
+    }
+
     /// At rest, level, z up, at the default latitude and heading 0.
     pub fn at_rest() -> Truth {
         let (w, f) = earth_and_gravity(&QUAT_IDENTITY, &earth_enu(DEFAULT_LATITUDE_DEG));

@@ -8,10 +8,10 @@
 mod support;
 
 use std::thread::sleep;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use support::{
-    ack_of, command, count_for, frame, hex, read_ram, save, save_flash, sum16, Conn, Emu,
+    ack_of, command, count_for, frame, hex, read_ram, save, save_flash, sum16, Conn, Control, Emu,
 };
 
 const GET_DEV_INFO: u8 = 0x12;
@@ -113,8 +113,11 @@ fn a_new_connection_replaces_the_old_and_the_device_keeps_streaming() {
     drop(c);
 }
 
+/// The device powers on when the first client connects (`--power-on`
+/// default), so a client connecting late still sees the AutoStart
+/// announcement first, then the stream.
 #[test]
-fn auto_start_output_waits_in_the_backlog_for_the_first_client() {
+fn auto_start_output_is_seen_by_a_late_first_client() {
     let dir = tempfile::tempdir().unwrap();
     let flash = flash_file(&dir);
     let mut emu = Emu::tcp(&["--flash", &flash]);
@@ -154,5 +157,126 @@ fn pty_with_link_answers_get_dev_info() {
     assert!(
         std::fs::symlink_metadata(&link).is_err(),
         "--link symlink left behind"
+    );
+}
+
+/// The GA 2 kHz counter (Table 5.7, payload offset 24).
+fn ga_counter(f: &support::Frame) -> u16 {
+    u16::from_le_bytes([f.payload()[24], f.payload()[25]])
+}
+
+/// Saves AutoStart = GA in a fresh flash file and returns its path.
+fn auto_start_flash(dir: &tempfile::TempDir) -> String {
+    let flash = flash_file(dir);
+    let mut emu = Emu::tcp(&["--flash", &flash]);
+    let mut c = emu.connect();
+    save(&mut c, AUTO_START, &[GA]);
+    drop(c);
+    assert!(emu.terminate().success());
+    flash
+}
+
+/// `--power-on now`: the device powers on at start and a real line loses
+/// what nobody reads — a client connecting 500 ms later gets no
+/// announcement and no old frames: its first GA frame is from after it
+/// connected (2 kHz counter at least 2000 × 0.5 s).
+#[test]
+fn power_on_now_loses_what_was_sent_before_the_client_connected() {
+    let dir = tempfile::tempdir().unwrap();
+    let flash = auto_start_flash(&dir);
+    let emu = Emu::tcp(&["--flash", &flash, "--power-on", "now"]);
+    sleep(Duration::from_millis(500));
+    let mut c = emu.connect();
+    let f = c.frame();
+    assert_eq!(f.id(), GA, "{:02X?}", f.bytes);
+    assert_eq!(f.bytes.len(), GA_FRAME_LEN);
+    assert!(
+        ga_counter(&f) >= 1000,
+        "stale frame: counter {}",
+        ga_counter(&f)
+    );
+}
+
+/// After a client disconnects, what the device sends meanwhile is dropped:
+/// the next client's first GA frame follows the gap in time (its counter
+/// jumped by at least 2000 × 0.4 s while nobody was connected), frames
+/// from the unconnected time never arrive.
+#[test]
+fn output_while_no_client_is_connected_is_dropped() {
+    let emu = Emu::tcp(&[]);
+    let mut c = emu.connect();
+    start_ga(&mut c);
+    let mut last = 0;
+    for _ in 0..5 {
+        last = ga_counter(&ga_frame(&mut c));
+    }
+    drop(c);
+    let gone = Instant::now();
+    sleep(Duration::from_millis(500));
+    let mut c = emu.connect();
+    let away = gone.elapsed();
+    let first = ga_frame(&mut c);
+    let jump = ga_counter(&first).wrapping_sub(last);
+    assert!(
+        jump >= 800,
+        "counter jumped by {jump} only: stale frames ({away:?} away)"
+    );
+    // Then the live stream, without gaps.
+    let mut k = ga_counter(&first);
+    for _ in 0..20 {
+        let n = ga_counter(&ga_frame(&mut c));
+        assert_eq!(n, k.wrapping_add(20));
+        k = n;
+    }
+}
+
+/// Before the first client connects the device is off: the control socket
+/// says so instead of applying commands; once a client connected, it works.
+#[test]
+fn the_control_socket_says_when_the_device_is_off() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    let emu = Emu::tcp(&["--control", &addr]);
+    let mut ctl = Control::connect(&addr);
+    assert_eq!(
+        ctl.cmd("pps"),
+        "error the device is off: it powers on when a client connects to the UART \
+         (or use --power-on now)"
+    );
+    let mut c = emu.connect();
+    get_dev_info_round_trip(&mut c);
+    assert_eq!(ctl.cmd("pps"), "ok");
+}
+
+/// On a pty the device powers on when the port is first opened (so the
+/// AutoStart announcement is seen), and what it sends while the port is
+/// closed — or what the client left unread — is dropped.
+#[test]
+fn pty_powers_on_at_first_open_and_drops_output_while_closed() {
+    let dir = tempfile::tempdir().unwrap();
+    let flash = auto_start_flash(&dir);
+    let emu = Emu::start(&["--pty", "--flash", &flash]);
+    sleep(Duration::from_millis(300));
+    let mut c = Conn::serial(&emu.pty_path());
+    assert_eq!(c.read_bytes(10), hex("AA 55 01 00 08 00 00 00 09 00"));
+    let mut last = 0;
+    for _ in 0..5 {
+        last = ga_counter(&ga_frame(&mut c));
+    }
+    // Leave some unread, then close for 0.5 s.
+    sleep(Duration::from_millis(100));
+    drop(c);
+    sleep(Duration::from_millis(500));
+    let mut c = Conn::serial(&emu.pty_path());
+    let first = ga_frame(&mut c);
+    let jump = ga_counter(&first).wrapping_sub(last);
+    assert!(jump >= 800, "counter jumped by {jump} only: stale frames");
+    assert_eq!(
+        ga_counter(&ga_frame(&mut c)),
+        ga_counter(&first).wrapping_add(20)
     );
 }

@@ -292,8 +292,15 @@ pub struct Emu {
 impl Emu {
     /// Starts `imu-emu` with `args` and waits for its first stdout line.
     pub fn start(args: &[&str]) -> Emu {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
-            .args(args)
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_imu-emu"));
+        cmd.args(args);
+        Emu::start_command(cmd)
+    }
+
+    /// Runs `cmd` (an `imu-emu` command line) and waits for its first
+    /// stdout line.
+    pub fn start_command(mut cmd: Command) -> Emu {
+        let mut child = cmd
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -359,6 +366,16 @@ impl Emu {
     /// A new TCP client connection.
     pub fn connect(&self) -> Conn {
         Conn::tcp(self.addr())
+    }
+
+    /// The emulator's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Whether the emulator is still running.
+    pub fn running(&mut self) -> bool {
+        self.child.try_wait().unwrap().is_none()
     }
 
     /// What the emulator wrote to stderr so far.

@@ -1,9 +1,10 @@
 //! A bounded byte backlog: device output that left the (emulated) UART but
-//! that the host side could not take yet — no TCP client connected, or a
-//! client / pty reader that is slower than the line.
+//! that the connected client could not take yet — a TCP client or pty
+//! reader that is slower than the line. (Output while no client is
+//! connected is not kept: the transports drop it, as a real line would.)
 //!
-//! When full, the oldest bytes are dropped first, so a client that connects
-//! late sees the most recent output (and must resynchronise on `AA 55`).
+//! When full, the oldest bytes are dropped first, so a slow client sees the
+//! most recent output (and must resynchronise on `AA 55`).
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -58,6 +59,12 @@ impl Backlog {
     /// Bytes dropped so far because the backlog was full.
     pub fn dropped(&self) -> u64 {
         self.dropped
+    }
+
+    /// Drops everything queued (the client it was for went away); not
+    /// counted in [`Backlog::dropped`].
+    pub fn clear(&mut self) {
+        self.buf.clear();
     }
 
     /// Appends `bytes`, dropping the oldest queued bytes if the capacity

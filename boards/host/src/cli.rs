@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! imu-emu [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
-//!         [--flash FILE] [--seed N]
+//!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -10,6 +10,11 @@
 //! reveals the port it got) or `listening on pty /dev/pts/5` — and is
 //! flushed at once. Diagnostics go to stderr. SIGINT/SIGTERM stop the
 //! program cleanly (exit 0; a second signal exits at once with status 1).
+//!
+//! `--tcp` and `--control` must be loopback addresses unless
+//! `--allow-remote` is given (then a warning says what is exposed). Errors
+//! are one line (`imu-emu: …`, [`report`]): exit status 2 for a bad
+//! argument ([`UsageError`]), 1 for a failure while running.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -42,7 +47,8 @@ pub struct Args {
     pub model: Product,
 
     /// Serve the UART on this TCP address (one client at a time; port 0
-    /// picks a free port) [default: 127.0.0.1:7000].
+    /// picks a free port; loopback only without --allow-remote)
+    /// [default: 127.0.0.1:7000].
     #[arg(long, value_name = "ADDR", conflicts_with = "pty")]
     pub tcp: Option<String>,
 
@@ -64,7 +70,7 @@ pub struct Args {
     /// Serve the control socket on this TCP address: inject 1PPS/EXTRIG
     /// edges, power-cycle with BOOT, read TOV edges (see the `control`
     /// module). Its address is the second stdout line:
-    /// `control on tcp ADDR`.
+    /// `control on tcp ADDR`. Loopback only without --allow-remote.
     #[arg(long, value_name = "ADDR")]
     pub control: Option<String>,
 
@@ -81,6 +87,20 @@ pub struct Args {
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
 
+    /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
+    /// LAN address). Whoever reaches the port can then save parameters,
+    /// power-cycle the device and inject faults: the program says so on
+    /// stderr at start.
+    #[arg(long)]
+    pub allow_remote: bool,
+
+    /// When the device powers on: `connect` (default) when the first
+    /// client connects (TCP) or first opens the pty, so it sees the
+    /// AutoStart announcement; `now` at start (what it sends before a
+    /// client connects is lost, as on a real line).
+    #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
+    pub power_on: PowerOnAt,
+
     /// Seed of the device's random processes (sensor noise, …).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
@@ -94,13 +114,131 @@ pub struct Args {
     pub speed: Speed,
 }
 
+/// When the device powers on (`--power-on`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PowerOnAt {
+    /// When the first client connects (TCP) or first opens the pty.
+    Connect,
+    /// At program start.
+    Now,
+}
+
 fn parse_product(s: &str) -> Result<Product, String> {
     Product::parse(s).map_err(|e| e.to_string())
+}
+
+/// An error in what the user asked for (exit status 2, as clap's usage
+/// errors), as opposed to one met while running (exit status 1).
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl core::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// The error of binding `addr` for `option` (`--tcp`, `--control`), with a
+/// hint where one helps: a port in use suggests port 0, an address that
+/// does not parse says `HOST:PORT` is expected.
+pub fn bind_error(e: std::io::Error, option: &str, addr: &str) -> anyhow::Error {
+    use std::io::ErrorKind;
+    match e.kind() {
+        ErrorKind::AddrInUse => anyhow::anyhow!(
+            "{option} {addr}: address already in use (another imu-emu?); \
+             hint: {option} 127.0.0.1:0 picks a free port"
+        ),
+        ErrorKind::InvalidInput => anyhow::Error::new(UsageError(format!(
+            "{option} {addr}: {e}; expected HOST:PORT, e.g. {option} 127.0.0.1:7000"
+        ))),
+        _ => anyhow::anyhow!("{option} {addr}: {e}"),
+    }
+}
+
+/// Checks that `addr` (`HOST:PORT`) given to `option` is a loopback
+/// address, or that `--allow-remote` allows any; a name is resolved and
+/// every address it resolves to must be loopback. Returns whether the
+/// address is remote (to warn about).
+pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Result<bool> {
+    use std::net::ToSocketAddrs as _;
+    let addrs: Vec<std::net::SocketAddr> = addr
+        .to_socket_addrs()
+        .map_err(|e| {
+            UsageError(format!(
+                "{option} {addr}: {e}; expected HOST:PORT, e.g. {option} 127.0.0.1:7000"
+            ))
+        })?
+        .collect();
+    let remote = addrs.is_empty() || addrs.iter().any(|a| !a.ip().is_loopback());
+    if remote && !allow_remote {
+        return Err(UsageError(format!(
+            "{option} {addr}: not a loopback address: it would expose SaveFlash, power \
+             cycle and fault injection to the network; add --allow-remote to allow it"
+        ))
+        .into());
+    }
+    Ok(remote)
+}
+
+/// Checks the listening addresses before anything is opened; warns loudly
+/// on stderr about each remote one `--allow-remote` lets through.
+fn check_addresses(args: &Args) -> anyhow::Result<()> {
+    let mut wanted = Vec::new();
+    if !args.pty {
+        wanted.push(("--tcp", args.tcp.as_deref().unwrap_or(DEFAULT_TCP)));
+    }
+    if let Some(c) = &args.control {
+        wanted.push(("--control", c.as_str()));
+    }
+    for (option, addr) in wanted {
+        if check_local(option, addr, args.allow_remote)? {
+            eprintln!(
+                "imu-emu: WARNING: {option} {addr} is reachable from the network \
+                 (--allow-remote): anyone who connects can save parameters, \
+                 power-cycle the device and inject faults"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Prints `e` as one line on stderr (`imu-emu: what: why: cause`) and
+/// returns the exit status: 2 for a [`UsageError`], 1 otherwise. Never a
+/// backtrace.
+pub fn report(e: &anyhow::Error) -> u8 {
+    let line = format!("{e:#}").replace('\n', " ");
+    eprintln!("imu-emu: {line}");
+    if e.chain().any(|c| c.is::<UsageError>()) {
+        2
+    } else {
+        1
+    }
+}
+
+/// Makes a panic print one line (`imu-emu: internal error: …`) instead of
+/// the default message and backtrace, whatever `RUST_BACKTRACE` says.
+pub fn one_line_panics() {
+    std::panic::set_hook(Box::new(|info| {
+        let what = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("imu-emu: internal error: {}{at}", what.replace('\n', " "));
+    }));
 }
 
 /// Runs the program: sets up signals, the flash and the transport, powers
 /// the device on and serves it until SIGINT/SIGTERM.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    check_addresses(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -131,15 +269,6 @@ fn serve<F: NorFlash, T: Transport>(
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    let epoch = std::time::Instant::now();
-    let cfg = PowerOn {
-        product: args.model,
-        boot: None,
-        seed: args.seed,
-    };
-    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
-    transport.set_line_rate(dev.line_rate())?;
-
     let trajectory = match &args.trajectory {
         Some(path) => {
             let t = crate::trajectory::Trajectory::load(path, args.trajectory_loop)?;
@@ -152,7 +281,7 @@ fn serve<F: NorFlash, T: Transport>(
         }
         None => None,
     };
-    let control = match &args.control {
+    let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
@@ -163,8 +292,36 @@ fn serve<F: NorFlash, T: Transport>(
     }
     out.flush()?;
     drop(out);
+
+    if args.power_on == PowerOnAt::Connect {
+        eprintln!("imu-emu: the device powers on when a client connects (--power-on now: at once)");
+        while !transport.poll_client()? {
+            if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                eprintln!("imu-emu: stopped");
+                return Ok(());
+            }
+            if let Some(c) = control.as_mut() {
+                c.poll(&mut |_| {
+                    Err(
+                        "the device is off: it powers on when a client connects to the UART \
+                         (or use --power-on now)"
+                            .to_owned(),
+                    )
+                })?;
+            }
+            transport.wait(crate::runner::IDLE_WAKE)?;
+        }
+    }
+    let epoch = std::time::Instant::now();
+    let cfg = PowerOn {
+        product: args.model,
+        boot: None,
+        seed: args.seed,
+    };
+    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
+    transport.set_line_rate(dev.line_rate())?;
     eprintln!(
-        "imu-emu: {} at {} bit/s, internal rate {} Hz, flash {}",
+        "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
         args.model.code(),
         dev.line_rate(),
         args.model.model.internal_rate_hz,
@@ -200,6 +357,11 @@ mod tests {
         assert!(!a.pty);
         assert_eq!(a.seed, 0);
         assert_eq!(a.speed, Speed::Factor(1.0));
+        assert_eq!(a.power_on, PowerOnAt::Connect);
+        assert!(!a.allow_remote);
+        let a = Args::try_parse_from(["imu-emu", "--power-on", "now"]).unwrap();
+        assert_eq!(a.power_on, PowerOnAt::Now);
+        assert!(Args::try_parse_from(["imu-emu", "--power-on", "later"]).is_err());
     }
 
     #[test]

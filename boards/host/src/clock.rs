@@ -16,8 +16,7 @@
 //!   ([`MAX_BATCH_TICKS`]) whenever less than [`MAX_BACKLOG`] bytes wait
 //!   for the client, and otherwise waits for the client to read. Nothing
 //!   is dropped for speed's sake, so a slow client slows device time down
-//!   instead (with no client connected, time stops once the backlog holds
-//!   [`MAX_BACKLOG`] bytes).
+//!   instead (with no client connected, time stops).
 //!
 //! Either way the device sees the same sequence of ticks and bytes at the
 //! same device times as in real time: a recorded session replays

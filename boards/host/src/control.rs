@@ -15,16 +15,28 @@
 //! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
 //!
 //! The device's TOV output (4.1.4) is reported to the client as lines
-//! `tov high <ns>` / `tov low <ns>` (ns since the program started), in the
+//! `tov high <ns>` / `tov low <ns>` (device time, ns since power-on), in the
 //! order the device produces them.
+//!
+//! Limits (a hostile or broken client cannot stall the device or grow its
+//! memory): a line is at most [`MAX_LINE`] bytes — a longer one is answered
+//! `error line longer than 256 bytes` and skipped up to its newline; each
+//! runner pass executes at most [`MAX_COMMANDS_PER_POLL`] commands and reads
+//! at most [`MAX_READ_PER_POLL`] bytes, the rest waiting for the next pass;
+//! a client that does not read its replies gets no more commands executed
+//! once [`MAX_PENDING_OUTPUT`] bytes wait for it (TOV reports that do not
+//! fit are dropped). A client that closes its sending side still gets its
+//! replies and the TOV reports.
 
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 
-use anyhow::Context as _;
 use imu_emu::chain::Faults;
 use imu_emu::device::{Level, Pin};
 use imu_emu::sensor::Motion;
+
+use crate::transport::AcceptGuard;
 
 /// A parsed control command.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,23 +139,194 @@ pub fn parse(line: &str) -> Result<Command, String> {
     }
 }
 
+/// Longest command line accepted, bytes (the newline excluded). A longer
+/// line is answered `error line longer than 256 bytes` once and skipped up
+/// to its newline.
+pub const MAX_LINE: usize = 256;
+
+/// Commands executed per [`Control::poll`] (one runner pass); the rest wait
+/// for the next pass, so a burst of lines never holds up the ticks.
+pub const MAX_COMMANDS_PER_POLL: usize = 256;
+
+/// Bytes read from the client per [`Control::poll`].
+pub const MAX_READ_PER_POLL: usize = 256 * 1024;
+
+/// Replies and reports queued for a client that does not read, bytes.
+/// While the queue is fuller than this less a reply, no further command is
+/// executed (the client's own sending is held up by TCP instead); a TOV
+/// report that does not fit is dropped.
+pub const MAX_PENDING_OUTPUT: usize = 64 * 1024;
+
+/// Room a reply needs in the output queue: the longest one echoes a
+/// [`MAX_LINE`] line.
+const REPLY_ROOM: usize = MAX_LINE + 64;
+
 /// The control listener and its client.
+///
+/// Input is scanned once as it arrives (O(n) in the bytes received) from a
+/// fixed 16 KiB buffer, at most [`MAX_READ_PER_POLL`] bytes and
+/// [`MAX_COMMANDS_PER_POLL`] commands a pass; memory stays bounded whatever
+/// the client sends (a line without a newline is cut at [`MAX_LINE`], its
+/// output queue at [`MAX_PENDING_OUTPUT`]).
 pub struct Control {
     listener: TcpListener,
-    client: Option<TcpStream>,
-    line: Vec<u8>,
+    accept: AcceptGuard,
+    client: Option<Client>,
+}
+
+/// The connected control client.
+struct Client {
+    stream: TcpStream,
+    /// Received bytes not yet parsed: `inbuf[start..end]`.
+    inbuf: Box<[u8; INBUF]>,
+    start: usize,
+    end: usize,
+    /// Skipping the rest of an over-long line, up to its newline.
+    discarding: bool,
+    /// Output not yet taken by the socket.
+    out: VecDeque<u8>,
+    /// The client closed its sending side: no more commands will come.
+    read_closed: bool,
+}
+
+/// Input buffer size: a whole pass of reads fits in a few refills.
+const INBUF: usize = 16 * 1024;
+
+/// What one scan of the input buffer found.
+enum Line {
+    /// A complete line `inbuf[from..to]` (newline excluded).
+    Complete(usize, usize),
+    /// A line over [`MAX_LINE`] started: reply once, then discard.
+    TooLong,
+    /// No complete line buffered.
+    None,
+}
+
+impl Client {
+    fn new(stream: TcpStream) -> Self {
+        Client {
+            stream,
+            inbuf: Box::new([0; INBUF]),
+            start: 0,
+            end: 0,
+            discarding: false,
+            out: VecDeque::new(),
+            read_closed: false,
+        }
+    }
+
+    /// The next line in the buffer, if any; consumes it (or, while
+    /// discarding, everything up to and including the next newline).
+    fn next_line(&mut self) -> Line {
+        loop {
+            let pending = &self.inbuf[self.start..self.end];
+            let nl = pending.iter().position(|&b| b == b'\n');
+            if self.discarding {
+                match nl {
+                    Some(i) => {
+                        self.start += i + 1;
+                        self.discarding = false;
+                        continue;
+                    }
+                    None => {
+                        self.start = self.end;
+                        return Line::None;
+                    }
+                }
+            }
+            return match nl {
+                Some(i) if i <= MAX_LINE => {
+                    let from = self.start;
+                    self.start += i + 1;
+                    Line::Complete(from, from + i)
+                }
+                Some(i) => {
+                    // Over-long but complete: skip it with its newline.
+                    self.start += i + 1;
+                    Line::TooLong
+                }
+                None if pending.len() > MAX_LINE => {
+                    self.start = self.end;
+                    self.discarding = true;
+                    Line::TooLong
+                }
+                None => Line::None,
+            };
+        }
+    }
+
+    /// Reads what the socket has, at most `budget` bytes, into the free
+    /// room of the buffer (moving the unparsed rest to its front first).
+    /// Returns bytes read and whether the client is gone.
+    fn fill(&mut self, budget: usize) -> (usize, bool) {
+        if self.read_closed {
+            return (0, false);
+        }
+        if self.start > 0 {
+            self.inbuf.copy_within(self.start..self.end, 0);
+            self.end -= self.start;
+            self.start = 0;
+        }
+        let room = (INBUF - self.end).min(budget);
+        if room == 0 {
+            return (0, false);
+        }
+        match self.stream.read(&mut self.inbuf[self.end..self.end + room]) {
+            Ok(0) => {
+                // Half-closed or closed: no more commands; replies and TOV
+                // reports still go out until a write fails.
+                self.read_closed = true;
+                (0, false)
+            }
+            Ok(n) => {
+                self.end += n;
+                (n, false)
+            }
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {
+                (0, false)
+            }
+            Err(_) => (0, true),
+        }
+    }
+
+    /// Queues `line` if there is room (else drops it); whether it was queued.
+    fn queue(&mut self, line: &[u8]) -> bool {
+        if self.out.len() + line.len() > MAX_PENDING_OUTPUT {
+            return false;
+        }
+        self.out.extend(line);
+        true
+    }
+
+    /// Writes queued output the socket takes now; `false` if the client is
+    /// gone.
+    fn flush(&mut self) -> bool {
+        while !self.out.is_empty() {
+            let (front, _) = self.out.as_slices();
+            match self.stream.write(front) {
+                Ok(0) => return false,
+                Ok(n) => {
+                    self.out.drain(..n);
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return true,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return false,
+            }
+        }
+        true
+    }
 }
 
 impl Control {
     /// Listens on `addr`.
     pub fn bind(addr: &str) -> anyhow::Result<Self> {
         let listener =
-            TcpListener::bind(addr).with_context(|| format!("binding control {addr}"))?;
+            TcpListener::bind(addr).map_err(|e| crate::cli::bind_error(e, "--control", addr))?;
         listener.set_nonblocking(true)?;
         Ok(Control {
             listener,
+            accept: AcceptGuard::new("control"),
             client: None,
-            line: Vec::new(),
         })
     }
 
@@ -152,61 +335,100 @@ impl Control {
         Ok(self.listener.local_addr()?)
     }
 
-    /// Accepts a new client and reads complete command lines; each is
-    /// handed to `apply`, whose answer goes back to the client. Never blocks.
-    pub fn poll(
-        &mut self,
-        apply: &mut dyn FnMut(Command) -> Result<(), String>,
-    ) -> anyhow::Result<()> {
+    /// Failed `accept()` calls so far (EMFILE and the like: transient).
+    pub fn accept_failures(&self) -> u64 {
+        self.accept.failures()
+    }
+
+    fn accept_new(&mut self) -> anyhow::Result<()> {
+        if !self.accept.ready() {
+            return Ok(());
+        }
         match self.listener.accept() {
             Ok((s, _)) => {
                 s.set_nonblocking(true)?;
                 s.set_nodelay(true)?;
-                self.client = Some(s);
-                self.line.clear();
+                self.client = Some(Client::new(s));
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock => {}
-            Err(e) => return Err(e.into()),
+            Err(e) if crate::transport::is_transient_accept_error(&e) => self.accept.failed(&e),
+            Err(e) => return Err(anyhow::Error::new(e).context("control socket accept")),
         }
-        let Some(client) = self.client.as_mut() else {
+        Ok(())
+    }
+
+    /// Accepts a new client and executes the command lines it sent; each is
+    /// handed to `apply`, whose answer goes back to the client. Never
+    /// blocks, and does bounded work: at most [`MAX_READ_PER_POLL`] bytes
+    /// read and [`MAX_COMMANDS_PER_POLL`] commands executed; what is left
+    /// waits for the next call.
+    pub fn poll(
+        &mut self,
+        apply: &mut dyn FnMut(Command) -> Result<(), String>,
+    ) -> anyhow::Result<()> {
+        self.accept_new()?;
+        let Some(c) = self.client.as_mut() else {
             return Ok(());
         };
-        let mut buf = [0u8; 256];
-        loop {
-            match client.read(&mut buf) {
-                Ok(0) => {
-                    self.client = None;
-                    return Ok(());
+        let mut commands = 0;
+        let mut read = 0;
+        let mut gone = false;
+        'pass: while commands < MAX_COMMANDS_PER_POLL {
+            // Backpressure: a client that does not read its replies gets no
+            // more commands executed until it does.
+            if MAX_PENDING_OUTPUT - c.out.len().min(MAX_PENDING_OUTPUT) < REPLY_ROOM {
+                if !c.flush() {
+                    gone = true;
                 }
-                Ok(n) => self.line.extend_from_slice(&buf[..n]),
-                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
-                Err(_) => {
-                    self.client = None;
-                    return Ok(());
+                break;
+            }
+            match c.next_line() {
+                Line::Complete(from, to) => {
+                    let text = String::from_utf8_lossy(&c.inbuf[from..to]);
+                    let text = text.trim();
+                    if text.is_empty() {
+                        continue;
+                    }
+                    commands += 1;
+                    let answer = match parse(text).and_then(&mut *apply) {
+                        Ok(()) => "ok\n".to_owned(),
+                        Err(e) => format!("error {e}\n"),
+                    };
+                    c.queue(answer.as_bytes());
+                }
+                Line::TooLong => {
+                    commands += 1;
+                    c.queue(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
+                }
+                Line::None => {
+                    if read >= MAX_READ_PER_POLL {
+                        break;
+                    }
+                    let (n, closed) = c.fill(MAX_READ_PER_POLL - read);
+                    read += n;
+                    if closed {
+                        gone = true;
+                        break 'pass;
+                    }
+                    if n == 0 {
+                        break;
+                    }
                 }
             }
         }
-        while let Some(end) = self.line.iter().position(|&b| b == b'\n') {
-            let raw: Vec<u8> = self.line.drain(..=end).collect();
-            let text = String::from_utf8_lossy(&raw);
-            let text = text.trim();
-            if text.is_empty() {
-                continue;
-            }
-            let answer = match parse(text).and_then(&mut *apply) {
-                Ok(()) => "ok\n".to_owned(),
-                Err(e) => format!("error {e}\n"),
-            };
-            self.say(&answer);
+        if gone || !c.flush() {
+            self.client = None;
         }
         Ok(())
     }
 
     /// Sends a line to the client, if one is connected (best effort: a
-    /// client that does not read loses lines rather than stalling the device).
+    /// client that does not read loses reports once
+    /// [`MAX_PENDING_OUTPUT`] bytes wait, rather than stalling the device).
     pub fn say(&mut self, line: &str) {
         if let Some(c) = self.client.as_mut() {
-            if c.write_all(line.as_bytes()).is_err() {
+            c.queue(line.as_bytes());
+            if !c.flush() {
                 self.client = None;
             }
         }
@@ -249,5 +471,105 @@ mod tests {
             Ok(Command::Motion(Motion::ConstantRotation { .. }))
         ));
         assert!(parse("motion rotate 0 x 0").is_err());
+    }
+
+    /// A control socket and a connected client whose first poll accepted it.
+    fn pair() -> (Control, TcpStream) {
+        let mut ctl = Control::bind("127.0.0.1:0").unwrap();
+        let client = TcpStream::connect(ctl.local_addr().unwrap()).unwrap();
+        client
+            .set_read_timeout(Some(std::time::Duration::from_secs(5)))
+            .unwrap();
+        for _ in 0..500 {
+            ctl.poll(&mut |_| Ok(())).unwrap();
+            if ctl.client.is_some() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        assert!(ctl.client.is_some());
+        (ctl, client)
+    }
+
+    /// Polls until `n` commands were applied (each poll applying at most
+    /// the per-pass budget); returns the count applied by each poll.
+    fn polls_until(ctl: &mut Control, n: usize) -> Vec<usize> {
+        let mut per_poll = Vec::new();
+        let mut total = 0;
+        for _ in 0..10_000 {
+            let mut k = 0;
+            ctl.poll(&mut |_| {
+                k += 1;
+                Ok(())
+            })
+            .unwrap();
+            if k > 0 {
+                per_poll.push(k);
+            }
+            total += k;
+            if total >= n {
+                return per_poll;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        panic!("{total} of {n} commands applied: {per_poll:?}");
+    }
+
+    #[test]
+    fn work_per_poll_is_bounded_and_every_line_is_answered() {
+        let (mut ctl, mut client) = pair();
+        client.write_all(&b"pps\n".repeat(1000)).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        let per_poll = polls_until(&mut ctl, 1000);
+        assert_eq!(per_poll.iter().sum::<usize>(), 1000);
+        assert!(
+            per_poll.iter().all(|&k| k <= MAX_COMMANDS_PER_POLL),
+            "{per_poll:?}"
+        );
+        assert_eq!(per_poll[0], MAX_COMMANDS_PER_POLL);
+        let mut r = std::io::BufReader::new(client);
+        let mut line = String::new();
+        for _ in 0..1000 {
+            line.clear();
+            std::io::BufRead::read_line(&mut r, &mut line).unwrap();
+            assert_eq!(line, "ok\n");
+        }
+    }
+
+    #[test]
+    fn an_over_long_line_is_refused_once_and_the_next_line_parses() {
+        let (mut ctl, mut client) = pair();
+        // Split across writes and polls, the newline far beyond the limit.
+        client.write_all(&[b'x'; 1000]).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        ctl.poll(&mut |_| Ok(())).unwrap();
+        client.write_all(&[b'y'; 70_000]).unwrap();
+        client.write_all(b"\nextrig sideways\npps\n").unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let mut applied = Vec::new();
+        for _ in 0..100 {
+            ctl.poll(&mut |c| {
+                applied.push(c);
+                Ok(())
+            })
+            .unwrap();
+        }
+        assert_eq!(applied, [Command::Edge(Pin::Pps, Level::High)]);
+        let mut r = std::io::BufReader::new(client);
+        let mut lines = Vec::new();
+        for _ in 0..3 {
+            let mut l = String::new();
+            std::io::BufRead::read_line(&mut r, &mut l).unwrap();
+            lines.push(l);
+        }
+        assert_eq!(
+            lines,
+            [
+                "error line longer than 256 bytes\n",
+                "error unknown command: extrig sideways\n",
+                "ok\n"
+            ]
+        );
+        assert!(ctl.client.as_ref().is_some_and(|c| !c.discarding));
     }
 }

@@ -8,10 +8,18 @@
 //! `0xFF` on open, so later writes never leave zero-filled holes). Bytes
 //! reach the operating system on every operation (`pwrite`), so they survive
 //! the process being killed at any moment; they are not `fsync`ed.
+//!
+//! The file must be a regular file (or a path where one can be created):
+//! a FIFO, a device (`/dev/null`, `/dev/full`), a directory or a socket is
+//! refused with one line, without blocking (the file is opened
+//! `O_NONBLOCK` and checked with `fstat` before anything is read). It is
+//! locked (`flock`, exclusive, non-blocking) while the program runs, so a
+//! second emulator on the same file is refused instead of silently losing
+//! the first one's saves.
 
 use std::fs::{File, OpenOptions};
 use std::io::{self, Read};
-use std::os::unix::fs::FileExt;
+use std::os::unix::fs::{FileExt, FileTypeExt as _, OpenOptionsExt as _};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
@@ -64,24 +72,62 @@ pub struct FileNor {
 }
 
 impl FileNor {
-    /// Opens (or creates) the flash image at `path`.
+    /// Opens (or creates) the flash image at `path` and locks it; refuses
+    /// anything that is not a regular file ([`crate::cli::UsageError`])
+    /// and a file another process holds locked.
     pub fn open(path: &Path) -> anyhow::Result<Self> {
+        let shown = path.display();
         let mut file = OpenOptions::new()
             .read(true)
             .write(true)
             .create(true)
             .truncate(false)
+            // A FIFO would block the open until a writer shows up; a
+            // terminal would become the controlling one.
+            .custom_flags(nix::fcntl::OFlag::O_NONBLOCK.bits() | nix::fcntl::OFlag::O_NOCTTY.bits())
             .open(path)
-            .with_context(|| format!("opening flash file {}", path.display()))?;
+            .with_context(|| format!("--flash {shown}: cannot open or create it"))?;
+        let kind = file
+            .metadata()
+            .with_context(|| format!("--flash {shown}: stat"))?
+            .file_type();
+        if !kind.is_file() {
+            return Err(crate::cli::UsageError(format!(
+                "--flash {shown}: not a regular file ({}); give the path of a file to keep the \
+                 flash image in",
+                describe(kind)
+            ))
+            .into());
+        }
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => anyhow::bail!(
+                "--flash {shown}: in use by another process (locked; another imu-emu?); \
+                 stop it or give another file"
+            ),
+            Err(std::fs::TryLockError::Error(e)) => {
+                return Err(anyhow::Error::new(e).context(format!("--flash {shown}: lock")))
+            }
+        }
+        // Back to blocking I/O for the reads and writes proper.
+        let fl = nix::fcntl::fcntl(&file, nix::fcntl::FcntlArg::F_GETFL)
+            .with_context(|| format!("--flash {shown}: fcntl"))?;
+        nix::fcntl::fcntl(
+            &file,
+            nix::fcntl::FcntlArg::F_SETFL(
+                nix::fcntl::OFlag::from_bits_truncate(fl) & !nix::fcntl::OFlag::O_NONBLOCK,
+            ),
+        )
+        .with_context(|| format!("--flash {shown}: fcntl"))?;
         let mut image = Vec::with_capacity(FLASH_SIZE);
         (&mut file)
             .take(FLASH_SIZE as u64)
             .read_to_end(&mut image)
-            .with_context(|| format!("reading flash file {}", path.display()))?;
+            .with_context(|| format!("--flash {shown}: reading"))?;
         let nor = MemNor::from_image(&image);
         if image.len() < FLASH_SIZE {
             file.write_all_at(&nor.image()[image.len()..], image.len() as u64)
-                .with_context(|| format!("initialising flash file {}", path.display()))?;
+                .with_context(|| format!("--flash {shown}: initialising"))?;
         }
         Ok(FileNor {
             nor,
@@ -131,6 +177,23 @@ impl FileNor {
                 r.map_err(FileNorError::Nor)
             }
         }
+    }
+}
+
+/// What a non-regular file is, for the refusal message.
+fn describe(kind: std::fs::FileType) -> &'static str {
+    if kind.is_dir() {
+        "a directory"
+    } else if kind.is_fifo() {
+        "a FIFO"
+    } else if kind.is_char_device() {
+        "a character device"
+    } else if kind.is_block_device() {
+        "a block device"
+    } else if kind.is_socket() {
+        "a socket"
+    } else {
+        "not a file"
     }
 }
 

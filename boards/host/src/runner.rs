@@ -29,7 +29,7 @@
 //!   once.
 //! * **`--speed max`**: before each pass device time moves on by
 //!   [`MAX_BATCH_TICKS`] ticks unless [`MAX_BACKLOG`] bytes wait for the
-//!   client; the loop never sleeps then, it only polls the transport (or
+//!   client or none is connected; the loop never sleeps then, it only polls the transport (or
 //!   waits for the client to read).
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -262,7 +262,9 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
             let max = self.clock.speed() == Speed::Max;
-            let client_keeps_up = self.io.transport.backlog_len() < MAX_BACKLOG;
+            // Nobody to read (output would be dropped): time waits.
+            let client_keeps_up =
+                self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG;
             if max && client_keeps_up {
                 let to =
                     (self.sched.ticks() + MAX_BATCH_TICKS).saturating_mul(self.sched.period_ns());
@@ -276,7 +278,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 Duration::ZERO
             } else if max {
                 // Poll only, or wait (briefly) for the client to read.
-                if self.io.transport.backlog_len() < MAX_BACKLOG {
+                if self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG {
                     Duration::ZERO
                 } else {
                     BUSY_WAKE

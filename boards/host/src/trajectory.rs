@@ -24,8 +24,18 @@ pub struct Trajectory {
     cursor: usize,
 }
 
+/// `a + (b − a)·w` in `f64`: between two finite `f32`s it never overflows
+/// (`f32::MAX − (−f32::MAX)` would, giving ∞ and then ∞·0 = NaN).
 fn lerp(a: f32, b: f32, w: f32) -> f32 {
-    a + (b - a) * w
+    let (a, b) = (f64::from(a), f64::from(b));
+    (a + (b - a) * f64::from(w)) as f32
+}
+
+/// A file value as `f32`, saturated at ±`f32::MAX` (3.5e38 would become
+/// ∞; the sensor model then saturates it at its range like any value
+/// beyond it).
+fn to_f32(v: f64) -> f32 {
+    v.clamp(-f64::from(f32::MAX), f64::from(f32::MAX)) as f32
 }
 
 impl Trajectory {
@@ -64,9 +74,9 @@ impl Trajectory {
                 }
             }
             let truth = Truth {
-                rate_dps: [v[1] as f32, v[2] as f32, v[3] as f32],
-                specific_force_g: [v[4] as f32, v[5] as f32, v[6] as f32],
-                temperature_c: v.get(7).map(|&t| t as f32),
+                rate_dps: [to_f32(v[1]), to_f32(v[2]), to_f32(v[3])],
+                specific_force_g: [to_f32(v[4]), to_f32(v[5]), to_f32(v[6])],
+                temperature_c: v.get(7).map(|&t| to_f32(t)),
             };
             rows.push((v[0], truth));
         }
@@ -169,5 +179,17 @@ mod tests {
         assert!(Trajectory::parse("0,0,0,0,0,0,1\n0,0,0,0,0,0,1\n", false).is_err());
         assert!(Trajectory::parse("0,0,0,0,0,0,1\nx,0,0,0,0,0,1\n", false).is_err());
         assert!(Trajectory::parse("0,0,0,0,0,0,NaN\n", false).is_err());
+    }
+
+    #[test]
+    fn values_beyond_f32_saturate_and_interpolate_finitely() {
+        let mut t =
+            Trajectory::parse("0,3.5e38,-1e300,0,0,0,1\n1,3.5e38,1e300,0,0,0,1\n", false).unwrap();
+        let m = f32::MAX;
+        assert_eq!(t.at(0.0).rate_dps, [m, -m, 0.0]);
+        let mid = t.at(0.5).rate_dps;
+        assert_eq!(mid[0], m);
+        assert!(mid[1].is_finite() && mid[1].abs() < 1e30, "{mid:?}");
+        assert_eq!(t.at(0.75).rate_dps[1], m / 2.0);
     }
 }

@@ -5,7 +5,8 @@
 //! transport's descriptors with a timeout up to the next tick deadline),
 //! takes host → device bytes with [`Transport::receive`], and hands paced
 //! device → host bytes to [`Transport::send`]. Output the peer cannot take
-//! right now is kept in a bounded [`crate::backlog::Backlog`].
+//! right now is kept in a bounded [`crate::backlog::Backlog`]; output while
+//! no client is connected is dropped, as on a real line.
 
 use std::time::Duration;
 
@@ -44,6 +45,18 @@ pub trait Transport {
 
     /// Bytes waiting in the backlog.
     fn backlog_len(&self) -> usize;
+
+    /// Whether a client is connected (a TCP client accepted, the pty's
+    /// slave open), as of the last [`Transport::wait`],
+    /// [`Transport::receive`] or [`Transport::poll_client`]. While none is,
+    /// [`Transport::send`] drops the bytes, as a real line loses what
+    /// nobody reads.
+    fn connected(&self) -> bool;
+
+    /// Takes a pending connection (TCP) or notices that the pty was
+    /// opened, without reading anything; whether a client is connected.
+    /// Never blocks. (The device powers on when this first says yes.)
+    fn poll_client(&mut self) -> anyhow::Result<bool>;
 }
 
 /// Converts a timeout into the `ppoll` time spec (rounded up to 1 µs so a
@@ -62,5 +75,103 @@ pub(crate) fn poll_fds(fds: &mut [nix::poll::PollFd<'_>], timeout: Duration) -> 
     match nix::poll::ppoll(fds, Some(timespec(timeout)), None) {
         Ok(_) | Err(nix::errno::Errno::EINTR) => Ok(()),
         Err(e) => Err(anyhow::Error::new(e).context("ppoll")),
+    }
+}
+
+/// How long a listener is left alone after `accept()` failed for lack of
+/// resources (EMFILE, ENFILE, ENOBUFS, ENOMEM): the pending connection stays
+/// queued and the listener stays readable, so retrying at once would spin.
+pub const ACCEPT_BACKOFF: Duration = Duration::from_millis(100);
+
+/// At most one message a second about failing `accept()` calls.
+pub const ACCEPT_REPORT_INTERVAL: Duration = Duration::from_secs(1);
+
+/// Whether an `accept()` error is transient: the listener stays usable and
+/// a later call may succeed (resources exhausted, or a connection that was
+/// reset or aborted before it was taken).
+pub fn is_transient_accept_error(e: &std::io::Error) -> bool {
+    use nix::errno::Errno;
+    matches!(
+        e.kind(),
+        std::io::ErrorKind::ConnectionAborted
+            | std::io::ErrorKind::ConnectionReset
+            | std::io::ErrorKind::Interrupted
+    ) || matches!(
+        e.raw_os_error().map(Errno::from_raw),
+        Some(
+            Errno::EMFILE
+                | Errno::ENFILE
+                | Errno::ENOBUFS
+                | Errno::ENOMEM
+                | Errno::EPROTO
+                | Errno::EPERM
+                | Errno::ENETDOWN
+                | Errno::ENOPROTOOPT
+                | Errno::EHOSTDOWN
+                | Errno::ENONET
+                | Errno::EHOSTUNREACH
+                | Errno::EOPNOTSUPP
+                | Errno::ENETUNREACH
+        )
+    )
+}
+
+/// What a listener does about transient `accept()` failures: it pauses for
+/// [`ACCEPT_BACKOFF`] (so a full descriptor table does not turn the loop
+/// into a busy spin) and reports on stderr at most once per
+/// [`ACCEPT_REPORT_INTERVAL`], with the number of failures since the last
+/// report. The process keeps running and serving the current client.
+#[derive(Debug)]
+pub struct AcceptGuard {
+    what: &'static str,
+    paused_until: Option<std::time::Instant>,
+    last_report: Option<std::time::Instant>,
+    failures: u64,
+}
+
+impl AcceptGuard {
+    /// A guard for the listener named `what` in messages (`tcp`, `control`).
+    pub fn new(what: &'static str) -> Self {
+        AcceptGuard {
+            what,
+            paused_until: None,
+            last_report: None,
+            failures: 0,
+        }
+    }
+
+    /// Whether the listener may be polled and accepted from now.
+    pub fn ready(&mut self) -> bool {
+        match self.paused_until {
+            Some(t) if std::time::Instant::now() < t => false,
+            _ => {
+                self.paused_until = None;
+                true
+            }
+        }
+    }
+
+    /// Failed `accept()` calls so far.
+    pub fn failures(&self) -> u64 {
+        self.failures
+    }
+
+    /// Notes a transient failure `e`: pauses the listener and reports, at
+    /// most once per [`ACCEPT_REPORT_INTERVAL`].
+    pub fn failed(&mut self, e: &std::io::Error) {
+        let now = std::time::Instant::now();
+        self.failures += 1;
+        self.paused_until = Some(now + ACCEPT_BACKOFF);
+        let due = self
+            .last_report
+            .is_none_or(|t| now.duration_since(t) >= ACCEPT_REPORT_INTERVAL);
+        if due {
+            eprintln!(
+                "imu-emu: {} accept failed: {e} ({} failures so far; retrying, \
+                 the current client is still served)",
+                self.what, self.failures
+            );
+            self.last_report = Some(now);
+        }
     }
 }

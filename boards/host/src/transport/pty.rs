@@ -1,27 +1,32 @@
 //! Pseudo-terminal transport: the device's UART as a serial port.
 //!
-//! The runner opens a pty pair, puts the slave in raw mode (8N1, no echo,
-//! no line editing) and keeps the slave open itself, so the master never
-//! sees `EIO`/hang-up when a client closes the port; clients open the slave
-//! path (printed on stdout, optionally symlinked at `--link PATH`).
+//! The runner opens a pty pair and puts the slave in raw mode (8N1, no
+//! echo, no line editing); clients open the slave path (printed on stdout,
+//! optionally symlinked at `--link PATH`). The runner does not keep the
+//! slave open itself, so the master tells whether a client has it open: it
+//! reports a hang-up (`POLLHUP`) exactly while nobody does. As on a real
+//! line, what the device sends while the port is closed is dropped, and
+//! what a client left unread when it closed the port is flushed: the next
+//! client starts with the live stream. The raw settings stay with the pty
+//! between opens.
 //!
 //! The emulated line rate is also written to the slave's termios speed
 //! (nearest standard `Bxxx` value) on every rate change, for clients that
 //! look at it; a pty moves bytes at memory speed whatever the speed says,
 //! so the runner's pacing is what models the line. Output the slave's
-//! input queue cannot take (no reader, or a slow one) waits in the bounded
-//! backlog.
+//! input queue cannot take (a slow reader) waits in the bounded backlog.
 
 use std::fs::File;
 use std::io::{self, Read};
-use std::os::fd::{AsFd, OwnedFd};
+use std::os::fd::AsFd;
+use std::os::unix::fs::OpenOptionsExt as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::Context as _;
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
-use nix::poll::{PollFd, PollFlags};
-use nix::sys::termios::{self, BaudRate, SetArg};
+use nix::poll::{PollFd, PollFlags, PollTimeout};
+use nix::sys::termios::{self, BaudRate, FlushArg, SetArg};
 
 use super::{poll_fds, Transport};
 use crate::backlog::Backlog;
@@ -30,10 +35,10 @@ use crate::backlog::Backlog;
 #[derive(Debug)]
 pub struct PtyTransport {
     master: File,
-    /// Held open so the master never sees a hang-up.
-    slave: OwnedFd,
     slave_path: PathBuf,
     link: Option<LinkGuard>,
+    /// Whether a client has the slave open (as of the last check).
+    open: bool,
     backlog: Backlog,
 }
 
@@ -48,6 +53,8 @@ impl PtyTransport {
         termios::cfmakeraw(&mut t);
         termios::cfsetspeed(&mut t, nearest_baud(bps)).context("cfsetspeed")?;
         termios::tcsetattr(&pty.slave, SetArg::TCSANOW, &t).context("tcsetattr")?;
+        // Closed: from now on the master's hang-up says "no client".
+        drop(pty.slave);
 
         let flags = OFlag::from_bits_truncate(fcntl(&pty.master, FcntlArg::F_GETFL)?);
         fcntl(&pty.master, FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK))
@@ -58,9 +65,9 @@ impl PtyTransport {
             .transpose()?;
         Ok(PtyTransport {
             master: File::from(pty.master),
-            slave: pty.slave,
             slave_path,
             link,
+            open: false,
             backlog: Backlog::default(),
         })
     }
@@ -74,6 +81,48 @@ impl PtyTransport {
     pub fn link_path(&self) -> Option<&Path> {
         self.link.as_ref().map(|l| l.path.as_path())
     }
+
+    /// Opens the slave for the runner's own use (termios, flushing): no
+    /// controlling terminal, never blocking.
+    fn open_slave(&self) -> anyhow::Result<File> {
+        std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags((OFlag::O_NOCTTY | OFlag::O_NONBLOCK).bits())
+            .open(&self.slave_path)
+            .with_context(|| format!("opening {}", self.slave_path.display()))
+    }
+
+    /// Whether a client has the slave open now (the master reports no
+    /// hang-up); notes opens and closes. On a close the bytes the client
+    /// left unread and the backlog are dropped.
+    fn check_client(&mut self) -> anyhow::Result<bool> {
+        let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::empty())];
+        match nix::poll::poll(&mut fds, PollTimeout::ZERO) {
+            Ok(_) | Err(nix::errno::Errno::EINTR) => {}
+            Err(e) => return Err(anyhow::Error::new(e).context("poll of the pty master")),
+        }
+        let hung_up = fds[0]
+            .revents()
+            .is_some_and(|r| r.contains(PollFlags::POLLHUP));
+        let open = !hung_up;
+        if open != self.open {
+            self.open = open;
+            if open {
+                eprintln!("imu-emu: {} opened", self.slave_path.display());
+            } else {
+                eprintln!(
+                    "imu-emu: {} closed; output is dropped until it is opened again",
+                    self.slave_path.display()
+                );
+                self.backlog.clear();
+                let slave = self.open_slave()?;
+                termios::tcflush(&slave, FlushArg::TCIFLUSH).context("flushing the pty")?;
+                // Closing it again restores the hang-up.
+            }
+        }
+        Ok(open)
+    }
 }
 
 impl Transport for PtyTransport {
@@ -82,6 +131,11 @@ impl Transport for PtyTransport {
     }
 
     fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+        if !self.check_client()? {
+            // The master's hang-up would end every poll at once: sleep
+            // instead (a signal still wakes it), looking again afterwards.
+            return poll_fds(&mut [], timeout);
+        }
         let mut ev = PollFlags::POLLIN;
         if !self.backlog.is_empty() {
             ev |= PollFlags::POLLOUT;
@@ -91,6 +145,7 @@ impl Transport for PtyTransport {
     }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
+        self.check_client()?;
         let mut buf = [0u8; 4096];
         let mut got = 0;
         loop {
@@ -106,7 +161,7 @@ impl Transport for PtyTransport {
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                // Cannot happen while the slave is held open; be tolerant.
+                // No client has the slave open.
                 Err(e) if e.raw_os_error() == Some(nix::errno::Errno::EIO as i32) => return Ok(()),
                 Err(e) => return Err(anyhow::Error::new(e).context("reading the pty master")),
             }
@@ -114,11 +169,17 @@ impl Transport for PtyTransport {
     }
 
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.backlog.push(bytes);
+        // A real line loses what nobody reads.
+        if self.open {
+            self.backlog.push(bytes);
+        }
         Ok(())
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {
+        if !self.open {
+            return Ok(());
+        }
         match self.backlog.write_to(&mut self.master) {
             Ok(_) => Ok(()),
             Err(e) if e.raw_os_error() == Some(nix::errno::Errno::EIO as i32) => Ok(()),
@@ -127,14 +188,23 @@ impl Transport for PtyTransport {
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
-        let mut t = termios::tcgetattr(&self.slave).context("tcgetattr")?;
+        let slave = self.open_slave()?;
+        let mut t = termios::tcgetattr(&slave).context("tcgetattr")?;
         termios::cfsetspeed(&mut t, nearest_baud(bps)).context("cfsetspeed")?;
-        termios::tcsetattr(&self.slave, SetArg::TCSANOW, &t).context("tcsetattr")?;
+        termios::tcsetattr(&slave, SetArg::TCSANOW, &t).context("tcsetattr")?;
         Ok(())
     }
 
     fn backlog_len(&self) -> usize {
         self.backlog.len()
+    }
+
+    fn connected(&self) -> bool {
+        self.open
+    }
+
+    fn poll_client(&mut self) -> anyhow::Result<bool> {
+        self.check_client()
     }
 }
 
@@ -255,11 +325,29 @@ mod tests {
         let tio = termios::tcgetattr(&client).unwrap();
         assert_eq!(termios::cfgetospeed(&tio), BaudRate::B4800);
 
-        // The client closing does not disturb the master.
+        // The client closing does not disturb the master; what is sent
+        // while the port is closed is dropped, and so is what the client
+        // left unread.
+        t.send(&[5, 6]).unwrap();
+        t.flush().unwrap();
         drop(client);
+        t.receive(usize::MAX, &mut |_| {}).unwrap();
+        assert!(!t.connected());
         t.send(&[3]).unwrap();
         t.flush().unwrap();
-        t.receive(usize::MAX, &mut |_| {}).unwrap();
+        assert_eq!(t.backlog_len(), 0);
+        let mut client = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&link)
+            .unwrap();
+        assert!(t.poll_client().unwrap());
+        t.send(&[4]).unwrap();
+        t.flush().unwrap();
+        let mut b = [0u8; 8];
+        assert_eq!(client.read(&mut b).unwrap(), 1);
+        assert_eq!(b[0], 4);
+        drop(client);
 
         drop(t);
         assert!(std::fs::symlink_metadata(&link).is_err());

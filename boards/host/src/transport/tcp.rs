@@ -1,21 +1,27 @@
 //! TCP transport: the device's UART on a listening socket.
 //!
 //! One client at a time; a new connection replaces (closes) the old one and
-//! the device keeps its state. While no client is connected — and whenever
-//! the client does not keep up — output goes into the bounded backlog, which
-//! is delivered first to the next client (so a client connecting right after
-//! start still sees the AutoStart announcement).
+//! the device keeps its state. As on a real line, what the device sends
+//! while no client is connected is dropped, and so is what a client did not
+//! take before it went: a new client starts with the live stream (possibly
+//! mid-frame: resynchronise on `AA 55`). A client that closes its sending side
+//! (`shutdown(SHUT_WR)`) keeps receiving the stream, as on a real line; it
+//! is dropped when a write to it fails or the socket reports a hang-up.
+//! `accept()` failing for lack of resources (EMFILE, …) is transient: the
+//! listener pauses briefly and the message is rate-limited
+//! ([`super::AcceptGuard`]). Output the client does not take at once (a
+//! slow reader) waits in the bounded backlog. The device powers on when the
+//! first client connects (unless `--power-on now`), so that client still
+//! sees the AutoStart announcement.
 
 use std::io::{self, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::os::fd::AsFd;
 use std::time::Duration;
 
-use anyhow::Context as _;
-use nix::errno::Errno;
 use nix::poll::{PollFd, PollFlags};
 
-use super::{poll_fds, Transport};
+use super::{is_transient_accept_error, poll_fds, AcceptGuard, Transport};
 use crate::backlog::Backlog;
 
 /// A listening socket with at most one client.
@@ -24,19 +30,28 @@ pub struct TcpTransport {
     listener: TcpListener,
     local: SocketAddr,
     client: Option<(TcpStream, SocketAddr)>,
+    /// The client closed its sending side: it is no longer read.
+    read_closed: bool,
+    /// The last [`Transport::wait`] saw the client's socket hang up.
+    hung_up: bool,
+    accept: AcceptGuard,
     backlog: Backlog,
 }
 
 impl TcpTransport {
     /// Binds `addr` (`host:port`; port 0 picks a free port).
     pub fn bind(addr: &str) -> anyhow::Result<Self> {
-        let listener = TcpListener::bind(addr).with_context(|| format!("binding tcp {addr}"))?;
+        let listener =
+            TcpListener::bind(addr).map_err(|e| crate::cli::bind_error(e, "--tcp", addr))?;
         listener.set_nonblocking(true)?;
         let local = listener.local_addr()?;
         Ok(TcpTransport {
             listener,
             local,
             client: None,
+            read_closed: false,
+            hung_up: false,
+            accept: AcceptGuard::new("tcp"),
             backlog: Backlog::default(),
         })
     }
@@ -46,8 +61,13 @@ impl TcpTransport {
         self.local
     }
 
+    /// Failed `accept()` calls so far (EMFILE and the like: transient).
+    pub fn accept_failures(&self) -> u64 {
+        self.accept.failures()
+    }
+
     fn accept_all(&mut self) -> anyhow::Result<()> {
-        loop {
+        while self.accept.ready() {
             match self.listener.accept() {
                 Ok((stream, peer)) => {
                     stream.set_nonblocking(true)?;
@@ -58,34 +78,27 @@ impl TcpTransport {
                     } else {
                         eprintln!("imu-emu: client {peer} connected");
                     }
+                    // What the old client did not take is not the new one's.
+                    self.backlog.clear();
+                    self.read_closed = false;
+                    self.hung_up = false;
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
-                Err(e) if is_transient_accept_error(&e) => {
-                    eprintln!("imu-emu: accept: {e}");
-                    return Ok(());
-                }
-                Err(e) => return Err(anyhow::Error::new(e).context("accept")),
+                Err(e) if is_transient_accept_error(&e) => self.accept.failed(&e),
+                Err(e) => return Err(anyhow::Error::new(e).context("tcp accept")),
             }
         }
+        Ok(())
     }
 
     fn drop_client(&mut self, why: &str) {
         if let Some((_, peer)) = self.client.take() {
-            eprintln!("imu-emu: client {peer} {why}");
+            eprintln!("imu-emu: client {peer} {why}; output is dropped until a client connects");
         }
+        self.backlog.clear();
+        self.read_closed = false;
+        self.hung_up = false;
     }
-}
-
-fn is_transient_accept_error(e: &io::Error) -> bool {
-    matches!(
-        e.kind(),
-        io::ErrorKind::ConnectionAborted
-            | io::ErrorKind::ConnectionReset
-            | io::ErrorKind::Interrupted
-    ) || matches!(
-        e.raw_os_error().map(Errno::from_raw),
-        Some(Errno::EMFILE | Errno::ENFILE | Errno::ENOBUFS | Errno::ENOMEM)
-    )
 }
 
 impl Transport for TcpTransport {
@@ -94,15 +107,32 @@ impl Transport for TcpTransport {
     }
 
     fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
-        let mut fds = vec![PollFd::new(self.listener.as_fd(), PollFlags::POLLIN)];
+        let mut fds = Vec::with_capacity(2);
+        if self.accept.ready() {
+            fds.push(PollFd::new(self.listener.as_fd(), PollFlags::POLLIN));
+        }
+        let listening = fds.len();
         if let Some((stream, _)) = &self.client {
-            let mut ev = PollFlags::POLLIN;
+            // A half-closed client stays readable (end of file) for ever:
+            // only its output and hang-ups matter then.
+            let mut ev = if self.read_closed {
+                PollFlags::empty()
+            } else {
+                PollFlags::POLLIN
+            };
             if !self.backlog.is_empty() {
                 ev |= PollFlags::POLLOUT;
             }
             fds.push(PollFd::new(stream.as_fd(), ev));
         }
-        poll_fds(&mut fds, timeout)
+        poll_fds(&mut fds, timeout)?;
+        if let Some(fd) = fds.get(listening) {
+            let gone = PollFlags::POLLHUP | PollFlags::POLLERR;
+            if fd.revents().is_some_and(|r| r.intersects(gone)) {
+                self.hung_up = true;
+            }
+        }
+        Ok(())
     }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
@@ -112,15 +142,28 @@ impl Transport for TcpTransport {
             // A new client: hand it what was queued meanwhile.
             self.flush()?;
         }
+        if self.hung_up {
+            self.drop_client("disconnected");
+        }
         let mut buf = [0u8; 4096];
         let mut got = 0;
-        while let Some((stream, _)) = &mut self.client {
+        while let Some((stream, peer)) = &mut self.client {
+            if self.read_closed {
+                break;
+            }
             let want = (max - got).min(buf.len());
             if want == 0 {
                 break;
             }
             match stream.read(&mut buf[..want]) {
-                Ok(0) => self.drop_client("disconnected"),
+                Ok(0) => {
+                    // Half-closed (or closed: the next write will tell).
+                    eprintln!(
+                        "imu-emu: client {peer} closed its sending side (half-closed or gone); \
+                         still sending until the connection fails"
+                    );
+                    self.read_closed = true;
+                }
                 Ok(n) => {
                     got += n;
                     sink(&buf[..n]);
@@ -134,7 +177,10 @@ impl Transport for TcpTransport {
     }
 
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.backlog.push(bytes);
+        // A real line loses what nobody reads.
+        if self.client.is_some() {
+            self.backlog.push(bytes);
+        }
         Ok(())
     }
 
@@ -154,5 +200,14 @@ impl Transport for TcpTransport {
 
     fn backlog_len(&self) -> usize {
         self.backlog.len()
+    }
+
+    fn connected(&self) -> bool {
+        self.client.is_some()
+    }
+
+    fn poll_client(&mut self) -> anyhow::Result<bool> {
+        self.accept_all()?;
+        Ok(self.client.is_some())
     }
 }
