@@ -10,6 +10,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::dsp::OutputVariant;
 use imu_emu::model::Product;
 use imu_emu::sensor::Motion;
@@ -20,7 +21,7 @@ fn worst() -> SignalChain {
     let p = Product::parse("K120").unwrap();
     let mut c = SignalChain::new(p, 1);
     let mut cfg = ChainConfig::defaults(&p);
-    cfg.lpf_code = 0;
+    cfg.lpf = Bandwidth::Hz16;
     cfg.cascade.mask = 0x07;
     cfg.output_variant = OutputVariant::Incremental;
     cfg.alignment_angles_deg = [10.0, -20.0, 30.0];

@@ -16,7 +16,7 @@ use core::mem::MaybeUninit;
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
-use crate::chain::{ChainConfig, SignalChain};
+use crate::chain::SignalChain;
 use crate::kernel::command::Command;
 use crate::kernel::fields::{self, Field, OutputCtx};
 use crate::kernel::formats::{self, UDD};
@@ -459,7 +459,7 @@ impl<F: NorFlash> Device<F> {
         self.saved = block;
         self.ram = block;
         self.chain
-            .configure(&ChainConfig::from_block(&self.ram, &product));
+            .configure(&crate::kernel::config::chain_config(&self.ram, &product));
         self.set_line_rate(params::baud_rate(
             params::BAUD_RATE.read_int(&self.ram) as u8
         ));
@@ -721,7 +721,7 @@ impl<F: NorFlash> Device<F> {
                 self.send(crate::kernel::command::GET_DEV_INFO, &info);
             }
             Command::GetBit => {
-                let bit = self.chain.status().bit;
+                let bit = crate::kernel::status::bit(&self.chain.health());
                 self.send(crate::kernel::command::GET_BIT, &bit);
             }
             Command::UddConfig => self.udd_pending = true,
@@ -901,7 +901,7 @@ impl<F: NorFlash> Device<F> {
         let internal = u64::from(self.cfg.product.model.internal_rate_hz);
         let product = self.cfg.product;
         self.chain
-            .configure(&ChainConfig::from_block(&self.ram, &product));
+            .configure(&crate::kernel::config::chain_config(&self.ram, &product));
         let align_left = if orientation { align_s * internal } else { 0 };
         if orientation {
             if align_left > 0 {
@@ -940,7 +940,7 @@ impl<F: NorFlash> Device<F> {
             return;
         };
         let sample = self.chain.output_with(stream.layout.attitude);
-        let status = self.chain.status();
+        let status = crate::kernel::status::Status::of(&self.chain.health());
         let product = self.cfg.product;
         // Second fraction (5.2.3.1): ns since the current second began,
         // which is the last 1PPS edge or power-on advanced by whole seconds

@@ -1,9 +1,11 @@
 //! The KERNEL protocol personality (ICD section 5, Appendix A).
 
 pub mod command;
+pub mod config;
 pub mod fields;
 pub mod formats;
 pub mod frame;
 pub mod params;
 pub mod rate;
+pub mod status;
 pub mod udd;
