@@ -35,6 +35,15 @@
 //!   previous output, then restarts the interval), then
 //!   [`SignalChain::health`], which the personality encodes (KERNEL: USW,
 //!   USW-extended and GetBIT in [`crate::kernel::status`]).
+//! - Streams that window the measurement themselves (the IMX's IMU and
+//!   PIMU): a `SignalChain<`[`Integrals`]`>` ([`SignalChain::powered_on`])
+//!   and [`SignalChain::integrals`] snapshots, differenced by
+//!   [`crate::dsp::integrals::window`]. The default `SignalChain` (the
+//!   KERNEL's) keeps none: no storage, no per-tick cost.
+//!
+//! The chain knows no protocol: nothing here or in `sensor`, `ahrs`, `dsp`
+//! imports `kernel` or `isb`; [`ChainConfig`] and [`Health`] are neutral and
+//! each personality maps its parameters and status words onto them.
 //!
 //! # Decisions (README "Protocol notes")
 //!
@@ -88,7 +97,11 @@
 //!
 //! # Fixed point (`fixed-point` feature)
 //!
-//! Every per-tick stage is integer; the few `f32` operations left run once
+//! The arithmetic is chosen in one place: `chain/float.rs` and
+//! `chain/fixed.rs` define the same numeric core (`Core`, with the same
+//! methods, and the same helper functions and type names), and one
+//! `cfg_attr(path)` on the module picks one; the rest of this file has no
+//! `cfg`. Every per-tick stage is integer; the few `f32` operations left run once
 //! per output (one division) or once per temperature change (one axis a
 //! tick); trigonometry only at configuration time.
 //!
@@ -211,6 +224,7 @@ impl ChainConfig {
     /// rotation, averaging alignment with the default threshold and tuning.
     /// (The KERNEL's factory parameters map to exactly this; a unit test in
     /// [`crate::kernel::config`] pins it.)
+    #[inline(never)]
     pub fn defaults(product: &Product) -> Self {
         ChainConfig {
             internal_rate_hz: product.model.internal_rate_hz,
@@ -535,6 +549,7 @@ impl<I: Integrate> SignalChain<I> {
 
     /// Applies a configuration (5.3.1: at every data command). See the module
     /// doc: FIR history kept, cascade in steady state, accumulator emptied.
+    #[inline(never)]
     pub fn configure(&mut self, cfg: &ChainConfig) {
         self.cfg = *cfg;
         self.fir.set_design(cfg.fir_design());
@@ -731,6 +746,7 @@ impl<I: Integrate> SignalChain<I> {
 
     /// Initial_Alignment_Time = 0: no bias estimation (bias 0, not failed),
     /// levelled at once from the FIR-filtered accelerometers, heading 0.
+    #[cold]
     pub fn skip_alignment(&mut self) {
         self.core.level_now();
         self.bias_failed = false;
@@ -739,6 +755,7 @@ impl<I: Integrate> SignalChain<I> {
         self.core.variant.reset();
     }
 
+    #[inline(never)]
     fn set_bias(&mut self, b: Vec3) {
         self.bias = b;
         self.core.set_bias(&b, self.dt);

@@ -463,3 +463,28 @@ fn size_of_the_chain_fits_the_10_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();
     assert!(n <= 10 * 1024, "{n}");
 }
+
+/// The neutral health reports accelerometer axes beyond their range too
+/// (the KERNEL's USW has no bit for it: its words are unchanged).
+#[test]
+fn health_reports_accelerometer_over_range_per_axis() {
+    let p = k("KERNEL-110-G2000-A8");
+    let mut c = SignalChain::new(p, 1);
+    *c.errors_mut() = ErrorModel::IDEAL;
+    c.set_motion(Motion::Sample(imu_emu::sensor::Truth {
+        rate_dps: [0.0; 3],
+        specific_force_g: [0.0, 0.0, 12.0],
+        temperature_c: None,
+    }));
+    let mut t = 0;
+    ticks(&mut c, &mut t, 1);
+    let h = c.health();
+    assert_eq!((h.accel_over_range, h.gyro_over_range), (0b100, 0));
+    assert_eq!(Status::of(&h).usw, 0);
+    c.output();
+    c.set_motion(Motion::default());
+    ticks(&mut c, &mut t, 1);
+    assert_eq!(c.health().accel_over_range, 0b100, "the last interval");
+    c.output();
+    assert_eq!(c.health().accel_over_range, 0);
+}

@@ -99,3 +99,41 @@ pub fn bit(h: &Health) -> [u8; 4] {
     }
     b
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_flag_is_its_table_bit() {
+        let none = Health::default();
+        assert_eq!(
+            Status::of(&none),
+            Status {
+                usw: 0,
+                usw_ext: 1,
+                bit: [0; 4]
+            }
+        );
+        let all = Health {
+            sensor_comm_failure: true,
+            sensor_config_failure: true,
+            gyro_over_range: 0b101,
+            accel_over_range: 0b111,
+            over_temperature: true,
+            gyro_bit_failed: true,
+            accel_bit_failed: true,
+            flash_check_failed: true,
+            aligning: true,
+            bias_estimation_failed: true,
+        };
+        assert_eq!(
+            Status::of(&all),
+            Status {
+                usw: 0x0002 | 0x0004 | 0x0400 | 0x1000 | 0x4000,
+                usw_ext: 0x0002,
+                bit: [0x05, 0x10, 0, 0],
+            }
+        );
+    }
+}
