@@ -22,7 +22,8 @@
 //!   (the sensors, the FIR history, temperature and attitude keep running while
 //!   the device is idle, like a real unit).
 //! - At a data command / stream start (5.3.1): [`SignalChain::configure`] with
-//!   [`ChainConfig::from_block`] of the live parameters. It keeps the FIR's
+//!   the personality's configuration of its live parameters (KERNEL:
+//!   [`crate::kernel::config::chain_config`]). It keeps the FIR's
 //!   input history (a real FIR runs on the sensor stream continuously; only
 //!   the coefficients change), starts the cascade in the steady state of its
 //!   current input (no transient) and empties the variant accumulator.
@@ -32,8 +33,17 @@
 //!   Formats without orientation call neither (the AHRS keeps its state).
 //! - At an output tick: [`SignalChain::output`] (covers the ticks since the
 //!   previous output, then restarts the interval), then
-//!   [`SignalChain::status`] for USW (Table 5.26), USW-extended (Table 5.27);
-//!   GetBIT (Table 5.18) takes `status().bit`.
+//!   [`SignalChain::health`], which the personality encodes (KERNEL: USW,
+//!   USW-extended and GetBIT in [`crate::kernel::status`]).
+//! - Streams that window the measurement themselves (the IMX's IMU and
+//!   PIMU): a `SignalChain<`[`Integrals`]`>` ([`SignalChain::powered_on`])
+//!   and [`SignalChain::integrals`] snapshots, differenced by
+//!   [`crate::dsp::integrals::window`]. The default `SignalChain` (the
+//!   KERNEL's) keeps none: no storage, no per-tick cost.
+//!
+//! The chain knows no protocol: nothing here or in `sensor`, `ahrs`, `dsp`
+//! imports `kernel` or `isb`; [`ChainConfig`] and [`Health`] are neutral and
+//! each personality maps its parameters and status words onto them.
 //!
 //! # Decisions (README "Protocol notes")
 //!
@@ -57,8 +67,8 @@
 //! - Alignment: averaging with the STD of 10 ms means vs the threshold, or a
 //!   Kalman filter (ZUPT); heading relative (0 after alignment)
 //!   ([`crate::ahrs::alignment`]).
-//! - USW bits 10–12 report a gyro axis (sensor axes) beyond the measurement
-//!   range at any tick of the interval the output covers.
+//! - [`Health::gyro_over_range`] reports a gyro axis (sensor axes) beyond
+//!   the measurement range at any tick of the interval the output covers.
 //! - Float path on FPU cores; the `fixed-point` feature (cores without an
 //!   FPU: ARMv6-M, RP2040) runs every per-tick stage in integers — see
 //!   "Fixed point" below. A seed gives the same bytes on every platform for
@@ -72,7 +82,8 @@
 //! # Memory
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
-//! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout). The
+//! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
+//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192
@@ -87,7 +98,11 @@
 //!
 //! # Fixed point (`fixed-point` feature)
 //!
-//! Every per-tick stage is integer; the few `f32` operations left run once
+//! The arithmetic is chosen in one place: `chain/float.rs` and
+//! `chain/fixed.rs` define the same numeric core (`Core`, with the same
+//! methods, and the same helper functions and type names), and one
+//! `cfg_attr(path)` on the module picks one; the rest of this file has no
+//! `cfg`. Every per-tick stage is integer; the few `f32` operations left run once
 //! per output (one division) or once per temperature change (one axis a
 //! tick); trigonometry only at configuration time.
 //!
@@ -156,52 +171,27 @@
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
-use crate::ahrs::alignment::{level_from, AlignConfig, Alignment};
-#[cfg(not(feature = "fixed-point"))]
-use crate::ahrs::attitude::Attitude;
-#[cfg(feature = "fixed-point")]
-use crate::ahrs::attitude::AttitudeFixed;
-use crate::ahrs::mounting::Mounting;
-#[cfg(feature = "fixed-point")]
-use crate::ahrs::mounting::MountingFixed;
-#[cfg(not(feature = "fixed-point"))]
-use crate::ahrs::rotation::{canonical, euler_from_quat};
-#[cfg(feature = "fixed-point")]
-use crate::ahrs::rotation::{euler_deg_q30, level_q30, quat_rotate_inv_q30};
+use crate::ahrs::alignment::{AlignConfig, Alignment};
 use crate::ahrs::rotation::{Quat, Vec3};
-#[cfg(not(feature = "fixed-point"))]
-use crate::dsp::cascade::Cascade;
-#[cfg(feature = "fixed-point")]
-use crate::dsp::cascade::CascadeFixed;
-use crate::dsp::cascade::{CascadeConfig, SecondOrder};
-#[cfg(not(feature = "fixed-point"))]
-use crate::dsp::fir::FirBank;
-#[cfg(feature = "fixed-point")]
-use crate::dsp::fir::FirBankFixed;
-use crate::dsp::fir::{self, FirDesign, CHANNELS};
-#[cfg(feature = "fixed-point")]
-use crate::dsp::fixed::{scaled_f32, to_fixed};
+use crate::dsp::cascade::CascadeConfig;
+use crate::dsp::fir::{self, Bandwidth, FirDesign, CHANNELS};
+use crate::dsp::integrals::{Integrals, Integrate, NoIntegrals};
 use crate::dsp::variant::OutputVariant;
-#[cfg(not(feature = "fixed-point"))]
-use crate::dsp::variant::VariantAccumulator;
-#[cfg(feature = "fixed-point")]
-use crate::dsp::variant::VariantFixed;
-use crate::kernel::params::{self, Block};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
-#[cfg(not(feature = "fixed-point"))]
-use crate::sensor::errors::TriadEngine;
-#[cfg(feature = "fixed-point")]
-use crate::sensor::errors::{TriadEngineFixed, ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
-#[cfg(not(feature = "fixed-point"))]
-use crate::sensor::motion::BuiltinMotion;
-#[cfg(feature = "fixed-point")]
-use crate::sensor::motion::{BuiltinMotionFixed, TruthFixed};
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
 use crate::time::Instant;
+
+// Float or fixed point: chosen here, once. Both files define the same items
+// (`Core` with the same methods, `Fir`, `Attitude`, `Truth`, `Sensor`,
+// `Triad` and the same free functions).
+#[cfg_attr(not(feature = "fixed-point"), path = "chain/float.rs")]
+#[cfg_attr(feature = "fixed-point", path = "chain/fixed.rs")]
+mod arith;
+use arith::Core;
 
 const RAD: f32 = 180.0 / core::f32::consts::PI;
 
@@ -210,129 +200,96 @@ pub const AUX_RANGE_G: f32 = 90.0;
 /// Supply voltage reported unless a fault overrides it, V.
 pub const NOMINAL_SUPPLY_V: f32 = 12.0;
 
-/// What the chain takes from the parameter block (Table 5.24).
+/// The chain's configuration, protocol neutral: each personality builds it
+/// from its own parameters (the KERNEL's Table 5.24 rows:
+/// [`crate::kernel::config::chain_config`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChainConfig {
     /// Internal rate of the model, Hz (Table 4.3).
     pub internal_rate_hz: u32,
-    /// LPF_Bandwidth code (0..4, 0xFF off; 5.6).
-    pub lpf_code: u8,
-    /// Filter mask and Filt1/Filt2/Tau (5.8).
+    /// FIR low-pass bandwidth (5.6, Table 5.29).
+    pub lpf: Bandwidth,
+    /// Cascade filter mask and Filt1/Filt2/Tau (5.8).
     pub cascade: CascadeConfig,
-    /// Output_Variant, with Average_Output_Data = 1 forcing the average (5.3.6).
+    /// What an output carries over its interval (5.3.6).
     pub output_variant: OutputVariant,
-    /// Alignment_Angles heading, pitch, roll, degrees (Appendix B).
+    /// Mounting (alignment) angles heading, pitch, roll, degrees (Appendix B).
     pub alignment_angles_deg: [f32; 3],
-    /// ZUPT, Align_Gyro_STD_Threshold and the AHRS tuning rows (5.7).
+    /// Alignment method, threshold and the AHRS tuning (5.7).
     pub align: AlignConfig,
 }
 
 impl ChainConfig {
-    /// The factory configuration of `product`.
+    /// The power-on configuration of `product`: LPF 262 Hz, cascade off
+    /// (its filters at their default tuning), instant output, no mounting
+    /// rotation, averaging alignment with the default threshold and tuning.
+    /// (The KERNEL's factory parameters map to exactly this; a unit test in
+    /// [`crate::kernel::config`] pins it.)
+    #[inline(never)]
     pub fn defaults(product: &Product) -> Self {
-        ChainConfig::from_block(&params::factory_block(product), product)
-    }
-
-    /// Reads the parameters the chain uses from `block` (the live RAM copy).
-    pub fn from_block(block: &Block, product: &Product) -> Self {
-        let f = |id: u16, default: f32| {
-            params::find(id)
-                .map(|p| p.read_f32(block, 0))
-                .filter(|v| v.is_finite())
-                .unwrap_or(default)
-        };
-        let so = |base: u16, omega: f32| SecondOrder {
-            zeta_num: f(base, 0.1),
-            zeta_den: f(base + 4, 0.7),
-            omega: f(base + 8, omega),
-        };
-        let angle = |i: usize| {
-            let v = params::ALIGNMENT_ANGLES.read_f32(block, i);
-            if v.is_finite() {
-                v
-            } else {
-                0.0
-            }
-        };
         ChainConfig {
             internal_rate_hz: product.model.internal_rate_hz,
-            lpf_code: params::LPF_BANDWIDTH.read_int(block) as u8,
-            cascade: CascadeConfig {
-                mask: params::FILTER.read_int(block) as u8 & 0x07,
-                filt1: so(0x0452, 314.159_27),
-                filt2: so(0x045E, 628.318_5),
-                tau: f(params::TAU.id, 0.01),
-            },
-            output_variant: OutputVariant::from_params(
-                params::OUTPUT_VARIANT.read_int(block) as u8,
-                params::AVERAGE_OUTPUT_DATA.read_int(block) as u8,
-            ),
-            alignment_angles_deg: [angle(0), angle(1), angle(2)],
-            align: AlignConfig {
-                zupt: params::ZUPT.read_int(block) == 1,
-                std_threshold_dps: f(params::ALIGN_GYRO_STD_THRESHOLD.id, 0.05),
-                gyro_noise_rms: f(0x03EE, 0.1),
-                gyro_bias_rms: f(0x03FA, 0.1),
-                gyro_bias_drift: f(0x03F6, 0.001),
-            },
+            lpf: Bandwidth::Hz262,
+            cascade: CascadeConfig::default(),
+            output_variant: OutputVariant::Instant,
+            alignment_angles_deg: [0.0; 3],
+            align: AlignConfig::default(),
         }
     }
 
     /// The FIR design this configuration selects (`None` = off).
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
-        fir::design(self.lpf_code, self.internal_rate_hz)
+        fir::design(self.lpf, self.internal_rate_hz)
     }
 }
 
-/// Injectable faults (they drive the status words and GetBIT).
+/// Injectable faults (they drive [`Health`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Faults {
     /// Internal sensors stop answering: the data freeze at the last good
-    /// values; USW bit 1 (Table 5.26).
+    /// values; [`Health::sensor_comm_failure`].
     pub sensor_comm: bool,
-    /// Internal sensor configuration failed: USW bit 2.
+    /// Internal sensor configuration failed: [`Health::sensor_config_failure`].
     pub sensor_config: bool,
-    /// Gyroscope BIT fails: GetBIT gyro result 1 (Table 5.18 bits 2–4).
+    /// Gyroscope BIT fails: [`Health::gyro_bit_failed`].
     pub gyro_bit: bool,
-    /// Accelerometer BIT fails: GetBIT accel result 1 (bits 0–1; 0 and 2 are
-    /// "okay").
+    /// Accelerometer BIT fails: [`Health::accel_bit_failed`].
     pub accel_bit: bool,
-    /// Flash check fails: GetBIT bits 12–13 = 1.
+    /// Flash check fails: [`Health::flash_check_failed`].
     pub flash_check: bool,
-    /// Forces the sensor temperature, °C; outside −40…85 °C sets USW bit 14.
+    /// Forces the sensor temperature, °C; outside
+    /// [`OPERATING_RANGE_C`] sets [`Health::over_temperature`].
     pub temperature_c: Option<f32>,
     /// Forces the reported supply voltage, V.
     pub supply_voltage: Option<f32>,
 }
 
-/// Status words of the chain.
+/// The unit's health now, protocol neutral (the KERNEL encodes it as USW,
+/// USW-extended and GetBIT in [`crate::kernel::status`]). Axis masks: bit 0
+/// X, bit 1 Y, bit 2 Z, sensor axes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Status {
-    /// Unit Status Word (Table 5.26): bit 1 sensor communication failure,
-    /// bit 2 sensor configuration failure, bits 10/11/12 X/Y/Z angular rate
-    /// out of range, bit 14 temperature out of the operating range.
-    pub usw: u16,
-    /// Extended USW (Table 5.27): bit 0 initial alignment complete (clear only
-    /// while aligning), bit 1 gyro bias estimation failed.
-    pub usw_ext: u16,
-    /// GetBIT payload (Table 5.18), 4 bytes.
-    pub bit: [u8; 4],
-}
-
-/// USW bits (Table 5.26).
-pub mod usw {
-    /// Communication failure of internal sensors.
-    pub const SENSOR_COMM: u16 = 1 << 1;
-    /// Configuration failure of internal sensors.
-    pub const SENSOR_CONFIG: u16 = 1 << 2;
-    /// X angular rate out of range (Y is `<< 1`, Z `<< 2`).
-    pub const RATE_X_RANGE: u16 = 1 << 10;
-    /// Temperature out of the operating range.
-    pub const TEMPERATURE: u16 = 1 << 14;
-    /// Extended: initial alignment complete (Table 5.27).
-    pub const EXT_ALIGNED: u16 = 1 << 0;
-    /// Extended: gyro bias estimation failed.
-    pub const EXT_BIAS_FAILED: u16 = 1 << 1;
+pub struct Health {
+    /// The internal sensors do not answer (data frozen).
+    pub sensor_comm_failure: bool,
+    /// The internal sensors' configuration failed.
+    pub sensor_config_failure: bool,
+    /// Gyro axes beyond the measurement range at any tick of the interval
+    /// of the last [`SignalChain::output`] or since.
+    pub gyro_over_range: u8,
+    /// Accelerometer axes beyond the measurement range, same interval.
+    pub accel_over_range: u8,
+    /// The sensor temperature is outside [`OPERATING_RANGE_C`].
+    pub over_temperature: bool,
+    /// The gyroscope built-in test failed.
+    pub gyro_bit_failed: bool,
+    /// The accelerometer built-in test failed.
+    pub accel_bit_failed: bool,
+    /// The flash check failed.
+    pub flash_check_failed: bool,
+    /// An initial alignment is running (clear: complete, or skipped).
+    pub aligning: bool,
+    /// The last alignment rejected its gyro bias estimate (5.7).
+    pub bias_estimation_failed: bool,
 }
 
 /// Per-channel scale of the fixed-point FIR: gyro 2¹⁷ per °/s (LSB 7.6e-6 °/s,
@@ -362,37 +319,6 @@ pub const FIXED_UNIT: [f32; CHANNELS] = [
     1.0 / 1_048_576.0,
 ];
 
-/// The numeric core of the chain, float (FPU cores): sensor engines, the
-/// built-in motion, mounting, FIR, cascade, accumulator and attitude.
-#[cfg(not(feature = "fixed-point"))]
-#[derive(Debug, Clone)]
-struct Core {
-    engines: [TriadEngine; 3],
-    motion: BuiltinMotion,
-    mounting: Mounting,
-    cascade: Cascade,
-    variant: VariantAccumulator,
-    attitude: Attitude,
-}
-
-/// The numeric core in integers (`fixed-point` feature, cores without an
-/// FPU): the same stages on `i32` samples (module doc, "Fixed point").
-#[cfg(feature = "fixed-point")]
-#[derive(Debug, Clone)]
-struct Core {
-    engines: [TriadEngineFixed; 3],
-    motion: BuiltinMotionFixed,
-    mounting: MountingFixed,
-    cascade: CascadeFixed,
-    variant: VariantFixed,
-    attitude: AttitudeFixed,
-    /// Sensor axes whose temperature terms are still to be updated (one a
-    /// tick, module doc).
-    temp_pending: u8,
-    /// The gyro bias in FIR units (°/s·2¹⁷), for the filtered gyro.
-    bias_fir: [i32; 3],
-}
-
 #[derive(Debug, Clone, PartialEq)]
 enum Ahrs {
     Aligning(Alignment),
@@ -400,8 +326,13 @@ enum Ahrs {
 }
 
 /// The signal chain of one unit (module doc). Fixed size, no heap.
+///
+/// `I` chooses whether it keeps the cumulative integrals
+/// ([`crate::dsp::integrals`]): [`NoIntegrals`] (the default, what the
+/// KERNEL runs: no storage, no cost) or [`Integrals`]
+/// ([`SignalChain::integrals`]; a personality whose streams window them).
 #[derive(Debug, Clone)]
-pub struct SignalChain {
+pub struct SignalChain<I: Integrate = NoIntegrals> {
     product: Product,
     dt: f32,
     has_aux: bool,
@@ -416,7 +347,7 @@ pub struct SignalChain {
     core: Core,
     /// The FIR bank (outside [`Core`]: it is most of the chain's size, and
     /// [`SignalChain::reset`] refills it in place).
-    fir: ChainFir,
+    fir: arith::Fir,
     ahrs: Ahrs,
     bias: Vec3,
     bias_failed: bool,
@@ -424,13 +355,7 @@ pub struct SignalChain {
     sat_reported: u8,
     ticks: u64,
     interval: f32,
-}
-
-#[cfg(not(feature = "fixed-point"))]
-fn pack(s: &[Vec3; 3]) -> [f32; CHANNELS] {
-    [
-        s[0][0], s[0][1], s[0][2], s[1][0], s[1][1], s[1][2], s[2][0], s[2][1], s[2][2],
-    ]
+    integrals: I,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -446,118 +371,36 @@ pub const EARTH_ASSUMED: Vec3 = [
     f32::from_bits(0x3858_4525),
 ];
 
-/// [`EARTH_ASSUMED`] in °/s·2^(GYRO_BITS + 8) (the fixed-point motion's unit).
-#[cfg(feature = "fixed-point")]
-fn earth_assumed_fixed() -> [i32; 3] {
-    EARTH_ASSUMED.map(|w| to_fixed(w * RAD, GYRO_BITS + 8))
-}
-
-/// FIR units (°/s·2¹⁷, g·2²⁰) of a fixed-point measurement, rounded.
-#[cfg(feature = "fixed-point")]
-#[inline(never)]
-fn fir_units(s: &[[i32; 3]; 3]) -> [i32; CHANNELS] {
-    let r = |x: i32, k: u32| (x >> k) + ((x >> (k - 1)) & 1);
-    let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
-    [
-        r(s[0][0], g),
-        r(s[0][1], g),
-        r(s[0][2], g),
-        r(s[1][0], a),
-        r(s[1][1], a),
-        r(s[1][2], a),
-        r(s[2][0], a),
-        r(s[2][1], a),
-        r(s[2][2], a),
-    ]
-}
-
-#[cfg(not(feature = "fixed-point"))]
-impl Core {
-    fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
-        let x = fir_row(t0);
-        Core {
-            engines: [
-                TriadEngine::new(product.gyro.full_scale() as f32),
-                TriadEngine::new(product.accel.full_scale() as f32),
-                TriadEngine::new(AUX_RANGE_G),
-            ],
-            motion: BuiltinMotion::new(Motion::default(), dt),
-            mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
-            cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
-            attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
-        }
-    }
-}
-
-#[cfg(feature = "fixed-point")]
-impl Core {
-    fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
-        let x = fir_row(t0);
-        let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
-        Core {
-            engines: [
-                TriadEngineFixed::new(product.gyro.full_scale() as f32, GYRO_BITS),
-                TriadEngineFixed::new(product.accel.full_scale() as f32, ACC_BITS),
-                TriadEngineFixed::new(AUX_RANGE_G, ACC_BITS),
-            ],
-            motion: BuiltinMotionFixed::new(Motion::default(), dt),
-            mounting: MountingFixed::new(&mounting),
-            cascade: CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantFixed::new(cfg.output_variant, dt, &x),
-            attitude: AttitudeFixed::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
-            temp_pending: 0,
-            bias_fir: [0; 3],
-        }
-    }
-}
-
-/// The FIR bank of this build: float, or integer (`fixed-point`).
-#[cfg(not(feature = "fixed-point"))]
-type ChainFir = FirBank;
-/// The FIR bank of this build: float, or integer (`fixed-point`).
-#[cfg(feature = "fixed-point")]
-type ChainFir = FirBankFixed;
-
-/// A measurement (gyro, acc, aux acc) as a FIR input row.
-#[cfg(not(feature = "fixed-point"))]
-fn fir_row(t: &[Vec3; 3]) -> [f32; CHANNELS] {
-    pack(t)
-}
-
-/// A measurement (gyro, acc, aux acc) as a FIR input row, in FIR units.
-#[cfg(feature = "fixed-point")]
-fn fir_row(t: &[Vec3; 3]) -> [i32; CHANNELS] {
-    fir_units(&[
-        t[0].map(|v| to_fixed(v, GYRO_BITS)),
-        t[1].map(|v| to_fixed(v, ACC_BITS)),
-        t[2].map(|v| to_fixed(v, ACC_BITS)),
-    ])
+/// What an output interval gives, carrier axes, °/s and g (the core's
+/// conversion of its accumulator).
+#[derive(Debug, Clone, Copy)]
+struct Outputs {
+    gyro: Vec3,
+    acc: Vec3,
+    gyro_f: Vec3,
+    acc_f: Vec3,
+    aux: Vec3,
+    aux_f: Vec3,
 }
 
 /// What [`SignalChain::attitude_mut`] gives: the attitude filter of this
 /// build ([`crate::ahrs::attitude::Attitude`], or
 /// [`crate::ahrs::attitude::AttitudeFixed`] with the `fixed-point` feature;
 /// both have `set`, `set_tilt_correction`, `quat`, `euler_deg`).
-#[cfg(not(feature = "fixed-point"))]
-pub type ChainAttitude = Attitude;
-/// What [`SignalChain::attitude_mut`] gives (see the float build's doc).
-#[cfg(feature = "fixed-point")]
-pub type ChainAttitude = AttitudeFixed;
+pub type ChainAttitude = arith::Attitude;
 
 impl SignalChain {
-    /// Power-on of `product` with every random process seeded by `seed`.
+    /// Power-on of `product` with every random process seeded by `seed`
+    /// (no integrals; [`SignalChain::powered_on`] for any `I`).
     ///
     /// The unit is static, level, z up, heading 0 at
     /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
-    /// [`crate::sensor::ErrorSpec`]; the parameters are the factory
-    /// defaults until [`SignalChain::configure`]. The AHRS starts levelled,
-    /// unaligned (bias 0), USW-extended bit 0 set.
+    /// [`crate::sensor::ErrorSpec`]; the configuration is
+    /// [`ChainConfig::defaults`] until [`SignalChain::configure`]. The AHRS
+    /// starts levelled, unaligned (bias 0), not aligning.
     pub fn new(product: Product, seed: u64) -> Self {
-        let mut chain = Self::unpowered(product);
-        chain.reset(product, seed);
-        chain
+        Self::powered_on(product, seed)
     }
 
     /// A placeholder chain for `product` (zero histories, no random draws)
@@ -565,6 +408,33 @@ impl SignalChain {
     /// build in place (`Device::power_on_into`).
     #[inline(always)]
     pub fn unpowered(product: Product) -> Self {
+        Self::placeholder(product)
+    }
+}
+
+impl SignalChain<Integrals> {
+    /// The cumulative integrals since power-on now (a snapshot): a stream
+    /// keeps the one of its window's start and, at its end,
+    /// [`crate::dsp::integrals::window`]`(&start, &chain.integrals(),
+    /// internal_rate_hz)` gives the coning/sculling-corrected Δθ and Δv.
+    /// Pre-FIR measurement, carrier axes, gyro bias not removed
+    /// ([`crate::dsp::integrals`]).
+    pub fn integrals(&self) -> Integrals {
+        self.integrals
+    }
+}
+
+impl<I: Integrate> SignalChain<I> {
+    /// [`SignalChain::new`] for a chain of any `I`.
+    pub fn powered_on(product: Product, seed: u64) -> Self {
+        let mut chain = Self::placeholder(product);
+        chain.reset(product, seed);
+        chain
+    }
+
+    /// [`SignalChain::unpowered`] for a chain of any `I`.
+    #[inline(always)]
+    pub fn placeholder(product: Product) -> Self {
         let dt = 1.0 / product.model.internal_rate_hz as f32;
         let cfg = ChainConfig::defaults(&product);
         let t0 = [[0.0; 3]; 3];
@@ -581,7 +451,7 @@ impl SignalChain {
             truth_frame: TruthFrame::Sensor,
             cfg,
             core: Core::new(&product, &cfg, &t0, dt),
-            fir: ChainFir::new(None, &fir_row(&t0)),
+            fir: arith::Fir::new(None, &arith::fir_row(&t0)),
             ahrs: Ahrs::Running,
             bias: [0.0; 3],
             bias_failed: false,
@@ -589,6 +459,7 @@ impl SignalChain {
             sat_reported: 0,
             ticks: 0,
             interval: dt,
+            integrals: I::default(),
         }
     }
 
@@ -641,6 +512,7 @@ impl SignalChain {
             sat_reported,
             ticks,
             interval,
+            integrals,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -654,7 +526,7 @@ impl SignalChain {
         *truth_frame = TruthFrame::Sensor;
         *cfg_ = cfg;
         *core_ = core;
-        fir.reset(cfg.fir_design(), &fir_row(&sensor));
+        fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
         *bias_failed = false;
@@ -662,6 +534,7 @@ impl SignalChain {
         *sat_reported = 0;
         *ticks = 0;
         *interval = dt;
+        *integrals = I::default();
         self.refresh_errors();
     }
 
@@ -677,39 +550,19 @@ impl SignalChain {
 
     /// Applies a configuration (5.3.1: at every data command). See the module
     /// doc: FIR history kept, cascade in steady state, accumulator emptied.
+    #[inline(never)]
     pub fn configure(&mut self, cfg: &ChainConfig) {
         self.cfg = *cfg;
-        let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
-        let c = &mut self.core;
         self.fir.set_design(cfg.fir_design());
         // The cascade starts in the steady state of the last FIR output
         // (exact for a steady signal).
-        let last = c.variant.last();
-        c.cascade
-            .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
-        #[cfg(not(feature = "fixed-point"))]
-        {
-            c.mounting = mounting;
-            c.variant = VariantAccumulator::new(cfg.output_variant, self.dt, &last);
-        }
-        #[cfg(feature = "fixed-point")]
-        {
-            c.mounting = MountingFixed::new(&mounting);
-            c.variant = VariantFixed::new(cfg.output_variant, self.dt, &last);
-        }
+        self.core.reconfigure(cfg, self.dt);
     }
 
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
-        #[cfg(not(feature = "fixed-point"))]
-        {
-            self.core.motion = BuiltinMotion::new(m, self.dt);
-        }
-        #[cfg(feature = "fixed-point")]
-        {
-            self.core.motion = BuiltinMotionFixed::new(m, self.dt);
-        }
+        self.core.set_motion(m, self.dt);
     }
 
     /// Which axes the motion describes (default: the unit's own).
@@ -754,22 +607,8 @@ impl SignalChain {
     /// The last measurement in sensor axes, before any filter: gyro (°/s),
     /// acc (g), aux acc (g).
     pub fn last_sensor(&self) -> [Vec3; 3] {
-        #[cfg(not(feature = "fixed-point"))]
-        {
-            // The FIR's newest input row is the last measurement.
-            let x = self.fir.last_input();
-            [triad(&x, 0), triad(&x, 1), triad(&x, 2)]
-        }
-        #[cfg(feature = "fixed-point")]
-        {
-            // The FIR's newest input row: the last measurement in FIR units.
-            let x = self.fir.last_input();
-            [
-                triad(&x, 0).map(|v| scaled_f32(v, 17)),
-                triad(&x, 1).map(|v| scaled_f32(v, 20)),
-                triad(&x, 2).map(|v| scaled_f32(v, 20)),
-            ]
-        }
+        // The FIR's newest input row is the last measurement.
+        arith::sensor_of(&self.fir.last_input())
     }
 
     /// The estimated gyro bias, carrier axes, °/s.
@@ -806,10 +645,7 @@ impl SignalChain {
         c[0].configure(&e.gyro, t, dt);
         c[1].configure(&e.acc, t, dt);
         c[2].configure(&e.aux, t, dt);
-        #[cfg(feature = "fixed-point")]
-        {
-            self.core.temp_pending = 0;
-        }
+        self.core.errors_configured();
         self.temp_model.prepare(UPDATE_TICKS as f32 * dt);
         self.errors_dirty = false;
     }
@@ -830,163 +666,57 @@ impl SignalChain {
         let t = forced.unwrap_or_else(|| self.temp_model.temperature_c());
         if update || t != self.temperature {
             self.temperature = t;
-            #[cfg(not(feature = "fixed-point"))]
-            {
-                let (e, c) = (&self.errors, &mut self.core.engines);
-                c[0].set_temperature(&e.gyro, t);
-                c[1].set_temperature(&e.acc, t);
-                c[2].set_temperature(&e.aux, t);
-            }
-            #[cfg(feature = "fixed-point")]
-            {
-                self.core.temp_pending = 9;
-            }
+            self.core.temperature_changed(&self.errors, t);
         }
         // Fixed point: one axis a tick (two soft-float products each).
-        #[cfg(feature = "fixed-point")]
-        if self.core.temp_pending > 0 {
-            self.core.temp_pending -= 1;
-            let k = usize::from(self.core.temp_pending);
-            let (e, i) = (
-                [2, 2, 2, 1, 1, 1, 0, 0, 0][k],
-                [2, 1, 0, 2, 1, 0, 2, 1, 0][k],
-            );
-            let errs = [&self.errors.gyro, &self.errors.acc, &self.errors.aux][e];
-            self.core.engines[e].set_axis_temperature(errs, i, self.temperature);
-        }
+        self.core.temperature_step(&self.errors, self.temperature);
     }
 
     /// One internal-rate tick with the built-in motion: truth → errors and
     /// saturation → FIR → cascade → variant accumulator, and alignment or
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
-        #[cfg(not(feature = "fixed-point"))]
-        {
-            let truth = self.core.motion.next(now, self.dt);
-            self.process(&truth);
-        }
-        #[cfg(feature = "fixed-point")]
-        {
-            let _ = now;
-            let truth = self.core.motion.step();
-            self.process(&truth);
-        }
+        let truth = self.core.builtin_truth(now, self.dt);
+        self.process(&truth);
     }
 
     /// One tick with an external motion source (a host's trajectory player)
     /// instead of the built-in motion.
     pub fn tick_with(&mut self, now: Instant, source: &mut dyn MotionSource) {
         let truth = source.next(now, self.dt);
-        #[cfg(not(feature = "fixed-point"))]
-        self.process(&truth);
-        #[cfg(feature = "fixed-point")]
-        self.process(&TruthFixed::from_truth(&truth));
+        self.process(&arith::truth_of(&truth));
     }
 
-    #[cfg(not(feature = "fixed-point"))]
-    fn process(&mut self, truth: &Truth) {
-        let truth = &truth.bounded();
+    fn process(&mut self, truth: &arith::Truth) {
+        let truth = &arith::bounded(truth);
         self.begin_tick(truth.temperature_c);
         let c = &mut self.core;
         // Sensors (sensor axes).
         let sensor = if !self.faults.sensor_comm {
-            let (rate, force) = match self.truth_frame {
-                TruthFrame::Sensor => (truth.rate_dps, truth.specific_force_g),
-                TruthFrame::Carrier => (
-                    c.mounting.to_sensor(&truth.rate_dps),
-                    c.mounting.to_sensor(&truth.specific_force_g),
-                ),
-            };
-            let (g, over) = c.engines[0].measure(&rate, &mut self.rng);
-            let (a, _) = c.engines[1].measure(&force, &mut self.rng);
-            let aux = if self.has_aux {
-                c.engines[2].measure(&force, &mut self.rng).0
-            } else {
-                [0.0; 3]
-            };
+            let (s, over) = c.measure(truth, self.truth_frame, self.has_aux, &mut self.rng);
             self.sat_live |= over;
-            pack(&[g, a, aux])
+            s
         } else {
             // Frozen: the FIR's newest input is the last good measurement.
-            self.fir.last_input()
+            arith::frozen(&self.fir.last_input())
         };
 
-        // AHRS on carrier axes, before the FIR.
-        let gc = c.mounting.to_carrier(&triad(&sensor, 0));
-        let ac = c.mounting.to_carrier(&triad(&sensor, 1));
+        // AHRS and the integrals on carrier axes, before the FIR.
+        let (gc, ac) = c.carrier(&sensor);
+        if I::ON {
+            let (w, f) = arith::integral_units(&gc, &ac);
+            self.integrals.add(&w, &f);
+        }
         match &mut self.ahrs {
             Ahrs::Aligning(al) => {
-                al.add(&gc, &ac, &self.cfg.align);
+                al.add(&arith::gyro_dps(&gc), &arith::acc_g(&ac), &self.cfg.align);
                 c.attitude.note_rate(&gc);
             }
-            Ahrs::Running => {
-                let g = [
-                    gc[0] - self.bias[0],
-                    gc[1] - self.bias[1],
-                    gc[2] - self.bias[2],
-                ];
-                c.attitude.update(&g, &ac);
-            }
+            Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
 
         // Filters (sensor axes).
-        let y = self.fir.push(&sensor);
-        let mut z = y;
-        c.cascade.process(&mut z);
-        c.variant.add(&y, &z);
-    }
-
-    #[cfg(feature = "fixed-point")]
-    fn process(&mut self, truth: &TruthFixed) {
-        self.begin_tick(truth.temperature_c);
-        let c = &mut self.core;
-        // Sensors (sensor axes), scaled by 2^GYRO_BITS, 2^ACC_BITS.
-        let sensor = if !self.faults.sensor_comm {
-            let (rate, force) = match self.truth_frame {
-                TruthFrame::Sensor => (truth.rate, truth.force),
-                TruthFrame::Carrier => (
-                    c.mounting.to_sensor(&truth.rate),
-                    c.mounting.to_sensor(&truth.force),
-                ),
-            };
-            let (g, over) = c.engines[0].measure(&rate, &mut self.rng);
-            let (a, _) = c.engines[1].measure(&force, &mut self.rng);
-            let aux = if self.has_aux {
-                c.engines[2].measure(&force, &mut self.rng).0
-            } else {
-                [0; 3]
-            };
-            self.sat_live |= over;
-            [g, a, aux]
-        } else {
-            // Frozen: the FIR's newest input (FIR units) is the last good
-            // measurement.
-            let x = self.fir.last_input();
-            let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
-            [
-                triad(&x, 0).map(|v| v << g),
-                triad(&x, 1).map(|v| v << a),
-                triad(&x, 2).map(|v| v << a),
-            ]
-        };
-
-        // AHRS on carrier axes, before the FIR.
-        let gc = c.mounting.to_carrier(&sensor[0]);
-        let ac = c.mounting.to_carrier(&sensor[1]);
-        match &mut self.ahrs {
-            Ahrs::Aligning(al) => {
-                al.add(
-                    &gc.map(|v| scaled_f32(v, GYRO_BITS)),
-                    &ac.map(|v| scaled_f32(v, ACC_BITS)),
-                    &self.cfg.align,
-                );
-                c.attitude.note_rate(&gc);
-            }
-            Ahrs::Running => c.attitude.update(&gc, &ac),
-        }
-
-        // Filters (sensor axes).
-        let y = self.fir.push(&fir_units(&sensor));
+        let y = self.fir.push(&arith::fir_input(&sensor));
         let mut z = y;
         c.cascade.process(&mut z);
         c.variant.add(&y, &z);
@@ -1007,34 +737,10 @@ impl SignalChain {
     /// [`SignalChain::skip_alignment`].
     pub fn end_alignment(&mut self) {
         let result = match &self.ahrs {
-            Ahrs::Aligning(al) if al.ticks() > 0 => {
-                #[cfg(not(feature = "fixed-point"))]
-                {
-                    al.finish(&EARTH_ASSUMED, &self.cfg.align)
-                }
-                #[cfg(feature = "fixed-point")]
-                {
-                    // Levelling and the Earth rate in integers (CORDIC): no
-                    // soft-float trigonometry in this tick.
-                    let f = al
-                        .mean_force()
-                        .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
-                    let q = level_q30(&f);
-                    let w = quat_rotate_inv_q30(&q, &earth_assumed_fixed());
-                    let r = al.finish_at(
-                        q.map(|v| scaled_f32(v, 30)),
-                        w.map(|v| scaled_f32(v, GYRO_BITS + 8)),
-                        &self.cfg.align,
-                    );
-                    self.core.attitude.set_q30(q);
-                    r
-                }
-            }
+            Ahrs::Aligning(al) if al.ticks() > 0 => self.core.finish_alignment(al, &self.cfg.align),
             _ => return self.skip_alignment(),
         };
         self.bias_failed = !result.accepted;
-        #[cfg(not(feature = "fixed-point"))]
-        self.core.attitude.set(result.attitude);
         self.set_bias(result.bias_dps);
         self.ahrs = Ahrs::Running;
         self.core.variant.reset();
@@ -1042,45 +748,25 @@ impl SignalChain {
 
     /// Initial_Alignment_Time = 0: no bias estimation (bias 0, not failed),
     /// levelled at once from the FIR-filtered accelerometers, heading 0.
+    #[cold]
     pub fn skip_alignment(&mut self) {
-        let last = self.core.variant.last();
-        let f = self.core.mounting.to_carrier(&triad(&last, 1));
-        #[cfg(not(feature = "fixed-point"))]
-        self.core.attitude.set(level_from(&f));
-        #[cfg(feature = "fixed-point")]
-        self.core.attitude.set_q30(level_q30(&f));
+        self.core.level_now();
         self.bias_failed = false;
         self.set_bias([0.0; 3]);
         self.ahrs = Ahrs::Running;
         self.core.variant.reset();
     }
 
+    #[inline(never)]
     fn set_bias(&mut self, b: Vec3) {
         self.bias = b;
-        #[cfg(feature = "fixed-point")]
-        {
-            self.core.attitude.set_bias(&b, self.dt);
-            self.core.bias_fir = b.map(|v| to_fixed(v, 17));
-        }
+        self.core.set_bias(&b, self.dt);
     }
 
     /// The orientation now: (quaternion, Euler angles in degrees).
     fn orientation(&self) -> (Quat, Vec3) {
         match &self.ahrs {
-            #[cfg(not(feature = "fixed-point"))]
-            Ahrs::Aligning(al) => {
-                let q = al.level();
-                let e = euler_from_quat(&q);
-                (canonical(&q), [e[0] * RAD, e[1] * RAD, e[2] * RAD])
-            }
-            #[cfg(feature = "fixed-point")]
-            Ahrs::Aligning(al) => {
-                let f = al
-                    .mean_force()
-                    .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
-                let q = level_q30(&f);
-                (q.map(|v| scaled_f32(v, 30)), euler_deg_q30(&q))
-            }
+            Ahrs::Aligning(al) => arith::aligning_orientation(al),
             Ahrs::Running => (self.core.attitude.quat(), self.core.attitude.euler_deg()),
         }
     }
@@ -1097,53 +783,18 @@ impl SignalChain {
     /// identity and [`Sample::euler`] zeros. Nothing else differs; the
     /// orientation has no state of its own to advance.
     pub fn output_with(&mut self, attitude: bool) -> Sample {
-        let v = self.core.variant.take();
-        self.interval = v.ticks as f32 * self.dt;
+        let (o, ticks) = self.core.take(&self.bias, self.has_aux);
+        self.interval = ticks as f32 * self.dt;
         self.sat_reported = self.sat_live;
         self.sat_live = 0;
-        let m = &self.core.mounting;
-        #[cfg(not(feature = "fixed-point"))]
-        let (gyro, acc, gyro_f, acc_f, (aux, aux_f)) = {
-            let b = self.bias;
-            let gf = m.to_carrier(&triad(&v.filtered, 0));
-            (
-                m.to_carrier(&triad(&v.main, 0)),
-                m.to_carrier(&triad(&v.main, 1)),
-                [gf[0] - b[0], gf[1] - b[1], gf[2] - b[2]],
-                m.to_carrier(&triad(&v.filtered, 1)),
-                if self.has_aux {
-                    (
-                        m.to_carrier(&triad(&v.main, 2)),
-                        m.to_carrier(&triad(&v.filtered, 2)),
-                    )
-                } else {
-                    ([0.0; 3], [0.0; 3])
-                },
-            )
-        };
-        #[cfg(feature = "fixed-point")]
-        let (gyro, acc, gyro_f, acc_f, (aux, aux_f)) = {
-            let f = |x: &[i32; CHANNELS], i: usize, k: u32| {
-                m.to_carrier(&triad(x, i)).map(|v| scaled_f32(v, k))
-            };
-            let b = self.core.bias_fir;
-            let gf = m.to_carrier(&triad(&v.filtered, 0));
-            (
-                f(&v.main, 0, 17),
-                f(&v.main, 1, 20),
-                [
-                    scaled_f32(gf[0].saturating_sub(b[0]), 17),
-                    scaled_f32(gf[1].saturating_sub(b[1]), 17),
-                    scaled_f32(gf[2].saturating_sub(b[2]), 17),
-                ],
-                f(&v.filtered, 1, 20),
-                if self.has_aux {
-                    (f(&v.main, 2, 20), f(&v.filtered, 2, 20))
-                } else {
-                    ([0.0; 3], [0.0; 3])
-                },
-            )
-        };
+        let Outputs {
+            gyro,
+            acc,
+            gyro_f,
+            acc_f,
+            aux,
+            aux_f,
+        } = o;
         let (quat, euler) = if attitude {
             self.orientation()
         } else {
@@ -1164,42 +815,25 @@ impl SignalChain {
         }
     }
 
-    /// USW, USW-extended and the GetBIT payload now. The rate-range bits
-    /// cover the interval of the last [`SignalChain::output`] and the ticks
-    /// since, so they read the same before or after `output()` at an output
-    /// tick.
-    pub fn status(&self) -> Status {
+    /// The health now. The over-range masks cover the interval of the
+    /// last [`SignalChain::output`] and the ticks since, so they read the
+    /// same before or after `output()` at an output tick.
+    pub fn health(&self) -> Health {
         let f = &self.faults;
-        let mut usw = 0u16;
-        if f.sensor_comm {
-            usw |= usw::SENSOR_COMM;
-        }
-        if f.sensor_config {
-            usw |= usw::SENSOR_CONFIG;
-        }
-        usw |= u16::from((self.sat_live | self.sat_reported) & 0x07) << 10;
+        let sat = self.sat_live | self.sat_reported;
         let (lo, hi) = OPERATING_RANGE_C;
-        if !(lo..=hi).contains(&self.temperature) {
-            usw |= usw::TEMPERATURE;
+        Health {
+            sensor_comm_failure: f.sensor_comm,
+            sensor_config_failure: f.sensor_config,
+            gyro_over_range: sat & 0x07,
+            accel_over_range: sat >> 3,
+            over_temperature: !(lo..=hi).contains(&self.temperature),
+            gyro_bit_failed: f.gyro_bit,
+            accel_bit_failed: f.accel_bit,
+            flash_check_failed: f.flash_check,
+            aligning: self.is_aligning(),
+            bias_estimation_failed: self.bias_failed,
         }
-        let mut usw_ext = 0u16;
-        if !self.is_aligning() {
-            usw_ext |= usw::EXT_ALIGNED;
-        }
-        if self.bias_failed {
-            usw_ext |= usw::EXT_BIAS_FAILED;
-        }
-        let mut bit = [0u8; 4];
-        if f.accel_bit {
-            bit[0] |= 0x01;
-        }
-        if f.gyro_bit {
-            bit[0] |= 0x04;
-        }
-        if f.flash_check {
-            bit[1] |= 0x10;
-        }
-        Status { usw, usw_ext, bit }
     }
 }
 

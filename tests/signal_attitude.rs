@@ -13,6 +13,7 @@
 
 use imu_emu::ahrs::rotation::*;
 use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::kernel::status::Status;
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion};
 use imu_emu::time::Instant;
@@ -239,10 +240,10 @@ fn static_after_alignment_with_default_errors() {
     let (mut c, mut t) = chain("K110", false);
     c.begin_alignment();
     run(&mut c, &mut t, 1);
-    assert_eq!(c.status().usw_ext & 1, 0, "aligning");
+    assert_eq!(Status::of(&c.health()).usw_ext & 1, 0, "aligning");
     run(&mut c, &mut t, 3999);
     c.end_alignment();
-    let st = c.status();
+    let st = Status::of(&c.health());
     assert_eq!(st.usw_ext, 0x0001, "accepted: {:?}", c.gyro_bias());
     // The bias estimate is the turn-on bias (Earth rate removed).
     let e = c.errors().gyro;
@@ -347,7 +348,7 @@ fn vibration_rejects_the_averaged_bias_but_not_the_kalman_one() {
         let mut t = 0;
         run(&mut c, &mut t, 4000);
         c.end_alignment();
-        let st = c.status();
+        let st = Status::of(&c.health());
         if zupt {
             assert_eq!(st.usw_ext, 0x0001);
             let e = c.errors().gyro;
@@ -378,7 +379,7 @@ fn skip_alignment_levels_at_once_without_bias() {
     });
     run(&mut c, &mut t, 100);
     c.skip_alignment();
-    assert_eq!(c.status().usw_ext, 0x0001);
+    assert_eq!(Status::of(&c.health()).usw_ext, 0x0001);
     assert_eq!(c.gyro_bias(), [0.0; 3]);
     let s = c.output();
     assert!(

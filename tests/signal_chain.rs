@@ -3,8 +3,11 @@
 //! faults, temperature, the K201's 4 kHz rate.
 
 use imu_emu::ahrs::rotation::{quat_conj, quat_mul, Quat};
-use imu_emu::chain::{usw, ChainConfig, SignalChain};
+use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::dsp::OutputVariant;
+use imu_emu::kernel::config::{self, lpf_bandwidth};
+use imu_emu::kernel::status::{usw, Status};
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion, Sample};
 use imu_emu::time::Instant;
@@ -40,7 +43,7 @@ fn reset_in_place_is_a_power_on() {
         let mut t = 0;
         let mut cfg = ChainConfig::defaults(&p);
         cfg.output_variant = OutputVariant::Incremental;
-        cfg.lpf_code = 0x04;
+        cfg.lpf = Bandwidth::Hz262;
         a.configure(&cfg);
         a.set_motion(Motion::Coning {
             lat_deg: 10.0,
@@ -105,8 +108,8 @@ fn power_on_is_static_level_z_up_with_earth_rate() {
     assert!((s.temperature - 25.145).abs() < 0.01, "{}", s.temperature);
     assert_eq!(s.supply_voltage, 12.0);
     assert_eq!(
-        c.status(),
-        imu_emu::chain::Status {
+        Status::of(&c.health()),
+        Status {
             usw: 0,
             usw_ext: 1,
             bit: [0; 4]
@@ -159,7 +162,7 @@ fn run_seq(seed: u64, cfg_mod: impl Fn(&mut ChainConfig)) -> Vec<Sample> {
 #[test]
 fn same_seed_same_samples_different_seed_different_samples() {
     let all = |cfg: &mut ChainConfig| {
-        cfg.lpf_code = 0;
+        cfg.lpf = Bandwidth::Hz16;
         cfg.cascade.mask = 7;
         cfg.output_variant = OutputVariant::Incremental;
         cfg.alignment_angles_deg = [10.0, -5.0, 3.0];
@@ -202,7 +205,7 @@ fn output_variants_instant_average_incremental() {
         let mut c = SignalChain::new(p, 1);
         *c.errors_mut() = ErrorModel::IDEAL;
         let mut cfg = ChainConfig::defaults(&p);
-        cfg.lpf_code = 0xFF;
+        cfg.lpf = Bandwidth::Off;
         cfg.output_variant = variant;
         c.configure(&cfg);
         let mut src = Alternating(0);
@@ -222,9 +225,9 @@ fn output_variants_instant_average_incremental() {
         );
         assert!((c.output_interval() - 0.02).abs() < 1e-7);
         // Average_Output_Data = 1 forces the average.
-        assert_eq!(OutputVariant::from_params(0, 1), OutputVariant::Average);
-        assert_eq!(OutputVariant::from_params(2, 1), OutputVariant::Average);
-        assert_eq!(OutputVariant::from_params(2, 0), OutputVariant::Incremental);
+        assert_eq!(config::output_variant(0, 1), OutputVariant::Average);
+        assert_eq!(config::output_variant(2, 1), OutputVariant::Average);
+        assert_eq!(config::output_variant(2, 0), OutputVariant::Incremental);
     }
 }
 
@@ -240,7 +243,7 @@ fn incremental_output_carries_the_coning_correction() {
         let mut c = SignalChain::new(p, 1);
         *c.errors_mut() = ErrorModel::IDEAL;
         let mut cfg = ChainConfig::defaults(&p);
-        cfg.lpf_code = 0xFF;
+        cfg.lpf = Bandwidth::Off;
         cfg.output_variant = variant;
         c.configure(&cfg);
         c.set_motion(Motion::Coning {
@@ -292,7 +295,7 @@ fn rate_out_of_range_sets_usw_bits_per_axis_and_saturates() {
     let mut c = SignalChain::new(p, 1);
     *c.errors_mut() = ErrorModel::IDEAL;
     let mut cfg = ChainConfig::defaults(&p);
-    cfg.lpf_code = 0xFF;
+    cfg.lpf = Bandwidth::Off;
     c.configure(&cfg);
     c.set_motion(Motion::ConstantRotation {
         lat_deg: 45.0,
@@ -303,7 +306,7 @@ fn rate_out_of_range_sets_usw_bits_per_axis_and_saturates() {
     ticks(&mut c, &mut t, 1);
     let s = c.output();
     assert_eq!(s.gyro[1], 2000.0, "clipped at the range");
-    let st = c.status();
+    let st = Status::of(&c.health());
     assert_eq!(
         st.usw & (7 << 10),
         usw::RATE_X_RANGE << 1,
@@ -314,12 +317,12 @@ fn rate_out_of_range_sets_usw_bits_per_axis_and_saturates() {
     c.set_motion(Motion::default());
     ticks(&mut c, &mut t, 1);
     assert_ne!(
-        c.status().usw & (7 << 10),
+        Status::of(&c.health()).usw & (7 << 10),
         0,
         "still reported for the last interval"
     );
     c.output();
-    assert_eq!(c.status().usw & (7 << 10), 0);
+    assert_eq!(Status::of(&c.health()).usw & (7 << 10), 0);
 }
 
 #[test]
@@ -340,7 +343,7 @@ fn faults_drive_usw_and_getbit() {
     }
     ticks(&mut c, &mut t, 10);
     let s = c.output();
-    let st = c.status();
+    let st = Status::of(&c.health());
     assert_eq!(
         st.usw,
         usw::SENSOR_COMM | usw::SENSOR_CONFIG | usw::TEMPERATURE
@@ -355,11 +358,11 @@ fn faults_drive_usw_and_getbit() {
     assert_ne!(before.gyro, s.gyro);
     c.faults_mut().temperature_c = Some(-41.0);
     ticks(&mut c, &mut t, 1);
-    assert_ne!(c.status().usw & usw::TEMPERATURE, 0);
+    assert_ne!(Status::of(&c.health()).usw & usw::TEMPERATURE, 0);
     *c.faults_mut() = Default::default();
     ticks(&mut c, &mut t, 1);
-    assert_eq!(c.status().usw, 0);
-    assert_eq!(c.status().bit, [0; 4]);
+    assert_eq!(Status::of(&c.health()).usw, 0);
+    assert_eq!(Status::of(&c.health()).bit, [0; 4]);
 }
 
 #[test]
@@ -387,7 +390,7 @@ fn configure_has_no_transient() {
     ticks(&mut c, &mut t, 500);
     for (lpf, mask) in [(0u8, 7u8), (4, 0), (0xFF, 3), (2, 4)] {
         let mut cfg = ChainConfig::defaults(&p);
-        cfg.lpf_code = lpf;
+        cfg.lpf = lpf_bandwidth(lpf);
         cfg.cascade.mask = mask;
         c.configure(&cfg);
         for _ in 0..50 {
@@ -433,8 +436,8 @@ fn from_block_reads_the_parameter_rows() {
     block[a + 8..a + 12].copy_from_slice(&(180.0f32).to_le_bytes());
     block[0x045A..0x045E].copy_from_slice(&(100.0f32).to_le_bytes());
     block[0x046A..0x046E].copy_from_slice(&(0.05f32).to_le_bytes());
-    let cfg = ChainConfig::from_block(&block, &p);
-    assert_eq!(cfg.lpf_code, 1);
+    let cfg = config::chain_config(&block, &p);
+    assert_eq!(cfg.lpf, Bandwidth::Hz33);
     assert_eq!(cfg.cascade.mask, 5);
     assert_eq!(cfg.cascade.filt1.omega, 100.0);
     assert_eq!(cfg.cascade.tau, 0.05);
@@ -443,13 +446,13 @@ fn from_block_reads_the_parameter_rows() {
     assert_eq!(cfg.alignment_angles_deg, [-90.0, 0.0, 180.0]);
     block[usize::from(params::AVERAGE_OUTPUT_DATA.id)] = 1;
     assert_eq!(
-        ChainConfig::from_block(&block, &p).output_variant,
+        config::chain_config(&block, &p).output_variant,
         OutputVariant::Average
     );
     let d = ChainConfig::defaults(&p);
     assert_eq!(
-        (d.lpf_code, d.cascade.mask, d.output_variant),
-        (4, 0, OutputVariant::Instant)
+        (d.lpf, d.cascade.mask, d.output_variant),
+        (Bandwidth::Hz262, 0, OutputVariant::Instant)
     );
 }
 
@@ -459,4 +462,29 @@ fn from_block_reads_the_parameter_rows() {
 fn size_of_the_chain_fits_the_10_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();
     assert!(n <= 10 * 1024, "{n}");
+}
+
+/// The neutral health reports accelerometer axes beyond their range too
+/// (the KERNEL's USW has no bit for it: its words are unchanged).
+#[test]
+fn health_reports_accelerometer_over_range_per_axis() {
+    let p = k("KERNEL-110-G2000-A8");
+    let mut c = SignalChain::new(p, 1);
+    *c.errors_mut() = ErrorModel::IDEAL;
+    c.set_motion(Motion::Sample(imu_emu::sensor::Truth {
+        rate_dps: [0.0; 3],
+        specific_force_g: [0.0, 0.0, 12.0],
+        temperature_c: None,
+    }));
+    let mut t = 0;
+    ticks(&mut c, &mut t, 1);
+    let h = c.health();
+    assert_eq!((h.accel_over_range, h.gyro_over_range), (0b100, 0));
+    assert_eq!(Status::of(&h).usw, 0);
+    c.output();
+    c.set_motion(Motion::default());
+    ticks(&mut c, &mut t, 1);
+    assert_eq!(c.health().accel_over_range, 0b100, "the last interval");
+    c.output();
+    assert_eq!(c.health().accel_over_range, 0);
 }

@@ -2,7 +2,8 @@
 //! end-to-end delay through the chain, fixed-point parity.
 
 use imu_emu::chain::{ChainConfig, SignalChain, FIXED_SCALE};
-use imu_emu::dsp::fir::{self, FirBank, FirBankFixed, FirDesign, CHANNELS, DESIGNS};
+use imu_emu::dsp::fir::{self, Bandwidth, FirBank, FirBankFixed, FirDesign, CHANNELS, DESIGNS};
+use imu_emu::kernel::config::lpf_bandwidth;
 
 #[test]
 fn long_orders_are_two_stage_and_still_order_n_linear_phase() {
@@ -72,20 +73,23 @@ fn minus_3db(d: &FirDesign) -> f64 {
 #[test]
 fn designs_follow_table_5_29_at_2khz_and_keep_delay_at_4khz() {
     for (code, &(bw, order, delay)) in TABLE_5_29.iter().enumerate() {
-        let d = fir::design(code as u8, 2000).unwrap();
+        let d = fir::design(lpf_bandwidth(code as u8), 2000).unwrap();
         assert_eq!((d.order, d.bandwidth_hz), (order, bw));
         assert!((d.delay_s() - delay).abs() < 1e-9, "code {code}");
         assert_eq!(d.delay_samples(), order / 2);
     }
-    assert!(fir::design(0xFF, 2000).is_none());
+    assert!(fir::design(Bandwidth::Off, 2000).is_none());
     // K201: codes 2..4 at 4 kHz, doubled order, same bandwidth and delay.
     for code in 2..=4u8 {
         let (bw, order, delay) = TABLE_5_29[code as usize];
-        let d = fir::design(code, 4000).unwrap();
+        let d = fir::design(lpf_bandwidth(code), 4000).unwrap();
         assert_eq!((d.order, d.bandwidth_hz, d.rate_hz), (order * 2, bw, 4000));
         assert!((d.delay_s() - delay).abs() < 1e-9);
     }
-    assert!(fir::design(0, 4000).is_none() && fir::design(1, 4000).is_none());
+    assert!(
+        fir::design(Bandwidth::Hz16, 4000).is_none()
+            && fir::design(Bandwidth::Hz33, 4000).is_none()
+    );
 }
 
 #[test]
@@ -221,7 +225,7 @@ fn chain_delay_equals_table_5_29() {
         let mut chain = SignalChain::new(product, 1);
         *chain.errors_mut() = ErrorModel::IDEAL;
         let mut cfg = ChainConfig::defaults(&product);
-        cfg.lpf_code = code as u8;
+        cfg.lpf = lpf_bandwidth(code as u8);
         chain.configure(&cfg);
         let mut src = RampRate { k: 0 };
         for t in 1..=(2 * order as u64 + 10) {
@@ -241,7 +245,7 @@ fn chain_delay_equals_table_5_29() {
     let mut chain = SignalChain::new(product, 1);
     *chain.errors_mut() = ErrorModel::IDEAL;
     let mut cfg = ChainConfig::defaults(&product);
-    cfg.lpf_code = 0xFF;
+    cfg.lpf = Bandwidth::Off;
     chain.configure(&cfg);
     let mut src = RampRate { k: 0 };
     for t in 1..50u64 {

@@ -15,6 +15,7 @@
 
 use imu_emu::ahrs::Mounting;
 use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion, TruthFrame};
 use imu_emu::time::Instant;
@@ -63,7 +64,7 @@ fn chain_with(angles: V) -> SignalChain {
     *c.errors_mut() = ErrorModel::IDEAL;
     let mut cfg = ChainConfig::defaults(&product);
     cfg.alignment_angles_deg = angles;
-    cfg.lpf_code = 0xFF;
+    cfg.lpf = Bandwidth::Off;
     c.configure(&cfg);
     c
 }

@@ -10,6 +10,7 @@
 
 use allan::{Allan, DataType, Style};
 use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::model::Product;
 use imu_emu::sensor::errors::{
     AxisErrors, SensorErrors, TriadEngine, GM_SIGMA_PER_BIAS_INSTABILITY,
@@ -176,7 +177,7 @@ fn chain_output_noise_and_mean_match_the_model() {
     let product = Product::parse("K110").unwrap();
     let mut chain = SignalChain::new(product, 3);
     let mut cfg = ChainConfig::defaults(&product);
-    cfg.lpf_code = 0xFF;
+    cfg.lpf = Bandwidth::Off;
     chain.configure(&cfg);
     *chain.errors_mut() = ErrorModel::IDEAL;
     let n_density = 0.004f32;

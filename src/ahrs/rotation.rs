@@ -481,8 +481,11 @@ pub fn quat_mul_q30(a: &QuatQ30, b: &QuatQ30) -> QuatQ30 {
 }
 
 /// `v` rotated by `q*` (reference → object) for a Q30 unit `q` and
-/// |v| ≤ 2²⁹ in any unit: [`quat_rotate_inv`] in integers.
-#[inline]
+/// |v| ≤ 2²⁹ in any unit: [`quat_rotate_inv`] in integers. Out of line in
+/// the `fixed-point` build (small flash: the attitude and the alignment's
+/// end share one copy).
+#[cfg_attr(feature = "fixed-point", inline(never))]
+#[cfg_attr(not(feature = "fixed-point"), inline)]
 pub fn quat_rotate_inv_q30(q: &QuatQ30, v: &[i32; 3]) -> [i32; 3] {
     // v + 2 q0 (u × v) + 2 u × (u × v) with u = −(q1, q2, q3).
     let u = [-q[1], -q[2], -q[3]];

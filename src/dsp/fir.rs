@@ -333,20 +333,56 @@ pub static DESIGNS: [&FirDesign; 8] = [
     &FIR_262HZ_4K,
 ];
 
-/// The design of LPF_Bandwidth `code` (Table 5.24) at `internal_rate_hz`;
-/// `None` = filter off (0xFF, or a code the rate has no design for).
-pub fn design(code: u8, internal_rate_hz: u32) -> Option<&'static FirDesign> {
-    match (internal_rate_hz, code) {
-        (4000, 2) => Some(&FIR_66HZ_4K),
-        (4000, 3) => Some(&FIR_131HZ_4K),
-        (4000, 4) => Some(&FIR_262HZ_4K),
+/// A low-pass bandwidth of the FIR (Table 5.29's −3 dB points), protocol
+/// neutral: a personality maps its own parameter onto it (the KERNEL's
+/// LPF_Bandwidth codes: [`crate::kernel::config::lpf_bandwidth`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Bandwidth {
+    /// 16 Hz (order 192 at 2 kHz).
+    Hz16,
+    /// 33 Hz (order 96 at 2 kHz).
+    Hz33,
+    /// 66 Hz (order 48 at 2 kHz, 96 at 4 kHz).
+    Hz66,
+    /// 131 Hz (order 24 at 2 kHz, 48 at 4 kHz).
+    Hz131,
+    /// 262 Hz (order 12 at 2 kHz, 24 at 4 kHz): the power-on bandwidth.
+    #[default]
+    Hz262,
+    /// No filter (delay 0).
+    Off,
+}
+
+impl Bandwidth {
+    /// The −3 dB bandwidth, Hz (`None` = off).
+    pub const fn hz(self) -> Option<f32> {
+        match self {
+            Bandwidth::Hz16 => Some(16.0),
+            Bandwidth::Hz33 => Some(33.0),
+            Bandwidth::Hz66 => Some(66.0),
+            Bandwidth::Hz131 => Some(131.0),
+            Bandwidth::Hz262 => Some(262.0),
+            Bandwidth::Off => None,
+        }
+    }
+}
+
+/// The design of `bandwidth` at `internal_rate_hz`; `None` = filter off
+/// ([`Bandwidth::Off`], or a bandwidth the rate has no design for: 16 and
+/// 33 Hz at 4 kHz).
+pub fn design(bandwidth: Bandwidth, internal_rate_hz: u32) -> Option<&'static FirDesign> {
+    use Bandwidth::*;
+    match (internal_rate_hz, bandwidth) {
+        (4000, Hz66) => Some(&FIR_66HZ_4K),
+        (4000, Hz131) => Some(&FIR_131HZ_4K),
+        (4000, Hz262) => Some(&FIR_262HZ_4K),
         (4000, _) => None,
-        (_, 0) => Some(&FIR_16HZ_2K),
-        (_, 1) => Some(&FIR_33HZ_2K),
-        (_, 2) => Some(&FIR_66HZ_2K),
-        (_, 3) => Some(&FIR_131HZ_2K),
-        (_, 4) => Some(&FIR_262HZ_2K),
-        _ => None,
+        (_, Hz16) => Some(&FIR_16HZ_2K),
+        (_, Hz33) => Some(&FIR_33HZ_2K),
+        (_, Hz66) => Some(&FIR_66HZ_2K),
+        (_, Hz131) => Some(&FIR_131HZ_2K),
+        (_, Hz262) => Some(&FIR_262HZ_2K),
+        (_, Off) => None,
     }
 }
 

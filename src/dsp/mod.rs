@@ -8,8 +8,9 @@
 pub mod cascade;
 pub mod fir;
 pub mod fixed;
+pub mod integrals;
 pub mod variant;
 
 pub use cascade::{Cascade, CascadeConfig, SecondOrder};
-pub use fir::{FirBank, FirBankFixed, FirDesign};
+pub use fir::{Bandwidth, FirBank, FirBankFixed, FirDesign};
 pub use variant::{OutputVariant, VariantAccumulator};

@@ -37,32 +37,18 @@
 use super::fir::CHANNELS;
 use crate::ahrs::rotation::{cross, Vec3};
 
-/// Output_Variant (Table 5.24; 5.3.6).
+/// What an output carries over its interval (ICD 5.3.6; the KERNEL's
+/// Output_Variant and Average_Output_Data map onto it in
+/// [`crate::kernel::config::output_variant`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum OutputVariant {
-    /// 0: instant values.
+    /// Instant values (KERNEL Output_Variant 0).
     #[default]
     Instant,
-    /// 1: the mean over the output interval.
+    /// The mean over the output interval (1).
     Average,
-    /// 2: Δθ/T and Δv/T over the output interval.
+    /// Δθ/T and Δv/T over the output interval (2).
     Incremental,
-}
-
-impl OutputVariant {
-    /// The variant of Output_Variant and Average_Output_Data: averaged data
-    /// on forces [`OutputVariant::Average`]; Output_Variant values above 2
-    /// read as instant.
-    pub fn from_params(output_variant: u8, average_output_data: u8) -> Self {
-        if average_output_data == 1 {
-            return OutputVariant::Average;
-        }
-        match output_variant {
-            1 => OutputVariant::Average,
-            2 => OutputVariant::Incremental,
-            _ => OutputVariant::Instant,
-        }
-    }
 }
 
 /// What [`VariantAccumulator::take`] returns.

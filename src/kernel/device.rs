@@ -4,14 +4,13 @@
 
 use embedded_storage::nor_flash::NorFlash;
 
-use crate::chain::ChainConfig;
 use crate::device::{Event, Level, Mode, Pin, Shell};
 use crate::kernel::command::{self, Command};
 use crate::kernel::fields::{self, Field, OutputCtx};
 use crate::kernel::formats::{self, UDD};
 use crate::kernel::frame::{self, Decoder, TYPE_COMMAND, TYPE_DATA};
 use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
-use crate::kernel::{rate, udd};
+use crate::kernel::{config, rate, status, udd};
 use crate::model::Capability;
 use crate::personality::Personality;
 use crate::time::Instant;
@@ -98,7 +97,7 @@ impl Personality for Kernel {
         self.saved = block;
         self.ram = block;
         sh.chain_mut()
-            .configure(&ChainConfig::from_block(&self.ram, &product));
+            .configure(&config::chain_config(&self.ram, &product));
         sh.set_line_rate(params::baud_rate(
             params::BAUD_RATE.read_int(&self.ram) as u8
         ));
@@ -285,7 +284,7 @@ impl Kernel {
                 send(sh, command::GET_DEV_INFO, &info);
             }
             Command::GetBit => {
-                let bit = sh.chain().status().bit;
+                let bit = status::bit(&sh.chain().health());
                 send(sh, command::GET_BIT, &bit);
             }
             Command::UddConfig => self.udd_pending = true,
@@ -467,7 +466,7 @@ impl Kernel {
         let product = sh.product();
         let internal = u64::from(product.model.internal_rate_hz);
         let chain = sh.chain_mut();
-        chain.configure(&ChainConfig::from_block(&self.ram, &product));
+        chain.configure(&config::chain_config(&self.ram, &product));
         let align_left = if orientation { align_s * internal } else { 0 };
         if orientation {
             if align_left > 0 {
@@ -499,7 +498,7 @@ impl Kernel {
             return;
         };
         let sample = sh.chain_mut().output_with(stream.layout.attitude);
-        let status = sh.chain().status();
+        let status = status::Status::of(&sh.chain().health());
         let product = sh.product();
         // Second fraction (5.2.3.1).
         let into_second = sh.second_fraction_ns(now);

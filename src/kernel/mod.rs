@@ -2,12 +2,14 @@
 
 pub mod block;
 pub mod command;
+pub mod config;
 pub mod device;
 pub mod fields;
 pub mod formats;
 pub mod frame;
 pub mod params;
 pub mod rate;
+pub mod status;
 pub mod udd;
 
 pub use device::Kernel;

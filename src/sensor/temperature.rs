@@ -15,8 +15,8 @@ use libm::expf;
 /// The model is advanced once every this many ticks.
 pub const UPDATE_TICKS: u32 = 64;
 
-/// Operating temperature range of the KERNEL family, °C: outside it the USW
-/// bit 14 (Table 5.26) is set. (−40…+85 °C, the industrial range the
+/// Operating temperature range of the KERNEL family, °C: outside it the chain
+/// reports over-temperature (`Health::over_temperature`; KERNEL USW bit 14). (−40…+85 °C, the industrial range the
 /// KERNEL datasheets give.)
 pub const OPERATING_RANGE_C: (f32, f32) = (-40.0, 85.0);
 

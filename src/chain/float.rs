@@ -1,0 +1,259 @@
+//! The numeric core of the chain in `f32` (FPU cores): sensor engines, the
+//! built-in motion, mounting, cascade, accumulator and attitude. The same
+//! items, with the same signatures, as `fixed.rs` (the `fixed-point` build);
+//! [`super`] picks one of the two, in one place.
+
+use super::{triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
+use crate::ahrs::alignment::{level_from, AlignConfig, AlignResult, Alignment};
+use crate::ahrs::attitude::Attitude as AttitudeFilter;
+use crate::ahrs::mounting::Mounting;
+use crate::ahrs::rotation::{canonical, euler_from_quat, Quat, Vec3};
+use crate::dsp::cascade::Cascade;
+use crate::dsp::fir::{FirBank, CHANNELS};
+use crate::dsp::integrals;
+use crate::dsp::variant::VariantAccumulator;
+use crate::model::Product;
+use crate::sensor::errors::{ErrorModel, TriadEngine};
+use crate::sensor::motion::{BuiltinMotion, Motion, MotionSource, Truth as TruthF32, TruthFrame};
+use crate::sensor::rng::Rng;
+use crate::time::Instant;
+
+/// The FIR bank of this build.
+pub type Fir = FirBank;
+/// The attitude filter of this build.
+pub type Attitude = AttitudeFilter;
+/// The truth the core measures.
+pub type Truth = TruthF32;
+/// One measurement (gyro, acc, aux acc), sensor axes, as a FIR row.
+pub type Sensor = [f32; CHANNELS];
+/// A carrier-axes triad (°/s or g).
+pub type Triad = Vec3;
+
+/// The core (module doc).
+#[derive(Debug, Clone)]
+pub struct Core {
+    pub engines: [TriadEngine; 3],
+    pub motion: BuiltinMotion,
+    pub mounting: Mounting,
+    pub cascade: Cascade,
+    pub variant: VariantAccumulator,
+    pub attitude: Attitude,
+}
+
+#[inline(always)]
+fn pack(s: &[Vec3; 3]) -> Sensor {
+    [
+        s[0][0], s[0][1], s[0][2], s[1][0], s[1][1], s[1][2], s[2][0], s[2][1], s[2][2],
+    ]
+}
+
+/// A measurement (gyro, acc, aux acc) as a FIR input row.
+#[inline]
+pub fn fir_row(t: &[Vec3; 3]) -> Sensor {
+    pack(t)
+}
+
+/// The FIR input of a measurement.
+#[inline(always)]
+pub fn fir_input(s: &Sensor) -> Sensor {
+    *s
+}
+
+/// The FIR's newest input row (the last measurement) as a measurement.
+#[inline(always)]
+pub fn frozen(last_input: &Sensor) -> Sensor {
+    *last_input
+}
+
+/// The last measurement of the FIR's newest input row, °/s and g.
+#[inline]
+pub fn sensor_of(x: &Sensor) -> [Vec3; 3] {
+    [triad(x, 0), triad(x, 1), triad(x, 2)]
+}
+
+/// A truth sample of an external source.
+#[inline(always)]
+pub fn truth_of(t: &TruthF32) -> Truth {
+    *t
+}
+
+/// The truth clamped to what the sensor model can take (±2048 °/s,
+/// ±128 g: [`TruthF32::bounded`]), so a value beyond `f32` saturates the
+/// sensor instead of turning into NaN.
+#[inline(always)]
+pub fn bounded(t: &Truth) -> Truth {
+    t.bounded()
+}
+
+/// Gyro and force in the units of [`crate::dsp::integrals`].
+#[inline(always)]
+pub fn integral_units(g: &Triad, a: &Triad) -> ([i32; 3], [i32; 3]) {
+    integrals::quantize(g, a)
+}
+
+/// A carrier triad as °/s (gyro) or g (acc) for the alignment.
+#[inline(always)]
+pub fn gyro_dps(g: &Triad) -> Vec3 {
+    *g
+}
+
+/// See [`gyro_dps`].
+#[inline(always)]
+pub fn acc_g(a: &Triad) -> Vec3 {
+    *a
+}
+
+/// The levelled orientation of a running alignment: (quaternion, Euler
+/// angles in degrees).
+pub fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
+    let q = al.level();
+    let e = euler_from_quat(&q);
+    (canonical(&q), [e[0] * RAD, e[1] * RAD, e[2] * RAD])
+}
+
+impl Core {
+    /// The core at power-on (or a placeholder) measuring `t0`.
+    pub fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
+        let x = fir_row(t0);
+        Core {
+            engines: [
+                TriadEngine::new(product.gyro.full_scale() as f32),
+                TriadEngine::new(product.accel.full_scale() as f32),
+                TriadEngine::new(AUX_RANGE_G),
+            ],
+            motion: BuiltinMotion::new(Motion::default(), dt),
+            mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
+            cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
+            variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
+            attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
+        }
+    }
+
+    /// The error model was (re)configured.
+    #[inline(always)]
+    pub fn errors_configured(&mut self) {}
+
+    /// The temperature changed to `t`: every axis at once.
+    #[inline]
+    pub fn temperature_changed(&mut self, e: &ErrorModel, t: f32) {
+        let c = &mut self.engines;
+        c[0].set_temperature(&e.gyro, t);
+        c[1].set_temperature(&e.acc, t);
+        c[2].set_temperature(&e.aux, t);
+    }
+
+    /// Per tick: nothing left to update.
+    #[inline(always)]
+    pub fn temperature_step(&mut self, _e: &ErrorModel, _t: f32) {}
+
+    /// The built-in motion's truth at this tick.
+    #[inline(always)]
+    pub fn builtin_truth(&mut self, now: Instant, dt: f32) -> Truth {
+        self.motion.next(now, dt)
+    }
+
+    /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits
+    /// 0–2) and accelerometer (bits 3–5) axes beyond their range.
+    #[inline(always)]
+    pub fn measure(
+        &mut self,
+        truth: &Truth,
+        frame: TruthFrame,
+        has_aux: bool,
+        rng: &mut Rng,
+    ) -> (Sensor, u8) {
+        let (rate, force) = match frame {
+            TruthFrame::Sensor => (truth.rate_dps, truth.specific_force_g),
+            TruthFrame::Carrier => (
+                self.mounting.to_sensor(&truth.rate_dps),
+                self.mounting.to_sensor(&truth.specific_force_g),
+            ),
+        };
+        let (g, over) = self.engines[0].measure(&rate, rng);
+        let (a, over_a) = self.engines[1].measure(&force, rng);
+        let aux = if has_aux {
+            self.engines[2].measure(&force, rng).0
+        } else {
+            [0.0; 3]
+        };
+        (pack(&[g, a, aux]), over | over_a << 3)
+    }
+
+    /// Gyro and acc of a measurement in carrier axes.
+    #[inline(always)]
+    pub fn carrier(&self, s: &Sensor) -> (Triad, Triad) {
+        (
+            self.mounting.to_carrier(&triad(s, 0)),
+            self.mounting.to_carrier(&triad(s, 1)),
+        )
+    }
+
+    /// One attitude step on carrier gyro `g` and acc `a`, `bias` removed.
+    #[inline(always)]
+    pub fn run_attitude(&mut self, g: &Triad, a: &Triad, bias: &Vec3) {
+        let g = [g[0] - bias[0], g[1] - bias[1], g[2] - bias[2]];
+        self.attitude.update(&g, a);
+    }
+
+    /// Ends the alignment `al`: its result, the attitude set from it.
+    pub fn finish_alignment(&mut self, al: &Alignment, cfg: &AlignConfig) -> AlignResult {
+        let r = al.finish(&EARTH_ASSUMED, cfg);
+        self.attitude.set(r.attitude);
+        r
+    }
+
+    /// Levels the attitude at once from the last filtered accelerometer.
+    pub fn level_now(&mut self) {
+        let last = self.variant.last();
+        let f = self.mounting.to_carrier(&triad(&last, 1));
+        self.attitude.set(level_from(&f));
+    }
+
+    /// A new gyro bias estimate (°/s, carrier axes).
+    #[inline(always)]
+    pub fn set_bias(&mut self, _b: &Vec3, _dt: f32) {}
+
+    /// A new configuration: mounting and an empty accumulator (the cascade
+    /// is reconfigured by the caller).
+    pub fn reconfigure(&mut self, cfg: &ChainConfig, dt: f32) {
+        let last = self.variant.last();
+        self.cascade
+            .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
+        self.mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
+        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last);
+    }
+
+    /// Chooses a built-in motion.
+    pub fn set_motion(&mut self, m: Motion, dt: f32) {
+        self.motion = BuiltinMotion::new(m, dt);
+    }
+
+    /// The accumulated interval, carrier axes, in °/s and g, and its ticks;
+    /// restarts the interval.
+    #[inline]
+    pub fn take(&mut self, bias: &Vec3, has_aux: bool) -> (Outputs, u32) {
+        let v = self.variant.take();
+        let m = &self.mounting;
+        let b = bias;
+        let gf = m.to_carrier(&triad(&v.filtered, 0));
+        let (aux, aux_f) = if has_aux {
+            (
+                m.to_carrier(&triad(&v.main, 2)),
+                m.to_carrier(&triad(&v.filtered, 2)),
+            )
+        } else {
+            ([0.0; 3], [0.0; 3])
+        };
+        (
+            Outputs {
+                gyro: m.to_carrier(&triad(&v.main, 0)),
+                acc: m.to_carrier(&triad(&v.main, 1)),
+                gyro_f: [gf[0] - b[0], gf[1] - b[1], gf[2] - b[2]],
+                acc_f: m.to_carrier(&triad(&v.filtered, 1)),
+                aux,
+                aux_f,
+            },
+            v.ticks,
+        )
+    }
+}
