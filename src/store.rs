@@ -9,7 +9,11 @@
 //! (length `L`, magic, version): for the KERNEL ([`KERNEL_IMAGE`],
 //! [`ParamStore::new`]) the [`PARAM_BLOCK_LEN`]-byte parameter block of ICD
 //! Table 5.24; another personality (the ISB FLASH_CONFIG image) brings its
-//! own spec ([`ParamStore::for_image`]) and gets the same guarantees.
+//! own spec ([`ParamStore::for_image`]) and gets the same guarantees. The
+//! store is generic over an [`Image`]: a type that fixes the spec
+//! ([`KernelImage`], the default; the compiler then folds the layout into
+//! constants, as small in firmware as a hard-wired layout) or an
+//! [`ImageSpec`] value carried at run time.
 //!
 //! | offset                              | size             | content                                   |
 //! |-------------------------------------|------------------|-------------------------------------------|
@@ -166,14 +170,40 @@ const CHUNK: usize = 256;
 /// millisecond on the MCUs, small beside a sector erase).
 static CRC32: Crc<u32, NoTable> = Crc::<u32, NoTable>::new(&CRC_32_ISO_HDLC);
 
+/// What a [`ParamStore`] persists: an [`ImageSpec`], either fixed by the
+/// type ([`KernelImage`]: the compiler folds it into constants, which keeps
+/// the firmware images as small as with a hard-wired layout) or carried at
+/// run time (an [`ImageSpec`] value).
+pub trait Image {
+    /// The image's length, magic and version.
+    fn spec(&self) -> ImageSpec;
+}
+
+impl Image for ImageSpec {
+    fn spec(&self) -> ImageSpec {
+        *self
+    }
+}
+
+/// The KERNEL parameter block, [`KERNEL_IMAGE`], as a type.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KernelImage;
+
+impl Image for KernelImage {
+    #[inline(always)]
+    fn spec(&self) -> ImageSpec {
+        KERNEL_IMAGE
+    }
+}
+
 /// Two-sector A/B store at a flash offset: the non-volatile home of one
 /// image — for the KERNEL the parameter block written by ICD 5.3.7
 /// SaveFlash ([`ParamStore::new`]), for another personality its own
 /// ([`ParamStore::for_image`]).
 #[derive(Debug, Clone, Copy)]
-pub struct ParamStore {
+pub struct ParamStore<I: Image = KernelImage> {
     base: u32,
-    spec: ImageSpec,
+    image: I,
 }
 
 /// Why a [`ParamStore`] operation failed.
@@ -229,11 +259,9 @@ fn align_up(n: usize, a: usize) -> Option<usize> {
 
 /// Where things are, for one flash type, base and image.
 #[derive(Debug, Clone, Copy)]
-struct Layout {
-    /// What is stored.
-    spec: ImageSpec,
-    /// Header + image, before `WRITE_SIZE` padding.
-    image_end: usize,
+struct Layout<I: Image> {
+    /// What is stored (a zero-sized constant for [`KernelImage`]).
+    image: I,
     /// Flash offset of sector A; sector B follows at `base + sector`.
     base: u32,
     /// Sector size (`F::ERASE_SIZE`).
@@ -247,14 +275,14 @@ struct Layout {
     read_len: usize,
 }
 
-impl Layout {
+impl<I: Image + Copy> Layout<I> {
     /// Checks the geometry of `F` at `base` in a flash of `capacity` bytes.
-    fn new<F: NorFlash>(spec: ImageSpec, base: u32, capacity: usize) -> Result<Self, StoreError> {
+    fn new<F: NorFlash>(image: I, base: u32, capacity: usize) -> Result<Self, StoreError> {
         let (w, r) = (F::WRITE_SIZE, F::READ_SIZE);
         if w == 0 || r == 0 || !CHUNK.is_multiple_of(w) || !CHUNK.is_multiple_of(r) {
             return Err(StoreError::Flash(NorFlashErrorKind::NotAligned));
         }
-        let image_end = HEADER_LEN + usize::from(spec.len);
+        let image_end = HEADER_LEN + usize::from(image.spec().len);
         let body_len = align_up(image_end, w).ok_or(StoreError::SectorTooSmall)?;
         let commit_len = align_up(COMMIT_LEN, w).ok_or(StoreError::SectorTooSmall)?;
         let write_end = body_len
@@ -280,14 +308,25 @@ impl Layout {
             return Err(StoreError::OutOfBounds);
         }
         Ok(Layout {
-            spec,
-            image_end,
+            image,
             base,
             sector,
             body_len,
             commit_len,
             read_len,
         })
+    }
+
+    /// The image's spec.
+    #[inline(always)]
+    fn spec(&self) -> ImageSpec {
+        self.image.spec()
+    }
+
+    /// Header + image, before `WRITE_SIZE` padding.
+    #[inline(always)]
+    fn image_end(&self) -> usize {
+        HEADER_LEN + usize::from(self.spec().len)
     }
 
     /// Flash offset of sector `idx` (0 = A, 1 = B); in range by construction.
@@ -310,9 +349,9 @@ impl Layout {
 /// Reads sector `idx` and validates it; returns its `seq` if valid. With
 /// `copy` (the image's length), also copies the sector's image bytes there
 /// (whether valid or not).
-fn scan<F: NorFlash>(
+fn scan<F: NorFlash, I: Image + Copy>(
     flash: &mut F,
-    layout: &Layout,
+    layout: &Layout<I>,
     idx: usize,
     mut copy: Option<&mut [u8]>,
 ) -> Result<Option<u32>, StoreError> {
@@ -336,8 +375,8 @@ fn scan<F: NorFlash>(
             }
         }
         if end >= HEADER_LEN && !header_hashed {
-            if field(&header, 0) != layout.spec.magic_word()
-                || field(&header, 8) != layout.spec.len_word()
+            if field(&header, 0) != layout.spec().magic_word()
+                || field(&header, 8) != layout.spec().len_word()
             {
                 // Not ours (erased, garbage, half erased): skip the rest.
                 return Ok(None);
@@ -346,7 +385,7 @@ fn scan<F: NorFlash>(
             header_hashed = true;
         }
         // Image: positions [16, 16 + len).
-        let (lo, hi) = (pos.max(HEADER_LEN), end.min(layout.image_end));
+        let (lo, hi) = (pos.max(HEADER_LEN), end.min(layout.image_end()));
         if lo < hi {
             if let Some(data) = chunk.get(lo - pos..hi - pos) {
                 digest.update(data);
@@ -401,21 +440,18 @@ fn newest(a: Option<u32>, b: Option<u32>) -> Option<(usize, u32)> {
 }
 
 /// Erases sector `idx` and writes a complete copy of `block` (the image's
-/// length) with `seq` there, commit marker last.
-fn write_sector<F: NorFlash>(
+/// length, checked by the caller) with `seq` there, commit marker last.
+fn write_sector<F: NorFlash, I: Image + Copy>(
     flash: &mut F,
-    layout: &Layout,
+    layout: &Layout<I>,
     idx: usize,
     seq: u32,
     block: &[u8],
 ) -> Result<(), StoreError> {
-    if block.len() != usize::from(layout.spec.len) {
-        return Err(StoreError::ImageLength);
-    }
     let mut header = [0u8; HEADER_LEN];
-    header[0..4].copy_from_slice(&layout.spec.magic);
+    header[0..4].copy_from_slice(&layout.spec().magic);
     header[4..8].copy_from_slice(&seq.to_le_bytes());
-    header[8..12].copy_from_slice(&layout.spec.len_word().to_le_bytes());
+    header[8..12].copy_from_slice(&layout.spec().len_word().to_le_bytes());
     let mut digest = CRC32.digest();
     digest.update(&header[..HEADER_CRC_LEN]);
     digest.update(block);
@@ -453,37 +489,39 @@ fn write_sector<F: NorFlash>(
         .map_err(flash_err)
 }
 
-impl ParamStore {
+impl ParamStore<KernelImage> {
     /// The KERNEL parameter store ([`KERNEL_IMAGE`]) whose two sectors start
     /// at flash offset `base` (a multiple of the flash's `ERASE_SIZE`;
     /// checked by [`load`](Self::load) and [`save`](Self::save)).
     pub const fn new(base: u32) -> Self {
-        Self::for_image(base, KERNEL_IMAGE)
+        Self::for_image(base, KernelImage)
     }
 
-    /// A store of the image `spec` whose two sectors start at `base` (as
-    /// for [`new`](Self::new)).
-    pub const fn for_image(base: u32, spec: ImageSpec) -> Self {
-        ParamStore { base, spec }
-    }
-
-    /// The image this store persists.
-    pub const fn spec(&self) -> ImageSpec {
-        self.spec
-    }
-
-    /// Flash offset of the store's first sector.
-    pub const fn base(&self) -> u32 {
-        self.base
-    }
-
-    /// Flash bytes the store occupies for flash type `F`: two erase sectors
-    /// (saturating at `u32::MAX` for absurd sector sizes).
+    /// Flash bytes a store occupies for flash type `F`, whatever its image:
+    /// two erase sectors (saturating at `u32::MAX` for absurd sector sizes).
     pub fn footprint<F: NorFlash>() -> u32 {
         u32::try_from(F::ERASE_SIZE)
             .ok()
             .and_then(|sector| sector.checked_mul(2))
             .unwrap_or(u32::MAX)
+    }
+}
+
+impl<I: Image + Copy> ParamStore<I> {
+    /// A store of `image` (e.g. an [`ImageSpec`] value) whose two sectors
+    /// start at `base` (as for [`new`](ParamStore::new)).
+    pub const fn for_image(base: u32, image: I) -> Self {
+        ParamStore { base, image }
+    }
+
+    /// The image this store persists.
+    pub fn spec(&self) -> ImageSpec {
+        self.image.spec()
+    }
+
+    /// Flash offset of the store's first sector.
+    pub const fn base(&self) -> u32 {
+        self.base
     }
 
     /// Reads the newest valid image into `block` (exactly the spec's length,
@@ -494,10 +532,11 @@ impl ParamStore {
     /// On `Ok(false)` `block` is untouched; on `Err` its contents are
     /// unspecified. Never panics, whatever the flash holds.
     pub fn load<F: NorFlash>(&self, flash: &mut F, block: &mut [u8]) -> Result<bool, StoreError> {
-        if block.len() != usize::from(self.spec.len) {
+        let spec = self.spec();
+        if block.len() != usize::from(spec.len) {
             return Err(StoreError::ImageLength);
         }
-        let layout = Layout::new::<F>(self.spec, self.base, flash.capacity())?;
+        let layout = Layout::new::<F>(self.image, self.base, flash.capacity())?;
         let a = scan(flash, &layout, 0, None)?;
         let b = scan(flash, &layout, 1, None)?;
         let Some((idx, seq)) = newest(a, b) else {
@@ -524,10 +563,11 @@ impl ParamStore {
     /// block 1 + 388 + 1 = 390 steps on [`crate::nor::RamNor`]. `Ok` means
     /// the new image read back valid.
     pub fn save<F: NorFlash>(&self, flash: &mut F, block: &[u8]) -> Result<(), StoreError> {
-        if block.len() != usize::from(self.spec.len) {
+        let spec = self.spec();
+        if block.len() != usize::from(spec.len) {
             return Err(StoreError::ImageLength);
         }
-        let layout = Layout::new::<F>(self.spec, self.base, flash.capacity())?;
+        let layout = Layout::new::<F>(self.image, self.base, flash.capacity())?;
         let a = scan(flash, &layout, 0, None)?;
         let b = scan(flash, &layout, 1, None)?;
         let (idx, seq) = match newest(a, b) {
@@ -558,8 +598,8 @@ mod tests {
         b
     }
 
-    fn layout() -> Layout {
-        Layout::new::<Nor>(KERNEL_IMAGE, 0, 8192).unwrap()
+    fn layout() -> Layout<KernelImage> {
+        Layout::new::<Nor>(KernelImage, 0, 8192).unwrap()
     }
 
     /// The table-less CRC is CRC-32/ISO-HDLC: the catalogue's check value.

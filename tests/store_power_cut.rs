@@ -7,7 +7,7 @@ use embedded_storage::nor_flash::{
     ReadNorFlash,
 };
 use imu_emu::nor::RamNor;
-use imu_emu::store::{ImageSpec, ParamStore, StoreError, KERNEL_IMAGE, PARAM_BLOCK_LEN};
+use imu_emu::store::{Image, ImageSpec, ParamStore, StoreError, KERNEL_IMAGE, PARAM_BLOCK_LEN};
 use proptest::prelude::*;
 
 type Block = [u8; PARAM_BLOCK_LEN];
@@ -58,7 +58,7 @@ fn old_and_new() -> (Block, Block) {
 }
 
 /// The newest image of any spec, as a `Vec`.
-fn load_img<F: NorFlash>(store: &ParamStore, flash: &mut F) -> Option<Vec<u8>> {
+fn load_img<F: NorFlash, I: Image + Copy>(store: &ParamStore<I>, flash: &mut F) -> Option<Vec<u8>> {
     let mut out = vec![0; usize::from(store.spec().len)];
     store
         .load(flash, &mut out)

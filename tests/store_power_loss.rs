@@ -120,7 +120,7 @@ const OTHER: ImageSpec = ImageSpec {
 
 /// One store's campaign state.
 struct Track {
-    store: ParamStore,
+    store: ParamStore<ImageSpec>,
     /// What loads now (the model of the flash contents).
     current: Option<Vec<u8>>,
     /// Steps of one save on this flash.
@@ -159,7 +159,7 @@ fn mutate(rng: &mut XorShift, current: Option<&Vec<u8>>, len: usize) -> Vec<u8> 
     next
 }
 
-fn load<F: NorFlash>(store: &ParamStore, flash: &mut F) -> Option<Vec<u8>> {
+fn load<F: NorFlash>(store: &ParamStore<ImageSpec>, flash: &mut F) -> Option<Vec<u8>> {
     let mut out = vec![0; usize::from(store.spec().len)];
     store
         .load(flash, &mut out)

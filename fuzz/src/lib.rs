@@ -19,7 +19,7 @@ use imu_emu::kernel::frame::{self, Decoder as KernelDecoder};
 use imu_emu::kernel::params::{self, PARAMS};
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
-use imu_emu::store::{ImageSpec, ParamStore};
+use imu_emu::store::{ImageSpec, ParamStore, KERNEL_IMAGE};
 use imu_emu::time::Instant;
 use imu_emu::{framing, isb};
 
@@ -629,12 +629,12 @@ const OTHER: ImageSpec = ImageSpec {
 
 /// One store's expectations.
 struct StoreTrack {
-    store: ParamStore,
+    store: ParamStore<ImageSpec>,
     /// What loads (the newest complete save; `None` before the first).
     current: Option<Vec<u8>>,
 }
 
-fn load_image<F: NorFlash>(s: &ParamStore, flash: &mut F) -> Option<Vec<u8>> {
+fn load_image<F: NorFlash>(s: &ParamStore<ImageSpec>, flash: &mut F) -> Option<Vec<u8>> {
     let mut out = vec![0; usize::from(s.spec().len)];
     s.load(flash, &mut out)
         .expect("a powered flash loads")
@@ -653,7 +653,7 @@ pub fn store(data: &[u8]) {
     let mut flash = RamNor::<16384>::new();
     let mut tracks = [
         StoreTrack {
-            store: ParamStore::new(0),
+            store: ParamStore::for_image(0, KERNEL_IMAGE),
             current: None,
         },
         StoreTrack {
