@@ -7,7 +7,9 @@ use embedded_storage::nor_flash::{
     ReadNorFlash,
 };
 use imu_emu::nor::RamNor;
-use imu_emu::store::{Image, ImageSpec, ParamStore, StoreError, KERNEL_IMAGE, PARAM_BLOCK_LEN};
+use imu_emu::store::{
+    Image, ImageSpec, KernelImage, ParamStore, StoreError, KERNEL_IMAGE, PARAM_BLOCK_LEN,
+};
 use proptest::prelude::*;
 
 type Block = [u8; PARAM_BLOCK_LEN];
@@ -306,16 +308,17 @@ fn exhaustive_power_cut<F: Sim>(
     )
 }
 
-/// [`exhaustive_power_cut`] for the image `spec` (blocks of its length).
-fn spec_power_cut<F: Sim>(
-    spec: ImageSpec,
+/// [`exhaustive_power_cut`] for the image `image` (blocks of its length).
+fn spec_power_cut<F: Sim, I: Image + Copy>(
+    image: I,
     flash: &F,
     base: usize,
     old: Option<&[u8]>,
     new: &[u8],
     next: &[u8],
 ) -> u32 {
-    let store = ParamStore::for_image(base as u32, spec);
+    let store = ParamStore::for_image(base as u32, image);
+    let spec = store.spec();
     let mut probe = flash.clone();
     assert_eq!(load_img(&store, &mut probe).as_deref(), old, "precondition");
     let old_sector = match (
@@ -387,12 +390,19 @@ fn spec_power_cut<F: Sim>(
 /// A flash that has seen `prior` saves of other blocks and then a save of
 /// `old` (so OLD sits in sector `prior % 2`).
 fn holding<F: Sim>(flash: F, base: usize, prior: usize, old: &Block) -> F {
-    spec_holding(KERNEL_IMAGE, flash, base, prior, old)
+    spec_holding(KernelImage, flash, base, prior, old)
 }
 
 /// [`holding`] for the image `spec`.
-fn spec_holding<F: Sim>(spec: ImageSpec, mut flash: F, base: usize, prior: usize, old: &[u8]) -> F {
-    let store = ParamStore::for_image(base as u32, spec);
+fn spec_holding<F: Sim, I: Image + Copy>(
+    image: I,
+    mut flash: F,
+    base: usize,
+    prior: usize,
+    old: &[u8],
+) -> F {
+    let store = ParamStore::for_image(base as u32, image);
+    let spec = store.spec();
     let mut rng = XorShift(0xC0FF_EE00 + prior as u32);
     for _ in 0..prior {
         let mut b = vec![0; old.len()];
