@@ -29,7 +29,7 @@ use crate::kernel::Kernel;
 use crate::line::Line;
 use crate::model::Product;
 use crate::personality::Personality;
-use crate::store::{ParamStore, StoreError, PARAM_BLOCK_LEN};
+use crate::store::{ParamStore, StoreError};
 use crate::time::Instant;
 
 pub use crate::kernel::device::{RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
@@ -137,32 +137,35 @@ impl TimeBase {
 /// What every personality shares: power, BOOT, flash and store, the line,
 /// events, the time base, and the signal chain. A personality gets it at
 /// every call ([`crate::personality::Personality`]).
-pub struct Shell<F: NorFlash> {
+pub struct Shell<F: NorFlash, P: Personality> {
     flash: F,
-    store: ParamStore,
+    store: ParamStore<P::Image>,
     cfg: PowerOn,
     firmware_update: bool,
     line: Line,
     events: Deque<Event, EVENTS>,
     time: TimeBase,
     /// What the device measures and computes (ICD 5.3.6, 5.6–5.8, App. B/C).
-    chain: SignalChain,
+    chain: SignalChain<P::Integrate>,
+    /// A software reset waits for the bytes queued before it.
+    reset_pending: bool,
 }
 
-impl<F: NorFlash> Shell<F> {
+impl<F: NorFlash, P: Personality> Shell<F, P> {
     /// The shell with its flash and configuration but no power yet: cheap
     /// to build in place (mostly zeros); [`Shell::cold_start`] powers it.
     #[inline(always)]
     fn unpowered(cfg: PowerOn, flash: F, now: Instant) -> Self {
         Shell {
             flash,
-            store: ParamStore::new(STORE_BASE),
+            store: ParamStore::for_image(STORE_BASE, P::IMAGE),
             cfg,
             firmware_update: false,
             line: Line::new(now),
             events: Deque::new(),
             time: TimeBase::new(now),
-            chain: SignalChain::unpowered(cfg.product),
+            chain: SignalChain::placeholder(cfg.product),
+            reset_pending: false,
         }
     }
 
@@ -170,6 +173,7 @@ impl<F: NorFlash> Shell<F> {
     /// the drop count starts over; BOOT is sampled.
     fn cold_start(&mut self, now: Instant) {
         self.line.reset(now);
+        self.reset_pending = false;
         self.events.clear();
         self.time = TimeBase::new(now);
         self.chain.reset(self.cfg.product, self.cfg.seed);
@@ -197,13 +201,21 @@ impl<F: NorFlash> Shell<F> {
     }
 
     /// The signal chain.
-    pub fn chain(&self) -> &SignalChain {
+    pub fn chain(&self) -> &SignalChain<P::Integrate> {
         &self.chain
     }
 
     /// The signal chain, mutably (configuration, output).
-    pub fn chain_mut(&mut self) -> &mut SignalChain {
+    pub fn chain_mut(&mut self) -> &mut SignalChain<P::Integrate> {
         &mut self.chain
+    }
+
+    /// Asks for a software reset (a personality's reset command): the
+    /// device powers on again — BOOT floating, the image reloaded — at the
+    /// first tick after the bytes already queued (the command's reply)
+    /// have been handed to the board.
+    pub fn request_reset(&mut self) {
+        self.reset_pending = true;
     }
 
     /// The serial line (read-only).
@@ -241,12 +253,12 @@ impl<F: NorFlash> Shell<F> {
 
     /// Loads the personality's image from flash into `image`: `Ok(true)` if
     /// a valid one was found.
-    pub fn load_image(&mut self, image: &mut [u8; PARAM_BLOCK_LEN]) -> Result<bool, StoreError> {
+    pub fn load_image(&mut self, image: &mut [u8]) -> Result<bool, StoreError> {
         self.store.load(&mut self.flash, image)
     }
 
     /// Saves the personality's image, power-fail safe ([`ParamStore::save`]).
-    pub fn save_image(&mut self, image: &[u8; PARAM_BLOCK_LEN]) -> Result<(), StoreError> {
+    pub fn save_image(&mut self, image: &[u8]) -> Result<(), StoreError> {
         self.store.save(&mut self.flash, image)
     }
 
@@ -312,7 +324,7 @@ impl<F: NorFlash> Shell<F> {
 /// An emulated IMU owning its flash: the [`Shell`] and one personality
 /// (the KERNEL by default).
 pub struct Device<F: NorFlash, P: Personality = Kernel> {
-    shell: Shell<F>,
+    shell: Shell<F, P>,
     personality: P,
 }
 
@@ -433,6 +445,10 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
         if self.shell.firmware_update {
             return;
         }
+        if self.shell.reset_pending && self.shell.line.is_empty() {
+            self.shell.cfg.boot = None;
+            self.cold_start(now);
+        }
         let t = &mut self.shell.time;
         t.clock = t.clock.max(now);
         t.ticks = t.ticks.wrapping_add(1);
@@ -548,12 +564,12 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
 
     /// The signal chain: motion source, error model and fault injection
     /// for boards, tests and scripted runs.
-    pub fn chain_mut(&mut self) -> &mut SignalChain {
+    pub fn chain_mut(&mut self) -> &mut SignalChain<P::Integrate> {
         &mut self.shell.chain
     }
 
     /// The signal chain (read-only).
-    pub fn chain(&self) -> &SignalChain {
+    pub fn chain(&self) -> &SignalChain<P::Integrate> {
         &self.shell.chain
     }
 }

@@ -7,7 +7,11 @@
 //!   one `WRITE_SIZE` word or one sector erase); the step in progress when the
 //!   power goes is left half done (half the bytes of the word programmed,
 //!   half the sector erased) and every later operation fails until
-//!   [`RamNor::restore_power`].
+//!   [`RamNor::restore_power`];
+//! * or the step in progress is left *torn* ([`RamNor::cut_power_torn`]),
+//!   as on real silicon: a program clears only a pseudo-random subset of the
+//!   bits it was to clear, an erase sets a pseudo-random prefix of the
+//!   sector to `0xFF` and a pseudo-random subset of the bits after it to 1.
 //!
 //! Implements [`embedded_storage::nor_flash::NorFlash`] so the parameter
 //! store ([`crate::store`]) runs on it exactly as on an MCU's flash.
@@ -61,6 +65,9 @@ pub struct RamNor<const N: usize> {
     /// Total program/erase steps performed (for counting a save's steps).
     steps: u32,
     dead: bool,
+    /// xorshift32 state of a torn cut ([`RamNor::cut_power_torn`]);
+    /// `None` = the cut step is left half done.
+    tear: Option<u32>,
 }
 
 impl<const N: usize> core::fmt::Debug for RamNor<N> {
@@ -70,6 +77,7 @@ impl<const N: usize> core::fmt::Debug for RamNor<N> {
             .field("steps", &self.steps)
             .field("budget", &self.budget)
             .field("dead", &self.dead)
+            .field("torn", &self.tear.is_some())
             .finish()
     }
 }
@@ -88,6 +96,7 @@ impl<const N: usize> RamNor<N> {
             budget: None,
             steps: 0,
             dead: false,
+            tear: None,
         }
     }
 
@@ -106,15 +115,38 @@ impl<const N: usize> RamNor<N> {
     }
 
     /// Cut the power after `steps` more program/erase steps (0 = before the
-    /// next one starts).
+    /// next one starts); the step in progress is left half done.
     pub fn cut_power_after(&mut self, steps: u32) {
         self.budget = Some(steps);
+        self.tear = None;
+    }
+
+    /// Cut the power after `steps` more steps, leaving the step in progress
+    /// torn in a way `seed` decides (the same seed, the same bits): a word
+    /// program clears a random subset of the bits it was to clear; a sector
+    /// erase sets a random prefix of the sector to `0xFF` and about a quarter
+    /// of the bits after it to 1. Either may happen to leave the step fully
+    /// done or not started at all, as a real cut can.
+    pub fn cut_power_torn(&mut self, steps: u32, seed: u32) {
+        self.budget = Some(steps);
+        // xorshift32 needs a non-zero state.
+        self.tear = Some(if seed == 0 { 0x9E37_79B9 } else { seed });
     }
 
     /// Power is back: operations work again, no cut is scheduled.
     pub fn restore_power(&mut self) {
         self.budget = None;
         self.dead = false;
+        self.tear = None;
+    }
+
+    /// The next pseudo-random word of a torn cut (`None` for a half cut).
+    fn tear_word(&mut self) -> Option<u32> {
+        let x = self.tear.as_mut()?;
+        *x ^= *x << 13;
+        *x ^= *x >> 17;
+        *x ^= *x << 5;
+        Some(*x)
     }
 
     /// Whether a scheduled cut has happened.
@@ -177,16 +209,24 @@ impl<const N: usize> NorFlash for RamNor<N> {
         while sector < to as usize {
             let full = self.step()?;
             let end = sector + RAM_NOR_ERASE_SIZE;
-            let stop = if full {
-                end
-            } else {
-                sector + RAM_NOR_ERASE_SIZE / 2
-            };
-            self.data[sector..stop].fill(0xFF);
-            if !full {
-                return Err(RamNorError::PowerLost);
+            if full {
+                self.data[sector..end].fill(0xFF);
+                sector = end;
+                continue;
             }
-            sector = end;
+            match self.tear_word() {
+                None => self.data[sector..sector + RAM_NOR_ERASE_SIZE / 2].fill(0xFF),
+                Some(r) => {
+                    let stop = sector + r as usize % (RAM_NOR_ERASE_SIZE + 1);
+                    self.data[sector..stop].fill(0xFF);
+                    for i in stop..end {
+                        let (a, b) = (self.tear_word(), self.tear_word());
+                        let mask = (a.unwrap_or(0) & b.unwrap_or(0)) as u8;
+                        self.data[i] |= mask;
+                    }
+                }
+            }
+            return Err(RamNorError::PowerLost);
         }
         Ok(())
     }
@@ -196,8 +236,18 @@ impl<const N: usize> NorFlash for RamNor<N> {
         let base = offset as usize;
         for (i, word) in bytes.chunks(RAM_NOR_WRITE_SIZE).enumerate() {
             let full = self.step()?;
-            let n = if full { word.len() } else { word.len() / 2 };
             let at = base + i * RAM_NOR_WRITE_SIZE;
+            if !full {
+                if let Some(r) = self.tear_word() {
+                    // Bits where `r` is 1 keep their old value.
+                    let keep = r.to_le_bytes();
+                    for ((cell, new), k) in self.data[at..].iter_mut().zip(word).zip(keep) {
+                        *cell &= *new | k;
+                    }
+                    return Err(RamNorError::PowerLost);
+                }
+            }
+            let n = if full { word.len() } else { word.len() / 2 };
             for (cell, new) in self.data[at..at + n].iter_mut().zip(word) {
                 *cell &= *new;
             }
@@ -248,5 +298,65 @@ mod tests {
         assert_eq!(f.write(8, &[0; 4]), Err(RamNorError::PowerLost));
         f.restore_power();
         f.write(8, &[0; 4]).unwrap();
+    }
+
+    #[test]
+    fn a_torn_program_clears_a_subset_of_the_bits_and_only_those() {
+        let mut f = RamNor::<8192>::new();
+        f.write(0, &[0xF0, 0xFF, 0xFF, 0xFF]).unwrap();
+        let mut seen = std::collections::BTreeSet::new();
+        for seed in 0..64 {
+            let mut g = f.clone();
+            g.cut_power_torn(0, seed);
+            assert_eq!(
+                g.write(0, &[0x0F, 0x00, 0xAA, 0xFF]),
+                Err(RamNorError::PowerLost)
+            );
+            let got = &g.image()[..4];
+            // Every bit is old or old & new: never set, never cleared
+            // where the program keeps a 1.
+            for (i, (&g, (&old, &new))) in got
+                .iter()
+                .zip(
+                    [0xF0u8, 0xFF, 0xFF, 0xFF]
+                        .iter()
+                        .zip(&[0x0Fu8, 0x00, 0xAA, 0xFF]),
+                )
+                .enumerate()
+            {
+                assert_eq!(g & !old, 0, "byte {i}: a bit was set");
+                assert_eq!(!g & old & new, 0, "byte {i}: a kept bit was cleared");
+            }
+            seen.insert(got[1]);
+            assert!(g.power_lost());
+            assert_eq!(g.write(8, &[0; 4]), Err(RamNorError::PowerLost));
+        }
+        assert!(seen.len() > 32, "random subsets: {} distinct", seen.len());
+    }
+
+    #[test]
+    fn a_torn_erase_leaves_part_of_the_sector() {
+        let mut f = RamNor::<8192>::new();
+        f.write(0, &[0; 4096]).unwrap();
+        let mut partial = 0;
+        for seed in 0..32 {
+            let mut g = f.clone();
+            g.cut_power_torn(0, seed);
+            assert_eq!(g.erase(0, 4096), Err(RamNorError::PowerLost));
+            let img = &g.image()[..4096];
+            let erased = img.iter().take_while(|&&x| x == 0xFF).count();
+            if erased < 4096 {
+                partial += 1;
+                // After the prefix, about a quarter of the bits are set.
+                let ones: u32 = img[erased..].iter().map(|x| x.count_ones()).sum();
+                let bits = 8 * (4096 - erased) as u32;
+                assert!(ones < bits / 2, "seed {seed}: {ones} of {bits}");
+            }
+            assert!(g.image()[4096..].iter().all(|&x| x == 0xFF));
+            g.restore_power();
+            g.erase(0, 4096).unwrap();
+            assert!(g.image()[..4096].iter().all(|&x| x == 0xFF));
+        }
+        assert!(partial > 16);
     }
 }

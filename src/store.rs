@@ -5,24 +5,41 @@
 //!
 //! [`ParamStore`] owns two consecutive erase sectors ("A" and "B") starting
 //! at its `base` offset; a sector is `F::ERASE_SIZE` bytes. Each sector holds
-//! one complete image of the [`PARAM_BLOCK_LEN`]-byte parameter block:
+//! one complete copy of the store's *image*, described by an [`ImageSpec`]
+//! (length `L`, magic, version): for the KERNEL ([`KERNEL_IMAGE`],
+//! [`ParamStore::new`]) the [`PARAM_BLOCK_LEN`]-byte parameter block of ICD
+//! Table 5.24; another personality (the ISB FLASH_CONFIG image) brings its
+//! own spec ([`ParamStore::for_image`]) and gets the same guarantees. The
+//! store is generic over an [`Image`]: a type that fixes the spec
+//! ([`KernelImage`], the default; the compiler then folds the layout into
+//! constants, as small in firmware as a hard-wired layout) or an
+//! [`ImageSpec`] value carried at run time.
 //!
 //! | offset                              | size             | content                                   |
 //! |-------------------------------------|------------------|-------------------------------------------|
-//! | 0                                   | 4                | magic `"KPRM"` (`0x4D52_504B`, LE)        |
+//! | 0                                   | 4                | magic (KERNEL: `"KPRM"`, `0x4D52_504B` LE) |
 //! | 4                                   | 4                | sequence number `seq` (u32 LE)            |
-//! | 8                                   | 4                | length, always [`PARAM_BLOCK_LEN`] (LE)   |
+//! | 8                                   | 4                | length word: `L` in bits 0–15, the version in bits 16–31 (LE); KERNEL: `0x0000_0600` |
 //! | 12                                  | 4                | CRC-32 (LE), see below                    |
-//! | 16                                  | `0x600`          | the parameter block                       |
-//! | `C` = `0x610` rounded up to `WRITE_SIZE` | `WRITE_SIZE` rounded up from 4 | commit marker `0x5AFE_C0DE` (LE), then `0xFF` padding |
+//! | 16                                  | `L` (KERNEL `0x600`) | the image                             |
+//! | `C` = `16 + L` rounded up to `WRITE_SIZE` | `WRITE_SIZE` rounded up from 4 | commit marker `0x5AFE_C0DE` (LE), then `0xFF` padding |
+//!
+//! The KERNEL's spec has version 0, so its length word is the plain length
+//! `0x600` and its sectors are byte for byte those of the store before it
+//! was made generic: existing flash images (`--flash` files) load unchanged.
 //!
 //! The CRC is CRC-32/ISO-HDLC (the zlib/Ethernet CRC) over the first 12
-//! header bytes (magic, seq, length) followed by the block, so a bit error in
-//! `seq` cannot silently reorder the two images. Bytes between the block and
-//! `C` (only when `WRITE_SIZE > 16`) are `0xFF`.
+//! header bytes (magic, seq, length word) followed by the image, so a bit
+//! error in `seq` cannot silently reorder the two images. Bytes between the
+//! image and `C` (when `16 + L` is not a multiple of `WRITE_SIZE`) are
+//! `0xFF`.
 //!
-//! A sector is **valid** iff the magic, the length, the commit marker (the
-//! exact 32-bit value) and the CRC all match. [`ParamStore::load`] returns
+//! A sector is **valid** iff the magic, the length word (so the length *and*
+//! the version), the commit marker (the exact 32-bit value) and the CRC all
+//! match: a store never loads another spec's image — a different
+//! personality's, or an older layout of its own (a personality bumps its
+//! version when its image layout changes; the old image then loads as
+//! "none", i.e. factory defaults). [`ParamStore::load`] returns
 //! the valid sector with the newest `seq`; [`ParamStore::save`] erases the
 //! *other* sector (sector A if neither is valid), programs header and block,
 //! and programs the commit marker **last**, then reads the sector back.
@@ -75,6 +92,13 @@
 //! and only a 256-byte stack buffer. Wear: one sector erase per save,
 //! alternating between the two sectors — fine for configuration writes.
 //!
+//! # Several images in one flash
+//!
+//! Each personality's store takes its own two sectors (its own `base`, at
+//! least [`ParamStore::footprint`] apart); saves of one never touch the
+//! other's sectors, and the magic keeps a store pointed at the wrong sectors
+//! from loading them.
+//!
 //! # Flash geometry
 //!
 //! Writes go through a 256-byte stack buffer in chunks that are multiples of
@@ -82,8 +106,10 @@
 //! kind of buffer, aligned to `F::READ_SIZE`. Both sizes must divide 256
 //! (every common MCU flash: 1…256); other flashes get
 //! `StoreError::Flash(NotAligned)`. `base` must be a multiple of
-//! `F::ERASE_SIZE`, and a sector must fit header + block + commit word
-//! ([`StoreError::SectorTooSmall`] otherwise).
+//! `F::ERASE_SIZE`, and a sector must fit header + image + commit word
+//! ([`StoreError::SectorTooSmall`] otherwise). The buffer handed to
+//! [`ParamStore::load`]/[`ParamStore::save`] must be exactly the spec's
+//! length ([`StoreError::ImageLength`] otherwise).
 
 use crc::{Crc, NoTable, CRC_32_ISO_HDLC};
 use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
@@ -92,8 +118,40 @@ use embedded_storage::nor_flash::{NorFlash, NorFlashError, NorFlashErrorKind};
 /// offsets; the highest, Hold-off_Time 0x05FE, ends at 0x0600).
 pub const PARAM_BLOCK_LEN: usize = 0x600;
 
-/// `"KPRM"` read as a little-endian u32.
-const MAGIC: u32 = u32::from_le_bytes(*b"KPRM");
+/// What a store persists: its image's length, magic and version (see the
+/// module docs for the sector format they go into).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageSpec {
+    /// Image length in bytes (at most `0xFFFF`: it shares the header's
+    /// length word with the version).
+    pub len: u16,
+    /// Four bytes that mark a sector as this image's (header bytes 0–3).
+    pub magic: [u8; 4],
+    /// Layout version, in the length word's upper half; 0 keeps the length
+    /// word the plain length (the KERNEL's original format).
+    pub version: u16,
+}
+
+impl ImageSpec {
+    /// The header's length word: `len | version << 16`.
+    const fn len_word(&self) -> u32 {
+        self.len as u32 | (self.version as u32) << 16
+    }
+
+    /// The magic read as a little-endian u32.
+    const fn magic_word(&self) -> u32 {
+        u32::from_le_bytes(self.magic)
+    }
+}
+
+/// The KERNEL parameter block (ICD 5.3.7 SaveFlash, Table 5.24): 0x600
+/// bytes, magic `"KPRM"`, version 0 — the format the store has always
+/// written.
+pub const KERNEL_IMAGE: ImageSpec = ImageSpec {
+    len: PARAM_BLOCK_LEN as u16,
+    magic: *b"KPRM",
+    version: 0,
+};
 /// The commit marker, programmed last. Neither `0xFFFF_FFFF` (erased) nor
 /// `0` (fully programmed), and no byte is `0xFF`.
 const COMMIT: u32 = 0x5AFE_C0DE;
@@ -101,8 +159,6 @@ const COMMIT: u32 = 0x5AFE_C0DE;
 const HEADER_LEN: usize = 16;
 /// The header bytes covered by the CRC (all but the CRC itself).
 const HEADER_CRC_LEN: usize = 12;
-/// Header + block, before `WRITE_SIZE` padding.
-const BODY_LEN: usize = HEADER_LEN + PARAM_BLOCK_LEN;
 /// The commit marker's size before `WRITE_SIZE` padding.
 const COMMIT_LEN: usize = 4;
 /// Stack buffer for reads and writes.
@@ -114,11 +170,40 @@ const CHUNK: usize = 256;
 /// millisecond on the MCUs, small beside a sector erase).
 static CRC32: Crc<u32, NoTable> = Crc::<u32, NoTable>::new(&CRC_32_ISO_HDLC);
 
-/// Two-sector A/B store at a flash offset: the non-volatile home of the
-/// parameter block written by ICD 5.3.7 SaveFlash.
+/// What a [`ParamStore`] persists: an [`ImageSpec`], either fixed by the
+/// type ([`KernelImage`]: the compiler folds it into constants, which keeps
+/// the firmware images as small as with a hard-wired layout) or carried at
+/// run time (an [`ImageSpec`] value).
+pub trait Image {
+    /// The image's length, magic and version.
+    fn spec(&self) -> ImageSpec;
+}
+
+impl Image for ImageSpec {
+    fn spec(&self) -> ImageSpec {
+        *self
+    }
+}
+
+/// The KERNEL parameter block, [`KERNEL_IMAGE`], as a type.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KernelImage;
+
+impl Image for KernelImage {
+    #[inline(always)]
+    fn spec(&self) -> ImageSpec {
+        KERNEL_IMAGE
+    }
+}
+
+/// Two-sector A/B store at a flash offset: the non-volatile home of one
+/// image — for the KERNEL the parameter block written by ICD 5.3.7
+/// SaveFlash ([`ParamStore::new`]), for another personality its own
+/// ([`ParamStore::for_image`]).
 #[derive(Debug, Clone, Copy)]
-pub struct ParamStore {
+pub struct ParamStore<I: Image = KernelImage> {
     base: u32,
+    image: I,
 }
 
 /// Why a [`ParamStore`] operation failed.
@@ -134,6 +219,8 @@ pub enum StoreError {
     SectorTooSmall,
     /// The two sectors do not fit in the flash (or in the `u32` offset space).
     OutOfBounds,
+    /// The buffer passed to load or save is not the image's length.
+    ImageLength,
 }
 
 impl From<NorFlashErrorKind> for StoreError {
@@ -150,6 +237,9 @@ impl core::fmt::Display for StoreError {
                 f.write_str("flash erase sector too small for the parameter block")
             }
             StoreError::OutOfBounds => f.write_str("parameter store does not fit in the flash"),
+            StoreError::ImageLength => {
+                f.write_str("buffer length is not the stored image's length")
+            }
         }
     }
 }
@@ -167,14 +257,16 @@ fn align_up(n: usize, a: usize) -> Option<usize> {
     n.checked_next_multiple_of(a)
 }
 
-/// Where things are, for one flash type and base.
+/// Where things are, for one flash type, base and image.
 #[derive(Debug, Clone, Copy)]
-struct Layout {
+struct Layout<I: Image> {
+    /// What is stored (a zero-sized constant for [`KernelImage`]).
+    image: I,
     /// Flash offset of sector A; sector B follows at `base + sector`.
     base: u32,
     /// Sector size (`F::ERASE_SIZE`).
     sector: u32,
-    /// Header + block, padded to `WRITE_SIZE`; also the commit word's offset.
+    /// Header + image, padded to `WRITE_SIZE`; also the commit word's offset.
     body_len: usize,
     /// The commit word padded to `WRITE_SIZE`.
     commit_len: usize,
@@ -183,14 +275,15 @@ struct Layout {
     read_len: usize,
 }
 
-impl Layout {
+impl<I: Image + Copy> Layout<I> {
     /// Checks the geometry of `F` at `base` in a flash of `capacity` bytes.
-    fn new<F: NorFlash>(base: u32, capacity: usize) -> Result<Self, StoreError> {
+    fn new<F: NorFlash>(image: I, base: u32, capacity: usize) -> Result<Self, StoreError> {
         let (w, r) = (F::WRITE_SIZE, F::READ_SIZE);
         if w == 0 || r == 0 || !CHUNK.is_multiple_of(w) || !CHUNK.is_multiple_of(r) {
             return Err(StoreError::Flash(NorFlashErrorKind::NotAligned));
         }
-        let body_len = align_up(BODY_LEN, w).ok_or(StoreError::SectorTooSmall)?;
+        let image_end = HEADER_LEN + usize::from(image.spec().len);
+        let body_len = align_up(image_end, w).ok_or(StoreError::SectorTooSmall)?;
         let commit_len = align_up(COMMIT_LEN, w).ok_or(StoreError::SectorTooSmall)?;
         let write_end = body_len
             .checked_add(commit_len)
@@ -215,12 +308,25 @@ impl Layout {
             return Err(StoreError::OutOfBounds);
         }
         Ok(Layout {
+            image,
             base,
             sector,
             body_len,
             commit_len,
             read_len,
         })
+    }
+
+    /// The image's spec.
+    #[inline(always)]
+    fn spec(&self) -> ImageSpec {
+        self.image.spec()
+    }
+
+    /// Header + image, before `WRITE_SIZE` padding.
+    #[inline(always)]
+    fn image_end(&self) -> usize {
+        HEADER_LEN + usize::from(self.spec().len)
     }
 
     /// Flash offset of sector `idx` (0 = A, 1 = B); in range by construction.
@@ -241,12 +347,13 @@ impl Layout {
 }
 
 /// Reads sector `idx` and validates it; returns its `seq` if valid. With
-/// `copy`, also copies the sector's block bytes there (whether valid or not).
-fn scan<F: NorFlash>(
+/// `copy` (the image's length), also copies the sector's image bytes there
+/// (whether valid or not).
+fn scan<F: NorFlash, I: Image + Copy>(
     flash: &mut F,
-    layout: &Layout,
+    layout: &Layout<I>,
     idx: usize,
-    mut copy: Option<&mut [u8; PARAM_BLOCK_LEN]>,
+    mut copy: Option<&mut [u8]>,
 ) -> Result<Option<u32>, StoreError> {
     let mut buf = [0u8; CHUNK];
     let mut header = [0u8; HEADER_LEN];
@@ -268,15 +375,17 @@ fn scan<F: NorFlash>(
             }
         }
         if end >= HEADER_LEN && !header_hashed {
-            if field(&header, 0) != MAGIC || field(&header, 8) != PARAM_BLOCK_LEN as u32 {
+            if field(&header, 0) != layout.spec().magic_word()
+                || field(&header, 8) != layout.spec().len_word()
+            {
                 // Not ours (erased, garbage, half erased): skip the rest.
                 return Ok(None);
             }
             digest.update(&header[..HEADER_CRC_LEN]);
             header_hashed = true;
         }
-        // Block: positions [16, 16 + 0x600).
-        let (lo, hi) = (pos.max(HEADER_LEN), end.min(BODY_LEN));
+        // Image: positions [16, 16 + len).
+        let (lo, hi) = (pos.max(HEADER_LEN), end.min(layout.image_end()));
         if lo < hi {
             if let Some(data) = chunk.get(lo - pos..hi - pos) {
                 digest.update(data);
@@ -330,19 +439,19 @@ fn newest(a: Option<u32>, b: Option<u32>) -> Option<(usize, u32)> {
     }
 }
 
-/// Erases sector `idx` and writes a complete image of `block` with `seq`
-/// there, commit marker last.
-fn write_sector<F: NorFlash>(
+/// Erases sector `idx` and writes a complete copy of `block` (the image's
+/// length, checked by the caller) with `seq` there, commit marker last.
+fn write_sector<F: NorFlash, I: Image + Copy>(
     flash: &mut F,
-    layout: &Layout,
+    layout: &Layout<I>,
     idx: usize,
     seq: u32,
-    block: &[u8; PARAM_BLOCK_LEN],
+    block: &[u8],
 ) -> Result<(), StoreError> {
     let mut header = [0u8; HEADER_LEN];
-    header[0..4].copy_from_slice(&MAGIC.to_le_bytes());
+    header[0..4].copy_from_slice(&layout.spec().magic);
     header[4..8].copy_from_slice(&seq.to_le_bytes());
-    header[8..12].copy_from_slice(&(PARAM_BLOCK_LEN as u32).to_le_bytes());
+    header[8..12].copy_from_slice(&layout.spec().len_word().to_le_bytes());
     let mut digest = CRC32.digest();
     digest.update(&header[..HEADER_CRC_LEN]);
     digest.update(block);
@@ -380,35 +489,54 @@ fn write_sector<F: NorFlash>(
         .map_err(flash_err)
 }
 
-impl ParamStore {
-    /// A store whose two sectors start at flash offset `base` (a multiple of
-    /// the flash's `ERASE_SIZE`; checked by [`load`](Self::load) and
-    /// [`save`](Self::save)).
+impl ParamStore<KernelImage> {
+    /// The KERNEL parameter store ([`KERNEL_IMAGE`]) whose two sectors start
+    /// at flash offset `base` (a multiple of the flash's `ERASE_SIZE`;
+    /// checked by [`load`](Self::load) and [`save`](Self::save)).
     pub const fn new(base: u32) -> Self {
-        ParamStore { base }
+        Self::for_image(base, KernelImage)
     }
 
-    /// Flash bytes the store occupies for flash type `F`: two erase sectors
-    /// (saturating at `u32::MAX` for absurd sector sizes).
+    /// Flash bytes a store occupies for flash type `F`, whatever its image:
+    /// two erase sectors (saturating at `u32::MAX` for absurd sector sizes).
     pub fn footprint<F: NorFlash>() -> u32 {
         u32::try_from(F::ERASE_SIZE)
             .ok()
             .and_then(|sector| sector.checked_mul(2))
             .unwrap_or(u32::MAX)
     }
+}
 
-    /// Reads the newest valid block into `block`; `Ok(true)` if one was
-    /// found, `Ok(false)` if the flash holds none (fresh or garbage) — the
-    /// power-on counterpart of ICD 5.3.7 SaveFlash.
+impl<I: Image + Copy> ParamStore<I> {
+    /// A store of `image` (e.g. an [`ImageSpec`] value) whose two sectors
+    /// start at `base` (as for [`new`](ParamStore::new)).
+    pub const fn for_image(base: u32, image: I) -> Self {
+        ParamStore { base, image }
+    }
+
+    /// The image this store persists.
+    pub fn spec(&self) -> ImageSpec {
+        self.image.spec()
+    }
+
+    /// Flash offset of the store's first sector.
+    pub const fn base(&self) -> u32 {
+        self.base
+    }
+
+    /// Reads the newest valid image into `block` (exactly the spec's length,
+    /// else [`StoreError::ImageLength`]); `Ok(true)` if one was found,
+    /// `Ok(false)` if the flash holds none (fresh, garbage, another spec's
+    /// image) — the power-on counterpart of ICD 5.3.7 SaveFlash.
     ///
     /// On `Ok(false)` `block` is untouched; on `Err` its contents are
     /// unspecified. Never panics, whatever the flash holds.
-    pub fn load<F: NorFlash>(
-        &self,
-        flash: &mut F,
-        block: &mut [u8; PARAM_BLOCK_LEN],
-    ) -> Result<bool, StoreError> {
-        let layout = Layout::new::<F>(self.base, flash.capacity())?;
+    pub fn load<F: NorFlash>(&self, flash: &mut F, block: &mut [u8]) -> Result<bool, StoreError> {
+        let spec = self.spec();
+        if block.len() != usize::from(spec.len) {
+            return Err(StoreError::ImageLength);
+        }
+        let layout = Layout::new::<F>(self.image, self.base, flash.capacity())?;
         let a = scan(flash, &layout, 0, None)?;
         let b = scan(flash, &layout, 1, None)?;
         let Some((idx, seq)) = newest(a, b) else {
@@ -422,22 +550,24 @@ impl ParamStore {
         }
     }
 
-    /// Persists `block` (ICD 5.3.7 SaveFlash), power-fail safe: erases the
-    /// sector not holding the newest valid image (sector A if none), writes
-    /// header and block, then the commit marker, then reads it back. If the
-    /// power is cut at any step, the next [`load`](Self::load) returns either
-    /// the previous block or `block`, complete.
+    /// Persists `block` (ICD 5.3.7 SaveFlash; exactly the spec's length,
+    /// else [`StoreError::ImageLength`] and nothing is written), power-fail
+    /// safe: erases the sector not holding the newest valid image (sector A
+    /// if none), writes header and image, then the commit marker, then reads
+    /// it back. If the power is cut at any step, the next
+    /// [`load`](Self::load) returns either the previous image or `block`,
+    /// complete.
     ///
-    /// Costs one sector erase plus the programs of `0x610` bytes (rounded up
-    /// to `WRITE_SIZE`) and of the padded commit word: 1 + 388 + 1 = 390
-    /// steps on [`crate::nor::RamNor`]. `Ok` means the new image read back
-    /// valid.
-    pub fn save<F: NorFlash>(
-        &self,
-        flash: &mut F,
-        block: &[u8; PARAM_BLOCK_LEN],
-    ) -> Result<(), StoreError> {
-        let layout = Layout::new::<F>(self.base, flash.capacity())?;
+    /// Costs one sector erase plus the programs of `16 + len` bytes (rounded
+    /// up to `WRITE_SIZE`) and of the padded commit word — for the KERNEL
+    /// block 1 + 388 + 1 = 390 steps on [`crate::nor::RamNor`]. `Ok` means
+    /// the new image read back valid.
+    pub fn save<F: NorFlash>(&self, flash: &mut F, block: &[u8]) -> Result<(), StoreError> {
+        let spec = self.spec();
+        if block.len() != usize::from(spec.len) {
+            return Err(StoreError::ImageLength);
+        }
+        let layout = Layout::new::<F>(self.image, self.base, flash.capacity())?;
         let a = scan(flash, &layout, 0, None)?;
         let b = scan(flash, &layout, 1, None)?;
         let (idx, seq) = match newest(a, b) {
@@ -468,8 +598,8 @@ mod tests {
         b
     }
 
-    fn layout() -> Layout {
-        Layout::new::<Nor>(0, 8192).unwrap()
+    fn layout() -> Layout<KernelImage> {
+        Layout::new::<Nor>(KernelImage, 0, 8192).unwrap()
     }
 
     /// The table-less CRC is CRC-32/ISO-HDLC: the catalogue's check value.
@@ -552,6 +682,32 @@ mod tests {
             assert!(!store.load(&mut g, &mut out).unwrap(), "bit {bit}");
         }
         assert_eq!(out, [0; PARAM_BLOCK_LEN], "untouched on Ok(false)");
+    }
+
+    #[test]
+    fn the_kernel_spec_keeps_the_original_length_word() {
+        assert_eq!(KERNEL_IMAGE.len_word(), 0x600);
+        assert_eq!(KERNEL_IMAGE.magic_word(), 0x4D52_504B);
+        let v = ImageSpec {
+            len: 301,
+            magic: *b"ISBC",
+            version: 3,
+        };
+        assert_eq!(v.len_word(), 0x0003_012D);
+    }
+
+    #[test]
+    fn a_buffer_of_the_wrong_length_is_refused_before_any_flash_access() {
+        let mut f = Nor::new();
+        f.cut_power_after(0); // any program/erase would fail differently
+        let store = ParamStore::new(0);
+        assert_eq!(store.save(&mut f, &[0; 16]), Err(StoreError::ImageLength));
+        assert_eq!(
+            store.load(&mut f, &mut [0; 0x601]),
+            Err(StoreError::ImageLength)
+        );
+        assert!(!f.power_lost());
+        assert_eq!(f.image(), Nor::new().image());
     }
 
     #[test]

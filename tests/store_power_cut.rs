@@ -7,7 +7,9 @@ use embedded_storage::nor_flash::{
     ReadNorFlash,
 };
 use imu_emu::nor::RamNor;
-use imu_emu::store::{ParamStore, StoreError, PARAM_BLOCK_LEN};
+use imu_emu::store::{
+    Image, ImageSpec, KernelImage, ParamStore, StoreError, KERNEL_IMAGE, PARAM_BLOCK_LEN,
+};
 use proptest::prelude::*;
 
 type Block = [u8; PARAM_BLOCK_LEN];
@@ -55,6 +57,15 @@ fn old_and_new() -> (Block, Block) {
         }
     }
     (old, new)
+}
+
+/// The newest image of any spec, as a `Vec`.
+fn load_img<F: NorFlash, I: Image + Copy>(store: &ParamStore<I>, flash: &mut F) -> Option<Vec<u8>> {
+    let mut out = vec![0; usize::from(store.spec().len)];
+    store
+        .load(flash, &mut out)
+        .expect("load never fails on a powered flash")
+        .then_some(out)
 }
 
 fn load<F: NorFlash>(store: &ParamStore, flash: &mut F) -> Option<Block> {
@@ -150,8 +161,13 @@ impl<const W: usize, const R: usize, const E: usize> Sim for Wide<W, R, E> {
 /// Which sector (0 = A, 1 = B) of the store at `base` holds header `seq`
 /// with the "KPRM" magic, per the format documented in `imu_emu::store`.
 fn sector_seq(image: &[u8], base: usize, sector: usize) -> Option<u32> {
+    spec_sector_seq(&KERNEL_IMAGE, image, base, sector)
+}
+
+/// [`sector_seq`] for the image `spec`.
+fn spec_sector_seq(spec: &ImageSpec, image: &[u8], base: usize, sector: usize) -> Option<u32> {
     let h = &image[base + sector * SECTOR..][..8];
-    (&h[..4] == b"KPRM").then(|| u32::from_le_bytes(h[4..8].try_into().unwrap()))
+    (h[..4] == spec.magic).then(|| u32::from_le_bytes(h[4..8].try_into().unwrap()))
 }
 
 // ---------------------------------------------------------------- basics
@@ -282,12 +298,32 @@ fn exhaustive_power_cut<F: Sim>(
     new: Block,
     next: Block,
 ) -> u32 {
-    let store = ParamStore::new(base as u32);
+    spec_power_cut(
+        KERNEL_IMAGE,
+        flash,
+        base,
+        old.as_ref().map(|b| &b[..]),
+        &new,
+        &next,
+    )
+}
+
+/// [`exhaustive_power_cut`] for the image `image` (blocks of its length).
+fn spec_power_cut<F: Sim, I: Image + Copy>(
+    image: I,
+    flash: &F,
+    base: usize,
+    old: Option<&[u8]>,
+    new: &[u8],
+    next: &[u8],
+) -> u32 {
+    let store = ParamStore::for_image(base as u32, image);
+    let spec = store.spec();
     let mut probe = flash.clone();
-    assert_eq!(load(&store, &mut probe), old, "precondition");
+    assert_eq!(load_img(&store, &mut probe).as_deref(), old, "precondition");
     let old_sector = match (
-        sector_seq(flash.image(), base, 0),
-        sector_seq(flash.image(), base, 1),
+        spec_sector_seq(&spec, flash.image(), base, 0),
+        spec_sector_seq(&spec, flash.image(), base, 1),
     ) {
         (Some(a), Some(b)) => Some(if b > a { 1 } else { 0 }),
         (Some(_), None) => Some(0),
@@ -297,7 +333,7 @@ fn exhaustive_power_cut<F: Sim>(
     assert_eq!(old_sector.is_some(), old.is_some());
 
     let before = probe.steps();
-    store.save(&mut probe, &new).unwrap();
+    store.save(&mut probe, new).unwrap();
     let s = probe.steps() - before;
 
     // Number of steps after which NEW must be loaded: the commit word's
@@ -307,7 +343,7 @@ fn exhaustive_power_cut<F: Sim>(
     for k in 0..=s + 1 {
         let mut f = flash.clone();
         f.cut_power_after(k);
-        let r = store.save(&mut f, &new);
+        let r = store.save(&mut f, new);
         if k < s {
             assert!(
                 matches!(r, Err(StoreError::Flash(_))),
@@ -317,11 +353,11 @@ fn exhaustive_power_cut<F: Sim>(
             assert_eq!(r, Ok(()), "k={k}");
         }
         f.restore_power();
-        let got = load(&store, &mut f);
-        if got == Some(new) {
+        let got = load_img(&store, &mut f);
+        if got.as_deref() == Some(new) {
             first_new.get_or_insert(k);
         } else {
-            assert_eq!(got, old, "k={k}: neither OLD nor NEW");
+            assert_eq!(got.as_deref(), old, "k={k}: neither OLD nor NEW");
             assert!(first_new.is_none(), "k={k}: NEW appeared, then went away");
         }
         if let Some(i) = old_sector {
@@ -333,8 +369,12 @@ fn exhaustive_power_cut<F: Sim>(
             );
         }
         // a later save still works
-        store.save(&mut f, &next).unwrap();
-        assert_eq!(load(&store, &mut f), Some(next), "k={k}: save after cut");
+        store.save(&mut f, next).unwrap();
+        assert_eq!(
+            load_img(&store, &mut f).as_deref(),
+            Some(next),
+            "k={k}: save after cut"
+        );
     }
     let first_new = first_new.expect("NEW after a complete save");
     assert!(first_new <= s, "NEW once k == S");
@@ -349,15 +389,29 @@ fn exhaustive_power_cut<F: Sim>(
 
 /// A flash that has seen `prior` saves of other blocks and then a save of
 /// `old` (so OLD sits in sector `prior % 2`).
-fn holding<F: Sim>(mut flash: F, base: usize, prior: usize, old: &Block) -> F {
-    let store = ParamStore::new(base as u32);
+fn holding<F: Sim>(flash: F, base: usize, prior: usize, old: &Block) -> F {
+    spec_holding(KernelImage, flash, base, prior, old)
+}
+
+/// [`holding`] for the image `spec`.
+fn spec_holding<F: Sim, I: Image + Copy>(
+    image: I,
+    mut flash: F,
+    base: usize,
+    prior: usize,
+    old: &[u8],
+) -> F {
+    let store = ParamStore::for_image(base as u32, image);
+    let spec = store.spec();
     let mut rng = XorShift(0xC0FF_EE00 + prior as u32);
     for _ in 0..prior {
-        store.save(&mut flash, &rng.block()).unwrap();
+        let mut b = vec![0; old.len()];
+        rng.fill(&mut b);
+        store.save(&mut flash, &b).unwrap();
     }
     store.save(&mut flash, old).unwrap();
     assert_eq!(
-        sector_seq(flash.image(), base, prior % 2),
+        spec_sector_seq(&spec, flash.image(), base, prior % 2),
         Some(prior as u32)
     );
     flash
@@ -426,6 +480,207 @@ fn repeated_cuts_never_lose_the_last_loaded_block() {
         current = got;
     }
     assert!(current.is_some());
+}
+
+// ---------------------------------------------------------------- other images
+
+/// A second, differently sized image, shaped like the ISB FLASH_CONFIG
+/// image (288 bytes and a few more): 301 bytes, so `16 + 301` needs
+/// `WRITE_SIZE` padding; version 1, so its length word is not plain.
+const OTHER: ImageSpec = ImageSpec {
+    len: 301,
+    magic: *b"ISBC",
+    version: 1,
+};
+/// Steps of one OTHER save on `RamNor`: 1 erase + (16 + 301 → 320) / 4
+/// words + 1 commit word.
+const OTHER_STEPS: u32 = 1 + 320 / 4 + 1;
+
+fn other_block(seed: u32) -> Vec<u8> {
+    let mut b = vec![0; usize::from(OTHER.len)];
+    XorShift(seed).fill(&mut b);
+    b
+}
+
+/// CRC-32/ISO-HDLC, as the format documents it.
+fn crc32(parts: &[&[u8]]) -> u32 {
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let mut d = crc.digest();
+    for p in parts {
+        d.update(p);
+    }
+    d.finalize()
+}
+
+#[test]
+fn a_kernel_sector_in_the_documented_format_loads() {
+    // Built by hand from the format (the layout before the store was made
+    // generic): an existing `--flash` file keeps loading.
+    let (old, _) = old_and_new();
+    let mut img = [0xFFu8; 8192];
+    img[0..4].copy_from_slice(b"KPRM");
+    img[4..8].copy_from_slice(&7u32.to_le_bytes());
+    img[8..12].copy_from_slice(&0x600u32.to_le_bytes());
+    let crc = crc32(&[&img[0..12], &old]);
+    img[12..16].copy_from_slice(&crc.to_le_bytes());
+    img[16..0x610].copy_from_slice(&old);
+    img[0x610..0x614].copy_from_slice(&0x5AFE_C0DEu32.to_le_bytes());
+    let mut f = Nor::from_image(&img);
+    let store = ParamStore::new(0);
+    assert_eq!(load(&store, &mut f), Some(old));
+    // And what the store writes over it is that format, seq + 1, in B.
+    store.save(&mut f, &old).unwrap();
+    assert_eq!(
+        &f.image()[SECTOR..SECTOR + 0x614],
+        {
+            let mut b = img[..0x614].to_vec();
+            b[4..8].copy_from_slice(&8u32.to_le_bytes());
+            let crc = crc32(&[&b[0..12], &old]);
+            b[12..16].copy_from_slice(&crc.to_le_bytes());
+            b
+        }
+        .as_slice()
+    );
+}
+
+#[test]
+fn another_image_writes_its_own_header_and_round_trips() {
+    let store = ParamStore::for_image(0, OTHER);
+    let mut f = Nor::new();
+    assert_eq!(load_img(&store, &mut f), None);
+    let b = other_block(3);
+    let before = f.steps();
+    store.save(&mut f, &b).unwrap();
+    assert_eq!(f.steps() - before, OTHER_STEPS);
+    assert_eq!(OTHER_STEPS, 82);
+    let img = f.image();
+    assert_eq!(&img[0..4], b"ISBC");
+    assert_eq!(&img[4..8], &0u32.to_le_bytes());
+    assert_eq!(&img[8..12], &0x0001_012Du32.to_le_bytes(), "301 | 1 << 16");
+    assert_eq!(&img[12..16], &crc32(&[&img[0..12], &b]).to_le_bytes());
+    assert_eq!(&img[16..317], &b[..]);
+    assert_eq!(&img[317..320], &[0xFF; 3], "padding to WRITE_SIZE");
+    assert_eq!(&img[320..324], &0x5AFE_C0DEu32.to_le_bytes());
+    assert!(img[324..].iter().all(|&x| x == 0xFF));
+    assert_eq!(load_img(&store, &mut f), Some(b.clone()));
+    // The wrong buffer length is refused, not truncated.
+    assert_eq!(
+        store.save(&mut f, &[0u8; PARAM_BLOCK_LEN]),
+        Err(StoreError::ImageLength)
+    );
+    assert_eq!(
+        store.load(&mut f, &mut [0u8; 300]),
+        Err(StoreError::ImageLength)
+    );
+    // Another version or magic of the same length loads nothing.
+    for spec in [
+        ImageSpec {
+            version: 2,
+            ..OTHER
+        },
+        ImageSpec {
+            version: 0,
+            ..OTHER
+        },
+        ImageSpec {
+            magic: *b"ISBD",
+            ..OTHER
+        },
+    ] {
+        let other = ParamStore::for_image(0, spec);
+        assert_eq!(load_img(&other, &mut f), None, "{spec:?}");
+    }
+    // The KERNEL store over these sectors sees nothing either, and vice versa.
+    assert_eq!(load(&ParamStore::new(0), &mut f), None);
+    let mut k = Nor::new();
+    ParamStore::new(0).save(&mut k, &old_and_new().0).unwrap();
+    assert_eq!(load_img(&store, &mut k), None);
+}
+
+#[test]
+fn another_image_survives_a_power_cut_at_every_step() {
+    let (old, new, next) = (other_block(10), other_block(11), other_block(12));
+    let s = spec_power_cut(OTHER, &Nor::new(), 0, None, &new, &next);
+    assert_eq!(s, OTHER_STEPS);
+    for prior in 0..4 {
+        let flash = spec_holding(OTHER, Nor::new(), 0, prior, &old);
+        let s = spec_power_cut(OTHER, &flash, 0, Some(&old), &new, &next);
+        assert_eq!(s, OTHER_STEPS, "prior={prior}");
+    }
+    // At an offset, and on wider program units (padding of 317 bytes).
+    for prior in 0..2 {
+        let flash = spec_holding(OTHER, RamNor::<16384>::new(), 8192, prior, &old);
+        spec_power_cut(OTHER, &flash, 8192, Some(&old), &new, &next);
+    }
+    for prior in 0..2 {
+        let flash = spec_holding(OTHER, Wide::<8, 1>::new(), 0, prior, &old);
+        assert_eq!(
+            spec_power_cut(OTHER, &flash, 0, Some(&old), &new, &next),
+            1 + 320 / 4 + 2
+        );
+        let flash = spec_holding(OTHER, Wide::<32, 8>::new(), 0, prior, &old);
+        assert_eq!(
+            spec_power_cut(OTHER, &flash, 0, Some(&old), &new, &next),
+            1 + 320 / 4 + 8
+        );
+        let flash = spec_holding(OTHER, Wide::<256, 256>::new(), 0, prior, &old);
+        assert_eq!(
+            spec_power_cut(OTHER, &flash, 0, Some(&old), &new, &next),
+            1 + 512 / 4 + 64
+        );
+    }
+}
+
+#[test]
+fn two_images_share_one_flash_and_a_cut_of_one_never_touches_the_other() {
+    // KERNEL at 0 (sectors 0–1), OTHER at 8192 (sectors 2–3) of 16 KiB.
+    let kernel = ParamStore::new(0);
+    let other = ParamStore::for_image(8192, OTHER);
+    let (k_old, k_new) = old_and_new();
+    let k_next = XorShift(77).block();
+    let (o_old, o_new, o_next) = (other_block(20), other_block(21), other_block(22));
+    for prior in 0..2 {
+        // Both hold an image (OLD in sector `prior % 2` of each).
+        let flash = holding(RamNor::<16384>::new(), 0, prior, &k_old);
+        let flash = spec_holding(OTHER, flash, 8192, prior, &o_old);
+        // Cut a KERNEL save at every step: OTHER's sectors stay byte for
+        // byte and keep loading OLD.
+        spec_power_cut(KERNEL_IMAGE, &flash, 0, Some(&k_old), &k_new, &k_next);
+        spec_power_cut(OTHER, &flash, 8192, Some(&o_old), &o_new, &o_next);
+        let s = {
+            let mut f = flash.clone();
+            let before = f.steps();
+            kernel.save(&mut f, &k_new).unwrap();
+            f.steps() - before
+        };
+        for k in 0..=s {
+            let mut f = flash.clone();
+            f.cut_power_after(k);
+            let _ = kernel.save(&mut f, &k_new);
+            f.restore_power();
+            assert_eq!(&f.image()[8192..], &flash.image()[8192..], "k={k}");
+            assert_eq!(load_img(&other, &mut f), Some(o_old.clone()), "k={k}");
+            // …and a cut OTHER save leaves the KERNEL's sectors alone.
+            let g = f.clone();
+            let got_k = load(&kernel, &mut f);
+            f.cut_power_after(k % (OTHER_STEPS + 1));
+            let _ = other.save(&mut f, &o_new);
+            f.restore_power();
+            assert_eq!(&f.image()[..8192], &g.image()[..8192], "k={k}");
+            assert_eq!(load(&kernel, &mut f), got_k, "k={k}");
+            let o = load_img(&other, &mut f);
+            assert!(
+                o == Some(o_old.clone()) || o == Some(o_new.clone()),
+                "k={k}"
+            );
+        }
+    }
+    // Each store pointed at the other's sectors loads nothing.
+    let mut f = holding(RamNor::<16384>::new(), 0, 0, &k_old);
+    let mut f2 = spec_holding(OTHER, f.clone(), 8192, 0, &o_old);
+    assert_eq!(load_img(&ParamStore::for_image(0, OTHER), &mut f2), None);
+    assert_eq!(load(&ParamStore::new(8192), &mut f2), None);
+    assert_eq!(load(&kernel, &mut f), Some(k_old));
 }
 
 // ---------------------------------------------------------------- garbage

@@ -5,6 +5,7 @@
 use embedded_storage::nor_flash::NorFlash;
 
 use crate::device::{Event, Level, Mode, Pin, Shell};
+use crate::dsp::integrals::NoIntegrals;
 use crate::kernel::command::{self, Command};
 use crate::kernel::fields::{self, Field, OutputCtx};
 use crate::kernel::formats::{self, UDD};
@@ -13,6 +14,7 @@ use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
 use crate::kernel::{config, rate, status, udd};
 use crate::model::Capability;
 use crate::personality::Personality;
+use crate::store::KernelImage;
 use crate::time::Instant;
 
 /// Largest host → device frame: a UDD config message `96 N` + 255 types.
@@ -67,6 +69,10 @@ pub struct Kernel {
 }
 
 impl Personality for Kernel {
+    type Integrate = NoIntegrals;
+    type Image = KernelImage;
+    const IMAGE: KernelImage = KernelImage;
+
     #[inline(always)]
     fn unpowered() -> Self {
         Kernel {
@@ -82,7 +88,7 @@ impl Personality for Kernel {
     /// Parameters load from flash (factory defaults if it holds none), the
     /// line starts at Baud_Rate, AutoStart runs (section 6) unless BOOT put
     /// the device in firmware update.
-    fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F>, _now: Instant) {
+    fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, _now: Instant) {
         self.rx = Decoder::new();
         self.stream = None;
         self.udd_pending = false;
@@ -112,7 +118,7 @@ impl Personality for Kernel {
     }
 
     /// Complete frames are executed at once; replies are queued.
-    fn on_rx<F: NorFlash>(&mut self, mut bytes: &[u8], sh: &mut Shell<F>, _now: Instant) {
+    fn on_rx<F: NorFlash>(&mut self, mut bytes: &[u8], sh: &mut Shell<F, Self>, _now: Instant) {
         while let Some(f) = self.rx.next_frame(&mut bytes) {
             if f.msg_type != TYPE_COMMAND || f.id != 0 {
                 continue;
@@ -128,7 +134,7 @@ impl Personality for Kernel {
 
     /// A frame cut short ([`RX_IDLE_ABANDON_NS`] without a byte) is
     /// abandoned.
-    fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F>, now: Instant) {
+    fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, now: Instant) {
         if self.rx.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
             self.rx.abandon();
             sh.touch_rx(now);
@@ -137,7 +143,7 @@ impl Personality for Kernel {
     }
 
     /// Alignment runs, output frames are produced at the data rate.
-    fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F>, now: Instant) {
+    fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, now: Instant) {
         let Some(s) = self.stream.as_mut() else {
             return;
         };
@@ -162,7 +168,13 @@ impl Personality for Kernel {
     /// 1 positive: rising) sends one frame of the running format with the
     /// latest data at once; edges within Hold-off_Time ms of the last
     /// accepted one are ignored. Periodic output is off while triggering.
-    fn on_pin<F: NorFlash>(&mut self, pin: Pin, level: Level, sh: &mut Shell<F>, at: Instant) {
+    fn on_pin<F: NorFlash>(
+        &mut self,
+        pin: Pin,
+        level: Level,
+        sh: &mut Shell<F, Self>,
+        at: Instant,
+    ) {
         if pin != Pin::Extrig {
             return;
         }
@@ -193,7 +205,7 @@ impl Personality for Kernel {
         }
     }
 
-    fn output_rate<F: NorFlash>(&self, sh: &Shell<F>) -> Option<u32> {
+    fn output_rate<F: NorFlash>(&self, sh: &Shell<F, Self>) -> Option<u32> {
         self.stream
             .as_ref()
             .map(|s| sh.product().model.internal_rate_hz / s.divisor)
@@ -212,7 +224,7 @@ impl Personality for Kernel {
 /// that `fill` writes straight into the TX queue (`false`: send nothing).
 /// Returns when its last bit will have left the line.
 fn queue_frame<F: NorFlash>(
-    sh: &mut Shell<F>,
+    sh: &mut Shell<F, Kernel>,
     id: u8,
     len: usize,
     fill: impl FnOnce(&mut [u8]) -> bool,
@@ -238,7 +250,7 @@ fn queue_frame<F: NorFlash>(
 }
 
 /// Queues a device frame with `payload`; dropped whole if it does not fit.
-fn send<F: NorFlash>(sh: &mut Shell<F>, id: u8, payload: &[u8]) -> Option<Instant> {
+fn send<F: NorFlash>(sh: &mut Shell<F, Kernel>, id: u8, payload: &[u8]) -> Option<Instant> {
     queue_frame(sh, id, payload.len(), |out| {
         out.copy_from_slice(payload);
         true
@@ -254,7 +266,7 @@ impl Kernel {
 
     // ----- commands -----
 
-    fn execute<F: NorFlash>(&mut self, sh: &mut Shell<F>, payload: &[u8], checksum: u16) {
+    fn execute<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, payload: &[u8], checksum: u16) {
         let parsed = Command::parse(payload);
         if core::mem::take(&mut self.udd_pending) {
             // The message after User_Def_Data_config is the configuration,
@@ -320,7 +332,7 @@ impl Kernel {
     /// [`Apply`].
     fn save_flash<F: NorFlash>(
         &mut self,
-        sh: &mut Shell<F>,
+        sh: &mut Shell<F, Self>,
         id: u16,
         len: u16,
         value: &[u8],
@@ -359,7 +371,7 @@ impl Kernel {
     /// CommitBaudRate (5.3.9): the saved Baud_Rate takes effect after the
     /// bytes already queued have left at the old rate. No reply (the ICD
     /// documents none).
-    fn commit_baud_rate<F: NorFlash>(&mut self, sh: &mut Shell<F>) {
+    fn commit_baud_rate<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>) {
         let p: &ParamSpec = &params::BAUD_RATE;
         let r = p.range();
         self.ram[r.clone()].copy_from_slice(&self.saved[r]);
@@ -370,7 +382,7 @@ impl Kernel {
 
     /// Recomputes the running stream's layout and rate (after a baud-rate
     /// or UDD configuration change).
-    fn refresh_stream<F: NorFlash>(&mut self, sh: &Shell<F>) {
+    fn refresh_stream<F: NorFlash>(&mut self, sh: &Shell<F, Self>) {
         if let Some(code) = self.stream.as_ref().map(|s| s.code) {
             let layout = self.layout(sh, code);
             let divisor = self.divisor_for(sh, &layout);
@@ -382,14 +394,14 @@ impl Kernel {
         }
     }
 
-    fn udd_config_now<F: NorFlash>(&self, sh: &Shell<F>) -> udd::Config {
+    fn udd_config_now<F: NorFlash>(&self, sh: &Shell<F, Self>) -> udd::Config {
         udd::read_config(&self.ram, &sh.product())
             .unwrap_or_else(|| udd::Config::from_slice(udd::DEFAULT_CONFIG).unwrap_or_default())
     }
 
     /// The configuration message after User_Def_Data_config (5.3.5):
     /// checked, answered with Table 5.20, persisted when accepted.
-    fn udd_config<F: NorFlash>(&mut self, sh: &mut Shell<F>, payload: &[u8], checksum: u16) {
+    fn udd_config<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, payload: &[u8], checksum: u16) {
         let product = sh.product();
         let internal = product.model.internal_rate_hz;
         let line_rate = sh.line().rate();
@@ -424,7 +436,7 @@ impl Kernel {
 
     /// The frame layout of data command `code`: a fixed format's fields, or
     /// the UDD header and the configured types' fields (Table 5.13).
-    fn layout<F: NorFlash>(&self, sh: &Shell<F>, code: u8) -> Layout {
+    fn layout<F: NorFlash>(&self, sh: &Shell<F, Self>, code: u8) -> Layout {
         let mut l = Layout::default();
         match formats::find(code) {
             Some(f) => {
@@ -449,14 +461,14 @@ impl Kernel {
     }
 
     /// Output every this many ticks: Data_Rate lowered by Formula 5.1.
-    fn divisor_for<F: NorFlash>(&self, sh: &Shell<F>, layout: &Layout) -> u32 {
+    fn divisor_for<F: NorFlash>(&self, sh: &Shell<F, Self>, layout: &Layout) -> u32 {
         let internal = sh.product().model.internal_rate_hz;
         let requested = params::DATA_RATE.read_int(&self.ram);
         let eff = rate::effective_rate(requested, sh.line().rate(), layout.len, internal);
         internal / eff.max(1)
     }
 
-    fn start_stream<F: NorFlash>(&mut self, sh: &mut Shell<F>, code: u8) {
+    fn start_stream<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, code: u8) {
         let layout = self.layout(sh, code);
         let divisor = self.divisor_for(sh, &layout);
         // A stream with orientation starts after the initial alignment
@@ -493,7 +505,7 @@ impl Kernel {
     }
 
     /// Produces one output frame of the running stream at `now`.
-    fn emit<F: NorFlash>(&mut self, sh: &mut Shell<F>, now: Instant) {
+    fn emit<F: NorFlash>(&mut self, sh: &mut Shell<F, Self>, now: Instant) {
         let Some(stream) = self.stream.as_ref() else {
             return;
         };
@@ -566,7 +578,7 @@ impl Kernel {
 
 /// GetDevInfo payload (Table 5.17): serial, firmware string, IMU_type,
 /// both duplicated; 166 bytes.
-fn dev_info<F: NorFlash>(sh: &Shell<F>) -> [u8; 166] {
+fn dev_info<F: NorFlash>(sh: &Shell<F, Kernel>) -> [u8; 166] {
     let mut p = [0u8; 166];
     // Serial: 8 ASCII digits (no core::fmt, which costs firmware flash).
     let mut sn = [b'0'; 8];
