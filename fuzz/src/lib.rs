@@ -12,6 +12,11 @@
 
 use std::collections::BTreeMap;
 
+// The invariants lean on the core's debug assertions and overflow checks
+// too: refuse a build without them (see Cargo.toml's release profile).
+#[cfg(not(debug_assertions))]
+compile_error!("build the fuzz targets with debug assertions (fuzz/Cargo.toml release profile)");
+
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, RX_FRAME_CAP, TX_CAP};
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
