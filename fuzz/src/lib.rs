@@ -239,7 +239,7 @@ fn save_flash_frames(rx: &[u8]) -> Vec<(u16, u16, Vec<u8>)> {
             continue;
         }
         let n = usize::from(u16::from_le_bytes([w[4], w[5]])) + 2;
-        if n > w.len() || n > RX_FRAME_CAP || n < 8 {
+        if n > w.len() || !(8..=RX_FRAME_CAP).contains(&n) {
             continue;
         }
         let sum = u16::from_le_bytes([w[n - 2], w[n - 1]]);
@@ -410,7 +410,7 @@ impl Harness {
         if let Some(rate) = self.dev.output_rate() {
             let internal = self.product.model.internal_rate_hz;
             assert!(
-                rate >= 1 && internal % rate == 0,
+                rate >= 1 && internal.is_multiple_of(rate),
                 "rate {rate} divides {internal}"
             );
         }
