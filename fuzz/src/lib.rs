@@ -12,6 +12,11 @@
 
 use std::collections::BTreeMap;
 
+// The invariants lean on the core's debug assertions and overflow checks
+// too: refuse a build without them (see Cargo.toml's release profile).
+#[cfg(not(debug_assertions))]
+compile_error!("build the fuzz targets with debug assertions (fuzz/Cargo.toml release profile)");
+
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, RX_FRAME_CAP, TX_CAP};
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
@@ -234,7 +239,7 @@ fn save_flash_frames(rx: &[u8]) -> Vec<(u16, u16, Vec<u8>)> {
             continue;
         }
         let n = usize::from(u16::from_le_bytes([w[4], w[5]])) + 2;
-        if n > w.len() || n > RX_FRAME_CAP || n < 8 {
+        if n > w.len() || !(8..=RX_FRAME_CAP).contains(&n) {
             continue;
         }
         let sum = u16::from_le_bytes([w[n - 2], w[n - 1]]);
@@ -405,7 +410,7 @@ impl Harness {
         if let Some(rate) = self.dev.output_rate() {
             let internal = self.product.model.internal_rate_hz;
             assert!(
-                rate >= 1 && internal % rate == 0,
+                rate >= 1 && internal.is_multiple_of(rate),
                 "rate {rate} divides {internal}"
             );
         }
