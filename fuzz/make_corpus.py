@@ -2,8 +2,7 @@
 """Writes the seed corpora of the fuzz targets into fuzz/corpus/<target>/.
 
 Seeds come from the golden vectors (the ICD's and the ISB page's hex
-strings, `vectors.txt`: pass its path, default the shared spec beside the
-clone) and from small scripted sessions in the `device` and `store`
+strings, `vectors.txt`: pass its path, default tests/data/vectors.txt) and from small scripted sessions in the `device` and `store`
 targets' script formats (see fuzz/src/lib.rs). Rerun after changing a
 script format; the files are committed so a fresh clone fuzzes from them.
 """
@@ -14,7 +13,6 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_VECTORS = [
     os.path.join(HERE, "..", "tests", "data", "vectors.txt"),
-    os.path.join(HERE, "..", "..", "shared", "spec", "vectors.txt"),
 ]
 
 
