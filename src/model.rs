@@ -361,7 +361,37 @@ impl core::fmt::Display for ProductError {
     }
 }
 
+/// The Inertial Sense IMX-5 the ISB personality emulates (IMU mode): not
+/// a KERNEL model (it is not in [`MODELS`], so `--model` never takes it);
+/// only its sensor half is used — the chain at 2 kHz, EXTRIG as the strobe
+/// input, gyro ±2000 °/s. Decision (README "ISB personality"): the IMX-5's
+/// ±16 g accelerometer is modelled with the nearest range the sensor
+/// model has, ±15 g; the grade is the mid one. The KERNEL columns
+/// (formats, LPF codes, IMU_type) are empty or zero.
+pub static IMX5: ModelSpec = ModelSpec {
+    short: "IMX-5",
+    number: "IMX-5",
+    internal_rate_hz: 2000,
+    formats: &[],
+    udd_starred_only: false,
+    caps: &[Extrig],
+    lpf_codes: &[],
+    products: &[(GyroRange::G2000, AccelRange::A15)],
+    boot_active_low: false,
+    grade: SensorGrade::Mid,
+    imu_type: 0,
+};
+
 impl Product {
+    /// The IMX-5 of the ISB personality ([`IMX5`]).
+    pub const fn imx5() -> Product {
+        Product {
+            model: &IMX5,
+            gyro: GyroRange::G2000,
+            accel: AccelRange::A15,
+        }
+    }
+
     /// Parses `K120`, `KERNEL-120`, or a product code such as
     /// `KERNEL-120-G2000-A40A90` (trailing `-TGA-C12-S-V1.2` options are
     /// accepted and ignored). A bare model takes its first product code.

@@ -2,7 +2,8 @@
 //! (the Inertial Sense ISB protocol page, protocol 2.1; the facts the code uses
 //! are in `docs/protocol-facts.md` "ISB").
 //!
-//! The protocol layer, pure and table-driven, no device yet:
+//! [`device::Isb`] is the personality (an IMX-5 in IMU mode on the device
+//! shell); beneath it the protocol layer, pure and table-driven:
 //! - [`packet`]: header, checksum, encoding, the streaming decoder;
 //! - [`did`]: DID numbers and the table of the data sets the emulated
 //!   IMX-5 (IMU mode) serves, with the NACK rule;
@@ -12,11 +13,12 @@
 //!   encoders;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
 //!   and [`nmea::Input`], the one place every received byte goes.
-//!
-//! The device behind it (streams, RMC, flash persistence) is not built yet.
 
+pub mod device;
 pub mod did;
 pub mod message;
 pub mod nmea;
 pub mod packet;
 pub mod sets;
+
+pub use device::Isb;

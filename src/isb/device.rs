@@ -1,0 +1,827 @@
+//! The ISB personality: an emulated Inertial Sense IMX-5 in IMU mode on
+//! the device shell ([`crate::device::Shell`]) — the same sensor model,
+//! filters, pins, line and flash store as the KERNEL, speaking the ISB
+//! protocol (`docs/isb-data-sets.md`, `docs/protocol-facts.md` "ISB").
+//!
+//! What it does with each input (decisions marked; README "ISB
+//! personality"):
+//!
+//! - **GET_DATA** ([`message::resolve_get`]): NACK for DID ≥ 132 and 95,
+//!   silence for an in-range DID it does not serve, else one DATA packet
+//!   now and, with a period multiple `n > 0`, a stream every `n ×` the data
+//!   set's source period ([`did::Source`], from the `startupImuDtMs` /
+//!   `startupNavDtMs` latched at boot); `n = 0` stops that DID's stream.
+//!   One stream per DID: a GET for a DID already streaming replaces its
+//!   stream; *decision*: a GET identical to the running stream changes
+//!   nothing and sends nothing (the vendor tool re-sends its GETs every
+//!   second, and a second packet would split a PIMU window).
+//! - **IMU, IMU_RAW, PIMU** are windows of the chain's cumulative
+//!   integrals ([`crate::dsp::integrals`]): a stream's packet covers
+//!   exactly the ticks since its previous packet (PIMU: coning- and
+//!   sculling-corrected Δθ, Δv, with `dt` that window; IMU and IMU_RAW: the
+//!   window's mean rate and specific force). The packet a GET sends at
+//!   once covers the last tick. Axes: the IMX's body frame is forward,
+//!   right, down; the chain's carrier frame is the KERNEL's (x, y, z up),
+//!   so the IMX reports `(x, −y, −z)` — at rest `acc = (0, 0, −g)`.
+//! - **SET_DATA** ([`message::apply_set`]): FLASH_CONFIG (checksum
+//!   recomputed, saved to flash at the next tick: "flash write pending"
+//!   until then; `startupImuDtMs`, `startupNavDtMs` and `ser0BaudRate`
+//!   apply after a reset: "system reset required" while they differ from
+//!   the running values), RMC (below), SYS_CMD (1 save persistent
+//!   messages, 97 save flash, 99 software reset, 5 zero motion: accepted,
+//!   no effect; ignored unless `invCommand == !command`), SYS_PARAMS
+//!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
+//!   done, the result from the chain's BIT faults).
+//! - **RMC**: its bits stand for the streams of the data sets that have an
+//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW); a SET starts those whose
+//!   bit is set (period multiple 1) and, without `OPTIONS_PRESERVE_CTRL`,
+//!   stops those whose bit is clear; `OPTIONS_PERSISTENT` then saves the
+//!   streams as persistent. The port mask is ignored (one port). A GET of
+//!   RMC reads the bits of the running streams.
+//! - **STROBE_IN_TIME** is sent on every rising EXTRIG edge while its
+//!   stream is on (a GET with `n > 0`, or its RMC bit), counting edges
+//!   since power-on, time of week = ms since power-on (no GPS).
+//! - **Stops**: STOP_BROADCASTS_ALL_PORTS / CURRENT_PORT stop every stream
+//!   and are ACKed; STOP_DID_BROADCAST stops one, no reply; `$STPB` and
+//!   `$STPC` stop every stream, no reply.
+//! - **NMEA**: `$INFO` is answered with the `$INFO` sentence, `$PERS`
+//!   saves the running streams as persistent, `$SRST` resets (after the
+//!   bytes already queued have been handed out). Persistent streams start
+//!   by themselves at every boot.
+//! - **Status words** (IMU `status`, SYS_PARAMS `hdwStatus`) come from the
+//!   chain's neutral health — the conditions behind the KERNEL's USW:
+//!   saturation (since the previous packet), sensor faults, over-
+//!   temperature — plus reset required, flash write pending, TX limited
+//!   (a packet dropped because the line was too slow) and the parse-error
+//!   count.
+
+use embedded_storage::nor_flash::NorFlash;
+use heapless::Vec;
+
+use crate::chain::{ChainConfig, Health};
+use crate::device::{Level, Mode, Pin, Shell};
+use crate::dsp::integrals::{self, Increment, Integrals};
+use crate::isb::did::{self, DataSet};
+use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
+use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
+use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
+use crate::isb::sets::{
+    self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
+    FlashConfig, Imu, Pimu, Rmc, StrobeInTime, SysParams, SystemCommand,
+};
+use crate::personality::Personality;
+use crate::store::ImageSpec;
+use crate::time::Instant;
+
+/// Streams the device runs at once (one per DID; there are 10 data sets).
+pub const MAX_STREAMS: usize = 10;
+/// Bytes of one persistent-stream entry in the image: `u8 did, u8 0,
+/// u16 size, u16 offset, u16 period`.
+const ENTRY: usize = 8;
+/// Where the persistent streams start in the image (after FLASH_CONFIG):
+/// `u32 count`, then [`MAX_STREAMS`] entries.
+const PERSIST: usize = flash::SIZE;
+/// The ISB image in flash: FLASH_CONFIG, then the persistent streams.
+pub const IMAGE_LEN: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// How the ISB image is stored ([`crate::store`]): its own magic, so a
+/// flash written by the KERNEL personality is not taken for it.
+pub const IMAGE: ImageSpec = ImageSpec {
+    len: IMAGE_LEN as u16,
+    magic: *b"ISB1",
+    version: 1,
+};
+/// An incomplete packet or sentence with no new byte for this long is
+/// dropped (as the KERNEL does with a frame cut short).
+pub const RX_IDLE_ABANDON_NS: u64 = 100_000_000;
+/// Largest `$INFO` sentence ([`nmea::info_sentence`]).
+const INFO_MAX: usize = 200;
+
+/// One running stream.
+#[derive(Debug, Clone, Copy)]
+struct Stream {
+    did: u8,
+    offset: u16,
+    size: u16,
+    /// Period multiple of the GET (0 never: such a GET stops the stream).
+    period: u16,
+    /// Ticks between packets; 0: sent on events (STROBE_IN_TIME).
+    every: u32,
+    /// Ticks to the next packet.
+    countdown: u32,
+    /// The integrals at the previous packet (IMU, IMU_RAW, PIMU windows).
+    start: Integrals,
+}
+
+/// The device state the input callback works on (beside the input
+/// classifier, so the two can be borrowed apart).
+struct State {
+    /// FLASH_CONFIG as the device holds it (RAM); saved to flash when
+    /// `save_pending`.
+    cfg: FlashConfig,
+    /// The persistent streams as saved (`u32 count` + entries).
+    persist: [u8; 4 + MAX_STREAMS * ENTRY],
+    /// `startupImuDtMs`, `startupNavDtMs`, `ser0BaudRate` at boot (what
+    /// runs until the next reset).
+    imu_dt_ms: u32,
+    nav_dt_ms: u32,
+    baud: u32,
+    save_pending: bool,
+    streams: Vec<Stream, MAX_STREAMS>,
+    rmc_options: u32,
+    /// The integrals one tick ago (the window of a one-shot IMU/PIMU).
+    prev: Integrals,
+    strobe_count: u16,
+    bit: Bit,
+    gen_fault_code: u32,
+    /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
+    dropped_seen: u32,
+    tx_limited: bool,
+    /// ISB candidates dropped (bad checksum, size) since power-on.
+    parse_errors: u32,
+}
+
+/// The ISB personality (module doc): an IMX-5 in IMU mode.
+pub struct Isb {
+    input: Input<MAX_PACKET>,
+    st: State,
+}
+
+impl Personality for Isb {
+    type Integrate = Integrals;
+    type Image = ImageSpec;
+    const IMAGE: ImageSpec = IMAGE;
+
+    fn unpowered() -> Self {
+        Isb {
+            input: Input::new(),
+            st: State {
+                cfg: FlashConfig([0; flash::SIZE]),
+                persist: [0; 4 + MAX_STREAMS * ENTRY],
+                imu_dt_ms: flash::DEFAULT_IMU_DT_MS,
+                nav_dt_ms: flash::DEFAULT_NAV_DT_MS,
+                baud: flash::DEFAULT_BAUD_RATE,
+                save_pending: false,
+                streams: Vec::new(),
+                rmc_options: 0,
+                prev: Integrals::default(),
+                strobe_count: 0,
+                bit: Bit::default(),
+                gen_fault_code: 0,
+                dropped_seen: 0,
+                tx_limited: false,
+                parse_errors: 0,
+            },
+        }
+    }
+
+    /// FLASH_CONFIG and the persistent streams load from flash (factory
+    /// defaults and none if it holds no valid ISB image); the startup
+    /// periods and `ser0BaudRate` are latched; persistent streams start.
+    fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, _now: Instant) {
+        self.input = Input::new();
+        let st = &mut self.st;
+        let mut image = [0u8; IMAGE_LEN];
+        let loaded = matches!(sh.load_image(&mut image), Ok(true));
+        let mut cfg = FlashConfig([0; flash::SIZE]);
+        cfg.0.copy_from_slice(&image[..PERSIST]);
+        if loaded && cfg.is_valid() {
+            st.cfg = cfg;
+            st.persist.copy_from_slice(&image[PERSIST..]);
+        } else {
+            st.cfg = FlashConfig::factory();
+            st.persist = [0; 4 + MAX_STREAMS * ENTRY];
+        }
+        st.imu_dt_ms = st.cfg.startup_imu_dt_ms().clamp(1, 1000);
+        st.nav_dt_ms = st.cfg.startup_nav_dt_ms().clamp(st.imu_dt_ms, 1000);
+        st.baud = st.cfg.u32_at(flash::SER0_BAUD_RATE).clamp(300, 10_000_000);
+        st.save_pending = false;
+        st.streams.clear();
+        st.rmc_options = 0;
+        st.prev = sh.chain().integrals();
+        st.strobe_count = 0;
+        st.bit = Bit::default();
+        st.gen_fault_code = 0;
+        st.dropped_seen = sh.line().dropped();
+        st.tx_limited = false;
+        st.parse_errors = 0;
+        let product = sh.product();
+        sh.chain_mut().configure(&ChainConfig::defaults(&product));
+        sh.set_line_rate(st.baud);
+        if sh.firmware_update() {
+            return;
+        }
+        let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
+        for k in 0..n {
+            let e = &st.persist[4 + k * ENTRY..4 + (k + 1) * ENTRY];
+            let req = GetRequest {
+                did: u16::from(e[0]),
+                size: le::u16(e, 2),
+                offset: le::u16(e, 4),
+                period: le::u16(e, 6),
+            };
+            if let GetReply::Serve {
+                set,
+                offset,
+                size,
+                period,
+            } = message::resolve_get(&req)
+            {
+                if period > 0 {
+                    st.start_stream(sh, set, offset, size, period);
+                }
+            }
+        }
+    }
+
+    fn on_rx<F: NorFlash>(&mut self, bytes: &[u8], sh: &mut Shell<F, Isb>, now: Instant) {
+        let st = &mut self.st;
+        self.input.feed(bytes, |ev| match ev {
+            Input_::Packet(p) => st.packet(sh, &p, now),
+            Input_::Nmea(c) => st.nmea(sh, c, now),
+        });
+        st.parse_errors = self.input.isb_errors();
+    }
+
+    /// A packet or sentence cut short ([`RX_IDLE_ABANDON_NS`] without a
+    /// byte) is dropped.
+    fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
+        if self.input.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
+            self.input.abandon();
+            sh.touch_rx(now);
+            self.st.parse_errors = self.input.isb_errors();
+        }
+    }
+
+    /// Pending flash writes happen; every periodic stream due sends.
+    fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
+        let st = &mut self.st;
+        if st.save_pending {
+            st.save(sh);
+        }
+        let mut sent = false;
+        for i in 0..st.streams.len() {
+            let s = &mut st.streams[i];
+            if s.every == 0 {
+                continue;
+            }
+            s.countdown = s.countdown.saturating_sub(1);
+            if s.countdown == 0 {
+                s.countdown = s.every;
+                st.send_stream(sh, i, now);
+                sent = true;
+            }
+        }
+        if sent {
+            // Saturation is reported since the previous packet.
+            let _ = sh.chain_mut().output_with(false);
+        }
+        st.prev = sh.chain().integrals();
+    }
+
+    /// A rising EXTRIG edge is a strobe: counted, and sent as
+    /// STROBE_IN_TIME while that stream is on.
+    fn on_pin<F: NorFlash>(&mut self, pin: Pin, level: Level, sh: &mut Shell<F, Isb>, at: Instant) {
+        if (pin, level) != (Pin::Extrig, Level::High) {
+            return;
+        }
+        let st = &mut self.st;
+        st.strobe_count = st.strobe_count.wrapping_add(1);
+        if let Some(i) = st.find(did::STROBE_IN_TIME) {
+            st.send_stream(sh, i, at);
+        }
+    }
+
+    fn mode(&self) -> Mode {
+        if self.st.streams.iter().any(|s| s.every > 0) {
+            Mode::Continuous
+        } else {
+            Mode::Idle
+        }
+    }
+
+    /// The rate of the fastest periodic stream.
+    fn output_rate<F: NorFlash>(&self, sh: &Shell<F, Isb>) -> Option<u32> {
+        let every = self
+            .st
+            .streams
+            .iter()
+            .filter(|s| s.every > 0)
+            .map(|s| s.every)
+            .min()?;
+        Some(sh.product().model.internal_rate_hz / every)
+    }
+
+    fn ticks_to_next_output(&self) -> Option<u64> {
+        self.st
+            .streams
+            .iter()
+            .filter(|s| s.every > 0)
+            .map(|s| u64::from(s.countdown))
+            .min()
+    }
+}
+
+impl Isb {
+    /// FLASH_CONFIG as the device holds it now.
+    pub fn flash_config(&self) -> &FlashConfig {
+        &self.st.cfg
+    }
+
+    /// DIDs streaming now, in the order they were started.
+    pub fn streams(&self) -> impl Iterator<Item = u8> + '_ {
+        self.st.streams.iter().map(|s| s.did)
+    }
+}
+
+/// Queues an ISB packet of `n` bytes written by `encode` (which returns
+/// the length it wrote).
+fn push<F: NorFlash>(
+    sh: &mut Shell<F, Isb>,
+    n: usize,
+    encode: impl FnOnce(&mut [u8]) -> Option<usize>,
+) -> bool {
+    sh.push_frame(n, |f| encode(f) == Some(n)).is_some()
+}
+
+fn send_ack<F: NorFlash>(sh: &mut Shell<F, Isb>, info: &AckInfo, nack: bool) {
+    push(sh, OVERHEAD + message::ACK_PAYLOAD_LEN, |f| {
+        if nack {
+            message::encode_nack(info, f)
+        } else {
+            message::encode_ack(info, f)
+        }
+    });
+}
+
+/// `(x, y, z)` of the chain's carrier frame in the IMX body frame
+/// (forward, right, down): a half turn about x (module doc).
+fn frd(v: [f64; 3]) -> [f32; 3] {
+    [v[0] as f32, -(v[1] as f32), -(v[2] as f32)]
+}
+
+impl State {
+    fn find(&self, did: u8) -> Option<usize> {
+        self.streams.iter().position(|s| s.did == did)
+    }
+
+    /// Ticks per source period of `set` (at least 1).
+    fn source_ticks(&self, rate_hz: u32, set: &DataSet) -> u32 {
+        let ms = set.source.period_ms(self.imu_dt_ms, self.nav_dt_ms);
+        (ms.saturating_mul(rate_hz) / 1000).max(1)
+    }
+
+    /// Starts (or replaces) the stream of `set`.
+    fn start_stream<F: NorFlash>(
+        &mut self,
+        sh: &Shell<F, Isb>,
+        set: &DataSet,
+        offset: u16,
+        size: u16,
+        period: u16,
+    ) {
+        let every = if set.did == did::STROBE_IN_TIME {
+            0
+        } else {
+            self.source_ticks(sh.product().model.internal_rate_hz, set)
+                .saturating_mul(u32::from(period))
+        };
+        let s = Stream {
+            did: set.did,
+            offset,
+            size,
+            period,
+            every,
+            countdown: every,
+            start: sh.chain().integrals(),
+        };
+        match self.find(set.did) {
+            Some(i) => self.streams[i] = s,
+            None => {
+                let _ = self.streams.push(s);
+            }
+        }
+    }
+
+    fn stop_stream(&mut self, did: u8) {
+        if let Some(i) = self.find(did) {
+            self.streams.remove(i);
+        }
+    }
+
+    // ----- input -----
+
+    fn packet<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, p: &Packet<'_>, now: Instant) {
+        match Request::of(p) {
+            Request::Get(g) => self.get(sh, &g, now),
+            Request::BadGet { rx_flags, rx_did } => {
+                send_ack(sh, &AckInfo::of(rx_flags, rx_did), true)
+            }
+            Request::Set(req) => self.set(sh, &req, now),
+            Request::StopAllPorts | Request::StopCurrentPort => {
+                self.streams.clear();
+                send_ack(sh, &AckInfo::of(p.flags, p.did), false);
+            }
+            Request::StopDid(did) => self.stop_stream(did),
+            Request::Ignored => {}
+        }
+    }
+
+    fn get<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, g: &GetRequest, now: Instant) {
+        match message::resolve_get(g) {
+            GetReply::Nack => send_ack(sh, &AckInfo::of(PacketType::GetData as u8, 0), true),
+            GetReply::Silent => {}
+            GetReply::Serve {
+                set,
+                offset,
+                size,
+                period,
+            } => {
+                let running = self.find(set.did).map(|i| self.streams[i]);
+                if period > 0
+                    && running
+                        .is_some_and(|s| (s.offset, s.size, s.period) == (offset, size, period))
+                {
+                    return;
+                }
+                self.send_once(sh, set, offset, size, now);
+                if period == 0 {
+                    self.stop_stream(set.did);
+                } else {
+                    self.start_stream(sh, set, offset, size, period);
+                }
+            }
+        }
+    }
+
+    fn set<F: NorFlash>(
+        &mut self,
+        sh: &mut Shell<F, Isb>,
+        req: &message::SetRequest<'_>,
+        now: Instant,
+    ) {
+        let mut image = [0u8; flash::SIZE];
+        let n = self.image_of(sh, req.did, &mut image, now);
+        let outcome = message::apply_set(req, &mut image[..n]);
+        match outcome {
+            SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(sh, &info, true),
+            SetOutcome::Silent => {}
+            SetOutcome::AckOnly(info) => send_ack(sh, &info, false),
+            SetOutcome::Written { ack, .. } => {
+                // The ACK goes first: a software reset clears the queue
+                // only after it has been handed out.
+                send_ack(sh, &ack, false);
+                self.written(sh, req.did, &image[..n]);
+            }
+        }
+    }
+
+    /// Acts on a data set written by a SET_DATA (module doc).
+    fn written<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, did: u8, image: &[u8]) {
+        match did {
+            did::FLASH_CONFIG => {
+                self.cfg.0.copy_from_slice(&image[..flash::SIZE]);
+                self.cfg.update_checksum();
+                self.save_pending = true;
+            }
+            did::RMC => {
+                let mut b = [0u8; rmc::SIZE];
+                b.copy_from_slice(&image[..rmc::SIZE]);
+                self.rmc(sh, &Rmc::decode(&b));
+            }
+            did::SYS_CMD => {
+                let mut b = [0u8; sys_cmd::SIZE];
+                b.copy_from_slice(&image[..sys_cmd::SIZE]);
+                match SystemCommand::decode(&b).valid() {
+                    Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(sh),
+                    Some(sys_cmd::SAVE_FLASH) => self.save(sh),
+                    Some(sys_cmd::SOFTWARE_RESET) => sh.request_reset(),
+                    _ => {}
+                }
+            }
+            did::SYS_PARAMS => {
+                self.gen_fault_code = le::u32(image, sets::sys_params::GEN_FAULT_CODE);
+            }
+            did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
+                self.run_bit(sh, image[bit::COMMAND]);
+            }
+            _ => {}
+        }
+    }
+
+    /// An RMC write (module doc).
+    fn rmc<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, r: &Rmc) {
+        let preserve = r.options & rmc::OPTIONS_PRESERVE_CTRL != 0;
+        for set in did::DATA_SETS.iter().filter(|s| s.rmc_bit != 0) {
+            if r.bits & set.rmc_bit != 0 {
+                if self.find(set.did).is_none() {
+                    self.start_stream(sh, set, 0, set.size, 1);
+                }
+            } else if !preserve {
+                self.stop_stream(set.did);
+            }
+        }
+        self.rmc_options = r.options;
+        if r.options & rmc::OPTIONS_PERSISTENT != 0 {
+            self.save_persistent(sh);
+        }
+    }
+
+    fn nmea<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, c: Nmea, _now: Instant) {
+        match c {
+            Nmea::Info => {
+                let mut out = [0u8; INFO_MAX];
+                if let Some(n) = nmea::info_sentence(&dev_info_of(sh), &mut out) {
+                    sh.push_frame(n, |f| {
+                        f.copy_from_slice(&out[..n]);
+                        true
+                    });
+                }
+            }
+            Nmea::StopAllPorts | Nmea::StopCurrentPort => self.streams.clear(),
+            Nmea::SavePersistent => self.save_persistent(sh),
+            Nmea::SoftwareReset => sh.request_reset(),
+        }
+    }
+
+    // ----- flash -----
+
+    /// The running streams become the persistent ones, saved at once.
+    fn save_persistent<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+        self.persist = [0; 4 + MAX_STREAMS * ENTRY];
+        le::put(
+            &mut self.persist,
+            0,
+            &(self.streams.len() as u32).to_le_bytes(),
+        );
+        for (k, s) in self.streams.iter().enumerate() {
+            let e = &mut self.persist[4 + k * ENTRY..4 + (k + 1) * ENTRY];
+            e[0] = s.did;
+            le::put(e, 2, &s.size.to_le_bytes());
+            le::put(e, 4, &s.offset.to_le_bytes());
+            le::put(e, 6, &s.period.max(1).to_le_bytes());
+        }
+        self.save(sh);
+    }
+
+    /// Writes FLASH_CONFIG and the persistent streams (power-fail safe); a
+    /// flash failure leaves the write pending.
+    fn save<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+        let mut image = [0u8; IMAGE_LEN];
+        image[..PERSIST].copy_from_slice(&self.cfg.0);
+        image[PERSIST..].copy_from_slice(&self.persist);
+        self.save_pending = sh.save_image(&image).is_err();
+    }
+
+    fn run_bit<F: NorFlash>(&mut self, sh: &Shell<F, Isb>, command: u8) {
+        let h = sh.chain().health();
+        let mut hdw = bit::HDW_PASSED_NO_GPS;
+        if h.gyro_bit_failed {
+            hdw = bit::HDW_FAULT_NOISE_PQR;
+        }
+        if h.accel_bit_failed {
+            hdw = if h.gyro_bit_failed {
+                bit::HDW_FAULT_NOISE_PQR | bit::HDW_FAULT_NOISE_ACC
+            } else {
+                bit::HDW_FAULT_NOISE_ACC
+            };
+        }
+        self.bit = Bit {
+            command: bit::CMD_NONE,
+            last_command: command,
+            state: bit::STATE_DONE,
+            hdw_bit_status: hdw,
+            cal_bit_status: bit::CAL_PASSED_ALL,
+            ..Bit::default()
+        };
+    }
+
+    // ----- output -----
+
+    /// The current bytes of data set `did` into `out`; its size.
+    fn image_of<F: NorFlash>(
+        &self,
+        sh: &mut Shell<F, Isb>,
+        did: u8,
+        out: &mut [u8; flash::SIZE],
+        now: Instant,
+    ) -> usize {
+        let mut put = |b: &[u8]| {
+            out[..b.len()].copy_from_slice(b);
+            b.len()
+        };
+        match did {
+            did::DEV_INFO => put(&dev_info_of(sh).encode()),
+            did::FLASH_CONFIG => put(&self.cfg.0),
+            did::SYS_PARAMS => put(&self.sys_params(sh, now).encode()),
+            did::RMC => put(&Rmc {
+                bits: self.rmc_bits(),
+                options: self.rmc_options,
+            }
+            .encode()),
+            did::SYS_CMD => put(&SystemCommand::default().encode()),
+            did::BIT => put(&self.bit.encode()),
+            did::STROBE_IN_TIME => put(&StrobeInTime {
+                week: 0,
+                time_of_week_ms: ms_since(sh, now),
+                pin: 0,
+                count: self.strobe_count,
+            }
+            .encode()),
+            did::IMU | did::IMU_RAW | did::PIMU => {
+                let w = integrals::window(&self.prev, &sh.chain().integrals(), rate(sh));
+                put(&self.windowed(sh, did, &w, now))
+            }
+            _ => 0,
+        }
+    }
+
+    fn rmc_bits(&self) -> u64 {
+        self.streams
+            .iter()
+            .filter_map(|s| did::lookup(u16::from(s.did)))
+            .fold(0, |b, set| b | set.rmc_bit)
+    }
+
+    /// IMU / IMU_RAW / PIMU of the window `w` (module doc); 40 bytes used
+    /// at most.
+    fn windowed<F: NorFlash>(
+        &self,
+        sh: &Shell<F, Isb>,
+        did: u8,
+        w: &Increment,
+        now: Instant,
+    ) -> [u8; sets::pimu::SIZE] {
+        let h = sh.chain().health();
+        let status = imu_status_of(&h);
+        let time = now.since(sh.powered_at()) as f64 / 1e9;
+        let dt = w.samples as f64 / f64::from(rate(sh));
+        let mut out = [0u8; sets::pimu::SIZE];
+        if did == did::PIMU {
+            out.copy_from_slice(
+                &Pimu {
+                    time,
+                    dt: dt as f32,
+                    status,
+                    theta: frd(w.dtheta_rad),
+                    vel: frd(w.dv_mps),
+                }
+                .encode(),
+            );
+        } else {
+            let inv = if dt > 0.0 { 1.0 / dt } else { 0.0 };
+            let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
+            out[..sets::imu::SIZE].copy_from_slice(
+                &Imu {
+                    time,
+                    status,
+                    pqr: mean(w.dtheta_raw_rad),
+                    acc: mean(w.dv_raw_mps),
+                }
+                .encode(),
+            );
+        }
+        out
+    }
+
+    /// One DATA packet of `set` now (the GET's reply).
+    fn send_once<F: NorFlash>(
+        &mut self,
+        sh: &mut Shell<F, Isb>,
+        set: &DataSet,
+        offset: u16,
+        size: u16,
+        now: Instant,
+    ) {
+        let mut image = [0u8; flash::SIZE];
+        let n = self.image_of(sh, set.did, &mut image, now);
+        send_data(sh, set.did, &image[..n], offset, size);
+    }
+
+    /// The packet of stream `i` at `now`; its window restarts.
+    fn send_stream<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, i: usize, now: Instant) {
+        let s = self.streams[i];
+        let mut image = [0u8; flash::SIZE];
+        let n = match s.did {
+            did::IMU | did::IMU_RAW | did::PIMU => {
+                let end = sh.chain().integrals();
+                let w = integrals::window(&s.start, &end, rate(sh));
+                self.streams[i].start = end;
+                let b = self.windowed(sh, s.did, &w, now);
+                let n = if s.did == did::PIMU {
+                    sets::pimu::SIZE
+                } else {
+                    sets::imu::SIZE
+                };
+                image[..n].copy_from_slice(&b[..n]);
+                n
+            }
+            _ => self.image_of(sh, s.did, &mut image, now),
+        };
+        send_data(sh, s.did, &image[..n], s.offset, s.size);
+    }
+
+    fn sys_params<F: NorFlash>(&self, sh: &mut Shell<F, Isb>, now: Instant) -> SysParams {
+        let h = sh.chain().health();
+        let mut hdw = 0u32;
+        if h.gyro_over_range != 0 {
+            hdw |= hdw_status::SATURATION_GYR;
+        }
+        if h.accel_over_range != 0 {
+            hdw |= hdw_status::SATURATION_ACC;
+        }
+        if h.over_temperature {
+            hdw |= hdw_status::ERR_TEMPERATURE;
+        }
+        if h.gyro_bit_failed || h.accel_bit_failed {
+            hdw |= hdw_status::BIT_FAILED;
+        } else if self.bit.state == bit::STATE_DONE {
+            hdw |= hdw_status::BIT_PASSED;
+        }
+        if h.sensor_comm_failure || h.sensor_config_failure {
+            hdw |= hdw_status::FAULT_SYS_CRITICAL;
+        }
+        let cfg = &self.cfg;
+        if cfg.startup_imu_dt_ms() != self.imu_dt_ms
+            || cfg.startup_nav_dt_ms() != self.nav_dt_ms
+            || cfg.u32_at(flash::SER0_BAUD_RATE) != self.baud
+        {
+            hdw |= hdw_status::SYSTEM_RESET_REQUIRED;
+        }
+        if self.save_pending {
+            hdw |= hdw_status::FLASH_WRITE_PENDING;
+        }
+        if sh.line().dropped() != self.dropped_seen {
+            hdw |= hdw_status::ERR_COM_TX_LIMITED;
+        }
+        hdw = hdw_status::with_parse_errors(hdw, self.parse_errors);
+        let t = sh.chain().temperature();
+        let up = now.since(sh.powered_at()) as f64 / 1e9;
+        SysParams {
+            time_of_week_ms: ms_since(sh, now),
+            ins_status: 0,
+            hdw_status: hdw,
+            imu_temp: t,
+            baro_temp: t,
+            mcu_temp: t,
+            sys_status: 0,
+            imu_sample_period_ms: self.imu_dt_ms,
+            nav_output_period_ms: self.nav_dt_ms,
+            sensor_true_period: f64::from(self.imu_dt_ms) * 1e-3,
+            flash_cfg_checksum: cfg.checksum(),
+            nav_update_period_ms: self.nav_dt_ms,
+            gen_fault_code: self.gen_fault_code,
+            up_time: up,
+        }
+    }
+}
+
+/// A DATA packet of `image[offset..offset + size]`.
+fn send_data<F: NorFlash>(sh: &mut Shell<F, Isb>, did: u8, image: &[u8], offset: u16, size: u16) {
+    let whole = offset == 0 && usize::from(size) == image.len();
+    let n = OVERHEAD + usize::from(size) + if whole { 0 } else { 2 };
+    push(sh, n, |f| message::encode_data(did, image, offset, size, f));
+}
+
+fn rate<F: NorFlash>(sh: &Shell<F, Isb>) -> u32 {
+    sh.product().model.internal_rate_hz
+}
+
+fn ms_since<F: NorFlash>(sh: &Shell<F, Isb>, now: Instant) -> u32 {
+    (now.since(sh.powered_at()) / 1_000_000) as u32
+}
+
+/// IMU `status` from the chain's health (module doc).
+fn imu_status_of(h: &Health) -> u32 {
+    let mut s = if h.sensor_comm_failure || h.sensor_config_failure {
+        0
+    } else {
+        imu_status::ALL_OK
+    };
+    if h.gyro_over_range != 0 {
+        s |= imu_status::SATURATION_GYR;
+    }
+    if h.accel_over_range != 0 {
+        s |= imu_status::SATURATION_ACC;
+    }
+    s
+}
+
+/// DEV_INFO of this unit: an IMX-5 (hardware 5.0), protocol 2.1.0.0, the
+/// serial number from the seed (never 0).
+fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
+    DevInfo {
+        hardware_type: dev_info::HARDWARE_TYPE_IMX,
+        hdw_run_state: dev_info::RUN_STATE_APP,
+        serial_number: 10_000_000 + (sh.seed() % 90_000_000) as u32,
+        hardware_ver: [5, 0, 0, 0],
+        firmware_ver: [2, 1, 0, 0],
+        build_number: 1,
+        protocol_ver: dev_info::PROTOCOL_2_1,
+        repo_revision: 0,
+        manufacturer: sets::str24("Inertial Sense Inc"),
+        build_type: b'r',
+        build_date: [26, 12, 1],
+        build_time: [0, 0, 0, 0],
+        add_info: sets::str24(concat!("imu-emu ", env!("CARGO_PKG_VERSION"))),
+    }
+}
