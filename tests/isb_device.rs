@@ -220,6 +220,14 @@ fn imu_streams_every_nav_period_with_exact_time() {
     b.run_ticks(100);
     let r = b.send(&hex("ef 49 03 00 08 00 3a 00 00 00 00 00 01 00 7e 0d"));
     assert_eq!(r.len(), 1, "one packet at once");
+    // Whole, without the offset flag, the last tick's sample.
+    assert_eq!(
+        (r[0].flags, r[0].did, r[0].payload.len()),
+        (4, did::IMU, 36)
+    );
+    let imu = Imu::decode(&r[0].payload.clone().try_into().unwrap());
+    assert_eq!(imu.time, 0.05);
+    assert!((imu.acc[2] + 9.81).abs() < 0.1, "{:?}", imu.acc);
     let r = b.run_ticks(2000);
     assert_eq!(r.len(), 250);
     let imus: Vec<Imu> = r

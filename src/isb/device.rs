@@ -128,7 +128,8 @@ struct State {
     save_pending: bool,
     streams: Vec<Stream, MAX_STREAMS>,
     rmc_options: u32,
-    /// The integrals one tick ago (the window of a one-shot IMU/PIMU).
+    /// The integrals before the last tick (the window of a one-shot
+    /// IMU/PIMU: that tick).
     prev: Integrals,
     strobe_count: u16,
     bit: Bit,
@@ -242,9 +243,11 @@ impl Personality for Isb {
         st.parse_errors = self.input.isb_errors();
     }
 
-    /// A packet or sentence cut short ([`RX_IDLE_ABANDON_NS`] without a
-    /// byte) is dropped.
+    /// The integrals before this tick are kept (a one-shot IMU covers the
+    /// last tick); a packet or sentence cut short ([`RX_IDLE_ABANDON_NS`]
+    /// without a byte) is dropped.
     fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
+        self.st.prev = sh.chain().integrals();
         if self.input.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
             self.input.abandon();
             sh.touch_rx(now);
@@ -275,7 +278,6 @@ impl Personality for Isb {
             // Saturation is reported since the previous packet.
             let _ = sh.chain_mut().output_with(false);
         }
-        st.prev = sh.chain().integrals();
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
@@ -629,7 +631,8 @@ impl State {
             .encode()),
             did::IMU | did::IMU_RAW | did::PIMU => {
                 let w = integrals::window(&self.prev, &sh.chain().integrals(), rate(sh));
-                put(&self.windowed(sh, did, &w, now))
+                let n = windowed_len(did);
+                put(&self.windowed(sh, did, &w, now)[..n])
             }
             _ => 0,
         }
@@ -707,11 +710,7 @@ impl State {
                 let w = integrals::window(&s.start, &end, rate(sh));
                 self.streams[i].start = end;
                 let b = self.windowed(sh, s.did, &w, now);
-                let n = if s.did == did::PIMU {
-                    sets::pimu::SIZE
-                } else {
-                    sets::imu::SIZE
-                };
+                let n = windowed_len(s.did);
                 image[..n].copy_from_slice(&b[..n]);
                 n
             }
@@ -780,6 +779,15 @@ fn send_data<F: NorFlash>(sh: &mut Shell<F, Isb>, did: u8, image: &[u8], offset:
     let whole = offset == 0 && usize::from(size) == image.len();
     let n = OVERHEAD + usize::from(size) + if whole { 0 } else { 2 };
     push(sh, n, |f| message::encode_data(did, image, offset, size, f));
+}
+
+/// Bytes of a windowed data set: `pimu_t` or `imu_t`.
+fn windowed_len(did: u8) -> usize {
+    if did == did::PIMU {
+        sets::pimu::SIZE
+    } else {
+        sets::imu::SIZE
+    }
 }
 
 fn rate<F: NorFlash>(sh: &Shell<F, Isb>) -> u32 {

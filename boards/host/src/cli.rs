@@ -1,7 +1,7 @@
 //! Command line and program setup.
 //!
 //! ```text
-//! imu-emu [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
+//! imu-emu [--protocol kernel|isb] [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
 //!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
 //! ```
 //!
@@ -25,7 +25,10 @@ use anyhow::Context as _;
 use clap::Parser;
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, PowerOn};
+use imu_emu::isb::Isb;
+use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
+use imu_emu::personality::Personality;
 use imu_emu::time::Instant;
 
 use crate::clock::Speed;
@@ -40,6 +43,12 @@ pub const DEFAULT_TCP: &str = "127.0.0.1:7000";
 #[derive(Parser, Debug, Clone)]
 #[command(name = "imu-emu", version, about)]
 pub struct Args {
+    /// The device's protocol: `kernel` (an Inertial Labs KERNEL, the
+    /// default) or `isb` (an Inertial Sense IMX-5 in IMU mode speaking ISB;
+    /// `--model` does not apply, the line starts at 921 600 bit/s).
+    #[arg(long, value_name = "PROTOCOL", value_enum, default_value_t = Protocol::Kernel)]
+    pub protocol: Protocol,
+
     /// Model name or product code: K100 K102 K108 K110 K110M K120 K201 K210
     /// K220, or e.g. KERNEL-110-G2000-A8 (a bare name takes the model's
     /// first product code).
@@ -112,6 +121,15 @@ pub struct Args {
     /// device time.
     #[arg(long, value_name = "SPEED", default_value = "1")]
     pub speed: Speed,
+}
+
+/// The emulated device's protocol (`--protocol`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Protocol {
+    /// Inertial Labs KERNEL (ICD rev 1.42).
+    Kernel,
+    /// Inertial Sense IMX-5 over ISB (protocol 2.1).
+    Isb,
 }
 
 /// When the device powers on (`--power-on`).
@@ -254,16 +272,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
-    if args.pty {
-        let t = PtyTransport::open(115_200, args.link.as_deref())?;
-        serve(flash, t, args, stop)
-    } else {
-        let t = TcpTransport::bind(args.tcp.as_deref().unwrap_or(DEFAULT_TCP))?;
-        serve(flash, t, args, stop)
+    match args.protocol {
+        Protocol::Kernel => with_transport::<F, Kernel>(flash, args, stop),
+        Protocol::Isb => with_transport::<F, Isb>(flash, args, stop),
     }
 }
 
-fn serve<F: NorFlash, T: Transport>(
+fn with_transport<F: NorFlash, P: Personality>(
+    flash: F,
+    args: &Args,
+    stop: &AtomicBool,
+) -> anyhow::Result<()> {
+    if args.pty {
+        let t = PtyTransport::open(115_200, args.link.as_deref())?;
+        serve::<F, _, P>(flash, t, args, stop)
+    } else {
+        let t = TcpTransport::bind(args.tcp.as_deref().unwrap_or(DEFAULT_TCP))?;
+        serve::<F, _, P>(flash, t, args, stop)
+    }
+}
+
+fn serve<F: NorFlash, T: Transport, P: Personality>(
     flash: F,
     mut transport: T,
     args: &Args,
@@ -313,18 +342,25 @@ fn serve<F: NorFlash, T: Transport>(
         }
     }
     let epoch = std::time::Instant::now();
+    let (product, name) = match args.protocol {
+        Protocol::Kernel => (args.model, args.model.code()),
+        Protocol::Isb => (
+            Product::imx5(),
+            "IMX-5 (ISB)".try_into().unwrap_or_default(),
+        ),
+    };
     let cfg = PowerOn {
-        product: args.model,
+        product,
         boot: None,
         seed: args.seed,
     };
-    let dev = Device::power_on_with(cfg, flash, Instant::ZERO);
+    let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
-        args.model.code(),
+        name,
         dev.line_rate(),
-        args.model.model.internal_rate_hz,
+        product.model.internal_rate_hz,
         args.flash
             .as_ref()
             .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string()),

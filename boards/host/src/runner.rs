@@ -37,6 +37,8 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
+use imu_emu::kernel::Kernel;
+use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
@@ -84,8 +86,8 @@ pub struct Stats {
 }
 
 /// The board: a device, the shared schedule, a transport and the pins.
-pub struct Runner<F: NorFlash, T: Transport> {
-    dev: Device<F>,
+pub struct Runner<F: NorFlash, T: Transport, P: Personality = Kernel> {
+    dev: Device<F, P>,
     sched: Box<Schedule<CHUNK>>,
     io: HostPort<T>,
     clock: Clock,
@@ -110,7 +112,7 @@ struct HostPort<T: Transport> {
     trajectory: Option<Trajectory>,
 }
 
-impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
+impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
     type Error = anyhow::Error;
 
     fn tx_room(&mut self) -> usize {
@@ -146,7 +148,7 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
         Ok(())
     }
 
-    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> anyhow::Result<()> {
+    fn before_tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
         let deadline = deadline.as_nanos();
         while let Some(pps) = self.next_pps_ns.filter(|&p| p <= deadline) {
             dev.on_pin(Pin::Pps, Level::High, Instant::from_nanos(pps));
@@ -155,7 +157,7 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
         Ok(())
     }
 
-    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> anyhow::Result<()> {
+    fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
         if let Some(t) = self.trajectory.as_mut() {
             let truth = t.at(deadline.as_nanos() as f64 * 1e-9);
             dev.chain_mut().set_motion(Motion::Sample(truth));
@@ -164,7 +166,7 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
         Ok(())
     }
 
-    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> anyhow::Result<()> {
+    fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> anyhow::Result<()> {
         if let Some(ctl) = self.control.as_mut() {
             ctl.poll(&mut |cmd| {
                 match cmd {
@@ -180,10 +182,10 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
     }
 }
 
-impl<F: NorFlash, T: Transport> Runner<F, T> {
+impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
     /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
     /// time ([`Runner::with_speed`] changes that).
-    pub fn new(dev: Device<F>, transport: T, epoch: std::time::Instant) -> Self {
+    pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
         let sched = Box::new(Schedule::new(&dev));
         Runner {
             dev,
@@ -229,7 +231,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     }
 
     /// The device.
-    pub fn device(&self) -> &Device<F> {
+    pub fn device(&self) -> &Device<F, P> {
         &self.dev
     }
 
@@ -248,7 +250,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     }
 
     /// Gives the device back (e.g. to inspect its flash).
-    pub fn into_device(self) -> Device<F> {
+    pub fn into_device(self) -> Device<F, P> {
         self.dev
     }
 
