@@ -529,3 +529,87 @@ fn saturation_reaches_the_status_words() {
     assert_ne!(sp.hdw_status & hdw_status::SATURATION_GYR, 0);
     assert_eq!(sys_params::SIZE, 64);
 }
+
+/// The chain's injected faults reach the ISB status words: a sensor
+/// communication failure clears the IMU's axis-OK bits and raises the
+/// critical-fault bit of hdwStatus; over-temperature sets its bit.
+#[test]
+fn injected_faults_reach_the_status_words() {
+    let mut b = Bench::new();
+    b.dev.chain_mut().faults_mut().sensor_comm = true;
+    b.dev.chain_mut().faults_mut().temperature_c = Some(99.0);
+    b.run_ticks(1);
+    let imu = Imu::decode(&b.get_once(did::IMU).try_into().unwrap());
+    assert_eq!(imu.status & imu_status::ALL_OK, 0);
+    let sp = b.sys_params();
+    assert_ne!(sp.hdw_status & hdw_status::FAULT_SYS_CRITICAL, 0);
+    assert_ne!(sp.hdw_status & hdw_status::ERR_TEMPERATURE, 0);
+    assert_eq!(sp.imu_temp, 99.0);
+    *b.dev.chain_mut().faults_mut() = Default::default();
+    b.run_ticks(1);
+    let imu = Imu::decode(&b.get_once(did::IMU).try_into().unwrap());
+    assert_eq!(imu.status, imu_status::ALL_OK);
+}
+
+/// BIT: writing a command runs the test at once; the result follows the
+/// chain's gyro BIT fault.
+#[test]
+fn bit_runs_on_command() {
+    use imu_emu::isb::sets::{bit, Bit};
+    let mut b = Bench::new();
+    let r = b.send(&set(did::BIT, 0, &[bit::CMD_BASIC_MOVING, 0, 0, 0]));
+    assert_eq!(r[0].flags, 1);
+    let res = Bit::decode(&b.get_once(did::BIT).try_into().unwrap());
+    assert_eq!((res.state, res.last_command), (bit::STATE_DONE, 3));
+    assert_eq!(res.hdw_bit_status, bit::HDW_PASSED_NO_GPS);
+    assert_ne!(b.sys_params().hdw_status & hdw_status::BIT_PASSED, 0);
+    b.dev.chain_mut().faults_mut().gyro_bit = true;
+    // A write of the command byte alone (the others are the result,
+    // read-only: a SET changing them would be refused).
+    let r = b.send(&set(did::BIT, 0, &[bit::CMD_FULL_STATIONARY]));
+    assert_eq!(r[0].flags, 1);
+    let res = Bit::decode(&b.get_once(did::BIT).try_into().unwrap());
+    assert_eq!(res.hdw_bit_status, bit::HDW_FAULT_NOISE_PQR);
+    assert_eq!(
+        b.sys_params().hdw_status & hdw_status::BIT_MASK,
+        hdw_status::BIT_FAILED
+    );
+}
+
+/// The line starts at `ser0BaudRate` (921 600 by default) and follows a
+/// new value after a software reset, not before.
+#[test]
+fn the_line_follows_ser0_baud_rate_after_a_reset() {
+    let mut b = Bench::new();
+    assert_eq!(b.dev.line_rate(), 921_600);
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::SER0_BAUD_RATE as u16,
+        &230_400u32.to_le_bytes(),
+    ));
+    b.run_ticks(2);
+    assert_eq!(b.dev.line_rate(), 921_600, "applies after a reset");
+    assert_ne!(
+        b.sys_params().hdw_status & hdw_status::SYSTEM_RESET_REQUIRED,
+        0
+    );
+    b.send(b"$SRST*06\r\n");
+    b.run_ticks(1);
+    assert_eq!(b.dev.line_rate(), 230_400);
+    assert_eq!(
+        b.sys_params().hdw_status & hdw_status::SYSTEM_RESET_REQUIRED,
+        0
+    );
+}
+
+/// IMU_RAW streams every `startupImuDtMs` (1 ms by default) multiple.
+#[test]
+fn imu_raw_streams_every_imu_period() {
+    let mut b = Bench::new();
+    b.send(&get(did::IMU_RAW, 3));
+    let r = b.run_ticks(600);
+    assert_eq!(r.len(), 100, "every 3 ms");
+    assert!(r
+        .iter()
+        .all(|p| p.did == did::IMU_RAW && p.payload.len() == 36));
+}
