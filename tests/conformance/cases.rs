@@ -244,7 +244,7 @@ pub fn k201_ticks_at_4_khz(kind: Kind) {
     let counters = frames_with_counter(c, GA, 101, 24);
     assert!(
         counters.windows(2).all(|w| w[1].wrapping_sub(w[0]) == 20),
-        "counter steps at 100 Hz: {counters:?}"
+        "counters at 100 Hz: {counters:?}"
     );
     let next = ga_frame(c);
     let mut prev = ga_frame(c);
