@@ -6,7 +6,8 @@ use std::thread::sleep;
 use std::time::{Duration, Instant};
 
 use crate::support::{
-    ack_of, command, count_for, frame, hex, read_ram, save, save_flash, sum16, Conn, Frame,
+    ack_of, assert_rate, bytes_per_device_second, command, count_for, device_span, device_times,
+    frame, frames_with_counter, hex, read_ram, save, save_flash, sum16, Conn, DeviceClock, Frame,
 };
 use crate::target::{Dut, Kind, Opts};
 
@@ -164,15 +165,15 @@ pub fn every_fixed_format_streams_its_frame_at_the_data_rate(kind: Kind) {
     let c = &mut d.c;
     save(c, ALIGN_TIME, &0u16.to_le_bytes());
     save(c, DATA_RATE, &200u16.to_le_bytes());
-    // (code, payload) of Tables 5.5–5.12.
-    for (code, len) in [
-        (0x33u8, 34usize),
-        (0x8F, 32),
-        (0x9B, 32),
-        (0xA5, 44),
-        (0xA6, 44),
-        (0x82, 34),
-        (0x81, 52),
+    // (code, payload, the device clock it carries) of Tables 5.5–5.12.
+    for (code, len, clock) in [
+        (0x33u8, 34usize, None),
+        (0x8F, 32, Some(DeviceClock::Counter(24))),
+        (0x9B, 32, Some(DeviceClock::SecondFraction(26))),
+        (0xA5, 44, None),
+        (0xA6, 44, Some(DeviceClock::SecondFraction(38))),
+        (0x82, 34, None),
+        (0x81, 52, Some(DeviceClock::Counter(42))),
     ] {
         let cmd = command(code);
         c.send(&cmd);
@@ -180,14 +181,23 @@ pub fn every_fixed_format_streams_its_frame_at_the_data_rate(kind: Kind) {
         let f = c.frame();
         assert_eq!((f.id(), f.payload().len()), (code, len), "{:02X?}", f.bytes);
         let window = Duration::from_millis(500);
-        let (frames, _) = count_for(c, code, window);
-        let rate = formula_5_1(200, 115_200, len as u32) as f64;
-        let want = rate * window.as_secs_f64();
-        eprintln!("{code:#04x}: {frames} frames in {window:?} (expect {want})");
-        assert!(
-            (frames as f64) >= want * 0.8 && (frames as f64) <= want * 1.2 + 1.0,
-            "{code:#04x}: {frames} frames in {window:?}, expected about {want}"
-        );
+        let rate = formula_5_1(200, 115_200, len as u32);
+        if let Some(clock) = clock {
+            // Half a second of device time: every step exactly one period.
+            let n = rate as usize / 2 + 1;
+            let stamps = device_times(c, code, n, clock);
+            assert_rate(&format!("{code:#04x}"), &stamps, clock, rate.into());
+        } else {
+            // Orientation, GAA and Quaternion carry no counter or time:
+            // frames counted in a wall-clock window.
+            let (frames, _) = count_for(c, code, window);
+            let want = f64::from(rate) * window.as_secs_f64();
+            eprintln!("{code:#04x}: {frames} frames in {window:?} (expect {want})");
+            assert!(
+                (frames as f64) >= want * 0.8 && (frames as f64) <= want * 1.2 + 1.0,
+                "{code:#04x}: {frames} frames in {window:?}, expected about {want}"
+            );
+        }
         c.send(&command(STOP));
         c.drain_for(Duration::from_millis(150));
     }
@@ -198,9 +208,9 @@ pub fn ga_streams_at_the_default_100_hz_and_stop_stops_it(kind: Kind) {
     let c = &mut d.c;
     start_ga(c);
     ga_frame(c);
-    let (frames, _) = count_for(c, GA, Duration::from_secs(1));
-    eprintln!("{frames} GA frames in 1 s");
-    assert!((90..=110).contains(&frames), "{frames} GA frames in 1 s");
+    // One second of device time at 100 Hz: 2 kHz counter steps of 20.
+    let clock = DeviceClock::Counter(24);
+    assert_rate("GA", &device_times(c, GA, 101, clock), clock, 100);
     assert_eq!(c.bad, 0);
 
     c.send(&command(STOP));
@@ -230,8 +240,12 @@ pub fn k201_ticks_at_4_khz(kind: Kind) {
     let c = &mut d.c;
     start_ga(c);
     let first = ga_frame(c);
-    let (frames, _) = count_for(c, GA, Duration::from_secs(1));
-    assert!((90..=110).contains(&frames), "{frames} GA frames in 1 s");
+    // One second of device time at 100 Hz.
+    let counters = frames_with_counter(c, GA, 101, 24);
+    assert!(
+        counters.windows(2).all(|w| w[1].wrapping_sub(w[0]) == 20),
+        "counters at 100 Hz: {counters:?}"
+    );
     let next = ga_frame(c);
     let mut prev = ga_frame(c);
     for _ in 0..5 {
@@ -298,8 +312,10 @@ pub fn udd_config_is_answered_read_back_streamed_and_persisted(kind: Kind) {
     assert_eq!(f.id(), UDD);
     assert_eq!(f.payload().len(), payload_len);
     assert_eq!(&f.payload()[..list.len()], &list[..]);
-    let (frames, _) = count_for(c, UDD, Duration::from_millis(500));
-    assert!((40..=60).contains(&frames), "{frames} UDD frames in 0.5 s");
+    // Half a second of device time at the default 100 Hz, by the IMU time
+    // (type 0x02, right after the type list): steps of exactly 10 ms.
+    let clock = DeviceClock::ImuTime(list.len());
+    assert_rate("UDD", &device_times(c, UDD, 51, clock), clock, 100);
     c.send(&command(STOP));
 
     // Accepted configurations are persisted.
@@ -393,7 +409,8 @@ pub fn commit_baud_rate_4800_caps_the_rate_and_the_throughput(kind: Kind) {
     c.drain_for(Duration::from_millis(200));
 
     // The line is paced at 4800 bit/s: the 174-byte GetDevInfo reply takes
-    // 362 ms on the wire (less a burst of at most 64 bytes: ≥ 229 ms).
+    // 362 ms on the wire (less a burst of at most 64 bytes: ≥ 229 ms). A
+    // reply carries no device time: measured on the wall clock.
     let t0 = Instant::now();
     get_dev_info_round_trip(c);
     let took = t0.elapsed();
@@ -403,14 +420,14 @@ pub fn commit_baud_rate_4800_caps_the_rate_and_the_throughput(kind: Kind) {
 
     start_ga(c);
     ga_frame(c);
-    let window = Duration::from_millis(1500);
-    let (frames, bytes) = count_for(c, GA, window);
     // Formula 5.1: 4800 / (11 × 40) = 10.9 → 10 Hz; the line carries at
-    // most 480 bytes/s.
-    let per_s = bytes as f64 / window.as_secs_f64();
-    eprintln!("4800 bit/s: {frames} GA frames, {bytes} bytes in 1.5 s");
-    assert!(per_s <= 500.0, "{bytes} bytes in 1.5 s = {per_s:.0} B/s");
-    assert!((12..=18).contains(&frames), "{frames} GA frames in 1.5 s");
+    // most 480 bytes/s. Over 1.5 s of device time (the 2 kHz counter).
+    let clock = DeviceClock::Counter(24);
+    let stamps = device_times(c, GA, 16, clock);
+    assert_rate("GA at 4800 bit/s", &stamps, clock, 10);
+    let per_s = bytes_per_device_second(&stamps, clock);
+    eprintln!("4800 bit/s: GA at 10 Hz, {per_s:.0} B per device second");
+    assert!(per_s <= 500.0, "{per_s:.0} B per device second");
 }
 
 pub fn two_megabaud_carries_ga_at_2000_hz(kind: Kind) {
@@ -420,10 +437,13 @@ pub fn two_megabaud_carries_ga_at_2000_hz(kind: Kind) {
     save(c, DATA_RATE, &2000u16.to_le_bytes());
     start_ga(c);
     ga_frame(c);
-    let window = Duration::from_secs(1);
-    let (frames, bytes) = count_for(c, GA, window);
-    eprintln!("2 Mbit/s: {frames} GA frames, {bytes} bytes in 1 s");
-    assert!((1700..=2300).contains(&frames), "{frames} GA frames in 1 s");
+    // One second of device time (the 2 kHz counter): a step of 1 each.
+    let clock = DeviceClock::Counter(24);
+    let stamps = device_times(c, GA, 2001, clock);
+    assert_eq!(device_span(&stamps, clock), 2000);
+    assert_rate("GA at 2 Mbit/s", &stamps, clock, 2000);
+    let bytes: usize = stamps[1..].iter().map(|s| s.len).sum();
+    eprintln!("2 Mbit/s: 2000 GA frames, {bytes} bytes in 1 s of device time");
     assert!(bytes <= 210_000, "{bytes} bytes in 1 s at 2 Mbit/s");
     assert_eq!(c.bad, 0);
 }

@@ -10,7 +10,10 @@ mod support;
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
-use support::{command, read_ram, save, Conn, Control, Emu, Frame};
+use support::{
+    assert_rate, bytes_per_device_second, command, device_times, read_ram, save, Conn, Control,
+    DeviceClock, Emu, Frame,
+};
 
 const DATA_RATE: u16 = 0x0012;
 const ALIGN_TIME: u16 = 0x0014;
@@ -27,8 +30,25 @@ fn set_baud(c: &mut Conn, code: u8) {
     assert_eq!(c.frame_with_id(0xB1).payload(), &[code]);
 }
 
+/// The device clock the frames of data command `code` carry, if any: the
+/// 2 kHz counter of GA and Calibrated HR, the second fraction of GAm and
+/// GAAm, the IMU time of the factory UDD (type 0x02 after the 1 + 5 bytes
+/// of its type list).
+fn clock_of(code: u8) -> Option<DeviceClock> {
+    match code {
+        0x8F => Some(DeviceClock::Counter(24)),
+        0x81 => Some(DeviceClock::Counter(42)),
+        0x9B => Some(DeviceClock::SecondFraction(26)),
+        0xA6 => Some(DeviceClock::SecondFraction(38)),
+        0x95 => Some(DeviceClock::ImuTime(6)),
+        _ => None,
+    }
+}
+
 /// Counts frames with `id` (checking their payload length) arriving in a
-/// window of `secs` after `settle`, and the bytes received in the window.
+/// window of `secs` after `settle`, and the bytes received in the window:
+/// for the formats that carry no device clock (Orientation, Quaternion,
+/// GAA), a wall-clock measure.
 fn measure(
     c: &mut Conn,
     id: u8,
@@ -176,6 +196,23 @@ fn every_format_streams_at_the_icd_rate_for_its_baud_rate() {
                     c.send(&command(code));
                     let ack = c.frame_with_id(code);
                     assert_eq!(ack.payload(), &command(code)[7..9]);
+                    if let Some(clock) = clock_of(code) {
+                        // One second of device time: `expect` frames, each
+                        // exactly one period after the last.
+                        let stamps = device_times(&mut c, code, expect + 1, clock);
+                        assert!(
+                            stamps.iter().all(|s| s.len == payload + 8),
+                            "frame length of {code:02X}"
+                        );
+                        let what = format!("{model} {code:02X} at {baud} bps, Data_Rate {rate}");
+                        assert_rate(&what, &stamps, clock, expect as u64);
+                        let bytes = bytes_per_device_second(&stamps, clock);
+                        assert!(
+                            bytes <= f64::from(baud / 10 + 128),
+                            "{bytes} B per device second exceeds the line at {baud} bps"
+                        );
+                        return;
+                    }
                     let (frames, bytes) = measure(&mut c, code, payload, Duration::from_millis(300), 1.0);
                     let tol = (expect / 20).max(2);
                     assert!(
@@ -203,9 +240,13 @@ fn a_slow_baud_rate_really_limits_the_line() {
     set_baud(&mut c, 0x02);
     c.send(&command(0x8F));
     c.frame_with_id(0x8F);
-    let (frames, bytes) = measure(&mut c, 0x8F, 32, Duration::from_millis(300), 2.0);
-    assert!(frames.abs_diff(40) <= 2, "{frames} frames in 2 s");
-    assert!(bytes <= 2 * 960 + 64, "{bytes} bytes in 2 s");
+    // Two seconds of device time (the 2 kHz counter): 40 frames.
+    let clock = DeviceClock::Counter(24);
+    let stamps = device_times(&mut c, 0x8F, 41, clock);
+    assert!(stamps.iter().all(|s| s.len == 40), "GA frame length");
+    assert_rate("GA at 9600 bps", &stamps, clock, 20);
+    let bytes = 2.0 * bytes_per_device_second(&stamps, clock);
+    assert!(bytes <= 2.0 * 960.0 + 64.0, "{bytes} bytes in 2 s");
 }
 
 /// A free local port for `--control`.
@@ -273,16 +314,23 @@ fn pps_generator_flags_one_frame_each_second() {
     let mut c = emu.connect();
     c.send(&command(0x9B));
     c.frame_with_id(0x9B);
-    let end = Instant::now() + Duration::from_millis(2600);
-    let mut flagged = 0;
-    let mut frames = 0;
-    while let Some(f) = c.frame_before(end) {
-        frames += 1;
-        if u16_at(f.payload(), 24) & 0x0001 != 0 {
-            flagged += 1;
-        }
-    }
-    assert!(frames > 200);
+    // 2.6 s of device time at 100 Hz, by the second fraction (the
+    // generator's edges fall on whole device seconds, so it steps by
+    // exactly 10 ms across them too).
+    let fs = frames(&mut c, 0x9B, 261);
+    let clock = DeviceClock::SecondFraction(26);
+    let stamps: Vec<_> = fs
+        .iter()
+        .map(|f| support::Stamp {
+            time: clock.read(f.payload()),
+            len: f.bytes.len(),
+        })
+        .collect();
+    assert_rate("GAm with --pps", &stamps, clock, 100);
+    let flagged = fs[1..]
+        .iter()
+        .filter(|f| u16_at(f.payload(), 24) & 0x0001 != 0)
+        .count();
     assert!(
         (2..=3).contains(&flagged),
         "{flagged} frames flagged with 1PPS in 2.6 s"

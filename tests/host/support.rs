@@ -467,3 +467,142 @@ impl Control {
         }
     }
 }
+
+/// A device clock carried in a frame's payload, at a byte offset: what the
+/// rate and timing tests measure with instead of a wall-clock window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeviceClock {
+    /// The 2 kHz counter, u16 (Tables 5.7 and 5.10; wraps at 2^16).
+    Counter(usize),
+    /// The second fraction, u32 ns within the second (5.2.3.1, Tables
+    /// 5.8 and 5.12, UDD 0x05; wraps at 10^9).
+    SecondFraction(usize),
+    /// IMU time, u64 ns since power-on (UDD 0x02, Table 5.17).
+    ImuTime(usize),
+}
+
+impl DeviceClock {
+    /// Its reading in `payload`.
+    pub fn read(self, payload: &[u8]) -> u64 {
+        let at = |i: usize, n: usize| {
+            let mut b = [0u8; 8];
+            b[..n].copy_from_slice(&payload[i..i + n]);
+            u64::from_le_bytes(b)
+        };
+        match self {
+            DeviceClock::Counter(i) => at(i, 2),
+            DeviceClock::SecondFraction(i) => at(i, 4),
+            DeviceClock::ImuTime(i) => at(i, 8),
+        }
+    }
+
+    /// Counts per device second.
+    pub fn per_second(self) -> u64 {
+        match self {
+            DeviceClock::Counter(_) => 2000,
+            DeviceClock::SecondFraction(_) | DeviceClock::ImuTime(_) => 1_000_000_000,
+        }
+    }
+
+    /// Where it wraps.
+    fn modulus(self) -> u128 {
+        match self {
+            DeviceClock::Counter(_) => 1 << 16,
+            DeviceClock::SecondFraction(_) => 1_000_000_000,
+            DeviceClock::ImuTime(_) => 1 << 64,
+        }
+    }
+
+    /// `later − earlier` in counts, across a wrap.
+    pub fn step(self, earlier: u64, later: u64) -> u64 {
+        let m = self.modulus();
+        ((u128::from(later) + m - u128::from(earlier)) % m) as u64
+    }
+}
+
+/// One frame's device time and its length on the wire.
+#[derive(Debug, Clone, Copy)]
+pub struct Stamp {
+    /// The frame's [`DeviceClock`] reading.
+    pub time: u64,
+    /// The whole frame's bytes.
+    pub len: usize,
+}
+
+/// The next `n` frames, which must all have `id` (any other frame fails,
+/// as in [`count_for`]), stamped with `clock`.
+pub fn device_times(c: &mut Conn, id: u8, n: usize, clock: DeviceClock) -> Vec<Stamp> {
+    (0..n)
+        .map(|_| {
+            let f = c.frame();
+            assert_eq!(f.id(), id, "{:02X?}", f.bytes);
+            Stamp {
+                time: clock.read(f.payload()),
+                len: f.bytes.len(),
+            }
+        })
+        .collect()
+}
+
+/// The 2 kHz counter of the next `n` frames with `id`, a u16 at payload
+/// offset `counter_offset` ([`device_times`] with [`DeviceClock::Counter`]).
+pub fn frames_with_counter(c: &mut Conn, id: u8, n: usize, counter_offset: usize) -> Vec<u16> {
+    device_times(c, id, n, DeviceClock::Counter(counter_offset))
+        .iter()
+        .map(|s| s.time as u16)
+        .collect()
+}
+
+/// Asserts that `stamps` (consecutive frames) came at exactly `rate` Hz of
+/// device time: every step between neighbours is `per_second / rate`
+/// counts, no gap, no repeat. Where that is not whole (the 2 kHz counter
+/// under a 4 kHz K201 stream) every run of `rate / gcd` frames spans exactly
+/// `per_second / gcd` counts and no single step exceeds its share rounded
+/// up. So the frames per device second equal `rate` exactly.
+pub fn assert_rate(what: &str, stamps: &[Stamp], clock: DeviceClock, rate: u64) {
+    assert!(stamps.len() >= 2, "{what}: {} frames", stamps.len());
+    let per_s = clock.per_second();
+    let g = gcd(per_s, rate);
+    let (frames, counts) = (rate / g, per_s / g);
+    let most = per_s.div_ceil(rate);
+    let steps: Vec<u64> = stamps
+        .windows(2)
+        .map(|w| clock.step(w[0].time, w[1].time))
+        .collect();
+    for (i, s) in steps.iter().enumerate() {
+        assert!(
+            *s <= most && (frames > 1 || *s == counts),
+            "{what}: step {s} at frame {i} ({rate} Hz is {counts}/{frames} counts of \
+             {per_s}/s): {:?}",
+            &steps[i.saturating_sub(3)..(i + 4).min(steps.len())]
+        );
+    }
+    for (i, w) in steps.windows(frames as usize).enumerate() {
+        let span: u64 = w.iter().sum();
+        assert_eq!(span, counts, "{what}: {frames} steps from frame {i}");
+    }
+}
+
+/// Device time from the first to the last of `stamps` in counts of
+/// `clock` (each step across its wrap).
+pub fn device_span(stamps: &[Stamp], clock: DeviceClock) -> u64 {
+    stamps
+        .windows(2)
+        .map(|w| clock.step(w[0].time, w[1].time))
+        .sum()
+}
+
+/// Bytes the frames after the first carried per second of device time
+/// (the line's throughput measured on the device's clock).
+pub fn bytes_per_device_second(stamps: &[Stamp], clock: DeviceClock) -> f64 {
+    let bytes: usize = stamps.iter().skip(1).map(|s| s.len).sum();
+    bytes as f64 * clock.per_second() as f64 / device_span(stamps, clock) as f64
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
