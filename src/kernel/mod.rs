@@ -2,6 +2,7 @@
 
 pub mod block;
 pub mod command;
+pub mod decode;
 pub mod device;
 pub mod fields;
 pub mod formats;
