@@ -29,27 +29,32 @@ use super::formats::{FORMATS, UDD};
 use super::frame::{Frame, TYPE_DATA};
 use super::udd::UDD_TYPES;
 
-/// Marks a code with no row in [`CODE_ROW`] / [`UDD_ROW`].
-const NO_ROW: u8 = u8::MAX;
-
-/// Row in [`FORMATS`] of each data command code ([`NO_ROW`] if none):
-/// built from the table at compile time, so a lookup is one load.
-static CODE_ROW: [u8; 256] = {
-    let mut t = [NO_ROW; 256];
+/// The fixed format of each data command code: its fields and payload
+/// length, built from [`FORMATS`] at compile time (one load a frame).
+static FORMAT_OF: [Option<(&[Field], u16)>; 256] = {
+    let mut t: [Option<(&[Field], u16)>; 256] = [None; 256];
     let mut i = 0;
     while i < FORMATS.len() {
-        t[FORMATS[i].code as usize] = i as u8;
+        let fields = FORMATS[i].fields;
+        let mut len = 0;
+        let mut j = 0;
+        while j < fields.len() {
+            len += fields[j].size();
+            j += 1;
+        }
+        t[FORMATS[i].code as usize] = Some((fields, len as u16));
         i += 1;
     }
     t
 };
 
-/// Row in [`UDD_TYPES`] of each UDD type code ([`NO_ROW`] if none).
-static UDD_ROW: [u8; 256] = {
-    let mut t = [NO_ROW; 256];
+/// The field of each UDD type code, built from [`UDD_TYPES`] at compile
+/// time.
+static UDD_FIELD: [Option<Field>; 256] = {
+    let mut t = [None; 256];
     let mut i = 0;
     while i < UDD_TYPES.len() {
-        t[UDD_TYPES[i].code as usize] = i as u8;
+        t[UDD_TYPES[i].code as usize] = Some(UDD_TYPES[i].field);
         i += 1;
     }
     t
@@ -58,9 +63,7 @@ static UDD_ROW: [u8; 256] = {
 /// The field of UDD type `code` (Table 5.15), if it is one.
 #[inline]
 pub fn udd_field(code: u8) -> Option<Field> {
-    UDD_TYPES
-        .get(usize::from(UDD_ROW[usize::from(code)]))
-        .map(|t| t.field)
+    UDD_FIELD[usize::from(code)]
 }
 
 /// Why a payload could not be decoded.
@@ -119,6 +122,7 @@ impl Iterator for Fields<'_> {
 /// Tables 5.5–5.12, or UDD, Table 5.13: `N`, `N` type codes, their fields),
 /// after checking its layout and exact length. `scales` are the product's
 /// KG and KA (Table 5.6), used by the 16-bit gyro and accelerometer fields.
+#[inline]
 pub fn payload(id: u8, payload: &[u8], scales: Scales) -> Result<Fields<'_>, DecodeError> {
     if id == UDD {
         let (&n, rest) = payload.split_first().ok_or(DecodeError::UddHeader)?;
@@ -143,10 +147,8 @@ pub fn payload(id: u8, payload: &[u8], scales: Scales) -> Result<Fields<'_>, Dec
             scales,
         });
     }
-    let spec = FORMATS
-        .get(usize::from(CODE_ROW[usize::from(id)]))
-        .ok_or(DecodeError::UnknownId(id))?;
-    let expected = spec.payload_len();
+    let (fields, len) = FORMAT_OF[usize::from(id)].ok_or(DecodeError::UnknownId(id))?;
+    let expected = usize::from(len);
     if payload.len() != expected {
         return Err(DecodeError::Length {
             expected,
@@ -154,13 +156,14 @@ pub fn payload(id: u8, payload: &[u8], scales: Scales) -> Result<Fields<'_>, Dec
         });
     }
     Ok(Fields {
-        kinds: Kinds::Fixed(spec.fields.iter()),
+        kinds: Kinds::Fixed(fields.iter()),
         data: payload,
         scales,
     })
 }
 
 /// [`payload`] of a decoded data frame ([`super::frame::Decoder`]).
+#[inline]
 pub fn frame<'a>(frame: &Frame<'a>, scales: Scales) -> Result<Fields<'a>, DecodeError> {
     if frame.msg_type != TYPE_DATA {
         return Err(DecodeError::NotData(frame.msg_type));
