@@ -25,6 +25,12 @@ pub struct TcpTransport {
     local: SocketAddr,
     client: Option<(TcpStream, SocketAddr)>,
     backlog: Backlog,
+    /// A connection may be waiting: the last `wait` saw the listener
+    /// readable (or no `wait` ran since the last accept). Otherwise
+    /// `receive` makes no `accept` call: one syscall less a pass.
+    listener_ready: bool,
+    /// The client may have sent bytes (or closed): as above, for `read`.
+    client_ready: bool,
 }
 
 impl TcpTransport {
@@ -38,6 +44,8 @@ impl TcpTransport {
             local,
             client: None,
             backlog: Backlog::default(),
+            listener_ready: true,
+            client_ready: true,
         })
     }
 
@@ -53,6 +61,7 @@ impl TcpTransport {
                     stream.set_nonblocking(true)?;
                     // Small frames should leave at once, like bytes on a wire.
                     stream.set_nodelay(true)?;
+                    self.client_ready = true;
                     if let Some((_, old)) = self.client.replace((stream, peer)) {
                         eprintln!("imu-emu: client {old} replaced by {peer}");
                     } else {
@@ -102,19 +111,34 @@ impl Transport for TcpTransport {
             }
             fds.push(PollFd::new(stream.as_fd(), ev));
         }
-        poll_fds(&mut fds, timeout)
+        poll_fds(&mut fds, timeout)?;
+        // Level-triggered: what is not seen now is seen at the next wait.
+        let ready = |fd: &PollFd<'_>| {
+            fd.revents().is_some_and(|r| {
+                r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP | PollFlags::POLLERR)
+            })
+        };
+        self.listener_ready = ready(&fds[0]);
+        self.client_ready = fds.get(1).is_some_and(ready);
+        Ok(())
     }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let had = self.client.as_ref().map(|(_, p)| *p);
-        self.accept_all()?;
+        if self.listener_ready {
+            self.accept_all()?;
+            self.listener_ready = false;
+        }
         if self.client.as_ref().map(|(_, p)| *p) != had {
             // A new client: hand it what was queued meanwhile.
             self.flush()?;
         }
         let mut buf = [0u8; 4096];
         let mut got = 0;
-        while let Some((stream, _)) = &mut self.client {
+        while self.client_ready {
+            let Some((stream, _)) = &mut self.client else {
+                break;
+            };
             let want = (max - got).min(buf.len());
             if want == 0 {
                 break;
@@ -125,7 +149,10 @@ impl Transport for TcpTransport {
                     got += n;
                     sink(&buf[..n]);
                 }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    self.client_ready = false;
+                    break;
+                }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(e) => self.drop_client(&format!("dropped: {e}")),
             }
