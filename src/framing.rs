@@ -94,12 +94,15 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     /// taken. (Each protocol adds a typed reader on top: `next_frame`,
     /// `next_packet`.)
     ///
-    /// While no bytes of a candidate are held, packets are found in `input`
-    /// itself and returned borrowing it (no copy); only a candidate cut at
-    /// the end of `input` is kept in the buffer. The packets found are the
-    /// same either way.
+    /// On 64-bit hosts, while no bytes of a candidate are held, packets are
+    /// found in `input` itself and returned borrowing it (no copy); only a
+    /// candidate cut at the end of `input` is kept in the buffer. The
+    /// packets found are the same either way.
     pub fn next_raw<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<&'r [u8]> {
         self.skip_consumed();
+        // Hosts only: the firmware's decoder sees a few bytes at a time,
+        // and its flash has no room for a second path (RP2040).
+        #[cfg(target_pointer_width = "64")]
         if self.start == self.end {
             // Nothing held: scan the input in place.
             let bytes: &'i [u8] = input;

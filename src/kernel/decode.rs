@@ -195,7 +195,7 @@ mod tests {
         fn f32(&mut self, range: f32) -> f32 {
             let u = (self.u64() >> 40) as f32 / (1u64 << 24) as f32; // [0, 1)
             let x = (u * 2.0 - 1.0) * range;
-            if self.u64() % 16 == 0 {
+            if self.u64().is_multiple_of(16) {
                 x * 1e4
             } else {
                 x

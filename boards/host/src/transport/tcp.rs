@@ -85,6 +85,12 @@ impl TcpTransport {
     }
 }
 
+/// Whether the last poll saw `fd` readable, hung up or in error.
+fn readable(fd: &PollFd<'_>) -> bool {
+    fd.revents()
+        .is_some_and(|r| r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP | PollFlags::POLLERR))
+}
+
 fn is_transient_accept_error(e: &io::Error) -> bool {
     matches!(
         e.kind(),
@@ -113,13 +119,8 @@ impl Transport for TcpTransport {
         }
         poll_fds(&mut fds, timeout)?;
         // Level-triggered: what is not seen now is seen at the next wait.
-        let ready = |fd: &PollFd<'_>| {
-            fd.revents().is_some_and(|r| {
-                r.intersects(PollFlags::POLLIN | PollFlags::POLLHUP | PollFlags::POLLERR)
-            })
-        };
-        self.listener_ready = ready(&fds[0]);
-        self.client_ready = fds.get(1).is_some_and(ready);
+        self.listener_ready = fds.first().is_some_and(readable);
+        self.client_ready = fds.get(1).is_some_and(readable);
         Ok(())
     }
 
