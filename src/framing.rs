@@ -93,12 +93,43 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     /// Call in a loop until it returns `None`; then all of `input` has been
     /// taken. (Each protocol adds a typed reader on top: `next_frame`,
     /// `next_packet`.)
-    pub fn next_raw<'s>(&'s mut self, input: &mut &[u8]) -> Option<&'s [u8]> {
+    ///
+    /// On 64-bit hosts, while no bytes of a candidate are held, packets are
+    /// found in `input` itself and returned borrowing it (no copy); only a
+    /// candidate cut at the end of `input` is kept in the buffer. The
+    /// packets found are the same either way.
+    pub fn next_raw<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<&'r [u8]> {
         self.skip_consumed();
+        // Hosts only: the firmware's decoder sees a few bytes at a time,
+        // and its flash has no room for a second path (RP2040).
+        #[cfg(target_pointer_width = "64")]
+        if self.start == self.end {
+            // Nothing held: scan the input in place.
+            let bytes: &'i [u8] = input;
+            match scan::<F>(bytes, CAP, &mut self.errors) {
+                Scan::Found { at, total } => {
+                    *input = &bytes[at + total..];
+                    return Some(&bytes[at..at + total]);
+                }
+                Scan::NeedMore { at } => {
+                    // What is left is a candidate shorter than CAP.
+                    let rest = &bytes[at..];
+                    let n = rest.len().min(CAP);
+                    self.buf[..n].copy_from_slice(&rest[..n]);
+                    self.start = 0;
+                    self.end = n;
+                    *input = &rest[n..];
+                }
+            }
+        }
         loop {
-            if let Some(total) = self.scan() {
-                self.consumed = total;
-                return Some(&self.buf[self.start..self.start + total]);
+            match scan::<F>(&self.buf[self.start..self.end], CAP, &mut self.errors) {
+                Scan::Found { at, total } => {
+                    self.start += at;
+                    self.consumed = total;
+                    return Some(&self.buf[self.start..self.start + total]);
+                }
+                Scan::NeedMore { at } => self.start += at,
             }
             if input.is_empty() {
                 return None;
@@ -116,52 +147,75 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
             *input = &input[n..];
         }
     }
+}
 
-    /// Advances `start` past garbage and bad candidates; the total length of
-    /// a complete valid packet at `start`, or `None` if more bytes are
-    /// needed.
-    fn scan(&mut self) -> Option<usize> {
-        loop {
-            let avail = &self.buf[self.start..self.end];
-            match avail.iter().position(|&b| b == F::PREAMBLE[0]) {
-                None => {
-                    self.start = self.end;
-                    return None;
-                }
-                Some(0) => {}
-                Some(i) => self.start += i,
-            }
-            let avail = &self.buf[self.start..self.end];
-            if avail.len() < 2 {
-                return None;
-            }
-            if avail[1] != F::PREAMBLE[1] {
-                self.drop_candidate();
-                continue;
-            }
-            if avail.len() < F::HEADER_LEN {
-                return None;
-            }
-            let total = match F::total_len(&avail[..F::HEADER_LEN]) {
-                Some(t) if t <= CAP => t,
-                _ => {
-                    self.drop_candidate();
-                    continue;
-                }
-            };
-            if avail.len() < total {
-                return None;
-            }
-            if !F::check(&avail[..total]) {
-                self.drop_candidate();
-                continue;
-            }
-            return Some(total);
-        }
+/// The first `b` in `bytes` (hosts: `memchr`).
+#[cfg(target_pointer_width = "64")]
+#[inline]
+fn find_byte(b: u8, bytes: &[u8]) -> Option<usize> {
+    // Back-to-back packets: the next one starts right here (no call).
+    if bytes.first() == Some(&b) {
+        return Some(0);
     }
+    memchr::memchr(b, bytes)
+}
 
-    fn drop_candidate(&mut self) {
-        self.start += 1;
-        self.errors = self.errors.wrapping_add(1);
+/// The first `b` in `bytes` (firmware: a byte loop, no flash for more).
+#[cfg(not(target_pointer_width = "64"))]
+#[inline]
+fn find_byte(b: u8, bytes: &[u8]) -> Option<usize> {
+    bytes.iter().position(|&x| x == b)
+}
+
+/// What [`scan`] found in a byte slice.
+enum Scan {
+    /// A complete valid packet of `total` bytes at `at`.
+    Found { at: usize, total: usize },
+    /// No complete packet: the bytes before `at` are garbage or dropped
+    /// candidates; from `at` on, an incomplete candidate (or nothing).
+    NeedMore { at: usize },
+}
+
+/// Skips garbage and bad candidates in `avail` (each dropped candidate
+/// counted in `errors`) up to the first complete valid packet of at most
+/// `cap` bytes.
+#[inline]
+fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
+    let mut at = 0;
+    loop {
+        let rest = &avail[at..];
+        match find_byte(F::PREAMBLE[0], rest) {
+            None => return Scan::NeedMore { at: avail.len() },
+            Some(i) => at += i,
+        }
+        let cand = &avail[at..];
+        if cand.len() < 2 {
+            return Scan::NeedMore { at };
+        }
+        if cand[1] != F::PREAMBLE[1] {
+            at += 1;
+            *errors = errors.wrapping_add(1);
+            continue;
+        }
+        if cand.len() < F::HEADER_LEN {
+            return Scan::NeedMore { at };
+        }
+        let total = match F::total_len(&cand[..F::HEADER_LEN]) {
+            Some(t) if t <= cap => t,
+            _ => {
+                at += 1;
+                *errors = errors.wrapping_add(1);
+                continue;
+            }
+        };
+        if cand.len() < total {
+            return Scan::NeedMore { at };
+        }
+        if !F::check(&cand[..total]) {
+            at += 1;
+            *errors = errors.wrapping_add(1);
+            continue;
+        }
+        return Scan::Found { at, total };
     }
 }

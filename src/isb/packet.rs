@@ -180,7 +180,10 @@ impl<const CAP: usize> Scanner<Isb, CAP> {
     /// Feeds bytes from `input` (advancing it past what was taken) and
     /// returns the next complete, valid packet, if any. Call in a loop until
     /// it returns `None`; then all of `input` has been taken.
-    pub fn next_packet<'s>(&'s mut self, input: &mut &[u8]) -> Option<Packet<'s>> {
+    pub fn next_packet<'r, 's: 'r, 'i: 'r>(
+        &'s mut self,
+        input: &mut &'i [u8],
+    ) -> Option<Packet<'r>> {
         let b = self.next_raw(input)?;
         Some(Packet {
             flags: b[2],

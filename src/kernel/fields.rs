@@ -5,6 +5,21 @@
 use crate::model::Product;
 use crate::sensor::Sample;
 
+/// LSB per deg/s of the high-resolution rate fields (Tables 5.7–5.12: deg/s·10⁵).
+pub const RATE_HR_SCALE: u32 = 100_000;
+/// LSB per g of the high-resolution acceleration fields (Tables 5.7–5.12: g·10⁶).
+pub const ACC_HR_SCALE: u32 = 1_000_000;
+/// LSB per degree of the 16-bit angles (Tables 5.5, 5.9: deg·100).
+pub const ANGLE_SCALE: u32 = 100;
+/// LSB per degree of the 32-bit angles (Table 5.10: deg·1000).
+pub const ANGLE_HR_SCALE: u32 = 1000;
+/// LSB per unit of the quaternion components (Table 5.9: ·10⁴).
+pub const QUAT_SCALE: u32 = 10_000;
+/// LSB per °C of the temperature (Tables 5.5–5.12, UDD 0x52: °C·10).
+pub const TEMPERATURE_SCALE: u32 = 10;
+/// LSB per volt of the supply voltage (UDD 0x50: VDC·100).
+pub const VOLTAGE_SCALE: u32 = 100;
+
 /// Everything an output frame can carry at one output instant.
 #[derive(Debug, Clone, Copy)]
 pub struct OutputCtx<'a> {
@@ -199,7 +214,7 @@ pub fn sat_u16(x: f32, k: u32) -> u16 {
 }
 
 /// Heading in [0, 360) degrees (the f32 remainder is exact).
-fn heading_0_360(h: f32) -> f32 {
+pub(crate) fn heading_0_360(h: f32) -> f32 {
     let h = crate::ahrs::rotation::small_rem(h, 360.0);
     if h < 0.0 {
         h + 360.0
@@ -279,14 +294,14 @@ impl Field {
         // that it can be inlined once).
         let triad = match self {
             Field::Gyro => Some((&s.gyro, ctx.product.gyro.kg(), false)),
-            Field::GyroHr => Some((&s.gyro, 100_000, true)),
+            Field::GyroHr => Some((&s.gyro, RATE_HR_SCALE, true)),
             Field::Acc => Some((&s.acc, ctx.product.accel.ka(), false)),
-            Field::AccHr => Some((&s.acc, 1_000_000, true)),
-            Field::AuxAccHr => Some((&s.aux_acc, 1_000_000, true)),
-            Field::GyroBiasCompHr => Some((&s.gyro_filtered, 100_000, true)),
-            Field::GyroBiasHr => Some((&s.gyro_bias, 100_000, true)),
-            Field::FilteredAccHr => Some((&s.acc_filtered, 1_000_000, true)),
-            Field::FilteredAuxAccHr => Some((&s.aux_acc_filtered, 1_000_000, true)),
+            Field::AccHr => Some((&s.acc, ACC_HR_SCALE, true)),
+            Field::AuxAccHr => Some((&s.aux_acc, ACC_HR_SCALE, true)),
+            Field::GyroBiasCompHr => Some((&s.gyro_filtered, RATE_HR_SCALE, true)),
+            Field::GyroBiasHr => Some((&s.gyro_bias, RATE_HR_SCALE, true)),
+            Field::FilteredAccHr => Some((&s.acc_filtered, ACC_HR_SCALE, true)),
+            Field::FilteredAuxAccHr => Some((&s.aux_acc_filtered, ACC_HR_SCALE, true)),
             _ => None,
         };
         if let Some((v, k, wide)) = triad {
@@ -299,30 +314,36 @@ impl Field {
         }
         match self {
             Field::Euler => {
-                out[0..2].copy_from_slice(&sat_u16(heading_0_360(s.euler[0]), 100).to_le_bytes());
-                out[2..4].copy_from_slice(&sat_i16(s.euler[1], 100).to_le_bytes());
-                out[4..6].copy_from_slice(&sat_i16(s.euler[2], 100).to_le_bytes());
+                out[0..2].copy_from_slice(
+                    &sat_u16(heading_0_360(s.euler[0]), ANGLE_SCALE).to_le_bytes(),
+                );
+                out[2..4].copy_from_slice(&sat_i16(s.euler[1], ANGLE_SCALE).to_le_bytes());
+                out[4..6].copy_from_slice(&sat_i16(s.euler[2], ANGLE_SCALE).to_le_bytes());
             }
             Field::EulerHr => {
-                out[0..4].copy_from_slice(&sat_i32(heading_0_360(s.euler[0]), 1000).to_le_bytes());
-                out[4..8].copy_from_slice(&sat_i32(s.euler[1], 1000).to_le_bytes());
-                out[8..12].copy_from_slice(&sat_i32(s.euler[2], 1000).to_le_bytes());
+                out[0..4].copy_from_slice(
+                    &sat_i32(heading_0_360(s.euler[0]), ANGLE_HR_SCALE).to_le_bytes(),
+                );
+                out[4..8].copy_from_slice(&sat_i32(s.euler[1], ANGLE_HR_SCALE).to_le_bytes());
+                out[8..12].copy_from_slice(&sat_i32(s.euler[2], ANGLE_HR_SCALE).to_le_bytes());
             }
             Field::Quat => {
                 for (c, q) in out.chunks_exact_mut(2).zip(s.quat) {
-                    c.copy_from_slice(&sat_i16(q, 10_000).to_le_bytes());
+                    c.copy_from_slice(&sat_i16(q, QUAT_SCALE).to_le_bytes());
                 }
             }
             Field::Zero(_) => out.fill(0),
             Field::Usw => out.copy_from_slice(&ctx.usw.to_le_bytes()),
             Field::UswExt => out.copy_from_slice(&ctx.usw_ext.to_le_bytes()),
             Field::Counter => out.copy_from_slice(&ctx.counter.to_le_bytes()),
-            Field::Temperature => out.copy_from_slice(&sat_i16(s.temperature, 10).to_le_bytes()),
+            Field::Temperature => {
+                out.copy_from_slice(&sat_i16(s.temperature, TEMPERATURE_SCALE).to_le_bytes())
+            }
             Field::TimeFlags => out.copy_from_slice(&ctx.time_flags.to_le_bytes()),
             Field::SecondFraction => out.copy_from_slice(&ctx.second_fraction_ns.to_le_bytes()),
             Field::ImuTime => out.copy_from_slice(&ctx.imu_time_ns.to_le_bytes()),
             Field::SupplyVoltage => {
-                out.copy_from_slice(&sat_u16(s.supply_voltage, 100).to_le_bytes())
+                out.copy_from_slice(&sat_u16(s.supply_voltage, VOLTAGE_SCALE).to_le_bytes())
             }
             // The triads, written above.
             _ => {}
@@ -345,6 +366,147 @@ pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Optio
         at += n;
     }
     Some(at)
+}
+
+/// The scale factors of the 16-bit gyro and accelerometer fields, which
+/// depend on the product's ranges (Table 5.6: KG, KA).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Scales {
+    /// KG: LSB per deg/s of [`Field::Gyro`].
+    pub kg: u32,
+    /// KA: LSB per g of [`Field::Acc`].
+    pub ka: u32,
+}
+
+impl Scales {
+    /// The scales `product` encodes with (Table 5.6).
+    pub const fn of(product: &Product) -> Scales {
+        Scales {
+            kg: product.gyro.kg(),
+            ka: product.accel.ka(),
+        }
+    }
+}
+
+/// A field's value decoded from the wire ([`Field::read`]), in the ICD's
+/// units: each is the `f64` nearest to the transmitted integer divided by
+/// the field's scale (exact enough that the integer is recovered by
+/// multiplying back and rounding).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    /// Heading, pitch, roll in degrees ([`Field::Euler`],
+    /// [`Field::EulerHr`]; heading as sent, 0 up to below 360).
+    Angles([f64; 3]),
+    /// Quaternion q0..q3 ([`Field::Quat`], Appendix C.3).
+    Quat([f64; 4]),
+    /// Angular rate X/Y/Z in deg/s ([`Field::Gyro`], [`Field::GyroHr`],
+    /// [`Field::GyroBiasCompHr`], [`Field::GyroBiasHr`]).
+    Rate([f64; 3]),
+    /// Specific force X/Y/Z in g ([`Field::Acc`], [`Field::AccHr`],
+    /// [`Field::AuxAccHr`], [`Field::FilteredAccHr`],
+    /// [`Field::FilteredAuxAccHr`]; 1 g = 9.8106 m/s², ICD 5.2.1).
+    Accel([f64; 3]),
+    /// Reserved bytes ([`Field::Zero`]): nothing to report.
+    Reserved,
+    /// A 16-bit word as sent: [`Field::Usw`], [`Field::UswExt`] (bits of
+    /// Tables 5.26, 5.27), [`Field::Counter`] (2 kHz ticks, wrapping),
+    /// [`Field::TimeFlags`] (Table 5.8 note 2).
+    Word(u16),
+    /// Temperature in °C ([`Field::Temperature`]).
+    Celsius(f64),
+    /// A time in nanoseconds: [`Field::SecondFraction`] (since the last
+    /// 1PPS, 5.2.3.1), [`Field::ImuTime`] (since power-on).
+    Nanos(u64),
+    /// Supply voltage in volts ([`Field::SupplyVoltage`]).
+    Volts(f64),
+}
+
+#[inline(always)]
+fn i32_at(b: &[u8], i: usize) -> i32 {
+    i32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+#[inline(always)]
+fn i16_at(b: &[u8], i: usize) -> i16 {
+    i16::from_le_bytes([b[i], b[i + 1]])
+}
+
+#[inline(always)]
+fn u16_at(b: &[u8], i: usize) -> u16 {
+    u16::from_le_bytes([b[i], b[i + 1]])
+}
+
+/// Three i32 values over `k`.
+#[inline(always)]
+fn get3_i32(b: &[u8], k: u32) -> [f64; 3] {
+    let k = f64::from(k);
+    [
+        f64::from(i32_at(b, 0)) / k,
+        f64::from(i32_at(b, 4)) / k,
+        f64::from(i32_at(b, 8)) / k,
+    ]
+}
+
+/// Three i16 values over `k`.
+#[inline(always)]
+fn get3_i16(b: &[u8], k: u32) -> [f64; 3] {
+    let k = f64::from(k);
+    [
+        f64::from(i16_at(b, 0)) / k,
+        f64::from(i16_at(b, 2)) / k,
+        f64::from(i16_at(b, 4)) / k,
+    ]
+}
+
+impl Field {
+    /// Decodes the field from `bytes[..self.size()]` — the inverse of the
+    /// writer, with the same scales (the constants above, `scales` for the
+    /// 16-bit gyro and accelerometer); `None` if `bytes` is too short.
+    #[inline]
+    pub fn read(self, scales: Scales, bytes: &[u8]) -> Option<Value> {
+        let b = bytes.get(..self.size())?;
+        Some(match self {
+            Field::Euler => Value::Angles([
+                f64::from(u16_at(b, 0)) / f64::from(ANGLE_SCALE),
+                f64::from(i16_at(b, 2)) / f64::from(ANGLE_SCALE),
+                f64::from(i16_at(b, 4)) / f64::from(ANGLE_SCALE),
+            ]),
+            Field::EulerHr => Value::Angles(get3_i32(b, ANGLE_HR_SCALE)),
+            Field::Quat => {
+                let k = f64::from(QUAT_SCALE);
+                Value::Quat([
+                    f64::from(i16_at(b, 0)) / k,
+                    f64::from(i16_at(b, 2)) / k,
+                    f64::from(i16_at(b, 4)) / k,
+                    f64::from(i16_at(b, 6)) / k,
+                ])
+            }
+            Field::Gyro => Value::Rate(get3_i16(b, scales.kg)),
+            Field::Acc => Value::Accel(get3_i16(b, scales.ka)),
+            Field::GyroHr | Field::GyroBiasCompHr | Field::GyroBiasHr => {
+                Value::Rate(get3_i32(b, RATE_HR_SCALE))
+            }
+            Field::AccHr | Field::AuxAccHr | Field::FilteredAccHr | Field::FilteredAuxAccHr => {
+                Value::Accel(get3_i32(b, ACC_HR_SCALE))
+            }
+            Field::Zero(_) => Value::Reserved,
+            Field::Usw | Field::UswExt | Field::Counter | Field::TimeFlags => {
+                Value::Word(u16_at(b, 0))
+            }
+            Field::Temperature => {
+                Value::Celsius(f64::from(i16_at(b, 0)) / f64::from(TEMPERATURE_SCALE))
+            }
+            Field::SecondFraction => {
+                Value::Nanos(u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            }
+            Field::ImuTime => Value::Nanos(u64::from_le_bytes([
+                b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],
+            ])),
+            Field::SupplyVoltage => {
+                Value::Volts(f64::from(u16_at(b, 0)) / f64::from(VOLTAGE_SCALE))
+            }
+        })
+    }
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 pub mod block;
 pub mod command;
 pub mod config;
+pub mod decode;
 pub mod device;
 pub mod fields;
 pub mod formats;
