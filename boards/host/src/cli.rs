@@ -112,6 +112,36 @@ pub struct Args {
     /// device time.
     #[arg(long, value_name = "SPEED", default_value = "1")]
     pub speed: Speed,
+
+    /// More log lines on stderr: `-v` every command the device received,
+    /// every frame it rejected or ignored and why, parameters saved; `-vv`
+    /// also control commands and transport events.
+    #[arg(short, long, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+    pub verbose: u8,
+
+    /// Only errors on stderr (no warnings).
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
+/// (default: warnings). Calling it again does nothing.
+pub fn init_logging(verbose: u8, quiet: bool) {
+    use tracing::level_filters::LevelFilter;
+    let level = match (quiet, verbose) {
+        (true, _) => LevelFilter::ERROR,
+        (false, 0) => LevelFilter::WARN,
+        (false, 1) => LevelFilter::INFO,
+        (false, 2) => LevelFilter::DEBUG,
+        _ => LevelFilter::TRACE,
+    };
+    let _ = tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .with_max_level(level)
+        .with_target(false)
+        .with_ansi(false)
+        .without_time()
+        .try_init();
 }
 
 /// When the device powers on (`--power-on`).
@@ -238,6 +268,7 @@ pub fn one_line_panics() {
 /// Runs the program: sets up signals, the flash and the transport, powers
 /// the device on and serves it until SIGINT/SIGTERM.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    init_logging(args.verbose, args.quiet);
     check_addresses(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
@@ -301,12 +332,13 @@ fn serve<F: NorFlash, T: Transport>(
                 return Ok(());
             }
             if let Some(c) = control.as_mut() {
-                c.poll(&mut |_| {
-                    Err(
+                c.poll(&mut |cmd| match cmd {
+                    crate::control::Command::Status => Ok("mode=off".to_owned()),
+                    _ => Err(
                         "the device is off: it powers on when a client connects to the UART \
                          (or use --power-on now)"
                             .to_owned(),
-                    )
+                    ),
                 })?;
             }
             transport.wait(crate::runner::IDLE_WAKE)?;
@@ -330,7 +362,9 @@ fn serve<F: NorFlash, T: Transport>(
             .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string()),
     );
 
-    let mut runner = Runner::new(dev, transport, epoch).with_speed(args.speed);
+    let mut runner = Runner::new(dev, transport, epoch)
+        .with_speed(args.speed)
+        .with_seed(args.seed);
     if let Some(c) = control {
         runner = runner.with_control(c);
     }

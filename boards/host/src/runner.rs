@@ -43,6 +43,8 @@ use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
+use crate::link::Link;
+use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 
@@ -108,6 +110,76 @@ struct HostPort<T: Transport> {
     next_pps_ns: Option<u64>,
     /// Motion replayed from a file (`--trajectory`), if any.
     trajectory: Option<Trajectory>,
+    /// Faults between the device's UART and the transport (`link …`).
+    link: Link,
+    /// The device's input decoded on the host side (logs, `status`).
+    monitor: Monitor,
+    /// Input past the faults that did not fit the device's read yet.
+    rx_carry: std::collections::VecDeque<u8>,
+    /// Device time of the current pass, ns.
+    now_ns: u64,
+    /// Bytes the line carried (before link faults).
+    line_bytes: u64,
+    /// Device time held back so far (copied from the clock), ns.
+    held_back_ns: u64,
+}
+
+impl<T: Transport> HostPort<T> {
+    /// Hands the transport what a stall released, if it is over.
+    fn release(&mut self) -> anyhow::Result<()> {
+        let mut out = Vec::new();
+        self.link.release(self.now_ns, &mut out);
+        if !out.is_empty() {
+            self.transport.send(&out)?;
+        }
+        Ok(())
+    }
+
+    /// `status`: the device, the line and the link in `key=value` words.
+    fn status<F: NorFlash>(&self, dev: &Device<F>) -> String {
+        use imu_emu::device::Mode;
+        let mode = match dev.mode() {
+            Mode::Idle => "idle",
+            Mode::Aligning => "aligning",
+            Mode::Continuous => "continuous",
+            Mode::FirmwareUpdate => "firmware-update",
+        };
+        let format = match (dev.mode(), self.link.last_id()) {
+            (Mode::Continuous, Some(id)) => format!("{id:#04x}"),
+            _ => "none".to_owned(),
+        };
+        let rate = dev
+            .output_rate()
+            .map_or("none".to_owned(), |r| r.to_string());
+        let rejected = self.monitor.rejected();
+        let total: u64 = rejected.iter().map(|r| r.1).sum();
+        let mut s = format!(
+            "mode={mode} format={format} output-rate={rate} line-rate={} frames-sent={} \
+             bytes-sent={} tx-dropped={} held-back-ms={} commands={} rejected={total}",
+            dev.line_rate(),
+            self.link.frames_sent(),
+            self.line_bytes,
+            dev.tx_dropped(),
+            self.held_back_ns / 1_000_000,
+            self.monitor.commands(),
+        );
+        for (r, n) in rejected {
+            s.push_str(&format!(" rejected-{}={n}", r.name()));
+        }
+        let l = self.link.stats();
+        s.push_str(&format!(
+            " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
+             link-cut={} link-stall-dropped={}",
+            self.link.describe(self.now_ns),
+            l.dropped,
+            l.corrupted,
+            l.duplicated,
+            l.noise,
+            l.cut,
+            l.stall_dropped
+        ));
+        s
+    }
 }
 
 impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
@@ -119,7 +191,13 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
     }
 
     fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.transport.send(bytes)
+        self.line_bytes += bytes.len() as u64;
+        let mut out = Vec::with_capacity(bytes.len());
+        self.link.tx(bytes, self.now_ns, &mut out);
+        if out.is_empty() {
+            return Ok(());
+        }
+        self.transport.send(&out)
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
@@ -128,12 +206,23 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
     }
 
     fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        let mut n = 0;
-        self.transport.receive(buf.len(), &mut |bytes| {
-            let k = bytes.len().min(buf.len() - n);
-            buf[n..n + k].copy_from_slice(&bytes[..k]);
+        // Input the faults made longer than the last read could take first.
+        let mut n = self.rx_carry.len().min(buf.len());
+        for (b, c) in buf.iter_mut().zip(self.rx_carry.drain(..n)) {
+            *b = c;
+        }
+        let mut raw = Vec::new();
+        self.transport
+            .receive(buf.len() - n, &mut |bytes| raw.extend_from_slice(bytes))?;
+        if !raw.is_empty() || self.link.rx_noise_pending() {
+            let mut got = Vec::with_capacity(raw.len());
+            self.link.rx(&raw, &mut got);
+            let k = got.len().min(buf.len() - n);
+            buf[n..n + k].copy_from_slice(&got[..k]);
+            self.rx_carry.extend(&got[k..]);
             n += k;
-        })?;
+        }
+        self.monitor.feed(&buf[..n]);
         Ok(n)
     }
 
@@ -141,7 +230,7 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
         // The host board has no TOV pin: edges go to the control client.
         if let Some(ctl) = self.control.as_mut() {
             let l = if level == Level::High { "high" } else { "low" };
-            ctl.say(&format!("tov {l} {}\n", at.as_nanos()));
+            ctl.event(&format!("tov {l} {}", at.as_nanos()));
         }
         Ok(())
     }
@@ -165,16 +254,32 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
     }
 
     fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> anyhow::Result<()> {
-        if let Some(ctl) = self.control.as_mut() {
-            ctl.poll(&mut |cmd| {
-                match cmd {
-                    control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
-                    control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
-                    control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-                    control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+        let product = dev.product();
+        self.monitor
+            .judge(&product, &|id| dev.param_ram(id).map(<[u8]>::to_vec));
+        let Some(mut ctl) = self.control.take() else {
+            return Ok(());
+        };
+        let mut noise = Vec::new();
+        let r = ctl.poll(&mut |cmd| {
+            tracing::debug!("control: {cmd:?}");
+            match cmd {
+                control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
+                control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
+                control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+                control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+                control::Command::Link(change) => {
+                    self.link.apply(change, self.now_ns, &mut noise);
                 }
-                Ok(())
-            })?;
+                control::Command::Status => return Ok(self.status(dev)),
+                control::Command::Help => {}
+            }
+            Ok(String::new())
+        });
+        self.control = Some(ctl);
+        r?;
+        if !noise.is_empty() {
+            self.transport.send(&noise)?;
         }
         Ok(())
     }
@@ -193,6 +298,12 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 control: None,
                 next_pps_ns: None,
                 trajectory: None,
+                link: Link::new(0),
+                monitor: Monitor::new(),
+                rx_carry: std::collections::VecDeque::new(),
+                now_ns: 0,
+                line_bytes: 0,
+                held_back_ns: 0,
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
@@ -218,6 +329,12 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     /// Serves the control socket (pin edges, power cycle, TOV reports).
     pub fn with_control(mut self, control: Control) -> Self {
         self.io.control = Some(control);
+        self
+    }
+
+    /// Seeds the link faults' random draws (`--seed`).
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.io.link = Link::new(seed);
         self
     }
 
@@ -348,6 +465,9 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
     /// transport flushed and the lag bounded.
     pub fn step(&mut self) -> anyhow::Result<Pass> {
         let now = self.now_ns();
+        self.io.now_ns = now;
+        self.io.held_back_ns = self.clock.held_back_ns();
+        self.io.release()?;
         let pass = self.sched.poll(&mut self.dev, &mut self.io, now, &LIMITS)?;
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;
