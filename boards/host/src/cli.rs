@@ -3,6 +3,7 @@
 //! ```text
 //! imu-emu [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
 //!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
+//! imu-emu client (--tcp HOST:PORT | --serial DEV [--baud N]) SUBCOMMAND …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -122,6 +123,19 @@ pub struct Args {
     /// Only errors on stderr (no warnings).
     #[arg(short, long)]
     pub quiet: bool,
+
+    /// A subcommand instead of the emulator (`imu-emu client --help`).
+    #[command(subcommand)]
+    pub command: Option<Sub>,
+}
+
+/// Subcommands of `imu-emu`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum Sub {
+    /// Talk to a KERNEL (the emulator or a real unit) over TCP or a serial
+    /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
+    /// decode, plot.
+    Client(crate::client::ClientArgs),
 }
 
 /// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
@@ -269,6 +283,9 @@ pub fn one_line_panics() {
 /// the device on and serves it until SIGINT/SIGTERM.
 pub fn run(args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
+    if let Some(Sub::Client(c)) = args.command {
+        return crate::client::run(c);
+    }
     check_addresses(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {

@@ -19,12 +19,15 @@
 //! * [`monitor`] — the device's input decoded on the host side: logs and
 //!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
-//! * [`cli`] — the command line and [`cli::run`], what `main` calls.
+//! * [`cli`] — the command line and [`cli::run`], what `main` calls;
+//! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
+//!   (commands, record, decode, plot).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
 pub mod backlog;
 pub mod cli;
+pub mod client;
 pub mod clock;
 pub mod control;
 pub mod flash;
