@@ -213,7 +213,7 @@ impl Link {
 
     /// Applies a change at device time `now` (ns). Noise on `tx` is
     /// written to `out` (it goes to the client at once, or into the stall's
-    /// hold); noise on `rx` waits for [`Link::rx_noise`].
+    /// hold); noise on `rx` goes to the device with the next [`Link::rx`].
     pub fn apply(&mut self, change: LinkChange, now: u64, out: &mut Vec<u8>) {
         let set = |r: &mut Rates, dir: Dir, is_tx: bool, f: &dyn Fn(&mut Rates)| {
             if (is_tx && dir.tx()) || (!is_tx && dir.rx()) {
