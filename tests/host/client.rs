@@ -290,3 +290,27 @@ fn errors_are_one_clear_line() {
         "imu-emu: client: say where the unit is: --tcp HOST:PORT or --serial DEV\n"
     );
 }
+
+/// `client --serial DEV`: the emulator's pty as the serial port.
+#[test]
+fn the_client_talks_over_a_serial_port() {
+    let e = Emu::start(&["--pty"]);
+    let path = e.pty_path();
+    let o = run(&[
+        "client",
+        "--serial",
+        path.to_str().unwrap(),
+        "--baud",
+        "115200",
+        "get",
+        "Data_Rate",
+    ]);
+    assert_eq!(stdout(&o), "Data_Rate = 100\n");
+    let o = run(&["client", "--serial", "/nonexistent/tty", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("imu-emu: --serial /nonexistent/tty: cannot open: "),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -89,7 +89,8 @@ impl Frame {
 /// Frames longer than this are taken as garbage (resync).
 const MAX_FRAME: usize = 2048;
 
-trait Port: Read + Write + Send {}
+/// What a [`Conn`] reads and writes.
+pub trait Port: Read + Write + Send {}
 impl<T: Read + Write + Send> Port for T {}
 
 /// A client connection (TCP socket or pty) with a frame reader.
@@ -139,7 +140,9 @@ impl Conn {
         Conn::new(Box::new(f))
     }
 
-    fn new(port: Box<dyn Port>) -> Conn {
+    /// A client over any byte pipe (reads should time out, as a socket's
+    /// or a raw tty's with VTIME do).
+    pub fn new(port: Box<dyn Port>) -> Conn {
         Conn {
             port,
             buf: Vec::new(),

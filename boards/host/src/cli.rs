@@ -54,8 +54,14 @@ pub struct Args {
     pub tcp: Option<String>,
 
     /// Serve the UART on a pseudo-terminal (raw mode) instead of TCP.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "serial")]
     pub pty: bool,
+
+    /// Serve the UART on a real serial port (e.g. /dev/ttyUSB0, a USB-RS-422
+    /// adapter) whose rate follows the device's line rate (Baud_Rate,
+    /// CommitBaudRate). The device powers on at start.
+    #[arg(long, value_name = "DEV", conflicts_with = "tcp")]
+    pub serial: Option<PathBuf>,
 
     /// With --pty: also symlink the pty's slave at PATH (an existing
     /// symlink is replaced; removed at exit).
@@ -230,7 +236,7 @@ pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Resu
 /// on stderr about each remote one `--allow-remote` lets through.
 fn check_addresses(args: &Args) -> anyhow::Result<()> {
     let mut wanted = Vec::new();
-    if !args.pty {
+    if !args.pty && args.serial.is_none() {
         wanted.push(("--tcp", args.tcp.as_deref().unwrap_or(DEFAULT_TCP)));
     }
     if let Some(c) = &args.control {
@@ -302,7 +308,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
-    if args.pty {
+    if let Some(dev) = &args.serial {
+        let t = crate::transport::SerialTransport::open(dev, 115_200)?;
+        serve(flash, t, args, stop)
+    } else if args.pty {
         let t = PtyTransport::open(115_200, args.link.as_deref())?;
         serve(flash, t, args, stop)
     } else {

@@ -241,6 +241,12 @@ pub fn nearest_baud(bps: u32) -> BaudRate {
         .unwrap_or(BaudRate::B115200)
 }
 
+/// The rate of a standard termios speed, bit/s (`None` for one not in the
+/// table).
+pub fn baud_bps(b: BaudRate) -> Option<u32> {
+    BAUDS.iter().find(|&&(_, x)| x == b).map(|&(r, _)| r)
+}
+
 /// The `--link` symlink; removed on drop if it still points at the slave.
 #[derive(Debug)]
 struct LinkGuard {
