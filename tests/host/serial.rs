@@ -70,3 +70,76 @@ fn the_device_on_a_serial_port_answers_and_its_rate_follows_commit_baud_rate() {
     assert_eq!(c.bad, 0);
     drop(emu);
 }
+
+/// Opens the emulator's pty as a raw serial port (reads time out after
+/// 0.1 s); returns the client and a handle to set its speed.
+fn open_raw(path: &std::path::Path) -> (Conn, File) {
+    use nix::sys::termios::{SetArg, SpecialCharacterIndices as Cc};
+    use std::os::unix::fs::OpenOptionsExt;
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
+        .open(path)
+        .unwrap();
+    let mut t = termios::tcgetattr(&f).unwrap();
+    termios::cfmakeraw(&mut t);
+    t.control_chars[Cc::VMIN as usize] = 0;
+    t.control_chars[Cc::VTIME as usize] = 1;
+    termios::tcsetattr(&f, SetArg::TCSANOW, &t).unwrap();
+    let handle = f.try_clone().unwrap();
+    (Conn::new(Box::new(f)), handle)
+}
+
+fn set_speed(f: &File, b: BaudRate) {
+    let mut t = termios::tcgetattr(f).unwrap();
+    termios::cfsetspeed(&mut t, b).unwrap();
+    termios::tcsetattr(f, termios::SetArg::TCSANOW, &t).unwrap();
+}
+
+/// A driver that sends CommitBaudRate but leaves its port at the old rate
+/// gets garbage both ways, as on the bench (and a warning is logged once);
+/// once it sets its port to the new rate, the line works again.
+#[test]
+fn a_baud_mismatch_on_the_pty_garbles_both_ways_until_the_client_follows() {
+    let emu = Emu::start(&["--pty"]);
+    let (mut c, port) = open_raw(&emu.pty_path());
+    c.send(&command(0x12));
+    assert_eq!(c.frame_with_id(0x12).bytes.len(), 174);
+    save(&mut c, 0x03B2, &[8]); // 230400
+    c.send(&command(0xC2));
+    std::thread::sleep(Duration::from_millis(100));
+    // The device now runs at 230400, the port still at 115200: the
+    // request reaches the device garbled and nothing valid comes back.
+    c.send(&command(0x12));
+    let deadline = std::time::Instant::now() + Duration::from_millis(400);
+    assert!(c.frame_before(deadline).is_none());
+    // The client follows: the line works.
+    set_speed(&port, BaudRate::B230400);
+    std::thread::sleep(Duration::from_millis(100));
+    c.drain_for(Duration::from_millis(50));
+    c.send(&command(0x12));
+    assert_eq!(c.frame_with_id(0x12).bytes.len(), 174);
+    // Garbled both ways: set the port wrong again while a stream runs; the
+    // bytes still arrive, no frame is valid.
+    c.send(&command(0x8F));
+    c.frame_with_id(0x8F);
+    set_speed(&port, BaudRate::B9600);
+    std::thread::sleep(Duration::from_millis(100));
+    c.drain_for(Duration::from_millis(50));
+    let before = c.received;
+    let deadline = std::time::Instant::now() + Duration::from_millis(300);
+    assert!(c.frame_before(deadline).is_none());
+    assert!(c.received > before);
+    let log = emu.stderr();
+    let warnings: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains("the client's port is at"))
+        .collect();
+    assert_eq!(warnings.len(), 2, "{log}");
+    assert!(warnings[0].contains(
+        "the client's port is at 115200 bit/s, the device's line at 230400 bit/s: bytes are \
+         garbled both ways as on a real line (did the driver follow CommitBaudRate?)"
+    ));
+    assert!(warnings[1].contains("the client's port is at 9600 bit/s"));
+}

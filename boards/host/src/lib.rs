@@ -19,6 +19,7 @@
 //! * [`monitor`] — the device's input decoded on the host side: logs and
 //!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
+//! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
 //!   (commands, record, decode, plot).
@@ -36,3 +37,4 @@ pub mod monitor;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;
+pub mod uart;
