@@ -19,6 +19,8 @@
 //! * [`monitor`] — the device's input decoded on the host side: logs and
 //!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
+//! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
+//!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
@@ -38,3 +40,4 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod virtual_device;
