@@ -122,6 +122,8 @@ struct HostPort<T: Transport> {
     line_bytes: u64,
     /// Device time held back so far (copied from the clock), ns.
     held_back_ns: u64,
+    /// Reused buffer of what passes the link faults.
+    scratch: Vec<u8>,
 }
 
 impl<T: Transport> HostPort<T> {
@@ -192,12 +194,16 @@ impl<F: NorFlash, T: Transport> Port<F> for HostPort<T> {
 
     fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.line_bytes += bytes.len() as u64;
-        let mut out = Vec::with_capacity(bytes.len());
+        let mut out = core::mem::take(&mut self.scratch);
+        out.clear();
         self.link.tx(bytes, self.now_ns, &mut out);
-        if out.is_empty() {
-            return Ok(());
-        }
-        self.transport.send(&out)
+        let r = if out.is_empty() {
+            Ok(())
+        } else {
+            self.transport.send(&out)
+        };
+        self.scratch = out;
+        r
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
@@ -304,6 +310,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                 now_ns: 0,
                 line_bytes: 0,
                 held_back_ns: 0,
+                scratch: Vec::new(),
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
