@@ -367,6 +367,20 @@ impl Link {
     /// Follows the frame boundaries of clean output (frame count, last ID).
     fn follow(&mut self, mut bytes: &[u8]) {
         while let Some((&b, rest)) = bytes.split_first() {
+            // A whole header at a frame boundary: take it at once.
+            if self.pos.at == 0 && bytes.len() >= 6 && bytes[..2] == [0xAA, 0x55] {
+                let len = u16::from_le_bytes([bytes[4], bytes[5]]);
+                if len >= 6 {
+                    self.last_id = Some(bytes[3]);
+                    self.pos = FramePos {
+                        at: 6,
+                        total: Some(usize::from(len) + 2),
+                        len_lo: bytes[4],
+                    };
+                    bytes = &bytes[6..];
+                    continue;
+                }
+            }
             // Inside a frame's body: jump to its last byte.
             if let Some(total) = self.pos.total {
                 let skip = (total - 1 - self.pos.at).min(bytes.len());
