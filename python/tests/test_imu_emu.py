@@ -76,7 +76,7 @@ class EmulatorTest(unittest.TestCase):
         self.assertEqual(self.emu.frames(0.3), [])
         ctl.link("clear")
         self.emu.frames(0.05)
-        self.assertGreaterEqual(len(self.emu.frames(0.3)), 20)
+        self.assertGreaterEqual(len(self.emu.frames(0.3)), 10)
         with self.assertRaises(RuntimeError) as e:
             ctl.cmd("extrig sideways")
         self.assertEqual(str(e.exception), "error bad syntax: extrig sideways; expected extrig high|low")

@@ -136,7 +136,10 @@ mod tests {
     #[test]
     fn the_driver_reads_info_and_a_gap_free_ga_stream() {
         let mut d = Driver::new(VirtualDevice::new(Product::parse("K110").unwrap()));
-        assert_eq!(d.firmware().unwrap(), "KERNEL-110-G2000-A40 imu-emu 0.1.0");
+        assert!(d
+            .firmware()
+            .unwrap()
+            .starts_with("KERNEL-110-G2000-A40 imu-emu "));
         d.start_ga().unwrap();
         let first = d.ga().unwrap();
         let mut last = first.counter;
