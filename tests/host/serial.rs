@@ -143,3 +143,27 @@ fn a_baud_mismatch_on_the_pty_garbles_both_ways_until_the_client_follows() {
     ));
     assert!(warnings[1].contains("the client's port is at 9600 bit/s"));
 }
+
+/// `--link` at the link of a running emulator is refused (exit status 2,
+/// one line), not stolen: the first emulator keeps its port.
+#[test]
+fn a_link_to_a_live_pty_is_refused_not_stolen() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("kernel");
+    let first = Emu::start(&["--pty", "--link", link.to_str().unwrap()]);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["--pty", "--link", link.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        format!(
+            "imu-emu: --link {}: points at {}, a live pty (another imu-emu?); choose another \
+             path or stop that program\n",
+            link.display(),
+            first.pty_path().display()
+        )
+    );
+    assert_eq!(std::fs::read_link(&link).unwrap(), first.pty_path());
+}

@@ -64,7 +64,8 @@ pub const SPEED_CHECK: Duration = Duration::from_millis(20);
 
 impl PtyTransport {
     /// Opens a pty pair in raw mode at `bps`; with `link`, symlinks the
-    /// slave there (an existing symlink is replaced).
+    /// slave there (an existing symlink is replaced, unless it points at a
+    /// live pty: another emulator's port is refused, not stolen).
     pub fn open(bps: u32, link: Option<&Path>) -> anyhow::Result<Self> {
         let pty = nix::pty::openpty(None, None).context("openpty")?;
         let slave_path = nix::unistd::ttyname(&pty.slave).context("ttyname of the pty slave")?;
@@ -366,8 +367,23 @@ struct LinkGuard {
 impl LinkGuard {
     fn create(path: &Path, target: &Path) -> anyhow::Result<Self> {
         match std::fs::symlink_metadata(path) {
-            Ok(m) if m.file_type().is_symlink() => std::fs::remove_file(path)
-                .with_context(|| format!("replacing symlink {}", path.display()))?,
+            Ok(m) if m.file_type().is_symlink() => {
+                // A pty slave exists only while its master is open: a link
+                // to one that exists belongs to a running emulator (or
+                // another program): refuse rather than steal it.
+                if let Ok(old) = std::fs::read_link(path) {
+                    if old.starts_with("/dev/pts") && old.exists() {
+                        return Err(anyhow::Error::new(crate::cli::UsageError(format!(
+                            "--link {}: points at {}, a live pty (another imu-emu?); \
+                             choose another path or stop that program",
+                            path.display(),
+                            old.display()
+                        ))));
+                    }
+                }
+                std::fs::remove_file(path)
+                    .with_context(|| format!("replacing symlink {}", path.display()))?
+            }
             Ok(_) => anyhow::bail!("--link {}: exists and is not a symlink", path.display()),
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => return Err(anyhow::Error::new(e).context(format!("{}", path.display()))),
