@@ -21,6 +21,8 @@
 //! * **Visible loss**: a frame the device's TX queue could not take is
 //!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
 //!   (at most once a second) and counts it in [`Stats::tx_dropped`].
+//! * **A status line** on stdout once a second when it is a terminal
+//!   (mode, format, rates, frames sent, frames rejected).
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
 //!   output, or when the line can carry what is queued — but not before the
 //!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
@@ -98,6 +100,9 @@ pub struct Runner<F: NorFlash, T: Transport> {
     reported_held_ns: u64,
     /// When loss or lag was last reported (host time).
     reported_at: Option<std::time::Instant>,
+    /// When the terminal status line was last drawn (`None`: stdout is
+    /// not a terminal, no status line).
+    status_at: Option<std::time::Instant>,
 }
 
 /// What the schedule drives on this board: the transport, the control
@@ -317,6 +322,8 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             reported_drops: 0,
             reported_held_ns: 0,
             reported_at: None,
+            status_at: std::io::IsTerminal::is_terminal(&std::io::stdout())
+                .then(std::time::Instant::now),
         }
     }
 
@@ -397,6 +404,7 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             let pass = self.step()?;
             let now = self.now_ns();
             self.report();
+            self.status_line();
             let timeout = if pass.behind || pass.rx == MAX_RX_PER_PASS {
                 // More is due or waiting: go on at once.
                 Duration::ZERO
@@ -412,6 +420,10 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
                     .host_wait(self.next_wake(now).saturating_sub(now))
             };
             self.io.transport.wait(timeout)?;
+        }
+        if self.status_at.is_some() {
+            // End the status line before the last messages.
+            println!();
         }
         Ok(())
     }
@@ -435,6 +447,36 @@ impl<F: NorFlash, T: Transport> Runner<F, T> {
             wake = wake.min(pps.max(self.sched.next_deadline()));
         }
         wake.max(now)
+    }
+
+    /// Redraws a one-line status on stdout (a terminal only) once a second:
+    /// mode, format, rates, frames and bytes sent, rejected frames.
+    fn status_line(&mut self) {
+        let Some(at) = self.status_at else { return };
+        if at.elapsed() < Duration::from_secs(1) {
+            return;
+        }
+        self.status_at = Some(std::time::Instant::now());
+        let words = self.io.status(&self.dev);
+        let short: Vec<&str> = words
+            .split_whitespace()
+            .filter(|w| {
+                [
+                    "mode=",
+                    "format=",
+                    "output-rate=",
+                    "line-rate=",
+                    "frames-sent=",
+                    "rejected=",
+                ]
+                .iter()
+                .any(|k| w.starts_with(k))
+            })
+            .collect();
+        use std::io::Write as _;
+        let mut out = std::io::stdout().lock();
+        let _ = write!(out, "\r{}\x1b[K", short.join(" "));
+        let _ = out.flush();
     }
 
     /// Tells stderr, at most once a second, that the device dropped frames
