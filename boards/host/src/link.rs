@@ -14,8 +14,10 @@
 //! * **stalled** for T ms of device time: the bytes the line carries meanwhile
 //!   are held (up to [`MAX_HELD`] bytes, the rest dropped and counted) and
 //!   released at once when the stall ends — a stalled adapter;
-//! * **cut** mid-frame: the rest of the KERNEL frame being sent is lost
-//!   (between frames: the next frame after its 6 header bytes).
+//! * **cut** mid-frame: the rest of the frame being sent is lost (between
+//!   frames: the next frame after its header — 6 bytes for KERNEL). Frames
+//!   are followed with the core's [`Framing`] rules ([`Wire`]), so another
+//!   personality's packets work the same way.
 //!
 //! Every random draw comes from the core's [`Rng`] seeded from `--seed`
 //! (one stream per direction), so a seed and a sequence of commands replay
@@ -23,6 +25,7 @@
 
 use std::collections::VecDeque;
 
+use imu_emu::framing::Framing;
 use imu_emu::sensor::rng::Rng;
 
 /// Most bytes a stall holds back; beyond it output is dropped (counted in
@@ -113,43 +116,86 @@ pub struct LinkStats {
     pub stall_dropped: u64,
 }
 
-/// Where the output stream is with respect to KERNEL frames (the device
-/// sends whole frames; this follows them byte by byte).
+/// The wire protocol's packet rules the output follower needs, from the
+/// core's [`Framing`] (KERNEL frames, ISB packets).
+#[derive(Debug, Clone, Copy)]
+pub struct Wire {
+    preamble: [u8; 2],
+    header_len: usize,
+    total_len: fn(&[u8]) -> Option<usize>,
+    /// Offset of the identifier byte shown by `status` (`format=`).
+    id_at: usize,
+}
+
+impl Wire {
+    /// The rules of framing `K`; `id_at` is the offset of the byte
+    /// `status` reports as the format (KERNEL: 3, the frame's ID).
+    pub fn of<K: Framing>(id_at: usize) -> Self {
+        Wire {
+            preamble: K::PREAMBLE,
+            header_len: K::HEADER_LEN.min(HDR_MAX),
+            total_len: K::total_len,
+            id_at,
+        }
+    }
+
+    /// KERNEL frames (ICD Table 5.2).
+    pub fn kernel() -> Self {
+        Self::of::<imu_emu::kernel::frame::Kernel>(3)
+    }
+
+    /// The total length of a packet starting with `hdr` (its first
+    /// `header_len` bytes), if it is one (longer than its header).
+    fn total(&self, hdr: &[u8]) -> Option<usize> {
+        (self.total_len)(&hdr[..self.header_len]).filter(|&t| t > self.header_len)
+    }
+}
+
+/// Longest header followed.
+const HDR_MAX: usize = 16;
+
+/// Where the output stream is with respect to the device's packets (it
+/// sends whole ones; this follows them byte by byte).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 struct FramePos {
-    /// Bytes of the current frame seen (0 = between frames).
+    /// Bytes of the current packet seen (0 = between packets).
     at: usize,
-    /// Its total length once the length field was seen.
+    /// Its total length once its header was seen.
     total: Option<usize>,
-    len_lo: u8,
+    hdr: [u8; HDR_MAX],
 }
 
 impl FramePos {
-    /// Follows one byte; whether it ended a frame.
-    fn step(&mut self, b: u8) -> bool {
+    /// Follows one byte; whether it ended a packet.
+    fn step(&mut self, b: u8, w: &Wire) -> bool {
         match self.at {
             0 => {
-                if b == 0xAA {
+                if b == w.preamble[0] {
+                    self.hdr[0] = b;
                     self.at = 1;
                 }
                 return false;
             }
             1 => {
-                if b == 0x55 {
+                if b == w.preamble[1] {
+                    self.hdr[1] = b;
                     self.at = 2;
                 } else {
-                    self.at = usize::from(b == 0xAA);
+                    self.at = usize::from(b == w.preamble[0]);
                 }
                 return false;
             }
-            4 => self.len_lo = b,
-            5 => {
-                let len = u16::from_le_bytes([self.len_lo, b]);
-                if len < 6 {
-                    *self = FramePos::default();
-                    return false;
+            at if at < w.header_len => {
+                self.hdr[at] = b;
+                if at + 1 == w.header_len {
+                    match w.total(&self.hdr) {
+                        Some(t) => self.total = Some(t),
+                        None => {
+                            *self = FramePos::default();
+                            return false;
+                        }
+                    }
                 }
-                self.total = Some(usize::from(len) + 2);
             }
             _ => {}
         }
@@ -173,6 +219,8 @@ pub struct Link {
     rx_rng: Rng,
     tx: Rates,
     rx: Rates,
+    /// The output's packet rules.
+    wire: Wire,
     /// The output frame being sent (for `cut` and the frame counts).
     pos: FramePos,
     /// `link cut` is waiting for a frame to cut.
@@ -192,9 +240,17 @@ pub struct Link {
 }
 
 impl Link {
-    /// A clean link whose random draws derive from `seed` (`--seed`).
+    /// A clean link for KERNEL output whose random draws derive from
+    /// `seed` (`--seed`).
     pub fn new(seed: u64) -> Self {
+        Self::with_wire(seed, Wire::kernel())
+    }
+
+    /// A clean link for output framed by `wire` (another personality's
+    /// packets: `Wire::of::<imu_emu::isb::packet::Isb>(…)`).
+    pub fn with_wire(seed: u64, wire: Wire) -> Self {
         Link {
+            wire,
             tx_rng: Rng::new(seed ^ 0x6C69_6E6B_2D74_7800),
             rx_rng: Rng::new(seed ^ 0x6C69_6E6B_2D72_7800),
             tx: Rates::default(),
@@ -327,15 +383,15 @@ impl Link {
         let mut passed = Vec::with_capacity(bytes.len());
         for &b in bytes {
             let was_in_frame = self.pos.in_frame();
-            if self.pos.at == 3 {
+            if self.pos.at == self.wire.id_at {
                 self.last_id = Some(b);
             }
-            let ended = self.pos.step(b);
+            let ended = self.pos.step(b, &self.wire);
             if ended {
                 self.frames_sent += 1;
             }
             // Cut: after the header of the next frame, or now.
-            if self.cut_armed && self.pos.at == 6 {
+            if self.cut_armed && self.pos.at == self.wire.header_len {
                 self.cut_armed = false;
                 self.cutting = true;
                 passed.push(b);
@@ -368,16 +424,18 @@ impl Link {
     fn follow(&mut self, mut bytes: &[u8]) {
         while let Some((&b, rest)) = bytes.split_first() {
             // A whole header at a frame boundary: take it at once.
-            if self.pos.at == 0 && bytes.len() >= 6 && bytes[..2] == [0xAA, 0x55] {
-                let len = u16::from_le_bytes([bytes[4], bytes[5]]);
-                if len >= 6 {
-                    self.last_id = Some(bytes[3]);
+            let w = self.wire;
+            if self.pos.at == 0 && bytes.len() >= w.header_len && bytes[..2] == w.preamble {
+                if let Some(total) = w.total(bytes) {
+                    if let Some(&id) = bytes.get(w.id_at) {
+                        self.last_id = Some(id);
+                    }
                     self.pos = FramePos {
-                        at: 6,
-                        total: Some(usize::from(len) + 2),
-                        len_lo: bytes[4],
+                        at: w.header_len,
+                        total: Some(total),
+                        hdr: [0; HDR_MAX],
                     };
-                    bytes = &bytes[6..];
+                    bytes = &bytes[w.header_len..];
                     continue;
                 }
             }
@@ -390,10 +448,10 @@ impl Link {
                     continue;
                 }
             }
-            if self.pos.at == 3 {
+            if self.pos.at == self.wire.id_at {
                 self.last_id = Some(b);
             }
-            if self.pos.step(b) {
+            if self.pos.step(b, &self.wire) {
                 self.frames_sent += 1;
             }
             bytes = rest;
@@ -596,5 +654,29 @@ mod tests {
         want.extend(&b);
         assert_eq!(out, want);
         assert_eq!(l.frames_sent(), 4);
+    }
+
+    #[test]
+    fn another_protocols_packets_are_followed_and_cut_the_same_way() {
+        use imu_emu::isb::packet;
+        let isb = |did: u8, p: &[u8]| {
+            let mut f = vec![0u8; p.len() + packet::OVERHEAD];
+            let n = packet::encode(0, did, p, &mut f).unwrap();
+            f.truncate(n);
+            f
+        };
+        let (a, b) = (isb(3, &[1; 24]), isb(3, &[2; 24]));
+        let mut l = Link::with_wire(0, Wire::of::<packet::Isb>(3));
+        let mut out = Vec::new();
+        l.tx(&a, 0, &mut out);
+        l.apply(LinkChange::Cut, 0, &mut out);
+        l.tx(&a[..10], 0, &mut out);
+        l.tx(&a[10..], 0, &mut out);
+        l.tx(&b, 0, &mut out);
+        let mut want = a.clone();
+        want.extend(&a[..packet::HEADER_LEN]);
+        want.extend(&b);
+        assert_eq!(out, want);
+        assert_eq!(l.frames_sent(), 3);
     }
 }
