@@ -253,9 +253,9 @@ impl Pins for HostControl {
         (0..n)
             .map(|_| {
                 let l = self.line();
-                match l.split_whitespace().take(2).collect::<Vec<_>>()[..] {
-                    ["tov", "high"] => true,
-                    ["tov", "low"] => false,
+                match l.split_whitespace().take(3).collect::<Vec<_>>()[..] {
+                    ["event", "tov", "high"] => true,
+                    ["event", "tov", "low"] => false,
                     _ => panic!("unexpected control line {l:?}"),
                 }
             })

@@ -370,6 +370,7 @@ fn tov_edges_are_reported_on_the_control_socket() {
     while edges.len() < 20 {
         let l = ctl.line();
         let mut w = l.split_whitespace();
+        assert_eq!(w.next(), Some("event"));
         assert_eq!(w.next(), Some("tov"));
         let level = w.next().unwrap().to_owned();
         let at: u64 = w.next().unwrap().parse().unwrap();

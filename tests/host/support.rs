@@ -89,7 +89,8 @@ impl Frame {
 /// Frames longer than this are taken as garbage (resync).
 const MAX_FRAME: usize = 2048;
 
-trait Port: Read + Write + Send {}
+/// What a [`Conn`] reads and writes.
+pub trait Port: Read + Write + Send {}
 impl<T: Read + Write + Send> Port for T {}
 
 /// A client connection (TCP socket or pty) with a frame reader.
@@ -139,7 +140,9 @@ impl Conn {
         Conn::new(Box::new(f))
     }
 
-    fn new(port: Box<dyn Port>) -> Conn {
+    /// A client over any byte pipe (reads should time out, as a socket's
+    /// or a raw tty's with VTIME do).
+    pub fn new(port: Box<dyn Port>) -> Conn {
         Conn {
             port,
             buf: Vec::new(),
@@ -442,26 +445,29 @@ impl Control {
     pub fn connect(addr: &str) -> Control {
         let s = std::net::TcpStream::connect(addr).expect("control socket");
         s.set_read_timeout(Some(TIMEOUT)).unwrap();
+        // One segment per command, sent at once (no Nagle wait for the
+        // newline: tests time what a command does).
+        s.set_nodelay(true).unwrap();
         Control {
             w: s.try_clone().unwrap(),
             r: BufReader::new(s),
         }
     }
 
-    /// The next line the runner sent (an answer or a TOV report).
+    /// The next line the runner sent (an answer, or an event: `event …`).
     pub fn line(&mut self) -> String {
         let mut l = String::new();
         self.r.read_line(&mut l).expect("control line");
         l.trim().to_owned()
     }
 
-    /// Sends a command and returns its answer, skipping TOV reports.
+    /// Sends a command and returns its answer, skipping events.
     pub fn cmd(&mut self, c: &str) -> String {
         use std::io::Write as _;
-        writeln!(self.w, "{c}").unwrap();
+        self.w.write_all(format!("{c}\n").as_bytes()).unwrap();
         loop {
             let l = self.line();
-            if !l.starts_with("tov ") {
+            if !l.starts_with("event ") {
                 return l;
             }
         }

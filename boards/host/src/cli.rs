@@ -3,6 +3,7 @@
 //! ```text
 //! imu-emu [--protocol kernel|isb] [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
 //!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
+//! imu-emu client (--tcp HOST:PORT | --serial DEV [--baud N]) SUBCOMMAND …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -28,12 +29,11 @@ use imu_emu::device::{Device, PowerOn};
 use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
-use imu_emu::personality::Personality;
 use imu_emu::time::Instant;
 
 use crate::clock::Speed;
 use crate::flash::{FileNor, MemNor};
-use crate::runner::Runner;
+use crate::runner::{HostPersonality, Runner};
 use crate::transport::{PtyTransport, TcpTransport, Transport};
 
 /// Default TCP address.
@@ -62,8 +62,14 @@ pub struct Args {
     pub tcp: Option<String>,
 
     /// Serve the UART on a pseudo-terminal (raw mode) instead of TCP.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "serial")]
     pub pty: bool,
+
+    /// Serve the UART on a real serial port (e.g. /dev/ttyUSB0, a USB-RS-422
+    /// adapter) whose rate follows the device's line rate (Baud_Rate,
+    /// CommitBaudRate). The device powers on at start.
+    #[arg(long, value_name = "DEV", conflicts_with = "tcp")]
+    pub serial: Option<PathBuf>,
 
     /// With --pty: also symlink the pty's slave at PATH (an existing
     /// symlink is replaced; removed at exit).
@@ -121,6 +127,49 @@ pub struct Args {
     /// device time.
     #[arg(long, value_name = "SPEED", default_value = "1")]
     pub speed: Speed,
+
+    /// More log lines on stderr: `-v` every command the device received,
+    /// every frame it rejected or ignored and why, parameters saved; `-vv`
+    /// also control commands and transport events.
+    #[arg(short, long, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+    pub verbose: u8,
+
+    /// Only errors on stderr (no warnings).
+    #[arg(short, long)]
+    pub quiet: bool,
+
+    /// A subcommand instead of the emulator (`imu-emu client --help`).
+    #[command(subcommand)]
+    pub command: Option<Sub>,
+}
+
+/// Subcommands of `imu-emu`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum Sub {
+    /// Talk to a KERNEL (the emulator or a real unit) over TCP or a serial
+    /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
+    /// decode, plot.
+    Client(crate::client::ClientArgs),
+}
+
+/// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
+/// (default: warnings). Calling it again does nothing.
+pub fn init_logging(verbose: u8, quiet: bool) {
+    use tracing::level_filters::LevelFilter;
+    let level = match (quiet, verbose) {
+        (true, _) => LevelFilter::ERROR,
+        (false, 0) => LevelFilter::WARN,
+        (false, 1) => LevelFilter::INFO,
+        (false, 2) => LevelFilter::DEBUG,
+        _ => LevelFilter::TRACE,
+    };
+    let _ = tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .with_max_level(level)
+        .with_target(false)
+        .with_ansi(false)
+        .without_time()
+        .try_init();
 }
 
 /// The emulated device's protocol (`--protocol`).
@@ -204,7 +253,7 @@ pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Resu
 /// on stderr about each remote one `--allow-remote` lets through.
 fn check_addresses(args: &Args) -> anyhow::Result<()> {
     let mut wanted = Vec::new();
-    if !args.pty {
+    if !args.pty && args.serial.is_none() {
         wanted.push(("--tcp", args.tcp.as_deref().unwrap_or(DEFAULT_TCP)));
     }
     if let Some(c) = &args.control {
@@ -256,6 +305,10 @@ pub fn one_line_panics() {
 /// Runs the program: sets up signals, the flash and the transport, powers
 /// the device on and serves it until SIGINT/SIGTERM.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    init_logging(args.verbose, args.quiet);
+    if let Some(Sub::Client(c)) = args.command {
+        return crate::client::run(c);
+    }
     check_addresses(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
@@ -278,13 +331,23 @@ fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::
     }
 }
 
-fn with_transport<F: NorFlash, P: Personality>(
+fn with_transport<F: NorFlash, P: HostPersonality>(
     flash: F,
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    if args.pty {
-        let t = PtyTransport::open(115_200, args.link.as_deref())?;
+    // The port starts at the protocol's factory rate (KERNEL Baud_Rate
+    // 115 200, IMX ser0BaudRate 921 600): a client that opens it before the
+    // device powers on sees the rate a factory unit starts at.
+    let rate = match args.protocol {
+        Protocol::Kernel => 115_200,
+        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
+    };
+    if let Some(dev) = &args.serial {
+        let t = crate::transport::SerialTransport::open(dev, rate)?;
+        serve::<F, _, P>(flash, t, args, stop)
+    } else if args.pty {
+        let t = PtyTransport::open(rate, args.link.as_deref())?;
         serve::<F, _, P>(flash, t, args, stop)
     } else {
         let t = TcpTransport::bind(args.tcp.as_deref().unwrap_or(DEFAULT_TCP))?;
@@ -292,7 +355,7 @@ fn with_transport<F: NorFlash, P: Personality>(
     }
 }
 
-fn serve<F: NorFlash, T: Transport, P: Personality>(
+fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     flash: F,
     mut transport: T,
     args: &Args,
@@ -330,12 +393,13 @@ fn serve<F: NorFlash, T: Transport, P: Personality>(
                 return Ok(());
             }
             if let Some(c) = control.as_mut() {
-                c.poll(&mut |_| {
-                    Err(
+                c.poll(&mut |cmd| match cmd {
+                    crate::control::Command::Status => Ok("mode=off".to_owned()),
+                    _ => Err(
                         "the device is off: it powers on when a client connects to the UART \
                          (or use --power-on now)"
                             .to_owned(),
-                    )
+                    ),
                 })?;
             }
             transport.wait(crate::runner::IDLE_WAKE)?;
@@ -366,7 +430,9 @@ fn serve<F: NorFlash, T: Transport, P: Personality>(
             .map_or_else(|| "in memory".to_owned(), |p| p.display().to_string()),
     );
 
-    let mut runner = Runner::new(dev, transport, epoch).with_speed(args.speed);
+    let mut runner = Runner::new(dev, transport, epoch)
+        .with_speed(args.speed)
+        .with_seed(args.seed);
     if let Some(c) = control {
         runner = runner.with_control(c);
     }

@@ -1,11 +1,16 @@
-//! The control socket: what a test rig does to the device's other pins.
+//! The control socket: what a test rig does to the device's other pins
+//! and to its line.
 //!
 //! `--control ADDR` listens on TCP (one client at a time, a new one replaces
-//! the old). The protocol is text, one command per line, each answered with
-//! `ok` or `error <why>`:
+//! the old). The protocol is text, one command per line, each answered by
+//! exactly one line: `ok`, `ok <text>` (`help`, `status`) or
+//! `error <why>` (a syntax error names the expected syntax). Lines the
+//! device raises by itself start with `event ` and never answer a command.
 //!
 //! | line | effect |
 //! |---|---|
+//! | `help` | `ok` and the list of commands |
+//! | `status` | `ok` and `key=value` words: mode, format, output rate, line rate, frames and bytes sent, frames rejected and why, link faults |
 //! | `pps` | a 1PPS rising edge now (ICD 5.2.3.1) |
 //! | `extrig high` / `extrig low` | the EXTRIG input changes level now (4.1.3) |
 //! | `power-cycle [boot=high\|boot=low]` | power cycle, BOOT at that level (or floating) |
@@ -13,10 +18,17 @@
 //! | `fault temperature <°C>\|off` | force the sensor temperature (USW bit 14 outside −40…85 °C) |
 //! | `motion static [lat heading]` | the unit at rest (default 45° N, heading 0) |
 //! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
+//! | `link drop\|corrupt\|duplicate <rate> [tx\|rx]` | each byte lost / XORed / doubled with probability `rate` (both directions unless `tx` = device → client or `rx`) |
+//! | `link noise <bytes> [tx\|rx]` | a burst of random bytes now (default `tx`) |
+//! | `link stall <ms>` | the output held for `ms` of device time, then sent at once |
+//! | `link cut` | the rest of the output frame being sent is lost |
+//! | `link clear` | no link faults (a stall ends now) |
+//!
+//! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
 //! The device's TOV output (4.1.4) is reported to the client as lines
-//! `tov high <ns>` / `tov low <ns>` (device time, ns since power-on), in the
-//! order the device produces them.
+//! `event tov high <ns>` / `event tov low <ns>` (device time, ns since
+//! power-on), in the order the device produces them.
 //!
 //! Limits (a hostile or broken client cannot stall the device or grow its
 //! memory): a line is at most [`MAX_LINE`] bytes — a longer one is answered
@@ -24,9 +36,9 @@
 //! runner pass executes at most [`MAX_COMMANDS_PER_POLL`] commands and reads
 //! at most [`MAX_READ_PER_POLL`] bytes, the rest waiting for the next pass;
 //! a client that does not read its replies gets no more commands executed
-//! once [`MAX_PENDING_OUTPUT`] bytes wait for it (TOV reports that do not
+//! once [`MAX_PENDING_OUTPUT`] bytes wait for it (events that do not
 //! fit are dropped). A client that closes its sending side still gets its
-//! replies and the TOV reports.
+//! replies and the events.
 
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -36,7 +48,15 @@ use imu_emu::chain::Faults;
 use imu_emu::device::{Level, Pin};
 use imu_emu::sensor::Motion;
 
+use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;
+
+/// The commands and their syntax, as `help` lists them.
+pub const HELP: &str = "help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
+| fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
+| motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+| link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
+| link stall <ms> | link cut | link clear";
 
 /// A parsed control command.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,6 +69,12 @@ pub enum Command {
     Fault(FaultChange),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Change the link faults.
+    Link(LinkChange),
+    /// Report the device's and the line's state (`ok key=value …`).
+    Status,
+    /// List the commands (answered by the socket itself).
+    Help,
 }
 
 /// One change to [`Faults`].
@@ -97,10 +123,64 @@ fn number(w: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("not a number: {w}"))
 }
 
-/// Parses one line of the control protocol.
+/// A probability for `link drop|corrupt|duplicate`.
+fn rate(w: &str) -> Result<f64, String> {
+    w.parse::<f64>()
+        .ok()
+        .filter(|x| (0.0..=1.0).contains(x))
+        .ok_or_else(|| format!("not a probability in 0..1: {w}"))
+}
+
+fn dir(w: Option<&&str>, default: Dir) -> Result<Dir, String> {
+    match w.copied() {
+        None => Ok(default),
+        Some("tx") => Ok(Dir::Tx),
+        Some("rx") => Ok(Dir::Rx),
+        Some(other) => Err(format!("expected tx or rx, got {other}")),
+    }
+}
+
+/// The syntax of the command family starting with `word`, for errors.
+fn usage(word: &str) -> Option<&'static str> {
+    Some(match word {
+        "help" => "help",
+        "status" => "status",
+        "pps" => "pps",
+        "extrig" => "extrig high|low",
+        "power-cycle" => "power-cycle [boot=high|boot=low]",
+        "fault" => {
+            "fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
+        }
+        "motion" => "motion static [<lat> <heading>], or motion rotate <x> <y> <z>",
+        "link" => {
+            "link drop|corrupt|duplicate <rate 0..1> [tx|rx], link noise <bytes> [tx|rx], \
+             link stall <ms>, link cut, or link clear"
+        }
+        _ => return None,
+    })
+}
+
+/// Parses one line of the control protocol. An error names the expected
+/// syntax (`bad syntax: …; expected extrig high|low`), says what a value
+/// should be (`not a probability in 0..1: 2`), or says `try help` for a
+/// word that starts no command.
 pub fn parse(line: &str) -> Result<Command, String> {
     let words: Vec<&str> = line.split_whitespace().collect();
-    match words.as_slice() {
+    parse_words(&words).map_err(|e| {
+        let first = words.first().copied().unwrap_or("");
+        match usage(first) {
+            Some(u) if e.is_empty() => format!("bad syntax: {line}; expected {u}"),
+            Some(_) => e,
+            None => format!("unknown command: {line}; try help"),
+        }
+    })
+}
+
+/// `Err("")` = wrong shape (the caller adds the usage).
+fn parse_words(words: &[&str]) -> Result<Command, String> {
+    match words {
+        ["help"] => Ok(Command::Help),
+        ["status"] => Ok(Command::Status),
         ["pps"] => Ok(Command::Edge(Pin::Pps, Level::High)),
         ["extrig", "high"] => Ok(Command::Edge(Pin::Extrig, Level::High)),
         ["extrig", "low"] => Ok(Command::Edge(Pin::Extrig, Level::Low)),
@@ -135,7 +215,36 @@ pub fn parse(line: &str) -> Result<Command, String> {
             heading_deg: 0.0,
             rate_dps: [number(x)?, number(y)?, number(z)?],
         })),
-        _ => Err(format!("unknown command: {line}")),
+        ["link", what @ ("drop" | "corrupt" | "duplicate"), p, rest @ ..] if rest.len() <= 1 => {
+            let (p, d) = (rate(p)?, dir(rest.first(), Dir::Both)?);
+            Ok(Command::Link(match *what {
+                "drop" => LinkChange::Drop(p, d),
+                "corrupt" => LinkChange::Corrupt(p, d),
+                _ => LinkChange::Duplicate(p, d),
+            }))
+        }
+        ["link", "noise", n, rest @ ..] if rest.len() <= 1 => {
+            let n = n
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| (1..=MAX_NOISE).contains(&n))
+                .ok_or_else(|| format!("not a byte count in 1..={MAX_NOISE}: {n}"))?;
+            Ok(Command::Link(LinkChange::Noise(
+                n,
+                dir(rest.first(), Dir::Tx)?,
+            )))
+        }
+        ["link", "stall", ms] => {
+            let ms = ms
+                .parse::<u64>()
+                .ok()
+                .filter(|&ms| ms <= 3_600_000)
+                .ok_or_else(|| format!("not a time in ms (0..=3600000): {ms}"))?;
+            Ok(Command::Link(LinkChange::Stall(ms)))
+        }
+        ["link", "cut"] => Ok(Command::Link(LinkChange::Cut)),
+        ["link", "clear"] => Ok(Command::Link(LinkChange::Clear)),
+        _ => Err(String::new()),
     }
 }
 
@@ -358,13 +467,15 @@ impl Control {
     }
 
     /// Accepts a new client and executes the command lines it sent; each is
-    /// handed to `apply`, whose answer goes back to the client. Never
+    /// handed to `apply`, whose answer goes back to the client (`ok`, `ok
+    /// <text>` for a non-empty text, `error <why>`); `help` is answered
+    /// here. Never
     /// blocks, and does bounded work: at most [`MAX_READ_PER_POLL`] bytes
     /// read and [`MAX_COMMANDS_PER_POLL`] commands executed; what is left
     /// waits for the next call.
     pub fn poll(
         &mut self,
-        apply: &mut dyn FnMut(Command) -> Result<(), String>,
+        apply: &mut dyn FnMut(Command) -> Result<String, String>,
     ) -> anyhow::Result<()> {
         self.accept_new()?;
         let Some(c) = self.client.as_mut() else {
@@ -390,8 +501,12 @@ impl Control {
                         continue;
                     }
                     commands += 1;
-                    let answer = match parse(text).and_then(&mut *apply) {
-                        Ok(()) => "ok\n".to_owned(),
+                    let answer = match parse(text).and_then(|c| match c {
+                        Command::Help => Ok(format!("commands: {HELP}")),
+                        c => apply(c),
+                    }) {
+                        Ok(t) if t.is_empty() => "ok\n".to_owned(),
+                        Ok(t) => format!("ok {t}\n"),
                         Err(e) => format!("error {e}\n"),
                     };
                     c.queue(answer.as_bytes());
@@ -422,12 +537,13 @@ impl Control {
         Ok(())
     }
 
-    /// Sends a line to the client, if one is connected (best effort: a
+    /// Sends an event line to the client, if one is connected, as
+    /// `event <what>` (best effort: a
     /// client that does not read loses reports once
     /// [`MAX_PENDING_OUTPUT`] bytes wait, rather than stalling the device).
-    pub fn say(&mut self, line: &str) {
+    pub fn event(&mut self, what: &str) {
         if let Some(c) = self.client.as_mut() {
-            c.queue(line.as_bytes());
+            c.queue(format!("event {what}\n").as_bytes());
             if !c.flush() {
                 self.client = None;
             }
@@ -473,6 +589,54 @@ mod tests {
         assert!(parse("motion rotate 0 x 0").is_err());
     }
 
+    #[test]
+    fn parses_the_link_faults_help_and_status() {
+        assert_eq!(parse("help"), Ok(Command::Help));
+        assert_eq!(parse("status"), Ok(Command::Status));
+        assert_eq!(
+            parse("link drop 0.25"),
+            Ok(Command::Link(LinkChange::Drop(0.25, Dir::Both)))
+        );
+        assert_eq!(
+            parse("link corrupt 1 tx"),
+            Ok(Command::Link(LinkChange::Corrupt(1.0, Dir::Tx)))
+        );
+        assert_eq!(
+            parse("link duplicate 0 rx"),
+            Ok(Command::Link(LinkChange::Duplicate(0.0, Dir::Rx)))
+        );
+        assert_eq!(
+            parse("link noise 10"),
+            Ok(Command::Link(LinkChange::Noise(10, Dir::Tx)))
+        );
+        assert_eq!(
+            parse("link noise 10 rx"),
+            Ok(Command::Link(LinkChange::Noise(10, Dir::Rx)))
+        );
+        assert_eq!(
+            parse("link stall 200"),
+            Ok(Command::Link(LinkChange::Stall(200)))
+        );
+        assert_eq!(parse("link cut"), Ok(Command::Link(LinkChange::Cut)));
+        assert_eq!(parse("link clear"), Ok(Command::Link(LinkChange::Clear)));
+        assert_eq!(
+            parse("link drop -0.1"),
+            Err("not a probability in 0..1: -0.1".to_owned())
+        );
+        assert_eq!(
+            parse("link stall 1 2"),
+            Err(
+                "bad syntax: link stall 1 2; expected link drop|corrupt|duplicate <rate 0..1> \
+                 [tx|rx], link noise <bytes> [tx|rx], link stall <ms>, link cut, or link clear"
+                    .to_owned()
+            )
+        );
+        assert_eq!(
+            parse("warp 9"),
+            Err("unknown command: warp 9; try help".to_owned())
+        );
+    }
+
     /// A control socket and a connected client whose first poll accepted it.
     fn pair() -> (Control, TcpStream) {
         let mut ctl = Control::bind("127.0.0.1:0").unwrap();
@@ -481,7 +645,7 @@ mod tests {
             .set_read_timeout(Some(std::time::Duration::from_secs(5)))
             .unwrap();
         for _ in 0..500 {
-            ctl.poll(&mut |_| Ok(())).unwrap();
+            ctl.poll(&mut |_| Ok(String::new())).unwrap();
             if ctl.client.is_some() {
                 break;
             }
@@ -500,7 +664,7 @@ mod tests {
             let mut k = 0;
             ctl.poll(&mut |_| {
                 k += 1;
-                Ok(())
+                Ok(String::new())
             })
             .unwrap();
             if k > 0 {
@@ -542,7 +706,7 @@ mod tests {
         // Split across writes and polls, the newline far beyond the limit.
         client.write_all(&[b'x'; 1000]).unwrap();
         std::thread::sleep(std::time::Duration::from_millis(20));
-        ctl.poll(&mut |_| Ok(())).unwrap();
+        ctl.poll(&mut |_| Ok(String::new())).unwrap();
         client.write_all(&[b'y'; 70_000]).unwrap();
         client.write_all(b"\nextrig sideways\npps\n").unwrap();
         std::thread::sleep(std::time::Duration::from_millis(20));
@@ -550,7 +714,7 @@ mod tests {
         for _ in 0..100 {
             ctl.poll(&mut |c| {
                 applied.push(c);
-                Ok(())
+                Ok(String::new())
             })
             .unwrap();
         }
@@ -566,7 +730,7 @@ mod tests {
             lines,
             [
                 "error line longer than 256 bytes\n",
-                "error unknown command: extrig sideways\n",
+                "error bad syntax: extrig sideways; expected extrig high|low\n",
                 "ok\n"
             ]
         );

@@ -13,17 +13,31 @@
 //! * [`flash`] — the device's NOR flash, optionally written through to a
 //!   file so a restart is a power cycle;
 //! * [`control`] — the control socket: 1PPS/EXTRIG edges, power cycle
-//!   with BOOT, TOV edges reported back;
+//!   with BOOT, `status`, link faults, TOV edges reported back as events;
+//! * [`link`] — link-level faults between the device and the transport
+//!   (drop, corrupt, duplicate, noise, stall, cut), seeded by `--seed`;
+//! * [`monitor`] — the device's input decoded on the host side: logs and
+//!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
-//! * [`cli`] — the command line and [`cli::run`], what `main` calls.
+//! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
+//!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
+//! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
+//! * [`cli`] — the command line and [`cli::run`], what `main` calls;
+//! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
+//!   (commands, record, decode, plot).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
 pub mod backlog;
 pub mod cli;
+pub mod client;
 pub mod clock;
 pub mod control;
 pub mod flash;
+pub mod link;
+pub mod monitor;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;
+pub mod uart;
+pub mod virtual_device;

@@ -21,6 +21,8 @@
 //! * **Visible loss**: a frame the device's TX queue could not take is
 //!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
 //!   (at most once a second) and counts it in [`Stats::tx_dropped`].
+//! * **A status line** on stdout once a second when it is a terminal
+//!   (mode, format, rates, frames sent, frames rejected).
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
 //!   output, or when the line can carry what is queued — but not before the
 //!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
@@ -47,8 +49,30 @@ use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
+use crate::link::Link;
+use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
+
+/// What the host runner asks of a personality beyond the core's seam.
+pub trait HostPersonality: Personality {
+    /// The live value of a parameter (the KERNEL's Table 5.24), for the
+    /// monitor's reasons (`-v`); `None` where the protocol has no such
+    /// parameters.
+    fn param(&self, id: u16) -> Option<&[u8]>;
+}
+
+impl HostPersonality for Kernel {
+    fn param(&self, id: u16) -> Option<&[u8]> {
+        self.param_ram(id)
+    }
+}
+
+impl HostPersonality for imu_emu::isb::Isb {
+    fn param(&self, _id: u16) -> Option<&[u8]> {
+        None
+    }
+}
 
 /// Wake interval while bytes wait for the client.
 pub const BUSY_WAKE: Duration = Duration::from_millis(1);
@@ -96,7 +120,7 @@ pub struct Stats {
 }
 
 /// The board: a device, the shared schedule, a transport and the pins.
-pub struct Runner<F: NorFlash, T: Transport, P: Personality = Kernel> {
+pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
     dev: Device<F, P>,
     sched: Box<Schedule<CHUNK>>,
     io: HostPort<T>,
@@ -108,6 +132,9 @@ pub struct Runner<F: NorFlash, T: Transport, P: Personality = Kernel> {
     reported_held_ns: u64,
     /// When loss or lag was last reported (host time).
     reported_at: Option<std::time::Instant>,
+    /// When the terminal status line was last drawn (`None`: stdout is
+    /// not a terminal, no status line).
+    status_at: Option<std::time::Instant>,
 }
 
 /// What the schedule drives on this board: the transport, the control
@@ -120,9 +147,81 @@ struct HostPort<T: Transport> {
     next_pps_ns: Option<u64>,
     /// Motion replayed from a file (`--trajectory`), if any.
     trajectory: Option<Trajectory>,
+    /// Faults between the device's UART and the transport (`link …`).
+    link: Link,
+    /// The device's input decoded on the host side (logs, `status`).
+    monitor: Monitor,
+    /// Input past the faults that did not fit the device's read yet.
+    rx_carry: std::collections::VecDeque<u8>,
+    /// Device time of the current pass, ns.
+    now_ns: u64,
+    /// Bytes the line carried (before link faults).
+    line_bytes: u64,
+    /// Device time held back so far (copied from the clock), ns.
+    held_back_ns: u64,
+    /// Reused buffer of what passes the link faults.
+    scratch: Vec<u8>,
 }
 
-impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
+impl<T: Transport> HostPort<T> {
+    /// Hands the transport what a stall released, if it is over.
+    fn release(&mut self) -> anyhow::Result<()> {
+        let mut out = Vec::new();
+        self.link.release(self.now_ns, &mut out);
+        if !out.is_empty() {
+            self.transport.send(&out)?;
+        }
+        Ok(())
+    }
+
+    /// `status`: the device, the line and the link in `key=value` words.
+    fn status<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>) -> String {
+        use imu_emu::device::Mode;
+        let mode = match dev.mode() {
+            Mode::Idle => "idle",
+            Mode::Aligning => "aligning",
+            Mode::Continuous => "continuous",
+            Mode::FirmwareUpdate => "firmware-update",
+        };
+        let format = match (dev.mode(), self.link.last_id()) {
+            (Mode::Continuous, Some(id)) => format!("{id:#04x}"),
+            _ => "none".to_owned(),
+        };
+        let rate = dev
+            .output_rate()
+            .map_or("none".to_owned(), |r| r.to_string());
+        let rejected = self.monitor.rejected();
+        let total: u64 = rejected.iter().map(|r| r.1).sum();
+        let mut s = format!(
+            "mode={mode} format={format} output-rate={rate} line-rate={} frames-sent={} \
+             bytes-sent={} tx-dropped={} held-back-ms={} commands={} rejected={total}",
+            dev.line_rate(),
+            self.link.frames_sent(),
+            self.line_bytes,
+            dev.tx_dropped(),
+            self.held_back_ns / 1_000_000,
+            self.monitor.commands(),
+        );
+        for (r, n) in rejected {
+            s.push_str(&format!(" rejected-{}={n}", r.name()));
+        }
+        let l = self.link.stats();
+        s.push_str(&format!(
+            " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
+             link-cut={} link-stall-dropped={}",
+            self.link.describe(self.now_ns),
+            l.dropped,
+            l.corrupted,
+            l.duplicated,
+            l.noise,
+            l.cut,
+            l.stall_dropped
+        ));
+        s
+    }
+}
+
+impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     type Error = anyhow::Error;
 
     fn tx_room(&mut self) -> usize {
@@ -131,7 +230,17 @@ impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
     }
 
     fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.transport.send(bytes)
+        self.line_bytes += bytes.len() as u64;
+        let mut out = core::mem::take(&mut self.scratch);
+        out.clear();
+        self.link.tx(bytes, self.now_ns, &mut out);
+        let r = if out.is_empty() {
+            Ok(())
+        } else {
+            self.transport.send(&out)
+        };
+        self.scratch = out;
+        r
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
@@ -140,12 +249,23 @@ impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
     }
 
     fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        let mut n = 0;
-        self.transport.receive(buf.len(), &mut |bytes| {
-            let k = bytes.len().min(buf.len() - n);
-            buf[n..n + k].copy_from_slice(&bytes[..k]);
+        // Input the faults made longer than the last read could take first.
+        let mut n = self.rx_carry.len().min(buf.len());
+        for (b, c) in buf.iter_mut().zip(self.rx_carry.drain(..n)) {
+            *b = c;
+        }
+        let mut raw = Vec::new();
+        self.transport
+            .receive(buf.len() - n, &mut |bytes| raw.extend_from_slice(bytes))?;
+        if !raw.is_empty() || self.link.rx_noise_pending() {
+            let mut got = Vec::with_capacity(raw.len());
+            self.link.rx(&raw, &mut got);
+            let k = got.len().min(buf.len() - n);
+            buf[n..n + k].copy_from_slice(&got[..k]);
+            self.rx_carry.extend(&got[k..]);
             n += k;
-        })?;
+        }
+        self.monitor.feed(&buf[..n]);
         Ok(n)
     }
 
@@ -153,7 +273,7 @@ impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
         // The host board has no TOV pin: edges go to the control client.
         if let Some(ctl) = self.control.as_mut() {
             let l = if level == Level::High { "high" } else { "low" };
-            ctl.say(&format!("tov {l} {}\n", at.as_nanos()));
+            ctl.event(&format!("tov {l} {}", at.as_nanos()));
         }
         Ok(())
     }
@@ -177,22 +297,39 @@ impl<F: NorFlash, T: Transport, P: Personality> Port<F, P> for HostPort<T> {
     }
 
     fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> anyhow::Result<()> {
-        if let Some(ctl) = self.control.as_mut() {
-            ctl.poll(&mut |cmd| {
-                match cmd {
-                    control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
-                    control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
-                    control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-                    control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+        let product = dev.product();
+        self.monitor.judge(&product, &|id| {
+            P::param(dev.personality(), id).map(<[u8]>::to_vec)
+        });
+        let Some(mut ctl) = self.control.take() else {
+            return Ok(());
+        };
+        let mut noise = Vec::new();
+        let r = ctl.poll(&mut |cmd| {
+            tracing::debug!("control: {cmd:?}");
+            match cmd {
+                control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
+                control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
+                control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+                control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+                control::Command::Link(change) => {
+                    self.link.apply(change, self.now_ns, &mut noise);
                 }
-                Ok(())
-            })?;
+                control::Command::Status => return Ok(self.status(dev)),
+                control::Command::Help => {}
+            }
+            Ok(String::new())
+        });
+        self.control = Some(ctl);
+        r?;
+        if !noise.is_empty() {
+            self.transport.send(&noise)?;
         }
         Ok(())
     }
 }
 
-impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
+impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
@@ -205,12 +342,21 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
                 control: None,
                 next_pps_ns: None,
                 trajectory: None,
+                link: Link::new(0),
+                monitor: Monitor::new(),
+                rx_carry: std::collections::VecDeque::new(),
+                now_ns: 0,
+                line_bytes: 0,
+                held_back_ns: 0,
+                scratch: Vec::new(),
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
             reported_drops: 0,
             reported_held_ns: 0,
             reported_at: None,
+            status_at: std::io::IsTerminal::is_terminal(&std::io::stdout())
+                .then(std::time::Instant::now),
         }
     }
 
@@ -230,6 +376,12 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
     /// Serves the control socket (pin edges, power cycle, TOV reports).
     pub fn with_control(mut self, control: Control) -> Self {
         self.io.control = Some(control);
+        self
+    }
+
+    /// Seeds the link faults' random draws (`--seed`).
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.io.link = Link::new(seed);
         self
     }
 
@@ -284,6 +436,7 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
             };
             let now = self.now_ns();
             self.report();
+            self.status_line();
             let timeout = if pass.behind || pass.rx == MAX_RX_PER_PASS {
                 // More is due or waiting: go on at once.
                 Duration::ZERO
@@ -299,6 +452,10 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
                     .host_wait(self.next_wake(now).saturating_sub(now))
             };
             self.io.transport.wait(timeout)?;
+        }
+        if self.status_at.is_some() {
+            // End the status line before the last messages.
+            println!();
         }
         Ok(())
     }
@@ -322,6 +479,36 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
             wake = wake.min(pps.max(self.sched.next_deadline()));
         }
         wake.max(now)
+    }
+
+    /// Redraws a one-line status on stdout (a terminal only) once a second:
+    /// mode, format, rates, frames and bytes sent, rejected frames.
+    fn status_line(&mut self) {
+        let Some(at) = self.status_at else { return };
+        if at.elapsed() < Duration::from_secs(1) {
+            return;
+        }
+        self.status_at = Some(std::time::Instant::now());
+        let words = self.io.status(&self.dev);
+        let short: Vec<&str> = words
+            .split_whitespace()
+            .filter(|w| {
+                [
+                    "mode=",
+                    "format=",
+                    "output-rate=",
+                    "line-rate=",
+                    "frames-sent=",
+                    "rejected=",
+                ]
+                .iter()
+                .any(|k| w.starts_with(k))
+            })
+            .collect();
+        use std::io::Write as _;
+        let mut out = std::io::stdout().lock();
+        let _ = write!(out, "\r{}\x1b[K", short.join(" "));
+        let _ = out.flush();
     }
 
     /// Tells stderr, at most once a second, that the device dropped frames
@@ -397,6 +584,9 @@ impl<F: NorFlash, T: Transport, P: Personality> Runner<F, T, P> {
     /// transport flushed and the lag bounded.
     pub fn step(&mut self) -> anyhow::Result<Pass> {
         let now = self.now_ns();
+        self.io.now_ns = now;
+        self.io.held_back_ns = self.clock.held_back_ns();
+        self.io.release()?;
         let pass = self.sched.poll(&mut self.dev, &mut self.io, now, &LIMITS)?;
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;

@@ -1,4 +1,5 @@
-//! Where the emulated UART's bytes go: a TCP port or a pseudo-terminal.
+//! Where the emulated UART's bytes go: a TCP port, a pseudo-terminal or a
+//! real serial port.
 //!
 //! Both transports are nonblocking and driven by the single-threaded
 //! [`crate::runner`] loop: it waits in [`Transport::wait`] (a `ppoll` on the
@@ -11,9 +12,11 @@
 use std::time::Duration;
 
 pub mod pty;
+pub mod serial;
 pub mod tcp;
 
 pub use pty::PtyTransport;
+pub use serial::SerialTransport;
 pub use tcp::TcpTransport;
 
 /// A byte pipe between the device's UART and the host side.

@@ -10,11 +10,20 @@
 //! client starts with the live stream. The raw settings stay with the pty
 //! between opens.
 //!
-//! The emulated line rate is also written to the slave's termios speed
-//! (nearest standard `Bxxx` value) on every rate change, for clients that
-//! look at it; a pty moves bytes at memory speed whatever the speed says,
-//! so the runner's pacing is what models the line. Output the slave's
-//! input queue cannot take (a slow reader) waits in the bounded backlog.
+//! The emulated line rate is written to the slave's termios speed (nearest
+//! standard `Bxxx` value) while no client has the port open, so a client
+//! that opens it finds the device's rate; a pty moves bytes at memory speed
+//! whatever the speed says, so the runner's pacing is what models the line.
+//! Output the slave's input queue cannot take (a slow reader) waits in the
+//! bounded backlog.
+//!
+//! **Baud mismatch**: while a client has the port open its termios speed
+//! is its own (a rate change of the device, CommitBaudRate, does not touch
+//! it, as a real UART's rate does not follow the far end). The runner
+//! reads it every [`SPEED_CHECK`]; when it differs from the device's line
+//! rate, the bytes in both directions are garbled as a UART at the wrong
+//! rate reads them ([`crate::uart::resample`]: wrong bits, framing errors
+//! read as `0x00`) and a warning is logged once per mismatch.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -40,11 +49,23 @@ pub struct PtyTransport {
     /// Whether a client has the slave open (as of the last check).
     open: bool,
     backlog: Backlog,
+    /// The device's line rate, bit/s.
+    bps: u32,
+    /// The client's termios speed when it differs from the device's
+    /// (standard speeds only), as of the last check.
+    mismatch: Option<u32>,
+    /// When the client's speed was last read (host time).
+    checked_at: Option<std::time::Instant>,
 }
+
+/// How often the client's termios speed is read while it has the port
+/// open.
+pub const SPEED_CHECK: Duration = Duration::from_millis(20);
 
 impl PtyTransport {
     /// Opens a pty pair in raw mode at `bps`; with `link`, symlinks the
-    /// slave there (an existing symlink is replaced).
+    /// slave there (an existing symlink is replaced, unless it points at a
+    /// live pty: another emulator's port is refused, not stolen).
     pub fn open(bps: u32, link: Option<&Path>) -> anyhow::Result<Self> {
         let pty = nix::pty::openpty(None, None).context("openpty")?;
         let slave_path = nix::unistd::ttyname(&pty.slave).context("ttyname of the pty slave")?;
@@ -69,7 +90,66 @@ impl PtyTransport {
             link,
             open: false,
             backlog: Backlog::default(),
+            bps,
+            mismatch: None,
+            checked_at: None,
         })
+    }
+
+    /// The client's termios speed when it differs from the device's line
+    /// rate (as of the last check), bit/s.
+    pub fn mismatch(&self) -> Option<u32> {
+        self.mismatch
+    }
+
+    /// Reads the client's termios speed (at most every [`SPEED_CHECK`])
+    /// and notes a mismatch with the device's rate, warning once.
+    fn check_speed(&mut self) -> anyhow::Result<()> {
+        let now = std::time::Instant::now();
+        if self
+            .checked_at
+            .is_some_and(|t| now.duration_since(t) < SPEED_CHECK)
+        {
+            return Ok(());
+        }
+        self.checked_at = Some(now);
+        let slave = self.open_slave()?;
+        let t = termios::tcgetattr(&slave).context("tcgetattr")?;
+        // A non-standard speed (BOTHER) is not readable here: no verdict.
+        let client = speed_of(&t);
+        let device = baud_bps(nearest_baud(self.bps));
+        let mismatch = match (client, device) {
+            (Some(c), Some(d)) if c != d => Some(c),
+            _ => None,
+        };
+        if mismatch != self.mismatch {
+            match mismatch {
+                Some(c) => tracing::warn!(
+                    "{}: the client's port is at {c} bit/s, the device's line at {} bit/s: \
+                     bytes are garbled both ways as on a real line (did the driver follow \
+                     CommitBaudRate?)",
+                    self.slave_path.display(),
+                    self.bps
+                ),
+                None if self.mismatch.is_some() => tracing::warn!(
+                    "{}: the client's port matches the line rate again ({} bit/s)",
+                    self.slave_path.display(),
+                    self.bps
+                ),
+                None => {}
+            }
+            self.mismatch = mismatch;
+        }
+        Ok(())
+    }
+
+    /// Writes the device's line rate into the slave's termios.
+    fn write_speed(&self) -> anyhow::Result<()> {
+        let slave = self.open_slave()?;
+        let mut t = termios::tcgetattr(&slave).context("tcgetattr")?;
+        termios::cfsetspeed(&mut t, nearest_baud(self.bps)).context("cfsetspeed")?;
+        termios::tcsetattr(&slave, SetArg::TCSANOW, &t).context("tcsetattr")?;
+        Ok(())
     }
 
     /// The slave's path (`/dev/pts/N`).
@@ -118,8 +198,15 @@ impl PtyTransport {
                 self.backlog.clear();
                 let slave = self.open_slave()?;
                 termios::tcflush(&slave, FlushArg::TCIFLUSH).context("flushing the pty")?;
+                drop(slave);
+                // The next client finds the device's rate.
+                self.mismatch = None;
+                self.write_speed()?;
                 // Closing it again restores the hang-up.
             }
+        }
+        if open {
+            self.check_speed()?;
         }
         Ok(open)
     }
@@ -157,7 +244,11 @@ impl Transport for PtyTransport {
                 Ok(0) => return Ok(()),
                 Ok(n) => {
                     got += n;
-                    sink(&buf[..n]);
+                    match self.mismatch {
+                        // Sent at the client's rate, read at the device's.
+                        Some(c) => sink(&crate::uart::resample(&buf[..n], c, self.bps)),
+                        None => sink(&buf[..n]),
+                    }
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -171,7 +262,13 @@ impl Transport for PtyTransport {
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         // A real line loses what nobody reads.
         if self.open {
-            self.backlog.push(bytes);
+            match self.mismatch {
+                // Sent at the device's rate, read at the client's.
+                Some(c) => self
+                    .backlog
+                    .push(&crate::uart::resample(bytes, self.bps, c)),
+                None => self.backlog.push(bytes),
+            }
         }
         Ok(())
     }
@@ -188,11 +285,14 @@ impl Transport for PtyTransport {
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
-        let slave = self.open_slave()?;
-        let mut t = termios::tcgetattr(&slave).context("tcgetattr")?;
-        termios::cfsetspeed(&mut t, nearest_baud(bps)).context("cfsetspeed")?;
-        termios::tcsetattr(&slave, SetArg::TCSANOW, &t).context("tcsetattr")?;
-        Ok(())
+        self.bps = bps;
+        if self.open {
+            // The client's port keeps its own speed: look at it again now.
+            self.checked_at = None;
+            self.check_speed()
+        } else {
+            self.write_speed()
+        }
     }
 
     fn backlog_len(&self) -> usize {
@@ -241,6 +341,22 @@ pub fn nearest_baud(bps: u32) -> BaudRate {
         .unwrap_or(BaudRate::B115200)
 }
 
+/// The standard speed in `t` (the `CBAUD` bits of its control flags), bit/s;
+/// `None` for a non-standard one (`BOTHER`, set through termios2), which
+/// `cfgetospeed` cannot express.
+pub fn speed_of(t: &termios::Termios) -> Option<u32> {
+    let raw = t.control_flags.bits() & termios::ControlFlags::CBAUD.bits();
+    BaudRate::try_from(raw as nix::libc::speed_t)
+        .ok()
+        .and_then(baud_bps)
+}
+
+/// The rate of a standard termios speed, bit/s (`None` for one not in the
+/// table).
+pub fn baud_bps(b: BaudRate) -> Option<u32> {
+    BAUDS.iter().find(|&&(_, x)| x == b).map(|&(r, _)| r)
+}
+
 /// The `--link` symlink; removed on drop if it still points at the slave.
 #[derive(Debug)]
 struct LinkGuard {
@@ -251,8 +367,23 @@ struct LinkGuard {
 impl LinkGuard {
     fn create(path: &Path, target: &Path) -> anyhow::Result<Self> {
         match std::fs::symlink_metadata(path) {
-            Ok(m) if m.file_type().is_symlink() => std::fs::remove_file(path)
-                .with_context(|| format!("replacing symlink {}", path.display()))?,
+            Ok(m) if m.file_type().is_symlink() => {
+                // A pty slave exists only while its master is open: a link
+                // to one that exists belongs to a running emulator (or
+                // another program): refuse rather than steal it.
+                if let Ok(old) = std::fs::read_link(path) {
+                    if old.starts_with("/dev/pts") && old.exists() {
+                        return Err(anyhow::Error::new(crate::cli::UsageError(format!(
+                            "--link {}: points at {}, a live pty (another imu-emu?); \
+                             choose another path or stop that program",
+                            path.display(),
+                            old.display()
+                        ))));
+                    }
+                }
+                std::fs::remove_file(path)
+                    .with_context(|| format!("replacing symlink {}", path.display()))?
+            }
             Ok(_) => anyhow::bail!("--link {}: exists and is not a symlink", path.display()),
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => return Err(anyhow::Error::new(e).context(format!("{}", path.display()))),
@@ -321,9 +452,23 @@ mod tests {
         client.read_exact(&mut b).unwrap();
         assert_eq!(b, [1, 2, 0x0A, 0x0D]);
 
+        // A rate change while the client has the port open leaves the
+        // client's speed alone (issue 11, baud mismatch): the mismatch is
+        // noted and bytes are garbled both ways until the client follows.
         t.set_line_rate(4800).unwrap();
-        let tio = termios::tcgetattr(&client).unwrap();
-        assert_eq!(termios::cfgetospeed(&tio), BaudRate::B4800);
+        let mut tio = termios::tcgetattr(&client).unwrap();
+        assert_eq!(termios::cfgetospeed(&tio), BaudRate::B115200);
+        assert_eq!(t.mismatch(), Some(115_200));
+        t.send(&[0x55]).unwrap();
+        t.flush().unwrap();
+        let mut g = [0u8; 1];
+        client.read_exact(&mut g).unwrap();
+        assert_eq!(g[0], crate::uart::resample(&[0x55], 4800, 115_200)[0]);
+        termios::cfsetspeed(&mut tio, BaudRate::B4800).unwrap();
+        termios::tcsetattr(&client, SetArg::TCSANOW, &tio).unwrap();
+        std::thread::sleep(SPEED_CHECK);
+        t.receive(usize::MAX, &mut |_| {}).unwrap();
+        assert_eq!(t.mismatch(), None);
 
         // The client closing does not disturb the master; what is sent
         // while the port is closed is dropped, and so is what the client

@@ -1,0 +1,761 @@
+//! `imu-emu client …`: the host side of a KERNEL line, against the
+//! emulator or a real unit on a serial port (`--serial DEV --baud N`) or
+//! TCP (`--tcp HOST:PORT`).
+//!
+//! | subcommand | what it does |
+//! |---|---|
+//! | `info` | GetDevInfo (5.3.3): serial number, firmware, IMU type |
+//! | `bit` | GetBIT (5.3.4): the BIT bytes |
+//! | `start FORMAT` | a data command (Table 5.16) by name (`GA`) or code (`0x8F`); waits for the acknowledgement |
+//! | `stop` | Stop (5.3.2) |
+//! | `get PARAM` / `set PARAM VALUE` | ReadRAM / SaveFlash (5.3.7, 5.3.8) by Table 5.24 name |
+//! | `commit-baud` | CommitBaudRate (5.3.9) |
+//! | `udd TYPE,…` | User_Def_Data_config (5.3.5) with the type codes, prints the device's check |
+//! | `record` | decoded frames to CSV or JSON lines, with a progress line on a terminal |
+//! | `decode FILE` | a raw capture decoded the same way |
+//! | `plot CSV` | a recording to PNG: rates, accelerations, attitude against time |
+//!
+//! Errors are one line: the port cannot be opened, no answer within
+//! `--timeout`, answers that fail their checksum.
+
+pub mod decode;
+pub mod plot;
+
+use std::io::{IsTerminal as _, Read, Write};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context as _};
+use imu_emu::kernel::command::{self, Command};
+use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
+use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
+use imu_emu::model::Product;
+
+use crate::cli::UsageError;
+
+/// Options of `imu-emu client`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ClientArgs {
+    /// The unit's TCP address (the emulator's `listening on tcp …`).
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "serial")]
+    pub tcp: Option<String>,
+
+    /// The unit's serial port (e.g. /dev/ttyUSB0, or the emulator's pty).
+    #[arg(long, value_name = "DEV")]
+    pub serial: Option<PathBuf>,
+
+    /// Line rate of --serial, bit/s.
+    #[arg(long, value_name = "N", default_value_t = 115_200)]
+    pub baud: u32,
+
+    /// How long to wait for an answer, seconds.
+    #[arg(long, value_name = "S", default_value_t = 2.0)]
+    pub timeout: f64,
+
+    /// The unit's model (scale factors of the low-resolution fields,
+    /// Table 5.6).
+    #[arg(long, value_name = "MODEL", default_value = "K110", value_parser = parse_product)]
+    pub model: Product,
+
+    /// What to do.
+    #[command(subcommand)]
+    pub cmd: ClientCmd,
+}
+
+fn parse_product(s: &str) -> Result<Product, String> {
+    Product::parse(s).map_err(|e| e.to_string())
+}
+
+/// Output format of `record` and `decode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OutFormat {
+    /// Comma-separated values with a header row.
+    Csv,
+    /// One JSON object per line.
+    Json,
+}
+
+/// The subcommands.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum ClientCmd {
+    /// GetDevInfo: serial number, firmware, IMU type.
+    Info,
+    /// GetBIT: the built-in-test bytes.
+    Bit,
+    /// Start a data stream: a format name (GA, GAm, GAA, GAAm, Orientation,
+    /// Quaternion, Calibrated-HR, UDD) or code (0x8F).
+    Start {
+        /// The format.
+        format: String,
+    },
+    /// Stop the stream.
+    Stop,
+    /// Read a parameter (ReadRAM) by its Table 5.24 name.
+    Get {
+        /// Name (e.g. Data_Rate) or ID (0x0012).
+        param: String,
+    },
+    /// Save a parameter (SaveFlash); the value as printed by `get`.
+    Set {
+        /// Name (e.g. Data_Rate) or ID (0x0012).
+        param: String,
+        /// The value (three comma-separated numbers for Alignment_Angles).
+        value: String,
+    },
+    /// CommitBaudRate: the saved Baud_Rate takes effect.
+    CommitBaud,
+    /// Configure User Defined Data: type codes, comma-separated (0x21,0x23).
+    Udd {
+        /// The types.
+        types: String,
+    },
+    /// Record decoded frames.
+    Record {
+        /// Start this format first (and stop it at the end).
+        #[arg(long, value_name = "FORMAT")]
+        format: Option<String>,
+        /// Record this many seconds of output (frames = seconds × Data_Rate).
+        #[arg(long, value_name = "S", conflicts_with = "frames")]
+        duration: Option<f64>,
+        /// Record this many frames.
+        #[arg(long, value_name = "N")]
+        frames: Option<u64>,
+        /// Output file (default stdout).
+        #[arg(long, short, value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// csv or json (lines).
+        #[arg(long, value_enum, default_value_t = OutFormat::Csv)]
+        to: OutFormat,
+        /// Also keep the raw bytes received in this file.
+        #[arg(long, value_name = "FILE")]
+        raw: Option<PathBuf>,
+    },
+    /// Decode a raw capture (the bytes of a line) to CSV or JSON lines.
+    Decode {
+        /// The capture.
+        file: PathBuf,
+        /// Output file (default stdout).
+        #[arg(long, short, value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// csv or json (lines).
+        #[arg(long, value_enum, default_value_t = OutFormat::Csv)]
+        to: OutFormat,
+    },
+    /// Plot a CSV recording to PNG (rates, accelerations, attitude).
+    Plot {
+        /// The CSV recording (from `record`).
+        file: PathBuf,
+        /// The PNG to write.
+        #[arg(long, short, value_name = "FILE")]
+        out: PathBuf,
+    },
+}
+
+trait Port: Read + Write + Send {}
+impl<T: Read + Write + Send> Port for T {}
+
+/// Largest frame decoded.
+const CAP: usize = 4096;
+
+/// A line to a unit, with a frame decoder.
+pub struct Link {
+    port: Box<dyn Port>,
+    rx: Box<Decoder<CAP>>,
+    timeout: Duration,
+    what: String,
+    /// Raw bytes received go here too (`record --raw`).
+    tee: Option<std::fs::File>,
+    /// Bytes read and not yet fed to the decoder: `inbuf[inpos..]`.
+    inbuf: Vec<u8>,
+    inpos: usize,
+}
+
+/// A frame received: identifier and payload.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Frame {
+    /// Message type.
+    pub msg_type: u8,
+    /// Identifier.
+    pub id: u8,
+    /// Payload.
+    pub payload: Vec<u8>,
+}
+
+impl Link {
+    /// Opens the line `args` name.
+    pub fn open(args: &ClientArgs) -> anyhow::Result<Link> {
+        let timeout = Duration::from_secs_f64(args.timeout.clamp(0.01, 3600.0));
+        let (port, what): (Box<dyn Port>, String) = match (&args.tcp, &args.serial) {
+            (Some(addr), None) => {
+                use std::net::ToSocketAddrs as _;
+                let what = format!("--tcp {addr}");
+                let sa = addr
+                    .to_socket_addrs()
+                    .map_err(|e| UsageError(format!("{what}: {e}; expected HOST:PORT")))?
+                    .next()
+                    .ok_or_else(|| UsageError(format!("{what}: no address")))?;
+                let s = std::net::TcpStream::connect_timeout(&sa, timeout)
+                    .map_err(|e| anyhow!("{what}: cannot connect: {e}"))?;
+                s.set_nodelay(true)?;
+                s.set_read_timeout(Some(Duration::from_millis(20)))?;
+                (Box::new(s), what)
+            }
+            (None, Some(dev)) => {
+                let what = format!("--serial {}", dev.display());
+                let p = serialport::new(dev.to_string_lossy(), args.baud)
+                    .timeout(Duration::from_millis(20))
+                    .open()
+                    .map_err(|e| anyhow!("{what}: cannot open: {e}"))?;
+                (Box::new(p), what)
+            }
+            _ => {
+                return Err(UsageError(
+                    "client: say where the unit is: --tcp HOST:PORT or --serial DEV".to_owned(),
+                )
+                .into())
+            }
+        };
+        Ok(Link {
+            port,
+            rx: Box::new(Decoder::new()),
+            timeout,
+            what,
+            tee: None,
+            inbuf: Vec::new(),
+            inpos: 0,
+        })
+    }
+
+    /// Sends a command.
+    pub fn send(&mut self, c: Command<'_>) -> anyhow::Result<()> {
+        let mut buf = [0u8; 300];
+        let n = c.encode(&mut buf).context("command too long")?;
+        self.port
+            .write_all(&buf[..n])
+            .and_then(|()| self.port.flush())
+            .map_err(|e| anyhow!("{}: write: {e}", self.what))
+    }
+
+    /// Frames that failed their length or checksum so far.
+    pub fn checksum_errors(&self) -> u32 {
+        self.rx.errors()
+    }
+
+    /// The next frame before `deadline`, or `None`.
+    pub fn frame_before(&mut self, deadline: Instant) -> anyhow::Result<Option<Frame>> {
+        loop {
+            let mut input: &[u8] = &self.inbuf[self.inpos..];
+            let before = input.len();
+            let got = self.rx.next_frame(&mut input).map(|f| Frame {
+                msg_type: f.msg_type,
+                id: f.id,
+                payload: f.payload.to_vec(),
+            });
+            self.inpos += before - input.len();
+            if got.is_some() {
+                return Ok(got);
+            }
+            self.inbuf.clear();
+            self.inpos = 0;
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+            let mut buf = [0u8; 4096];
+            let n = match self.port.read(&mut buf) {
+                Ok(0) => bail!("{}: the unit closed the connection", self.what),
+                Ok(n) => n,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock
+                            | std::io::ErrorKind::TimedOut
+                            | std::io::ErrorKind::Interrupted
+                    ) =>
+                {
+                    0
+                }
+                Err(e) => bail!("{}: read: {e}", self.what),
+            };
+            if let Some(t) = self.tee.as_mut() {
+                t.write_all(&buf[..n])?;
+            }
+            self.inbuf.extend_from_slice(&buf[..n]);
+        }
+    }
+
+    /// Sends `c` and waits for a data frame with `id`; a one-line error
+    /// after the timeout (saying if frames failed their checksum).
+    pub fn request(&mut self, c: Command<'_>, id: u8, what: &str) -> anyhow::Result<Frame> {
+        let errors = self.checksum_errors();
+        self.send(c)?;
+        self.answer(id, what, errors)
+    }
+
+    fn answer(&mut self, id: u8, what: &str, errors_before: u32) -> anyhow::Result<Frame> {
+        let deadline = Instant::now() + self.timeout;
+        while let Some(f) = self.frame_before(deadline)? {
+            if f.msg_type == TYPE_DATA && f.id == id {
+                return Ok(f);
+            }
+        }
+        let bad = self.checksum_errors() - errors_before;
+        if bad > 0 {
+            bail!(
+                "{}: no valid answer to {what} within {:?}: {bad} frames failed their \
+                 checksum (wrong --baud?)",
+                self.what,
+                self.timeout
+            );
+        }
+        bail!(
+            "{}: no answer to {what} within {:?} (is the unit on, the line rate right?)",
+            self.what,
+            self.timeout
+        )
+    }
+
+    /// Reads and discards whatever arrives during `d`.
+    pub fn drain(&mut self, d: Duration) -> anyhow::Result<()> {
+        let end = Instant::now() + d;
+        while self.frame_before(end)?.is_some() {}
+        Ok(())
+    }
+}
+
+/// The row of a parameter by Table 5.24 name (any case) or ID.
+pub fn find_param(s: &str) -> anyhow::Result<&'static ParamSpec> {
+    let by_id = s
+        .strip_prefix("0x")
+        .and_then(|h| u16::from_str_radix(h, 16).ok())
+        .and_then(params::find);
+    by_id
+        .or_else(|| PARAMS.iter().find(|p| p.name.eq_ignore_ascii_case(s)))
+        .ok_or_else(|| {
+            let names: Vec<&str> = PARAMS.iter().map(|p| p.name).collect();
+            UsageError(format!(
+                "no parameter {s}; Table 5.24 names: {}",
+                names.join(" ")
+            ))
+            .into()
+        })
+}
+
+/// A parameter value as text (`get`).
+pub fn show_value(p: &ParamSpec, v: &[u8]) -> String {
+    match p.kind {
+        Kind::U8 => v[0].to_string(),
+        Kind::U16 => u16::from_le_bytes([v[0], v[1]]).to_string(),
+        Kind::F32 | Kind::F32x3 => v
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]).to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+    }
+}
+
+/// Parses a value for `p` (`set`).
+pub fn parse_value(p: &ParamSpec, s: &str) -> anyhow::Result<Vec<u8>> {
+    let bad = || UsageError(format!("{}: {s} is not a {:?} value", p.name, p.kind));
+    Ok(match p.kind {
+        Kind::U8 => vec![s.parse::<u8>().map_err(|_| bad())?],
+        Kind::U16 => s.parse::<u16>().map_err(|_| bad())?.to_le_bytes().to_vec(),
+        Kind::F32 | Kind::F32x3 => {
+            let want = usize::from(p.kind.byte_len() / 4);
+            let xs: Vec<f32> = s
+                .split(',')
+                .map(|x| x.trim().parse::<f32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| bad())?;
+            if xs.len() != want {
+                return Err(bad().into());
+            }
+            xs.iter().flat_map(|x| x.to_le_bytes()).collect()
+        }
+    })
+}
+
+fn ascii(b: &[u8]) -> String {
+    b.iter()
+        .take_while(|&&c| c != 0)
+        .map(|&c| {
+            if c.is_ascii_graphic() || c == b' ' {
+                c as char
+            } else {
+                '?'
+            }
+        })
+        .collect::<String>()
+        .trim()
+        .to_owned()
+}
+
+/// Runs `imu-emu client …`.
+pub fn run(args: ClientArgs) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    match &args.cmd {
+        ClientCmd::Decode { file, out: o, to } => {
+            let bytes =
+                std::fs::read(file).with_context(|| format!("decode {}", file.display()))?;
+            let mut w = writer(o.as_ref())?;
+            let mut rec = Recorder::new(*to, args.model);
+            let mut d = Box::new(Decoder::<CAP>::new());
+            let mut input: &[u8] = &bytes;
+            while let Some(f) = d.next_frame(&mut input) {
+                if f.msg_type == TYPE_DATA {
+                    rec.row(&mut w, f.id, f.payload, None)?;
+                }
+            }
+            w.flush()?;
+            eprintln!(
+                "imu-emu: {} frames decoded, {} failed their checksum, {} counter gaps, {} skipped",
+                rec.rows,
+                d.errors(),
+                rec.gaps,
+                rec.skipped
+            );
+            return Ok(());
+        }
+        ClientCmd::Plot { file, out: png } => {
+            let n = plot::plot(file, png)?;
+            writeln!(out, "{}: {n} rows plotted", png.display())?;
+            return Ok(());
+        }
+        _ => {}
+    }
+    let mut link = Link::open(&args)?;
+    match &args.cmd {
+        ClientCmd::Info => {
+            let f = link.request(Command::GetDevInfo, command::GET_DEV_INFO, "GetDevInfo")?;
+            let p = &f.payload;
+            if p.len() < 50 {
+                bail!("GetDevInfo answer of {} bytes, expected 166", p.len());
+            }
+            writeln!(out, "serial: {}", ascii(&p[0..8]))?;
+            writeln!(out, "firmware: {}", ascii(&p[8..48]))?;
+            writeln!(out, "imu_type: {:#04x}", p[49])?;
+        }
+        ClientCmd::Bit => {
+            let f = link.request(Command::GetBit, command::GET_BIT, "GetBIT")?;
+            let hex: Vec<String> = f.payload.iter().map(|b| format!("{b:02X}")).collect();
+            let verdict = if f.payload.iter().all(|&b| b == 0) {
+                "pass"
+            } else {
+                "FAIL"
+            };
+            writeln!(out, "bit: {} ({verdict})", hex.join(" "))?;
+        }
+        ClientCmd::Start { format } => {
+            let code = start(&mut link, format)?;
+            writeln!(out, "started {} ({code:#04x})", decode::format_name(code))?;
+        }
+        ClientCmd::Stop => {
+            link.send(Command::Stop)?;
+            writeln!(out, "stopped")?;
+        }
+        ClientCmd::Get { param } => {
+            let p = find_param(param)?;
+            let v = get(&mut link, p)?;
+            writeln!(out, "{} = {}", p.name, show_value(p, &v))?;
+        }
+        ClientCmd::Set { param, value } => {
+            let p = find_param(param)?;
+            let v = parse_value(p, value)?;
+            let c = Command::SaveFlash {
+                id: p.id,
+                len: p.kind.byte_len(),
+                value: &v,
+            };
+            match link.request(c, 0xB2, "SaveFlash") {
+                Ok(_) => writeln!(out, "{} saved = {value}", p.name)?,
+                Err(_) => bail!(
+                    "{}: SaveFlash {} {value}: no acknowledgement within {:?}: the unit refused \
+                     the value (ICD 5.3.7) or did not hear it",
+                    link.what,
+                    p.name,
+                    link.timeout
+                ),
+            }
+        }
+        ClientCmd::CommitBaud => {
+            link.send(Command::CommitBaudRate)?;
+            writeln!(out, "baud rate committed")?;
+        }
+        ClientCmd::Udd { types } => {
+            let list = parse_types(types)?;
+            link.send(Command::UddConfig)?;
+            let mut msg = vec![u8::try_from(list.len()).unwrap_or(u8::MAX)];
+            msg.extend_from_slice(&list);
+            let f = link.request(
+                Command::UddConfigMessage(&msg),
+                command::UDD_CONFIG,
+                "User_Def_Data_config",
+            )?;
+            let p = &f.payload;
+            if p.len() < 8 {
+                bail!("UDD configuration answer of {} bytes, expected 8", p.len());
+            }
+            let errors = p[2];
+            if errors == 0 {
+                writeln!(
+                    out,
+                    "udd configured: {} types, max rate {} Hz",
+                    list.len(),
+                    u16::from_le_bytes([p[5], p[6]])
+                )?;
+            } else {
+                bail!(
+                    "udd refused: error bits {errors:#04x}, wrong types mask {:#06x}, max rate {} Hz \
+                     (ICD Table 5.21)",
+                    u16::from_le_bytes([p[3], p[4]]),
+                    u16::from_le_bytes([p[5], p[6]])
+                );
+            }
+        }
+        ClientCmd::Record {
+            format,
+            duration,
+            frames,
+            out: o,
+            to,
+            raw,
+        } => {
+            if let Some(r) = raw {
+                link.tee = Some(
+                    std::fs::File::create(r).with_context(|| format!("--raw {}", r.display()))?,
+                );
+            }
+            let started = match format {
+                Some(f) => Some(start(&mut link, f)?),
+                None => None,
+            };
+            let want = match (frames, duration) {
+                (Some(n), _) => Some(*n),
+                (None, Some(s)) => {
+                    let v = get(&mut link, &params::DATA_RATE)?;
+                    let rate = u16::from_le_bytes([v[0], v[1]]);
+                    Some((s * f64::from(rate)).round() as u64)
+                }
+                (None, None) => None,
+            };
+            let mut w = writer(o.as_ref())?;
+            let r = record(&mut link, &mut w, *to, args.model, want);
+            if started.is_some() {
+                link.send(Command::Stop)?;
+            }
+            w.flush()?;
+            let rec = r?;
+            eprintln!(
+                "imu-emu: {} frames recorded, {} failed their checksum, {} counter gaps",
+                rec.rows,
+                link.checksum_errors(),
+                rec.gaps
+            );
+        }
+        ClientCmd::Decode { .. } | ClientCmd::Plot { .. } => unreachable!(),
+    }
+    Ok(())
+}
+
+fn parse_types(s: &str) -> anyhow::Result<Vec<u8>> {
+    s.split(',')
+        .map(|t| {
+            let t = t.trim();
+            let h = t.strip_prefix("0x").unwrap_or(t);
+            u8::from_str_radix(h, 16).map_err(|_| {
+                UsageError(format!("udd: {t} is not a type code (hex, e.g. 0x21)")).into()
+            })
+        })
+        .collect()
+}
+
+fn start(link: &mut Link, format: &str) -> anyhow::Result<u8> {
+    let code = decode::format_code(format).ok_or_else(|| {
+        UsageError(format!(
+            "start: unknown format {format}; expected GA, GAm, GAA, GAAm, Orientation, \
+             Quaternion, Calibrated-HR, UDD or a code (0x8F)"
+        ))
+    })?;
+    link.request(Command::Data(code), code, &format!("start {format}"))?;
+    Ok(code)
+}
+
+fn get(link: &mut Link, p: &ParamSpec) -> anyhow::Result<Vec<u8>> {
+    let f = link.request(
+        Command::ReadRam {
+            id: p.id,
+            len: p.kind.byte_len(),
+        },
+        0xB1,
+        &format!("ReadRAM {}", p.name),
+    )?;
+    if f.payload.len() != usize::from(p.kind.byte_len()) {
+        bail!(
+            "ReadRAM {}: answer of {} bytes, expected {}",
+            p.name,
+            f.payload.len(),
+            p.kind.byte_len()
+        );
+    }
+    Ok(f.payload)
+}
+
+fn writer(path: Option<&PathBuf>) -> anyhow::Result<Box<dyn Write>> {
+    Ok(match path {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("{}", p.display()))?,
+        )),
+        None => Box::new(std::io::BufWriter::new(std::io::stdout())),
+    })
+}
+
+/// Writes decoded frames as rows and counts them.
+pub struct Recorder {
+    to: OutFormat,
+    product: Product,
+    /// The columns of the first data frame (CSV header).
+    columns: Option<(u8, Vec<&'static str>)>,
+    /// Rows written.
+    pub rows: u64,
+    /// Frames of another format, or that did not decode, skipped.
+    pub skipped: u64,
+    /// Counter steps that differ from the first one.
+    pub gaps: u64,
+    last_counter: Option<u16>,
+    step: Option<u16>,
+}
+
+impl Recorder {
+    /// No row yet.
+    pub fn new(to: OutFormat, product: Product) -> Self {
+        Recorder {
+            to,
+            product,
+            columns: None,
+            rows: 0,
+            skipped: 0,
+            gaps: 0,
+            last_counter: None,
+            step: None,
+        }
+    }
+
+    /// Writes the frame as a row (with the host time `t`, seconds since
+    /// the start, if given); whether it was written.
+    pub fn row(
+        &mut self,
+        w: &mut dyn Write,
+        id: u8,
+        payload: &[u8],
+        t: Option<f64>,
+    ) -> anyhow::Result<bool> {
+        let Some(d) = decode::decode(id, payload, &self.product) else {
+            self.skipped += 1;
+            return Ok(false);
+        };
+        let cols: Vec<&'static str> = d.values.iter().map(|v| v.0).collect();
+        match &self.columns {
+            None => {
+                if self.to == OutFormat::Csv {
+                    let mut h = vec!["frame", "format"];
+                    if t.is_some() {
+                        h.push("host_time_s");
+                    }
+                    h.extend(&cols);
+                    writeln!(w, "{}", h.join(","))?;
+                }
+                self.columns = Some((id, cols));
+            }
+            Some((cid, c)) if *cid != id || *c != cols => {
+                self.skipped += 1;
+                return Ok(false);
+            }
+            Some(_) => {}
+        }
+        if let Some(c) = d.get("counter") {
+            let c = c as u16;
+            if let Some(last) = self.last_counter {
+                let step = c.wrapping_sub(last);
+                match self.step {
+                    None => self.step = Some(step),
+                    Some(s) if s != step => self.gaps += 1,
+                    Some(_) => {}
+                }
+            }
+            self.last_counter = Some(c);
+        }
+        let fmt = decode::format_name(id);
+        match self.to {
+            OutFormat::Csv => {
+                let mut line = format!("{},{fmt}", self.rows);
+                if let Some(t) = t {
+                    line.push_str(&format!(",{t:.6}"));
+                }
+                for (_, v) in &d.values {
+                    line.push_str(&format!(",{v}"));
+                }
+                writeln!(w, "{line}")?;
+            }
+            OutFormat::Json => {
+                let mut line = format!("{{\"frame\":{},\"format\":\"{fmt}\"", self.rows);
+                if let Some(t) = t {
+                    line.push_str(&format!(",\"host_time_s\":{t:.6}"));
+                }
+                for (k, v) in &d.values {
+                    line.push_str(&format!(",\"{k}\":{v}"));
+                }
+                line.push('}');
+                writeln!(w, "{line}")?;
+            }
+        }
+        self.rows += 1;
+        Ok(true)
+    }
+}
+
+/// Records data frames until `want` rows were written (or forever); a
+/// progress line on stderr when it is a terminal.
+fn record(
+    link: &mut Link,
+    w: &mut dyn Write,
+    to: OutFormat,
+    product: Product,
+    want: Option<u64>,
+) -> anyhow::Result<Recorder> {
+    let mut rec = Recorder::new(to, product);
+    let t0 = Instant::now();
+    let tty = std::io::stderr().is_terminal();
+    let mut shown = t0;
+    let mut quiet_since = Instant::now();
+    while want.is_none_or(|n| rec.rows < n) {
+        match link.frame_before(Instant::now() + Duration::from_millis(100))? {
+            Some(f) if f.msg_type == TYPE_DATA => {
+                quiet_since = Instant::now();
+                rec.row(w, f.id, &f.payload, Some(t0.elapsed().as_secs_f64()))?;
+            }
+            Some(_) => {}
+            None if quiet_since.elapsed() > link.timeout => bail!(
+                "{}: no data frame within {:?} after {} rows (is a stream running? --format GA \
+                 starts one)",
+                link.what,
+                link.timeout,
+                rec.rows
+            ),
+            None => {}
+        }
+        if tty && shown.elapsed() > Duration::from_millis(250) {
+            shown = Instant::now();
+            let secs = t0.elapsed().as_secs_f64();
+            eprint!(
+                "\r{} frames  {:.1} Hz  {} checksum errors  {} counter gaps ",
+                rec.rows,
+                rec.rows as f64 / secs.max(1e-9),
+                link.checksum_errors(),
+                rec.gaps
+            );
+        }
+    }
+    if tty {
+        eprintln!();
+    }
+    Ok(rec)
+}

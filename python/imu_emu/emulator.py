@@ -1,0 +1,207 @@
+"""Start the imu-emu binary and talk to it (UART and control socket)."""
+
+import os
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+from .kernel import FrameReader
+
+_REPO = Path(__file__).resolve().parents[2]
+
+
+def find_binary():
+    """The ``imu-emu`` binary: ``$IMU_EMU_BIN``, then the cargo target
+    directory (``$CARGO_TARGET_DIR`` or ``target/`` of the repository,
+    release before debug), then ``PATH``."""
+    env = os.environ.get("IMU_EMU_BIN")
+    if env:
+        return env
+    dirs = [os.environ.get("CARGO_TARGET_DIR"), str(_REPO / "target"),
+            os.path.expanduser("~/.cache/imu-emu/target")]
+    for d in filter(None, dirs):
+        for profile in ("release", "debug"):
+            p = Path(d) / profile / "imu-emu"
+            if p.is_file() and os.access(p, os.X_OK):
+                return str(p)
+    found = shutil.which("imu-emu")
+    if found:
+        return found
+    raise FileNotFoundError(
+        "imu-emu binary not found: build it (cargo build -p imu-emu-host) or set IMU_EMU_BIN"
+    )
+
+
+class Control:
+    """The control socket: one reply line per command; lines starting with
+    ``event `` (TOV edges, ...) are kept in :attr:`events`."""
+
+    def __init__(self, addr, timeout=5.0):
+        host, port = addr.rsplit(":", 1)
+        self.sock = socket.create_connection((host, int(port)), timeout=timeout)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.file = self.sock.makefile("r", encoding="utf-8", newline="\n")
+        self.events = []
+
+    def cmd(self, line):
+        """Sends ``line``; returns the reply text after ``ok`` (maybe
+        empty); raises :class:`RuntimeError` on ``error ...``."""
+        self.sock.sendall(line.encode() + b"\n")
+        while True:
+            reply = self.file.readline()
+            if not reply:
+                raise ConnectionError("control socket closed")
+            reply = reply.rstrip("\n")
+            if reply.startswith("event "):
+                self.events.append(reply[len("event "):])
+                continue
+            if reply == "ok":
+                return ""
+            if reply.startswith("ok "):
+                return reply[3:]
+            raise RuntimeError(reply)
+
+    def status(self):
+        """``status`` as a dict of strings."""
+        return dict(w.split("=", 1) for w in self.cmd("status").split())
+
+    def link(self, *words):
+        """A ``link ...`` fault (``link("corrupt", 1, "tx")``)."""
+        return self.cmd("link " + " ".join(str(w) for w in words))
+
+    def pps(self):
+        """A 1PPS rising edge now."""
+        return self.cmd("pps")
+
+    def close(self):
+        """Closes the socket."""
+        self.file.close()
+        self.sock.close()
+
+
+class Emulator:
+    """A running ``imu-emu`` on a free loopback port with a control socket.
+
+    Use as a context manager, or call :meth:`stop`. ``args`` are extra
+    command-line options (``["--model", "K120", "--seed", "3"]``).
+    """
+
+    def __init__(self, args=(), binary=None, timeout=5.0):
+        self.timeout = timeout
+        cmd = [binary or find_binary(), "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0"]
+        cmd += list(args)
+        self.proc = subprocess.Popen(
+            cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            text=True,
+        )
+        self.stderr_lines = []
+        self._err = threading.Thread(target=self._drain_stderr, daemon=True)
+        self._err.start()
+        self.addr = self._line("listening on tcp ")
+        self.control_addr = self._line("control on tcp ")
+        self._uart = None
+        self._control = None
+        self.reader = FrameReader()
+
+    def _drain_stderr(self):
+        for line in self.proc.stderr:
+            self.stderr_lines.append(line.rstrip("\n"))
+
+    def _line(self, prefix):
+        line = self.proc.stdout.readline()
+        if not line.startswith(prefix):
+            self.stop()
+            raise RuntimeError(
+                "imu-emu did not start: %r; stderr: %s" % (line, "\n".join(self.stderr_lines))
+            )
+        return line[len(prefix):].strip()
+
+    @property
+    def port(self):
+        """The UART's TCP port."""
+        return int(self.addr.rsplit(":", 1)[1])
+
+    def uart(self):
+        """The UART socket (connected on first use: the device powers on)."""
+        if self._uart is None:
+            host, port = self.addr.rsplit(":", 1)
+            self._uart = socket.create_connection((host, int(port)), timeout=self.timeout)
+            self._uart.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return self._uart
+
+    def control(self):
+        """The :class:`Control` client (connected on first use)."""
+        if self._control is None:
+            self._control = Control(self.control_addr, self.timeout)
+        return self._control
+
+    def send(self, frame):
+        """Sends bytes to the device's UART."""
+        self.uart().sendall(frame)
+
+    def frames(self, duration):
+        """The frames arriving within ``duration`` seconds."""
+        s = self.uart()
+        out = []
+        end = time.monotonic() + duration
+        while True:
+            left = end - time.monotonic()
+            if left <= 0:
+                return out
+            s.settimeout(min(left, 0.05))
+            try:
+                data = s.recv(65536)
+            except socket.timeout:
+                continue
+            if not data:
+                return out
+            out += self.reader.feed(data)
+
+    def frame(self, ident, timeout=None):
+        """The next frame with ``ident`` (others skipped); raises
+        :class:`TimeoutError`."""
+        end = time.monotonic() + (timeout or self.timeout)
+        pending = getattr(self, "_pending", [])
+        while True:
+            while pending:
+                f = pending.pop(0)
+                if f.ident == ident:
+                    self._pending = pending
+                    return f
+            left = end - time.monotonic()
+            if left <= 0:
+                self._pending = pending
+                raise TimeoutError("no frame with id 0x%02X" % ident)
+            pending = self.frames(min(left, 0.05))
+
+    def request(self, frame, ident, timeout=None):
+        """Sends ``frame`` and returns the next frame with ``ident``."""
+        self.send(frame)
+        return self.frame(ident, timeout)
+
+    def stop(self):
+        """Stops the emulator (SIGTERM, then kill)."""
+        for s in (self._uart,):
+            if s is not None:
+                s.close()
+        if self._control is not None:
+            self._control.close()
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._err.join(timeout=2)
+        self.proc.stdout.close()
+        self.proc.stderr.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()

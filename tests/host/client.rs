@@ -1,0 +1,320 @@
+//! End-to-end tests of `imu-emu client …` (issue 11): each subcommand of
+//! the real binary against the real emulator, checked by what it prints,
+//! what it writes and what the device did.
+
+// Shared with the other host suites; not every helper is used here.
+#[allow(dead_code)]
+mod support;
+
+use std::process::{Command, Output};
+use std::time::Duration;
+
+use support::Emu;
+
+/// Runs `imu-emu client --tcp ADDR ARGS…` (killed after 20 s at most).
+fn client(addr: &str, args: &[&str]) -> Output {
+    let mut all = vec!["client", "--tcp", addr];
+    all.extend_from_slice(args);
+    run(&all)
+}
+
+fn run(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("client {args:?} did not finish");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn stdout(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "{:?}: {}",
+        o.status,
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8(o.stderr.clone()).unwrap()
+}
+
+fn emu() -> (Emu, String) {
+    let e = Emu::tcp(&["--power-on", "now"]);
+    let a = e.addr().to_string();
+    (e, a)
+}
+
+#[test]
+fn info_bit_get_set_and_their_errors() {
+    let (_e, a) = emu();
+    let info = stdout(&client(&a, &["info"]));
+    let lines: Vec<&str> = info.lines().collect();
+    assert_eq!(lines.len(), 3, "{info}");
+    assert_eq!(lines[0], "serial: 10000000");
+    assert!(
+        lines[1].starts_with("firmware: KERNEL-110-G2000-A40 imu-emu "),
+        "{info}"
+    );
+    assert_eq!(lines[2], "imu_type: 0x6e");
+    assert_eq!(stdout(&client(&a, &["bit"])), "bit: 00 00 00 00 (pass)\n");
+    assert_eq!(
+        stdout(&client(&a, &["get", "Data_Rate"])),
+        "Data_Rate = 100\n"
+    );
+    assert_eq!(
+        stdout(&client(&a, &["set", "data_rate", "50"])),
+        "Data_Rate saved = 50\n"
+    );
+    assert_eq!(stdout(&client(&a, &["get", "0x0012"])), "Data_Rate = 50\n");
+    assert_eq!(
+        stdout(&client(&a, &["get", "Alignment_Angles"])),
+        "Alignment_Angles = 0,0,0\n"
+    );
+    // Refused by the device: no acknowledgement.
+    let o = client(&a, &["--timeout", "0.5", "set", "Data_Rate", "33"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {a}: SaveFlash Data_Rate 33: no acknowledgement within 500ms: the \
+             unit refused the value (ICD 5.3.7) or did not hear it\n"
+        )
+    );
+    // Refused by the client: a name not in Table 5.24.
+    let o = client(&a, &["get", "Warp_Factor"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("imu-emu: no parameter Warp_Factor; Table 5.24 names: Data_Rate")
+    );
+}
+
+#[test]
+fn start_stop_udd_and_commit_baud_act_on_the_device() {
+    let (_e, a) = emu();
+    assert_eq!(
+        stdout(&client(&a, &["udd", "0x21,0x23,0x53"])),
+        "udd configured: 3 types, max rate 250 Hz\n"
+    );
+    assert_eq!(
+        stdout(&client(&a, &["start", "udd"])),
+        "started UDD (0x95)\n"
+    );
+    // The stream runs the configured types.
+    let o = client(&a, &["record", "--frames", "3", "--to", "json"]);
+    let rows = stdout(&o);
+    assert_eq!(rows.lines().count(), 3);
+    for l in rows.lines() {
+        assert!(l.starts_with("{\"frame\":"), "{l}");
+        assert!(l.contains("\"format\":\"UDD\""), "{l}");
+        assert!(l.contains("\"gyro_x\":") && l.contains("\"acc_z\":") && l.contains("\"usw\":0}"));
+    }
+    assert_eq!(stdout(&client(&a, &["stop"])), "stopped\n");
+    assert_eq!(
+        stdout(&client(&a, &["start", "0x8f"])),
+        "started GA (0x8f)\n"
+    );
+    assert_eq!(stdout(&client(&a, &["stop"])), "stopped\n");
+    let o = client(&a, &["start", "warp"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = client(&a, &["udd", "0x21,0x77"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("udd refused: error bits"),
+        "{}",
+        stderr(&o)
+    );
+    // Baud_Rate 230400 (code 8) saved, committed: the device switches; a
+    // TCP client does not notice the rate, it still gets answers.
+    assert_eq!(
+        stdout(&client(&a, &["set", "Baud_Rate", "8"])),
+        "Baud_Rate saved = 8\n"
+    );
+    assert_eq!(
+        stdout(&client(&a, &["commit-baud"])),
+        "baud rate committed\n"
+    );
+    assert_eq!(
+        stdout(&client(&a, &["get", "Baud_Rate"])),
+        "Baud_Rate = 8\n"
+    );
+}
+
+/// `record` of a 2 s GA stream at 100 Hz: 200 rows, the 2 kHz counter
+/// stepping by 20 on every row; `decode` of its raw capture gives the same
+/// rows; `plot` writes a PNG.
+#[test]
+fn record_decode_and_plot() {
+    let (_e, a) = emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let raw = dir.path().join("ga.bin");
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GA",
+            "--duration",
+            "2",
+            "-o",
+            csv.to_str().unwrap(),
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: 200 frames recorded, 0 failed their checksum, 0 counter gaps\n"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "frame,format,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 200);
+    let counters: Vec<u16> = rows.iter().map(|r| r[9].parse().unwrap()).collect();
+    for (i, w) in counters.windows(2).enumerate() {
+        assert_eq!(w[1], w[0].wrapping_add(20), "gap after row {i}");
+    }
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[0], i.to_string());
+        assert_eq!(r[1], "GA");
+        // At rest, level: about 1 g on Z.
+        let az: f64 = r[8].parse().unwrap();
+        assert!((az - 1.0).abs() < 0.05, "{az}");
+    }
+
+    // The raw capture holds the acknowledgement, the GA frames and the
+    // ReadRAM answer; decoding it gives the same GA rows (no host time).
+    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    let decoded = stdout(&o);
+    let mut dl = decoded.lines();
+    assert_eq!(
+        dl.next().unwrap(),
+        "frame,format,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+    );
+    let drows: Vec<Vec<&str>> = dl.map(|l| l.split(',').collect()).collect();
+    assert!(drows.len() >= 200, "{}", drows.len());
+    let first = drows.iter().position(|r| r[8] == rows[0][9]).unwrap();
+    for (r, d) in rows.iter().zip(&drows[first..]) {
+        assert_eq!(r[3..], d[2..]);
+    }
+
+    let png = dir.path().join("ga.png");
+    let o = run(&[
+        "client",
+        "plot",
+        csv.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert_eq!(stdout(&o), format!("{}: 200 rows plotted\n", png.display()));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // IHDR: width and height.
+    assert_eq!(&bytes[12..16], b"IHDR");
+    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 1200);
+    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 900);
+    assert!(bytes.len() > 10_000, "{}", bytes.len());
+}
+
+/// One clear line for each failure: a port nobody listens on, a unit that
+/// does not answer, answers that fail their checksum.
+#[test]
+fn errors_are_one_clear_line() {
+    // Nobody listens.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    let o = client(&addr, &["info"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!("imu-emu: --tcp {addr}: cannot connect: Connection refused (os error 111)\n")
+    );
+    // Something listens but never answers.
+    let silent = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = silent.local_addr().unwrap().to_string();
+    let o = client(&addr, &["--timeout", "0.3", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {addr}: no answer to GetDevInfo within 300ms (is the unit on, the \
+             line rate right?)\n"
+        )
+    );
+    // The emulator with every output byte corrupted: checksum errors.
+    let ctl = format!(
+        "127.0.0.1:{}",
+        std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port()
+    );
+    let e = Emu::tcp(&["--power-on", "now", "--control", &ctl]);
+    let mut c = support::Control::connect(&ctl);
+    assert_eq!(c.cmd("link corrupt 0.05 tx"), "ok");
+    let a = e.addr().to_string();
+    let o = client(&a, &["--timeout", "0.5", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!(
+            "imu-emu: --tcp {a}: no valid answer to GetDevInfo within 500ms: "
+        )) && err.ends_with(" frames failed their checksum (wrong --baud?)\n"),
+        "{err}"
+    );
+    // Neither --tcp nor --serial.
+    let o = run(&["client", "info"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: client: say where the unit is: --tcp HOST:PORT or --serial DEV\n"
+    );
+}
+
+/// `client --serial DEV`: the emulator's pty as the serial port.
+#[test]
+fn the_client_talks_over_a_serial_port() {
+    let e = Emu::start(&["--pty"]);
+    let path = e.pty_path();
+    let o = run(&[
+        "client",
+        "--serial",
+        path.to_str().unwrap(),
+        "--baud",
+        "115200",
+        "get",
+        "Data_Rate",
+    ]);
+    assert_eq!(stdout(&o), "Data_Rate = 100\n");
+    let o = run(&["client", "--serial", "/nonexistent/tty", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("imu-emu: --serial /nonexistent/tty: cannot open: "),
+        "{}",
+        stderr(&o)
+    );
+}
