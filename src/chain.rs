@@ -155,19 +155,19 @@
 //!
 //! ¹ The v6-M column was measured before the FIR's channel loop was written
 //! out (`each_channel!`) and before the fixed-point multiply/convert
-//! helpers went out of line to fit the rp2040 image in 64 KiB (+10–14 % on
-//! the whole device tick, README "Performance"); not re-measured since.
+//! helpers went out of line to fit the rp2040 image in 64 KiB; the chain
+//! alone has not been re-measured since. The whole device tick has (below).
 //!
 //! The firmware images build with `opt-level = "s"`, which does not unroll
 //! loops: the FIR's channel loop is written out for them (at opt-level 3
 //! the compiler did it already; the M4F figures above moved by 0 to −25).
-//! A whole `Device::on_tick` under the same single-step trace, opt-level
-//! "s", K110 factory settings, 2 Mbit/s (before this work in brackets):
-//! 2 124 a tick without output (3 349), ≈ 3 260 with a GA frame (5 546),
-//! 5 115–5 220 with the largest UDD frame (≈ 8 900), at most 5 480 (9 464)
-//! when the temperature update falls on an output tick. With `fixed-point`
-//! on thumbv6m: 8 962 (9 857), ≈ 12 520 GA, ≈ 19 700 UDD; worst
-//! 13 808 GA (18 819), 21 016 UDD (24 821). README "Performance".
+//! A whole `Device::on_tick` in the qemu-mps2 image (M4F, opt-level "s",
+//! K110 factory settings, 2 Mbit/s, the `qemu::tick_cost` conformance
+//! tests): 3 800 with a GA frame at 2 kHz, 5 640–5 840 with the largest UDD
+//! frame. With `fixed-point` on thumbv6m (`scripts/v6m-tick.sh`, worst of
+//! 40 ticks, ±40): 11 920 a tick without output, 15 600 GA at 2 kHz,
+//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. README
+//! "Performance", docs/firmware-budget.md.
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 

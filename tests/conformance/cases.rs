@@ -678,7 +678,8 @@ pub fn tick_cost_ga_2khz_at_2_mbaud(kind: Kind) {
     save(&mut d.c, DATA_RATE, &2000u16.to_le_bytes());
     start_ga(&mut d.c);
     let stats = measure(&mut d, GA, "GA at 2000 Hz, 2 Mbit/s");
-    // Measured 5 640–5 680 (on_tick 3 680–3 720), five runs.
+    // Measured 5 640–5 680 (on_tick 3 680–3 720), five runs; after the
+    // shell/personality merge 5 760 (on_tick 3 800), three runs.
     assert_cost(&stats, 6_800, 4_500);
 }
 
@@ -693,7 +694,8 @@ pub fn tick_cost_largest_udd(kind: Kind) {
     ];
     stream_udd_at_2_mbaud(&mut d, &types, 145);
     let stats = measure(&mut d, UDD, "largest UDD (145 B) at 1000 Hz, 2 Mbit/s");
-    // Measured 9 680–9 800 (on_tick 5 560–5 760), five runs.
+    // Measured 9 680–9 800 (on_tick 5 560–5 760), five runs; after the
+    // shell/personality merge 9 760–10 040 (on_tick 5 640–5 840), three runs.
     assert_cost(&stats, 11_800, 6_900);
 }
 
@@ -723,7 +725,8 @@ pub fn tick_cost_worst_case(kind: Kind) {
         UDD,
         "worst case (K120, LPF 16 Hz, all cascade filters, incremental, mounting, UDD 155 B at 1000 Hz)",
     );
-    // Measured 12 520–12 720 (on_tick 8 280–8 520), five runs.
+    // Measured 12 520–12 720 (on_tick 8 280–8 520), five runs; after the
+    // shell/personality merge 12 440–12 720 (on_tick 8 200–8 440), three runs.
     assert_cost(&stats, 15_300, 10_200);
 }
 
