@@ -88,6 +88,8 @@ impl Default for Opts {
 
 impl Opts {
     /// An IMX-5 over ISB (seed 0).
+    // Used by the ISB suite only.
+    #[allow(dead_code)]
     pub fn isb() -> Opts {
         Opts {
             isb: true,

@@ -147,12 +147,14 @@ mod app {
         let period = SYSCLK_HZ / shell.tick_hz();
         TIMER0_REGS.start(period - 1, true);
         #[cfg(not(feature = "isb"))]
-        let name = cfg.product.code();
+        let code = cfg.product.code();
+        #[cfg(not(feature = "isb"))]
+        let name = code.as_str();
         #[cfg(feature = "isb")]
         let name = "IMX-5 (ISB)";
         semi::Line::default()
             .str("imu-emu: ")
-            .str(&name)
+            .str(name)
             .str(" on mps2-an386, tick ")
             .dec(u64::from(shell.tick_hz()))
             .str(" Hz, ")
