@@ -14,6 +14,9 @@
 //! The QEMU image is built once per test run by `cargo build --release` in
 //! `boards/qemu-mps2` (target dir `$CARGO_TARGET_DIR/fw-qemu`, or
 //! `target/fw-qemu`), unless `IMU_EMU_QEMU_ELF` names a prebuilt image.
+//! With [`Opts::isb`] the device speaks ISB: the host runner gets
+//! `--protocol isb`, QEMU runs the `isb` image (`--features isb`, target dir
+//! `…/fw-qemu-isb`, or `IMU_EMU_QEMU_ISB_ELF`).
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -67,6 +70,9 @@ pub struct Opts {
     pub seed: u64,
     /// QEMU only: extra QEMU options (e.g. `-icount shift=0`).
     pub qemu_args: Vec<String>,
+    /// The ISB personality (an IMX-5) instead of the KERNEL; `model` is
+    /// then not passed.
+    pub isb: bool,
 }
 
 impl Default for Opts {
@@ -75,11 +81,22 @@ impl Default for Opts {
             model: "K110".into(),
             seed: 0,
             qemu_args: Vec::new(),
+            isb: false,
         }
     }
 }
 
 impl Opts {
+    /// An IMX-5 over ISB (seed 0).
+    // Used by the ISB suite only.
+    #[allow(dead_code)]
+    pub fn isb() -> Opts {
+        Opts {
+            isb: true,
+            ..Opts::default()
+        }
+    }
+
     /// Default options with this model.
     pub fn model(m: &str) -> Opts {
         Opts {
@@ -185,9 +202,14 @@ fn launch(kind: Kind, opts: &Opts, flash: &Path) -> (Proc, Conn) {
         Kind::Host => {
             let ctl_addr = format!("127.0.0.1:{}", free_port());
             let seed = opts.seed.to_string();
+            let personality: [&str; 2] = if opts.isb {
+                ["--protocol", "isb"]
+            } else {
+                ["--model", &opts.model]
+            };
             let emu = Emu::tcp(&[
-                "--model",
-                &opts.model,
+                personality[0],
+                personality[1],
                 "--seed",
                 &seed,
                 "--flash",
@@ -265,11 +287,23 @@ impl Pins for HostControl {
 
 // ----- QEMU -----
 
-/// The QEMU image, built once per test run.
-pub fn qemu_elf() -> PathBuf {
+/// The QEMU image, built once per test run (with `isb`: the ISB image,
+/// `--features isb`, in a target dir of its own).
+pub fn qemu_elf(isb: bool) -> PathBuf {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
-        if let Some(p) = std::env::var_os("IMU_EMU_QEMU_ELF") {
+    static ISB_ELF: OnceLock<PathBuf> = OnceLock::new();
+    let (cell, var, dir, features): (_, _, _, &[&str]) = if isb {
+        (
+            &ISB_ELF,
+            "IMU_EMU_QEMU_ISB_ELF",
+            "fw-qemu-isb",
+            &["--features", "isb"],
+        )
+    } else {
+        (&ELF, "IMU_EMU_QEMU_ELF", "fw-qemu", &[])
+    };
+    cell.get_or_init(|| {
+        if let Some(p) = std::env::var_os(var) {
             return PathBuf::from(p);
         }
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -277,13 +311,14 @@ pub fn qemu_elf() -> PathBuf {
         let target_dir = std::env::var_os("CARGO_TARGET_DIR")
             .map(PathBuf::from)
             .unwrap_or_else(|| root.join("target"))
-            .join("fw-qemu");
+            .join(dir);
         let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
         // The board's own .cargo/config.toml (target, link script) applies
         // because cargo runs in its directory; flags meant for the host
         // build must not leak into it.
         let out = Command::new(cargo)
             .args(["build", "--release", "--quiet"])
+            .args(features)
             .current_dir(&board)
             .env("CARGO_TARGET_DIR", &target_dir)
             .env_remove("RUSTFLAGS")
@@ -309,14 +344,14 @@ struct Qemu {
 
 impl Qemu {
     fn start(opts: &Opts, flash: &Path) -> (Qemu, Conn) {
-        let elf = qemu_elf();
+        let elf = qemu_elf(opts.isb);
         let (uart, pins) = (free_port(), free_port());
         let mut semi = String::from("enable=on,target=native");
-        for a in [
-            format!("model={}", opts.model),
+        let model = (!opts.isb).then(|| format!("model={}", opts.model));
+        for a in model.into_iter().chain([
             format!("seed={}", opts.seed),
             format!("flash={}", flash.display()),
-        ] {
+        ]) {
             semi.push_str(",arg=");
             semi.push_str(&a.replace(',', ",,"));
         }

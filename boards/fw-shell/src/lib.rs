@@ -50,6 +50,8 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 pub use imu_emu;
 use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::kernel::Kernel;
+use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Port, Schedule};
 use imu_emu::time::Instant;
 
@@ -73,7 +75,7 @@ pub trait Clock {
     fn now(&mut self) -> Instant;
 }
 
-/// The UART carrying the KERNEL protocol. Every method is non-blocking.
+/// The UART carrying the device's protocol. Every method is non-blocking.
 pub trait Uart {
     /// Moves received bytes into `buf`; how many.
     fn read(&mut self, buf: &mut [u8]) -> usize;
@@ -174,8 +176,20 @@ pub struct Stats {
 /// The device is borrowed, not owned: it is ~12 KiB, and a board builds it
 /// in place in a static of its own ([`power_on`]) so power-on does not need
 /// copies of it on the stack.
-pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> {
-    dev: &'d mut Device<F>,
+///
+/// `P` is the device's protocol personality ([`Personality`]; ARCHITECTURE.md
+/// "Shell and personalities"): the KERNEL by default, or e.g.
+/// [`imu_emu::isb::Isb`]. One image carries one personality.
+pub struct Shell<
+    'd,
+    F: NorFlash,
+    U: Uart,
+    C: Clock,
+    T: TovPin,
+    E: EdgeSource,
+    P: Personality = Kernel,
+> {
+    dev: &'d mut Device<F, P>,
     sched: Schedule<CHUNK>,
     io: Io<U, C, T, E>,
 }
@@ -208,7 +222,7 @@ impl<U: Uart, C: Clock, T: TovPin, E: EdgeSource> Io<U, C, T, E> {
     }
 
     /// Delivers the edges stamped at or before `until` (device time).
-    fn deliver_edges<F: NorFlash>(&mut self, dev: &mut Device<F>, until: u64) {
+    fn deliver_edges<F: NorFlash, P: Personality>(&mut self, dev: &mut Device<F, P>, until: u64) {
         loop {
             let edge = match self.lookahead.take().or_else(|| self.edges.pop()) {
                 Some(e) => e,
@@ -235,7 +249,9 @@ impl<U: Uart, C: Clock, T: TovPin, E: EdgeSource> Io<U, C, T, E> {
     }
 }
 
-impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U, C, T, E> {
+impl<F: NorFlash, P: Personality, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F, P>
+    for Io<U, C, T, E>
+{
     type Error = core::convert::Infallible;
 
     fn tx_room(&mut self) -> usize {
@@ -271,7 +287,11 @@ impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U,
         Ok(())
     }
 
-    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+    fn before_tick(
+        &mut self,
+        dev: &mut Device<F, P>,
+        deadline: Instant,
+    ) -> Result<(), Self::Error> {
         self.tick_start = if self.batch == 0 {
             self.service_start
         } else {
@@ -282,7 +302,7 @@ impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U,
         Ok(())
     }
 
-    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+    fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> Result<(), Self::Error> {
         let a = self.now();
         dev.on_tick(deadline);
         let b = self.now();
@@ -293,7 +313,7 @@ impl<F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Port<F> for Io<U,
         Ok(())
     }
 
-    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> Result<(), Self::Error> {
+    fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> Result<(), Self::Error> {
         self.deliver_edges(dev, at.as_nanos());
         Ok(())
     }
@@ -305,42 +325,47 @@ struct Hooked<'a, IO, H> {
     after_rx: Option<H>,
 }
 
-impl<F, U, C, T, E, H> Port<F> for Hooked<'_, Io<U, C, T, E>, H>
+impl<F, P, U, C, T, E, H> Port<F, P> for Hooked<'_, Io<U, C, T, E>, H>
 where
     F: NorFlash,
+    P: Personality,
     U: Uart,
     C: Clock,
     T: TovPin,
     E: EdgeSource,
-    H: FnOnce(&mut Device<F>),
+    H: FnOnce(&mut Device<F, P>),
 {
     type Error = core::convert::Infallible;
 
     fn tx_room(&mut self) -> usize {
-        Port::<F>::tx_room(self.io)
+        Port::<F, P>::tx_room(self.io)
     }
     fn write(&mut self, bytes: &[u8]) -> Result<(), Self::Error> {
-        Port::<F>::write(self.io, bytes)
+        Port::<F, P>::write(self.io, bytes)
     }
     fn tx_idle(&mut self) -> bool {
-        Port::<F>::tx_idle(self.io)
+        Port::<F, P>::tx_idle(self.io)
     }
     fn set_line_rate(&mut self, bps: u32) -> Result<(), Self::Error> {
-        Port::<F>::set_line_rate(self.io, bps)
+        Port::<F, P>::set_line_rate(self.io, bps)
     }
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
-        Port::<F>::read(self.io, buf)
+        Port::<F, P>::read(self.io, buf)
     }
     fn tov(&mut self, level: Level, at: Instant) -> Result<(), Self::Error> {
-        Port::<F>::tov(self.io, level, at)
+        Port::<F, P>::tov(self.io, level, at)
     }
-    fn before_tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+    fn before_tick(
+        &mut self,
+        dev: &mut Device<F, P>,
+        deadline: Instant,
+    ) -> Result<(), Self::Error> {
         self.io.before_tick(dev, deadline)
     }
-    fn tick(&mut self, dev: &mut Device<F>, deadline: Instant) -> Result<(), Self::Error> {
+    fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> Result<(), Self::Error> {
         self.io.tick(dev, deadline)
     }
-    fn after_rx(&mut self, dev: &mut Device<F>, at: Instant) -> Result<(), Self::Error> {
+    fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> Result<(), Self::Error> {
         if let Some(hook) = self.after_rx.take() {
             hook(dev);
         }
@@ -354,20 +379,25 @@ where
 /// ([`Device::power_on_into`]): power-on needs a few hundred bytes of
 /// stack, not copies of the ~12 KiB device. Never inlined, so its frame is
 /// gone when the board's init goes on.
+///
+/// Generic over the personality: `fw_shell::power_on::<_, Isb>(…)` (or a
+/// slot typed `MaybeUninit<Device<F, Isb>>`) powers an ISB device on.
 #[inline(never)]
-pub fn power_on<F: NorFlash>(
-    slot: &mut MaybeUninit<Device<F>>,
+pub fn power_on<F: NorFlash, P: Personality>(
+    slot: &mut MaybeUninit<Device<F, P>>,
     cfg: PowerOn,
     flash: F,
-) -> &mut Device<F> {
-    Device::power_on_into(slot, cfg, flash, Instant::ZERO)
+) -> &mut Device<F, P> {
+    Device::new_into(slot, cfg, flash, Instant::ZERO)
 }
 
-impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, U, C, T, E> {
+impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource, P: Personality>
+    Shell<'d, F, U, C, T, E, P>
+{
     /// Takes a device just powered on ([`power_on`]; its `Instant::ZERO` is
     /// now) and the board's peripherals. The UART is set to the device's
     /// line rate at once.
-    pub fn new(dev: &'d mut Device<F>, uart: U, mut clock: C, tov: T, edges: E) -> Self {
+    pub fn new(dev: &'d mut Device<F, P>, uart: U, mut clock: C, tov: T, edges: E) -> Self {
         let epoch = clock.now().as_nanos();
         let rate = dev.line_rate();
         let sched = Schedule::new(dev);
@@ -423,12 +453,12 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     }
 
     /// The device.
-    pub fn device(&self) -> &Device<F> {
+    pub fn device(&self) -> &Device<F, P> {
         self.dev
     }
 
     /// The device, mutably.
-    pub fn device_mut(&mut self) -> &mut Device<F> {
+    pub fn device_mut(&mut self) -> &mut Device<F, P> {
         self.dev
     }
 
@@ -467,7 +497,7 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource> Shell<'d, F, 
     /// were executed and before any reply is handed to the UART (e.g. to
     /// persist the flash image, so a client that saw a SaveFlash
     /// acknowledgement can cut the power at once).
-    pub fn service_with(&mut self, after_rx: impl FnOnce(&mut Device<F>)) {
+    pub fn service_with(&mut self, after_rx: impl FnOnce(&mut Device<F, P>)) {
         let t0 = self.io.now();
         self.io.service_start = t0;
         self.io.batch = 0;

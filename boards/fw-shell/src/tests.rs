@@ -357,3 +357,133 @@ fn a_stall_at_87_percent_line_use_loses_no_frame() {
         counters.len()
     );
 }
+
+// ----- the ISB personality on the same shell -----
+
+type IsbShell =
+    Shell<'static, RamNor<8192>, FakeUart, FakeClock, FakeTov, FakeEdges, imu_emu::isb::Isb>;
+
+/// An IMX-5 (ISB personality) powered on at board time 1 ms.
+fn isb_shell() -> (IsbShell, Shared) {
+    let b: Shared = Rc::new(RefCell::new(Board {
+        now: 1_000_000,
+        room: 64,
+        idle: true,
+        ..Board::default()
+    }));
+    let cfg = PowerOn {
+        product: Product::imx5(),
+        boot: None,
+        seed: 1,
+    };
+    let slot = std::boxed::Box::leak(std::boxed::Box::new(core::mem::MaybeUninit::uninit()));
+    let dev = power_on::<_, imu_emu::isb::Isb>(slot, cfg, RamNor::new());
+    let s = Shell::new(
+        dev,
+        FakeUart(b.clone()),
+        FakeClock(b.clone()),
+        FakeTov(b.clone()),
+        FakeEdges(b.clone()),
+    );
+    (s, b)
+}
+
+/// Services the ISB shell every `step` ns until board time `until`.
+fn run_isb(s: &mut IsbShell, b: &Shared, until: u64, step: u64) {
+    loop {
+        let now = b.borrow().now;
+        if now >= until {
+            break;
+        }
+        b.borrow_mut().now = (now + step).min(until);
+        b.borrow_mut().fifo = 0;
+        s.service();
+    }
+}
+
+/// A GET_DATA request (ISB "GET_DATA": did, size, offset, period).
+fn isb_get(did: u8, period: u16) -> Vec<u8> {
+    let req = imu_emu::isb::message::GetRequest {
+        did: u16::from(did),
+        size: 0,
+        offset: 0,
+        period,
+    };
+    let mut out = [0u8; 32];
+    let n = imu_emu::isb::packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// The ISB packets in `tx`: (board time of the first byte, flags, DID,
+/// payload), each checksum checked; the stream must hold nothing else.
+fn isb_packets(tx: &[(u64, u8)]) -> Vec<(u64, u8, u8, Vec<u8>)> {
+    let bytes: Vec<u8> = tx.iter().map(|&(_, x)| x).collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        assert_eq!(bytes[i..i + 2], [0xEF, 0x49], "packet start at {i}");
+        let size = usize::from(u16::from_le_bytes([bytes[i + 4], bytes[i + 5]]));
+        let end = i + 6 + size;
+        assert_eq!(
+            imu_emu::isb::packet::checksum(&bytes[i..end]),
+            bytes[end..end + 2],
+            "checksum at {i}"
+        );
+        out.push((
+            tx[i].0,
+            bytes[i + 2],
+            bytes[i + 3],
+            bytes[i + 6..end].to_vec(),
+        ));
+        i = end + 2;
+    }
+    out
+}
+
+#[test]
+fn isb_power_on_sets_921600_and_answers_get_dev_info() {
+    let (mut s, b) = isb_shell();
+    // FLASH_CONFIG's factory ser0BaudRate, set before anything is sent.
+    assert_eq!(b.borrow().bauds, [(1_000_000, 921_600)]);
+    assert_eq!(s.device().line_rate(), 921_600);
+    b.borrow_mut().rx = isb_get(imu_emu::isb::did::DEV_INFO, 0);
+    // 92 bytes at 92 160 byte/s: 1 ms of line time, 3 ms to be sure.
+    run_isb(&mut s, &b, 4_000_000, 500_000);
+    let p = isb_packets(&b.borrow().tx);
+    assert_eq!(p.len(), 1);
+    let (_, flags, did, payload) = &p[0];
+    assert_eq!((*flags, *did, payload.len()), (4, 1, 84));
+    let info = imu_emu::isb::sets::DevInfo::decode(payload.as_slice().try_into().unwrap());
+    assert!(info.accepted_by_sdk());
+}
+
+#[test]
+fn isb_imu_streams_every_4_ms_on_the_fake_clock() {
+    let (mut s, b) = isb_shell();
+    b.borrow_mut().rx = isb_get(imu_emu::isb::did::IMU, 1);
+    // Serviced every tick (500 µs) for 101 ms.
+    run_isb(&mut s, &b, 102_000_000, 500_000);
+    let p = isb_packets(&b.borrow().tx);
+    assert!(p.iter().all(|(_, f, d, l)| (*f, *d, l.len())
+        == (4, imu_emu::isb::did::IMU, imu_emu::isb::sets::imu::SIZE)));
+    // The GET's own packet at once (the service that received it, 1.5 ms),
+    // then one every 8 ticks: 25 in 100 ms.
+    assert_eq!(
+        p.len(),
+        26,
+        "{:?}",
+        p.iter().map(|x| x.0).collect::<Vec<_>>()
+    );
+    assert_eq!(p[0].0, 1_500_000);
+    let times: Vec<f64> = p
+        .iter()
+        .map(|(_, _, _, l)| imu_emu::isb::sets::Imu::decode(l.as_slice().try_into().unwrap()).time)
+        .collect();
+    for (w, t) in p[1..].windows(2).zip(times[1..].windows(2)) {
+        // On the board's clock and in the packets' own time field.
+        assert_eq!(w[1].0 - w[0].0, 4_000_000);
+        assert!((t[1] - t[0] - 0.004).abs() < 1e-9, "{t:?}");
+    }
+    assert_eq!(s.device().mode(), imu_emu::device::Mode::Continuous);
+    assert_eq!(s.device().output_rate(), Some(250));
+}

@@ -6,7 +6,7 @@
 //!
 //! Words without `=` (QEMU puts the kernel path first when no `arg=` is
 //! given) are ignored. Keys: `model` (a model or product code, default
-//! K110), `seed` (u64, default 0), `flash` (host file of the 8 KiB flash
+//! K110; not in the `isb` image, whose product is always the IMX-5), `seed` (u64, default 0), `flash` (host file of the 8 KiB flash
 //! image; none = RAM only, lost at exit), `boot` (`high`, `low` or `float`:
 //! the BOOT input at power-on, default `float`).
 
@@ -36,7 +36,10 @@ impl Config {
     /// Parses the command line.
     pub fn parse(cmdline: &str) -> Result<Config, BadArg<'_>> {
         let mut c = Config {
+            #[cfg(not(feature = "isb"))]
             product: Product::parse("K110").map_err(|_| BadArg("K110"))?,
+            #[cfg(feature = "isb")]
+            product: Product::imx5(),
             seed: 0,
             flash: None,
             boot: None,
@@ -46,6 +49,7 @@ impl Config {
                 continue;
             };
             match k {
+                #[cfg(not(feature = "isb"))]
                 "model" => c.product = Product::parse(v).map_err(|_| BadArg(word))?,
                 "seed" => c.seed = v.parse().map_err(|_| BadArg(word))?,
                 "flash" => {

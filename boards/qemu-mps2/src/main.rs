@@ -1,6 +1,8 @@
 //! # imu-emu on QEMU's mps2-an386 (Cortex-M4F) — the CI board
 //!
-//! * UART0 carries the KERNEL protocol;
+//! * UART0 carries the KERNEL protocol (with the `isb` feature: the ISB
+//!   protocol of an emulated IMX-5, [`imu_emu::isb::Isb`], from 921 600
+//!   bit/s);
 //! * UART1 is the pin bridge (see [`bridge`] and the README): the host
 //!   injects 1PPS/EXTRIG edges, BOOT level and power cycles, reads TOV edges
 //!   and the tick's timing figures;
@@ -61,10 +63,23 @@ mod app {
     use crate::semi;
 
     /// The shell as this board instantiates it.
-    pub type BoardShell =
-        Shell<'static, &'static mut Flash, Uart0, Mps2Clock, BridgeTov, Consumer<'static, Edge>>;
+    pub type BoardShell = Shell<
+        'static,
+        &'static mut Flash,
+        Uart0,
+        Mps2Clock,
+        BridgeTov,
+        Consumer<'static, Edge>,
+        Proto,
+    >;
     /// The device as this board instantiates it.
-    pub type BoardDevice = Device<&'static mut Flash>;
+    pub type BoardDevice = Device<&'static mut Flash, Proto>;
+    /// The image's protocol personality: the KERNEL.
+    #[cfg(not(feature = "isb"))]
+    pub type Proto = imu_emu::kernel::Kernel;
+    /// The image's protocol personality: the IMX-5 over ISB.
+    #[cfg(feature = "isb")]
+    pub type Proto = imu_emu::isb::Isb;
 
     #[shared]
     struct Shared {}
@@ -131,12 +146,20 @@ mod app {
         let shell = Shell::new(dev, uart, Mps2Clock, BridgeTov, edges_out);
         let period = SYSCLK_HZ / shell.tick_hz();
         TIMER0_REGS.start(period - 1, true);
+        #[cfg(not(feature = "isb"))]
+        let code = cfg.product.code();
+        #[cfg(not(feature = "isb"))]
+        let name = code.as_str();
+        #[cfg(feature = "isb")]
+        let name = "IMX-5 (ISB)";
         semi::Line::default()
             .str("imu-emu: ")
-            .str(&cfg.product.code())
+            .str(name)
             .str(" on mps2-an386, tick ")
             .dec(u64::from(shell.tick_hz()))
-            .str(" Hz")
+            .str(" Hz, ")
+            .dec(u64::from(shell.device().line_rate()))
+            .str(" bit/s")
             .eprintln();
         (
             Shared {},

@@ -72,8 +72,26 @@ mod app {
         }
     }
 
-    type BoardDevice = Device<RomFlash>;
-    type BoardShell = Shell<'static, RomFlash, Uart0, TimerClock, Tov, Consumer<'static, Edge>>;
+    type BoardDevice = Device<RomFlash, Proto>;
+    /// The image's protocol personality: the KERNEL.
+    #[cfg(not(feature = "isb"))]
+    type Proto = imu_emu::kernel::Kernel;
+    /// The image's protocol personality (feature `isb`): the IMX-5 over ISB.
+    #[cfg(feature = "isb")]
+    type Proto = imu_emu::isb::Isb;
+    type BoardShell =
+        Shell<'static, RomFlash, Uart0, TimerClock, Tov, Consumer<'static, Edge>, Proto>;
+    /// The RX ring between the UART interrupt and the tick: ≈ 5 ms of the
+    /// fastest line a stalled tick must survive (KERNEL: 2 Mbit/s, 1024 B;
+    /// ISB: 921 600 bit/s, 512 B — which keeps the ISB image's static RAM
+    /// under its 20 KiB budget: its device is 17 040 B, 688 B more than
+    /// the KERNEL's, with its 2 KiB packet buffer and the chain's
+    /// cumulative integrals).
+    #[cfg(not(feature = "isb"))]
+    const RXQ: usize = 1024;
+    /// The RX ring (see the KERNEL image's).
+    #[cfg(feature = "isb")]
+    const RXQ: usize = 512;
 
     #[shared]
     struct Shared {}
@@ -91,7 +109,7 @@ mod app {
     #[init(local = [
         device: MaybeUninit<BoardDevice> = MaybeUninit::uninit(),
         boot2: [u32; 64] = [0; 64],
-        rxq: Queue<u8, 1024> = Queue::new(),
+        rxq: Queue<u8, RXQ> = Queue::new(),
         edgeq: Queue<Edge, 32> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -152,8 +170,13 @@ mod app {
         }
         let tov = Tov(pins.gpio4.into_push_pull_output());
 
+        #[cfg(not(feature = "isb"))]
         let product = Product::parse(option_env!("IMU_EMU_MODEL").unwrap_or("K110"))
             .unwrap_or_else(|_| panic!("IMU_EMU_MODEL is not a KERNEL model"));
+        // The ISB image is always an IMX-5; its line starts at FLASH_CONFIG's
+        // ser0BaudRate (921 600 bit/s), set by `Shell::new`.
+        #[cfg(feature = "isb")]
+        let product = Product::imx5();
         let seed = option_env!("IMU_EMU_SEED")
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);

@@ -66,9 +66,15 @@ mod app {
     #[cfg(feature = "nucleo-f446re")]
     const BOARD: &str = "Nucleo-F446RE";
 
-    type BoardDevice = Device<ParamFlash>;
+    type BoardDevice = Device<ParamFlash, Proto>;
+    /// The image's protocol personality: the KERNEL.
+    #[cfg(not(feature = "isb"))]
+    type Proto = imu_emu::kernel::Kernel;
+    /// The image's protocol personality (feature `isb`): the IMX-5 over ISB.
+    #[cfg(feature = "isb")]
+    type Proto = imu_emu::isb::Isb;
     type BoardShell =
-        Shell<'static, ParamFlash, Usart1Dma, Tim2Clock, TovPb0, Consumer<'static, Edge>>;
+        Shell<'static, ParamFlash, Usart1Dma, Tim2Clock, TovPb0, Consumer<'static, Edge>, Proto>;
 
     #[shared]
     struct Shared {}
@@ -121,8 +127,13 @@ mod app {
             None
         };
 
+        #[cfg(not(feature = "isb"))]
         let product = Product::parse(option_env!("IMU_EMU_MODEL").unwrap_or("K110"))
             .unwrap_or_else(|_| panic!("IMU_EMU_MODEL is not a KERNEL model"));
+        // The ISB image is always an IMX-5; its line starts at FLASH_CONFIG's
+        // ser0BaudRate (921 600 bit/s), set by `Shell::new`.
+        #[cfg(feature = "isb")]
+        let product = Product::imx5();
         let seed = option_env!("IMU_EMU_SEED")
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);

@@ -1,0 +1,298 @@
+//! The ISB conformance cases: an emulated IMX-5 as the Inertial Sense SDK
+//! and its command-line tool see it (`docs/protocol-facts.md` "ISB", README
+//! "ISB personality"), one function per case, each run against every
+//! target ([`Kind`]). Times are the packets' own `time` fields (device
+//! time), never the wall clock; the wall clock only bounds the waits.
+
+use std::time::{Duration, Instant};
+
+use imu_emu::isb::did;
+use imu_emu::isb::message::GetRequest;
+use imu_emu::isb::packet::{self, FLAG_OFFSET};
+use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
+
+use crate::support::{hex, Conn, TIMEOUT};
+use crate::target::{Dut, Kind, Opts};
+
+/// An ISB packet as received.
+#[derive(Debug)]
+struct Pkt {
+    flags: u8,
+    did: u8,
+    payload: Vec<u8>,
+    /// The whole packet, preamble to checksum.
+    raw: Vec<u8>,
+}
+
+/// Reads the next ISB packet, skipping NMEA replies (a `$…\r\n` line);
+/// panics on anything else or a bad checksum.
+fn packet(c: &mut Conn) -> Pkt {
+    loop {
+        let b = c.read_bytes(1)[0];
+        if b == b'$' {
+            while c.read_bytes(1)[0] != b'\n' {}
+            continue;
+        }
+        assert_eq!(b, 0xEF, "not a packet start");
+        let head = [&[b][..], &c.read_bytes(5)].concat();
+        assert_eq!(head[1], 0x49, "preamble");
+        let size = usize::from(u16::from_le_bytes([head[4], head[5]]));
+        let rest = c.read_bytes(size + 2);
+        let raw = [&head[..], &rest[..]].concat();
+        assert_eq!(packet::checksum(&raw[..6 + size]), rest[size..], "checksum");
+        return Pkt {
+            flags: head[2],
+            did: head[3],
+            payload: rest[..size].to_vec(),
+            raw,
+        };
+    }
+}
+
+/// The next packet with this DID in the header (others are skipped).
+fn packet_of(c: &mut Conn, did: u8) -> Pkt {
+    loop {
+        let p = packet(c);
+        if p.did == did {
+            return p;
+        }
+    }
+}
+
+/// A GET_DATA request for the whole data set, every `period` source
+/// periods (0: once).
+fn get(did: u8, period: u16) -> Vec<u8> {
+    let req = GetRequest {
+        did: u16::from(did),
+        size: 0,
+        offset: 0,
+        period,
+    };
+    let mut out = [0u8; 32];
+    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// A SET_DATA of `data` at `offset`.
+fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
+    let mut out = [0u8; 512];
+    let n =
+        packet::encode_parts(5 | FLAG_OFFSET, did, &offset.to_le_bytes(), data, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+fn u32_at(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes(b[i..i + 4].try_into().unwrap())
+}
+
+fn sys_params(c: &mut Conn) -> SysParams {
+    c.send(&get(did::SYS_PARAMS, 0));
+    SysParams::decode(
+        &packet_of(c, did::SYS_PARAMS)
+            .payload
+            .try_into()
+            .expect("SYS_PARAMS size"),
+    )
+}
+
+fn flash_config(c: &mut Conn) -> Vec<u8> {
+    c.send(&get(did::FLASH_CONFIG, 0));
+    packet_of(c, did::FLASH_CONFIG).payload
+}
+
+/// Nothing arrives for `d` once what was in flight had `settle` to land.
+fn assert_silent(c: &mut Conn, settle: Duration, d: Duration, what: &str) {
+    c.drain_for(settle);
+    assert_eq!(c.drain_for(d), 0, "{what}");
+}
+
+fn start(kind: Kind) -> Dut {
+    Dut::start(kind, Opts::isb())
+}
+
+/// GET DEV_INFO with the vendor tool's own request bytes: one DATA packet
+/// of the whole 84-byte set, nothing else, and the SDK's acceptance rule
+/// holds (protocol 2.1, serial and hardware set).
+pub fn dev_info_is_answered_whole_and_accepted_by_the_sdk(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&hex("ef 49 03 00 08 00 01 00 00 00 00 00 00 00 44 43"));
+    let p = packet(&mut d.c);
+    assert_eq!((p.flags, p.did, p.payload.len()), (4, did::DEV_INFO, 84));
+    assert_eq!(p.raw.len(), 92);
+    let info = DevInfo::decode(&p.payload.clone().try_into().unwrap());
+    assert!(info.accepted_by_sdk(), "{info:?}");
+    assert_silent(
+        &mut d.c,
+        Duration::from_millis(20),
+        Duration::from_millis(100),
+        "one GET, one packet",
+    );
+}
+
+/// The tool's handshake: SYS_PARAMS' `flashCfgChecksum` is FLASH_CONFIG's
+/// `checksum` word, which is the checksum of the set as sent.
+pub fn sys_params_and_flash_config_checksums_agree(kind: Kind) {
+    let mut d = start(kind);
+    let sp = sys_params(&mut d.c);
+    let fc = flash_config(&mut d.c);
+    assert_eq!(fc.len(), flash::SIZE);
+    assert_eq!(sp.flash_cfg_checksum, u32_at(&fc, 4));
+    assert_eq!(sp.flash_cfg_checksum, flash::checksum(&fc));
+    assert_ne!(sp.flash_cfg_checksum, 0xFFFF_FFFF);
+    assert_eq!(sp.hdw_status & hdw_status::SYSTEM_RESET_REQUIRED, 0);
+}
+
+/// IMU every source period (4 ms) and PIMU every 2 source periods (8 ms),
+/// on the packets' own time fields; PIMU's `dt` is its window.
+pub fn imu_every_4_ms_and_pimu_every_8_ms_on_device_time(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&get(did::IMU, 1));
+    d.c.send(&get(did::PIMU, 2));
+    let (mut imu, mut pimu) = (Vec::new(), Vec::new());
+    while imu.len() < 201 || pimu.len() < 101 {
+        let p = packet(&mut d.c);
+        let l = p.payload.clone();
+        match p.did {
+            did::IMU => imu.push(Imu::decode(&l.try_into().unwrap()).time),
+            did::PIMU => pimu.push(Pimu::decode(&l.try_into().unwrap())),
+            other => panic!("unexpected DID {other}"),
+        }
+    }
+    // The first packet of each answers its GET at once; then the streams.
+    for w in imu[1..].windows(2) {
+        assert!((w[1] - w[0] - 0.004).abs() < 1e-9, "IMU {w:?}");
+    }
+    for w in pimu[1..].windows(2) {
+        assert!((w[1].time - w[0].time - 0.008).abs() < 1e-9, "PIMU {w:?}");
+        assert_eq!(w[1].dt, 0.008);
+    }
+}
+
+/// FLASH_CONFIG written at an offset: ACKed with the SDK's bytes (flags,
+/// DID, size, offset echoed), read back with the checksum recomputed,
+/// SYS_PARAMS in step and "system reset required"; kept across a power
+/// cycle, which applies it.
+pub fn flash_config_set_is_acked_read_back_and_kept(kind: Kind) {
+    let mut d = start(kind);
+    let at = flash::STARTUP_NAV_DT_MS;
+    d.c.send(&set(did::FLASH_CONFIG, at as u16, &8u32.to_le_bytes()));
+    let ack = packet(&mut d.c);
+    assert_eq!((ack.flags, ack.did), (1, 0));
+    assert_eq!(ack.payload, [0x25, 12, 0, 0, 12, 4, 0, at as u8, 0]);
+    let fc = flash_config(&mut d.c);
+    assert_eq!(u32_at(&fc, at), 8);
+    assert_eq!(u32_at(&fc, 4), flash::checksum(&fc));
+    // The save happens at the next tick: wait for it before the power cut.
+    let deadline = Instant::now() + TIMEOUT;
+    let sp = loop {
+        let sp = sys_params(&mut d.c);
+        if sp.hdw_status & hdw_status::FLASH_WRITE_PENDING == 0 {
+            break sp;
+        }
+        assert!(Instant::now() < deadline, "flash write still pending");
+    };
+    assert_eq!(sp.flash_cfg_checksum, u32_at(&fc, 4));
+    assert_ne!(sp.hdw_status & hdw_status::SYSTEM_RESET_REQUIRED, 0);
+    assert_eq!(sp.nav_output_period_ms, 4, "applies after a reset");
+    d.restart();
+    assert_eq!(flash_config(&mut d.c), fc);
+    let sp = sys_params(&mut d.c);
+    assert_eq!(sp.nav_output_period_ms, 8);
+    assert_eq!(sp.hdw_status & hdw_status::SYSTEM_RESET_REQUIRED, 0);
+}
+
+/// `$PERS` saves the running streams (IMU), `$SRST` resets: IMU resumes by
+/// itself every 4 ms and the stream that was not saved (PIMU) does not.
+pub fn pers_then_srst_resumes_the_saved_stream(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&get(did::IMU, 1));
+    d.c.send(b"$PERS*14\r\n");
+    // Not saved: started after $PERS.
+    d.c.send(&get(did::PIMU, 2));
+    packet_of(&mut d.c, did::PIMU);
+    d.c.send(b"$SRST*06\r\n");
+    // Before the reset a PIMU comes every second IMU; after it, IMU only.
+    let mut run = Vec::new();
+    let deadline = Instant::now() + TIMEOUT;
+    while run.len() < 30 {
+        assert!(Instant::now() < deadline, "no IMU-only run after $SRST");
+        let p = packet(&mut d.c);
+        match p.did {
+            did::IMU => run.push(Imu::decode(&p.payload.try_into().unwrap()).time),
+            did::PIMU => run.clear(),
+            other => panic!("unexpected DID {other}"),
+        }
+    }
+    // At most two IMU packets of the run came before the reset.
+    for w in run[2..].windows(2) {
+        assert!((w[1] - w[0] - 0.004).abs() < 1e-9, "{w:?}");
+    }
+}
+
+/// STOP_BROADCASTS_ALL_PORTS is ACKed with the SDK's bytes, and nothing
+/// follows the ACK.
+pub fn stop_all_is_acked_with_the_sdks_bytes(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&get(did::IMU, 1));
+    d.c.send(&get(did::PIMU, 1));
+    packet_of(&mut d.c, did::PIMU);
+    d.c.send(&hex("ef 49 06 00 00 00 3e 1f"));
+    let ack = loop {
+        let p = packet(&mut d.c);
+        if p.flags == 1 {
+            break p;
+        }
+    };
+    assert_eq!(
+        ack.raw,
+        hex("ef 49 01 00 09 00 06 00 00 00 00 00 00 00 00 48 a5")
+    );
+    assert_silent(
+        &mut d.c,
+        Duration::from_millis(20),
+        Duration::from_millis(100),
+        "streams stopped",
+    );
+}
+
+/// GET of DID 132 (past the SDK's table) is NACKed with the SDK's bytes.
+pub fn get_of_did_132_is_nacked(kind: Kind) {
+    let mut d = start(kind);
+    let req = GetRequest {
+        did: 132,
+        size: 0,
+        offset: 0,
+        period: 0,
+    };
+    let mut out = [0u8; 32];
+    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    d.c.send(&out[..n]);
+    assert_eq!(
+        packet(&mut d.c).raw,
+        hex("ef 49 02 00 09 00 03 00 00 00 00 00 00 00 00 46 97")
+    );
+    assert_silent(
+        &mut d.c,
+        Duration::from_millis(20),
+        Duration::from_millis(100),
+        "one NACK",
+    );
+}
+
+/// A packet with a bad checksum is dropped silently; the good packet right
+/// behind it is answered.
+pub fn bad_checksum_then_a_good_packet_is_answered(kind: Kind) {
+    let mut d = start(kind);
+    let good = get(did::DEV_INFO, 0);
+    let mut bad = good.clone();
+    *bad.last_mut().unwrap() ^= 0xFF;
+    d.c.send(&[bad, good].concat());
+    let p = packet(&mut d.c);
+    assert_eq!((p.flags, p.did, p.payload.len()), (4, did::DEV_INFO, 84));
+    assert_silent(
+        &mut d.c,
+        Duration::from_millis(20),
+        Duration::from_millis(100),
+        "only the good packet answered",
+    );
+}
