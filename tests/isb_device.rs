@@ -613,3 +613,27 @@ fn imu_raw_streams_every_imu_period() {
         .iter()
         .all(|p| p.did == did::IMU_RAW && p.payload.len() == 36));
 }
+
+/// FLASH_CONFIG's `key` names the defaults it was made from: one written
+/// with another key is replaced by the factory defaults at the next boot
+/// (docs/isb-data-sets.md), with the persistent streams.
+#[test]
+fn a_changed_key_restores_the_factory_defaults_at_boot() {
+    let mut b = Bench::new();
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::STARTUP_NAV_DT_MS as u16,
+        &8u32.to_le_bytes(),
+    ));
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::KEY as u16,
+        &7u32.to_le_bytes(),
+    ));
+    b.run_ticks(1);
+    assert_eq!(u32_at(&b.flash_config(), flash::KEY), 7);
+    let mut b = b.power_cycle();
+    let fc = b.flash_config();
+    assert_eq!(u32_at(&fc, flash::KEY), flash::FACTORY_KEY);
+    assert_eq!(u32_at(&fc, flash::STARTUP_NAV_DT_MS), 4);
+}

@@ -176,7 +176,8 @@ impl Personality for Isb {
     }
 
     /// FLASH_CONFIG and the persistent streams load from flash (factory
-    /// defaults and none if it holds no valid ISB image); the startup
+    /// defaults and none if it holds no valid ISB image, or one whose
+    /// `key` is not the factory key); the startup
     /// periods and `ser0BaudRate` are latched; persistent streams start.
     fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, _now: Instant) {
         self.input = Input::new();
@@ -185,7 +186,9 @@ impl Personality for Isb {
         let loaded = matches!(sh.load_image(&mut image), Ok(true));
         let mut cfg = FlashConfig([0; flash::SIZE]);
         cfg.0.copy_from_slice(&image[..PERSIST]);
-        if loaded && cfg.is_valid() {
+        // A FLASH_CONFIG whose `key` is not the firmware's is replaced by
+        // the factory defaults (docs/isb-data-sets.md).
+        if loaded && cfg.is_valid() && cfg.key() == flash::FACTORY_KEY {
             st.cfg = cfg;
             st.persist.copy_from_slice(&image[PERSIST..]);
         } else {
