@@ -10,36 +10,15 @@ use imu_emu::isb::did;
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 
-use crate::support::{hex, isb_packet, isb_packet_of, Conn, TIMEOUT};
+use crate::support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, TIMEOUT};
 use crate::target::{Dut, Kind, Opts};
-
-/// A GET_DATA request for the whole data set, every `period` source
-/// periods (0: once).
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 32];
-    let n = message::encode_get(&req, &mut out).unwrap();
-    out[..n].to_vec()
-}
-
-/// A SET_DATA of `data` at `offset`.
-fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
-    let mut out = [0u8; 512];
-    let n = message::encode_set(did, offset, data, &mut out).unwrap();
-    out[..n].to_vec()
-}
 
 fn u32_at(b: &[u8], i: usize) -> u32 {
     u32::from_le_bytes(b[i..i + 4].try_into().unwrap())
 }
 
 fn sys_params(c: &mut Conn) -> SysParams {
-    c.send(&get(did::SYS_PARAMS, 0));
+    c.send(&isb_get(did::SYS_PARAMS, 0));
     SysParams::decode(
         &isb_packet_of(c, did::SYS_PARAMS)
             .payload
@@ -49,7 +28,7 @@ fn sys_params(c: &mut Conn) -> SysParams {
 }
 
 fn flash_config(c: &mut Conn) -> Vec<u8> {
-    c.send(&get(did::FLASH_CONFIG, 0));
+    c.send(&isb_get(did::FLASH_CONFIG, 0));
     isb_packet_of(c, did::FLASH_CONFIG).payload
 }
 
@@ -99,8 +78,8 @@ pub fn sys_params_and_flash_config_checksums_agree(kind: Kind) {
 /// on the packets' own time fields; PIMU's `dt` is its window.
 pub fn imu_every_4_ms_and_pimu_every_8_ms_on_device_time(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
-    d.c.send(&get(did::PIMU, 2));
+    d.c.send(&isb_get(did::IMU, 1));
+    d.c.send(&isb_get(did::PIMU, 2));
     let (mut imu, mut pimu) = (Vec::new(), Vec::new());
     while imu.len() < 201 || pimu.len() < 101 {
         let p = isb_packet(&mut d.c);
@@ -128,7 +107,7 @@ pub fn imu_every_4_ms_and_pimu_every_8_ms_on_device_time(kind: Kind) {
 pub fn flash_config_set_is_acked_read_back_and_kept(kind: Kind) {
     let mut d = start(kind);
     let at = flash::STARTUP_NAV_DT_MS;
-    d.c.send(&set(did::FLASH_CONFIG, at as u16, &8u32.to_le_bytes()));
+    d.c.send(&isb_set(did::FLASH_CONFIG, at as u16, &8u32.to_le_bytes()));
     let ack = isb_packet(&mut d.c);
     assert_eq!((ack.flags, ack.did), (1, 0));
     assert_eq!(ack.payload, [0x25, 12, 0, 0, 12, 4, 0, at as u8, 0]);
@@ -158,10 +137,10 @@ pub fn flash_config_set_is_acked_read_back_and_kept(kind: Kind) {
 /// itself every 4 ms and the stream that was not saved (PIMU) does not.
 pub fn pers_then_srst_resumes_the_saved_stream(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
+    d.c.send(&isb_get(did::IMU, 1));
     d.c.send(b"$PERS*14\r\n");
     // Not saved: started after $PERS.
-    d.c.send(&get(did::PIMU, 2));
+    d.c.send(&isb_get(did::PIMU, 2));
     isb_packet_of(&mut d.c, did::PIMU);
     d.c.send(b"$SRST*06\r\n");
     // Before the reset a PIMU comes every second IMU; after it, IMU only.
@@ -186,8 +165,8 @@ pub fn pers_then_srst_resumes_the_saved_stream(kind: Kind) {
 /// follows the ACK.
 pub fn stop_all_is_acked_with_the_sdks_bytes(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
-    d.c.send(&get(did::PIMU, 1));
+    d.c.send(&isb_get(did::IMU, 1));
+    d.c.send(&isb_get(did::PIMU, 1));
     isb_packet_of(&mut d.c, did::PIMU);
     d.c.send(&hex("ef 49 06 00 00 00 3e 1f"));
     let ack = loop {
@@ -236,7 +215,7 @@ pub fn get_of_did_132_is_nacked(kind: Kind) {
 /// behind it is answered.
 pub fn bad_checksum_then_a_good_packet_is_answered(kind: Kind) {
     let mut d = start(kind);
-    let good = get(did::DEV_INFO, 0);
+    let good = isb_get(did::DEV_INFO, 0);
     let mut bad = good.clone();
     *bad.last_mut().unwrap() ^= 0xFF;
     d.c.send(&[bad, good].concat());

@@ -9,30 +9,9 @@ mod support;
 use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
-use imu_emu::isb::message::{self, GetRequest};
+
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
-use support::{hex, isb_packet, isb_packet_of, Conn, Emu};
-
-/// A GET_DATA request for the whole data set, every `period` source
-/// periods (0: once).
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 32];
-    let n = message::encode_get(&req, &mut out).unwrap();
-    out[..n].to_vec()
-}
-
-/// A SET_DATA of `data` at `offset`.
-fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
-    let mut out = [0u8; 512];
-    let n = message::encode_set(did, offset, data, &mut out).unwrap();
-    out[..n].to_vec()
-}
+use support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Emu};
 
 fn isb(args: &[&str]) -> Emu {
     let mut all = vec!["--protocol", "isb"];
@@ -74,19 +53,19 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
     // Reported, and asserted well inside the tool's ~10 ms.
     eprintln!("DEV_INFO round trip: worst {worst:?} of 20");
     assert!(worst < Duration::from_millis(5), "{worst:?}");
-    c.send(&get(did::SYS_PARAMS, 0));
+    c.send(&isb_get(did::SYS_PARAMS, 0));
     let sp = SysParams::decode(&isb_packet(&mut c).payload.try_into().unwrap());
-    c.send(&get(did::FLASH_CONFIG, 0));
+    c.send(&isb_get(did::FLASH_CONFIG, 0));
     let fc = isb_packet(&mut c).payload;
     assert_eq!(
         sp.flash_cfg_checksum,
         u32::from_le_bytes(fc[4..8].try_into().unwrap())
     );
-    c.send(&get(121, 0));
-    c.send(&get(123, 0));
+    c.send(&isb_get(121, 0));
+    c.send(&isb_get(123, 0));
     c.send(b"$STPC*14\r\n");
-    c.send(&get(did::DEV_INFO, 2000));
-    c.send(&get(did::IMU, 1));
+    c.send(&isb_get(did::DEV_INFO, 2000));
+    c.send(&isb_get(did::IMU, 1));
     // The first packets answer the GETs; then IMU every 4 ms of device
     // time, DEV_INFO every 2 s, nothing for 121/123.
     let first = isb_packet(&mut c);
@@ -115,7 +94,7 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
 fn pimu_streams_and_survives_a_reconnect() {
     let emu = isb(&[]);
     let mut c = emu.connect();
-    c.send(&get(did::PIMU, 5));
+    c.send(&isb_get(did::PIMU, 5));
     // The GET's own reply comes at once (its time is the request's); the
     // stream then runs on its period.
     let first = isb_packet_of(&mut c, did::PIMU);
@@ -151,7 +130,7 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
     {
         let emu = isb(&["--flash", path]);
         let mut c = emu.connect();
-        c.send(&set(
+        c.send(&isb_set(
             did::FLASH_CONFIG,
             flash::STARTUP_NAV_DT_MS as u16,
             &2u32.to_le_bytes(),
@@ -159,10 +138,10 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
         let ack = isb_packet(&mut c);
         assert_eq!(ack.flags, 1);
         assert_eq!(ack.payload, [0x25, 12, 0, 0, 12, 4, 0, 16, 0]);
-        c.send(&get(did::FLASH_CONFIG, 0));
+        c.send(&isb_get(did::FLASH_CONFIG, 0));
         let fc = isb_packet_of(&mut c, did::FLASH_CONFIG).payload;
         assert_eq!(u32::from_le_bytes(fc[16..20].try_into().unwrap()), 2);
-        c.send(&get(did::SYS_PARAMS, 0));
+        c.send(&isb_get(did::SYS_PARAMS, 0));
         let sp = SysParams::decode(
             &isb_packet_of(&mut c, did::SYS_PARAMS)
                 .payload
@@ -171,7 +150,7 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
         );
         assert_eq!(sp.flash_cfg_checksum, flash::checksum(&fc));
         assert_ne!(sp.hdw_status & hdw_status::SYSTEM_RESET_REQUIRED, 0);
-        c.send(&get(did::IMU, 1));
+        c.send(&isb_get(did::IMU, 1));
         c.send(b"$PERS*14\r\n");
         c.send(b"$SRST*06\r\n");
         // After the reset the IMU stream resumes at the new 2 ms period.
@@ -203,7 +182,7 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
 fn dev_info_over_a_pty() {
     let emu = Emu::start(&["--protocol", "isb", "--pty"]);
     let mut c = Conn::serial(&emu.pty_path());
-    c.send(&get(did::DEV_INFO, 0));
+    c.send(&isb_get(did::DEV_INFO, 0));
     let p = isb_packet(&mut c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
     assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());

@@ -283,6 +283,28 @@ impl Conn {
     }
 }
 
+/// A GET_DATA packet for the whole data set `did`, every `period` source
+/// periods (0: once), with the core's `imu_emu::isb::message::encode_get`.
+pub fn isb_get(did: u8, period: u16) -> Vec<u8> {
+    let req = imu_emu::isb::message::GetRequest {
+        did: u16::from(did),
+        size: 0,
+        offset: 0,
+        period,
+    };
+    let mut out = [0u8; 32];
+    let n = imu_emu::isb::message::encode_get(&req, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// A SET_DATA packet of `data` at `offset` of data set `did`, with the
+/// core's `imu_emu::isb::message::encode_set`.
+pub fn isb_set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
+    let mut out = [0u8; 512];
+    let n = imu_emu::isb::message::encode_set(did, offset, data, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
 /// An ISB packet as received (`docs/protocol-facts.md` "ISB").
 #[derive(Debug)]
 pub struct IsbPacket {
