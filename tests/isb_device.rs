@@ -5,8 +5,8 @@
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
 use imu_emu::isb::did;
-use imu_emu::isb::message::GetRequest;
-use imu_emu::isb::packet::{self, Decoder, FLAG_OFFSET};
+use imu_emu::isb::message::{self, GetRequest};
+use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
     dev_info, flash, hdw_status, imu_status, rmc, sys_params, DevInfo, Imu, Pimu, Rmc,
     StrobeInTime, SysParams, SystemCommand,
@@ -50,14 +50,13 @@ fn get(did: u8, period: u16) -> Vec<u8> {
         period,
     };
     let mut out = [0u8; 64];
-    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    let n = message::encode_get(&req, &mut out).unwrap();
     out[..n].to_vec()
 }
 
 fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
     let mut out = [0u8; 512];
-    let n =
-        packet::encode_parts(5 | FLAG_OFFSET, did, &offset.to_le_bytes(), data, &mut out).unwrap();
+    let n = message::encode_set(did, offset, data, &mut out).unwrap();
     out[..n].to_vec()
 }
 
@@ -436,7 +435,7 @@ fn get_rules() {
             period: 0,
         };
         let mut out = [0u8; 32];
-        let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+        let n = message::encode_get(&req, &mut out).unwrap();
         let r = b.send(&out[..n]);
         assert_eq!(r.len(), 1);
         assert_eq!(
@@ -454,7 +453,7 @@ fn get_rules() {
         offset: 12,
         period: 0,
     };
-    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    let n = message::encode_get(&req, &mut out).unwrap();
     let r = b.send(&out[..n]);
     assert_eq!((r[0].flags, r[0].did), (0x24, did::FLASH_CONFIG));
     assert_eq!(r[0].payload, [12, 0, 1, 0, 0, 0, 4, 0, 0, 0]);

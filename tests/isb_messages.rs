@@ -7,8 +7,8 @@
 
 use imu_emu::isb::did::{self, Class, Source};
 use imu_emu::isb::message::{
-    self, apply_set, encode_ack, encode_data, encode_nack, resolve_get, AckInfo, GetReply,
-    GetRequest, Request, SetOutcome,
+    self, apply_set, encode_ack, encode_data, encode_get, encode_nack, resolve_get, AckInfo,
+    GetReply, GetRequest, Request, SetOutcome,
 };
 use imu_emu::isb::nmea::{self, Command, Dropped, Event, Input};
 use imu_emu::isb::packet::{self, Decoder, Packet, MAX_PACKET};
@@ -44,7 +44,7 @@ fn nack_bytes(info: &AckInfo) -> Vec<u8> {
 
 fn get_packet(g: &GetRequest) -> Vec<u8> {
     let mut out = [0u8; 16];
-    let n = packet::encode(3, 0, &g.encode(), &mut out).unwrap();
+    let n = encode_get(g, &mut out).unwrap();
     out[..n].to_vec()
 }
 

@@ -16,6 +16,7 @@
 //! is not just "still factory".
 
 mod common;
+use common::xorshift::XorShift;
 use common::*;
 
 use imu_emu::device::{Device, Event, Mode, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
@@ -613,20 +614,6 @@ fn commands_mid_stream_at_2_mbaud_are_answered_between_frames() {
     assert_eq!(got, replies, "every good command answered once, in order");
     assert_eq!(state(&b.dev), before);
     assert_eq!(b.dev.tx_dropped(), 0);
-}
-
-/// Deterministic xorshift32.
-struct XorShift(u32);
-
-impl XorShift {
-    fn next(&mut self) -> u32 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.0 = x;
-        x
-    }
 }
 
 #[test]

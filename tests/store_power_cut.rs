@@ -12,6 +12,9 @@ use imu_emu::store::{
 };
 use proptest::prelude::*;
 
+mod common;
+use common::xorshift::XorShift;
+
 type Block = [u8; PARAM_BLOCK_LEN];
 type Nor = RamNor<8192>;
 
@@ -20,29 +23,14 @@ const SECTOR: usize = 4096;
 /// and block words + 1 commit word.
 const SAVE_STEPS: u32 = 1 + 0x610 / 4 + 1;
 
-/// Deterministic xorshift32 (seed must be non-zero).
-struct XorShift(u32);
+/// [`XorShift`] bytes as a parameter block.
+trait Blocks {
+    fn block(&mut self) -> Block;
+}
 
-impl XorShift {
-    fn next(&mut self) -> u32 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.0 = x;
-        x
-    }
-
-    fn fill(&mut self, bytes: &mut [u8]) {
-        for b in bytes {
-            *b = self.next() as u8;
-        }
-    }
-
+impl Blocks for XorShift {
     fn block(&mut self) -> Block {
-        let mut b = [0; PARAM_BLOCK_LEN];
-        self.fill(&mut b);
-        b
+        self.bytes()
     }
 }
 

@@ -28,33 +28,12 @@ use imu_emu::nor::RamNor;
 use imu_emu::store::{ImageSpec, ParamStore, KERNEL_IMAGE};
 use imu_emu::time::Instant;
 
+mod common;
+use common::xorshift::XorShift;
+
 const SECTOR: usize = 4096;
 /// Capacity of the campaign flash: two stores of two sectors each.
 const CAP: usize = 16384;
-
-/// Deterministic xorshift32 (seed must be non-zero).
-struct XorShift(u32);
-
-impl XorShift {
-    fn next(&mut self) -> u32 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.0 = x;
-        x
-    }
-
-    fn below(&mut self, n: u32) -> u32 {
-        self.next() % n
-    }
-
-    fn fill(&mut self, bytes: &mut [u8]) {
-        for b in bytes {
-            *b = self.next() as u8;
-        }
-    }
-}
 
 /// A `RamNor` seen through `WRITE_SIZE` `W` / `READ_SIZE` `R` (alignment
 /// enforced), counting the erases of each sector: the wear.

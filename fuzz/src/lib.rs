@@ -858,20 +858,13 @@ fn isb_get(did: u8, size: u16, offset: u16, period: u16) -> Vec<u8> {
         period,
     };
     let mut out = [0u8; 32];
-    let n = isb::packet::encode(3, 0, &req.encode(), &mut out).unwrap_or(0);
+    let n = isb::message::encode_get(&req, &mut out).unwrap_or(0);
     out[..n].to_vec()
 }
 
 fn isb_set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
     let mut out = [0u8; 512];
-    let n = isb::packet::encode_parts(
-        5 | isb::packet::FLAG_OFFSET,
-        did,
-        &offset.to_le_bytes(),
-        data,
-        &mut out,
-    )
-    .unwrap_or(0);
+    let n = isb::message::encode_set(did, offset, data, &mut out).unwrap_or(0);
     out[..n].to_vec()
 }
 

@@ -61,6 +61,29 @@ impl GetRequest {
     }
 }
 
+/// Encodes a GET_DATA packet of `req` (flags [`PacketType::GetData`],
+/// header DID 0, the DID in the payload; `docs/protocol-facts.md` "ISB")
+/// into `out`, what a host sends; its length, or `None` if `out` is shorter
+/// than 16 bytes.
+pub fn encode_get(req: &GetRequest, out: &mut [u8]) -> Option<usize> {
+    packet::encode(PacketType::GetData as u8, 0, &req.encode(), out)
+}
+
+/// Encodes a SET_DATA packet writing `data` at `offset` of data set `did`
+/// (flags [`PacketType::SetData`] with [`FLAG_OFFSET`], payload the `u16`
+/// offset then the data; `docs/protocol-facts.md` "ISB") into `out`, what a
+/// host sends; its length, or `None` if `out` is too small or the packet
+/// longer than [`packet::MAX_PACKET`].
+pub fn encode_set(did: u8, offset: u16, data: &[u8], out: &mut [u8]) -> Option<usize> {
+    packet::encode_parts(
+        PacketType::SetData as u8 | FLAG_OFFSET,
+        did,
+        &offset.to_le_bytes(),
+        data,
+        out,
+    )
+}
+
 /// The part `(offset, size)` of a `struct_size`-byte set a GET of `size`
 /// bytes at `offset` gets (NOTES.md "ISB"): size 0 and offset 0 → the whole
 /// struct; a request running past the struct → the whole struct. Decision:
@@ -371,6 +394,79 @@ impl<'a> Request<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The golden vector named `meaning` in `tests/data/vectors.txt`, into
+    /// `buf`; its length.
+    fn vector(meaning: &str, buf: &mut [u8]) -> usize {
+        let text = include_str!("../../tests/data/vectors.txt");
+        let line = text
+            .lines()
+            .find(|l| l.split('|').next().map(str::trim) == Some(meaning))
+            .expect("vector in tests/data/vectors.txt");
+        let hex = line.rsplit('|').next().unwrap_or("");
+        let mut n = 0;
+        for h in hex.split_whitespace() {
+            buf[n] = u8::from_str_radix(h, 16).expect("hex byte");
+            n += 1;
+        }
+        n
+    }
+
+    #[test]
+    fn get_and_set_encode_to_the_sdk_bytes() {
+        let mut want = [0u8; 64];
+        let mut out = [0u8; 64];
+        for (meaning, req) in [
+            (
+                "SDK: GET DEV_INFO once",
+                GetRequest {
+                    did: u16::from(did::DEV_INFO),
+                    size: 0,
+                    offset: 0,
+                    period: 0,
+                },
+            ),
+            (
+                "SDK: GET IMU period 1",
+                GetRequest {
+                    did: u16::from(did::IMU),
+                    size: 0,
+                    offset: 0,
+                    period: 1,
+                },
+            ),
+        ] {
+            let w = vector(meaning, &mut want);
+            assert_eq!(encode_get(&req, &mut out), Some(w), "{meaning}");
+            assert_eq!(out[..w], want[..w], "{meaning}");
+        }
+        let w = vector(
+            "SDK: SET FLASH_CONFIG startupImuDtMs=2 (offset 12)",
+            &mut want,
+        );
+        assert_eq!(
+            encode_set(did::FLASH_CONFIG, 12, &[2, 0, 0, 0], &mut out),
+            Some(w)
+        );
+        assert_eq!(out[..w], want[..w]);
+        // Too small a buffer: no packet, no panic.
+        assert_eq!(
+            encode_get(
+                &GetRequest {
+                    did: 1,
+                    size: 0,
+                    offset: 0,
+                    period: 0
+                },
+                &mut out[..15]
+            ),
+            None
+        );
+        assert_eq!(
+            encode_set(did::FLASH_CONFIG, 12, &[2, 0, 0, 0], &mut out[..13]),
+            None
+        );
+    }
 
     #[test]
     fn windows() {

@@ -104,19 +104,7 @@ impl<'a> Packet<'a> {
 /// Encodes a packet into `out`; returns its length, or `None` if `out` is
 /// too small or the packet longer than [`MAX_PACKET`].
 pub fn encode(flags: u8, did: u8, payload: &[u8], out: &mut [u8]) -> Option<usize> {
-    let total = payload.len().checked_add(OVERHEAD)?;
-    if total > MAX_PACKET {
-        return None;
-    }
-    let out = out.get_mut(..total)?;
-    out[..2].copy_from_slice(&PREAMBLE);
-    out[2] = flags;
-    out[3] = did;
-    out[4..6].copy_from_slice(&(payload.len() as u16).to_le_bytes());
-    out[6..6 + payload.len()].copy_from_slice(payload);
-    let sum = checksum(&out[..6 + payload.len()]);
-    out[6 + payload.len()..].copy_from_slice(&sum);
-    Some(total)
+    encode_parts(flags, did, &[], payload, out)
 }
 
 /// Encodes a packet whose payload is `prefix` then `data` (e.g. the `u16`

@@ -9,6 +9,8 @@ use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
 
+pub mod xorshift;
+
 pub type Flash = RamNor<8192>;
 
 /// A device frame as received by the host.

@@ -7,88 +7,20 @@
 use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
-use imu_emu::isb::message::GetRequest;
-use imu_emu::isb::packet::{self, FLAG_OFFSET};
+use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 
-use crate::support::{hex, Conn, TIMEOUT};
+use crate::support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, TIMEOUT};
 use crate::target::{Dut, Kind, Opts};
-
-/// An ISB packet as received.
-#[derive(Debug)]
-struct Pkt {
-    flags: u8,
-    did: u8,
-    payload: Vec<u8>,
-    /// The whole packet, preamble to checksum.
-    raw: Vec<u8>,
-}
-
-/// Reads the next ISB packet, skipping NMEA replies (a `$…\r\n` line);
-/// panics on anything else or a bad checksum.
-fn packet(c: &mut Conn) -> Pkt {
-    loop {
-        let b = c.read_bytes(1)[0];
-        if b == b'$' {
-            while c.read_bytes(1)[0] != b'\n' {}
-            continue;
-        }
-        assert_eq!(b, 0xEF, "not a packet start");
-        let head = [&[b][..], &c.read_bytes(5)].concat();
-        assert_eq!(head[1], 0x49, "preamble");
-        let size = usize::from(u16::from_le_bytes([head[4], head[5]]));
-        let rest = c.read_bytes(size + 2);
-        let raw = [&head[..], &rest[..]].concat();
-        assert_eq!(packet::checksum(&raw[..6 + size]), rest[size..], "checksum");
-        return Pkt {
-            flags: head[2],
-            did: head[3],
-            payload: rest[..size].to_vec(),
-            raw,
-        };
-    }
-}
-
-/// The next packet with this DID in the header (others are skipped).
-fn packet_of(c: &mut Conn, did: u8) -> Pkt {
-    loop {
-        let p = packet(c);
-        if p.did == did {
-            return p;
-        }
-    }
-}
-
-/// A GET_DATA request for the whole data set, every `period` source
-/// periods (0: once).
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 32];
-    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
-    out[..n].to_vec()
-}
-
-/// A SET_DATA of `data` at `offset`.
-fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
-    let mut out = [0u8; 512];
-    let n =
-        packet::encode_parts(5 | FLAG_OFFSET, did, &offset.to_le_bytes(), data, &mut out).unwrap();
-    out[..n].to_vec()
-}
 
 fn u32_at(b: &[u8], i: usize) -> u32 {
     u32::from_le_bytes(b[i..i + 4].try_into().unwrap())
 }
 
 fn sys_params(c: &mut Conn) -> SysParams {
-    c.send(&get(did::SYS_PARAMS, 0));
+    c.send(&isb_get(did::SYS_PARAMS, 0));
     SysParams::decode(
-        &packet_of(c, did::SYS_PARAMS)
+        &isb_packet_of(c, did::SYS_PARAMS)
             .payload
             .try_into()
             .expect("SYS_PARAMS size"),
@@ -96,8 +28,8 @@ fn sys_params(c: &mut Conn) -> SysParams {
 }
 
 fn flash_config(c: &mut Conn) -> Vec<u8> {
-    c.send(&get(did::FLASH_CONFIG, 0));
-    packet_of(c, did::FLASH_CONFIG).payload
+    c.send(&isb_get(did::FLASH_CONFIG, 0));
+    isb_packet_of(c, did::FLASH_CONFIG).payload
 }
 
 /// Nothing arrives for `d` once what was in flight had `settle` to land.
@@ -116,7 +48,7 @@ fn start(kind: Kind) -> Dut {
 pub fn dev_info_is_answered_whole_and_accepted_by_the_sdk(kind: Kind) {
     let mut d = start(kind);
     d.c.send(&hex("ef 49 03 00 08 00 01 00 00 00 00 00 00 00 44 43"));
-    let p = packet(&mut d.c);
+    let p = isb_packet(&mut d.c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, did::DEV_INFO, 84));
     assert_eq!(p.raw.len(), 92);
     let info = DevInfo::decode(&p.payload.clone().try_into().unwrap());
@@ -146,11 +78,11 @@ pub fn sys_params_and_flash_config_checksums_agree(kind: Kind) {
 /// on the packets' own time fields; PIMU's `dt` is its window.
 pub fn imu_every_4_ms_and_pimu_every_8_ms_on_device_time(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
-    d.c.send(&get(did::PIMU, 2));
+    d.c.send(&isb_get(did::IMU, 1));
+    d.c.send(&isb_get(did::PIMU, 2));
     let (mut imu, mut pimu) = (Vec::new(), Vec::new());
     while imu.len() < 201 || pimu.len() < 101 {
-        let p = packet(&mut d.c);
+        let p = isb_packet(&mut d.c);
         let l = p.payload.clone();
         match p.did {
             did::IMU => imu.push(Imu::decode(&l.try_into().unwrap()).time),
@@ -175,8 +107,8 @@ pub fn imu_every_4_ms_and_pimu_every_8_ms_on_device_time(kind: Kind) {
 pub fn flash_config_set_is_acked_read_back_and_kept(kind: Kind) {
     let mut d = start(kind);
     let at = flash::STARTUP_NAV_DT_MS;
-    d.c.send(&set(did::FLASH_CONFIG, at as u16, &8u32.to_le_bytes()));
-    let ack = packet(&mut d.c);
+    d.c.send(&isb_set(did::FLASH_CONFIG, at as u16, &8u32.to_le_bytes()));
+    let ack = isb_packet(&mut d.c);
     assert_eq!((ack.flags, ack.did), (1, 0));
     assert_eq!(ack.payload, [0x25, 12, 0, 0, 12, 4, 0, at as u8, 0]);
     let fc = flash_config(&mut d.c);
@@ -205,18 +137,18 @@ pub fn flash_config_set_is_acked_read_back_and_kept(kind: Kind) {
 /// itself every 4 ms and the stream that was not saved (PIMU) does not.
 pub fn pers_then_srst_resumes_the_saved_stream(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
+    d.c.send(&isb_get(did::IMU, 1));
     d.c.send(b"$PERS*14\r\n");
     // Not saved: started after $PERS.
-    d.c.send(&get(did::PIMU, 2));
-    packet_of(&mut d.c, did::PIMU);
+    d.c.send(&isb_get(did::PIMU, 2));
+    isb_packet_of(&mut d.c, did::PIMU);
     d.c.send(b"$SRST*06\r\n");
     // Before the reset a PIMU comes every second IMU; after it, IMU only.
     let mut run = Vec::new();
     let deadline = Instant::now() + TIMEOUT;
     while run.len() < 30 {
         assert!(Instant::now() < deadline, "no IMU-only run after $SRST");
-        let p = packet(&mut d.c);
+        let p = isb_packet(&mut d.c);
         match p.did {
             did::IMU => run.push(Imu::decode(&p.payload.try_into().unwrap()).time),
             did::PIMU => run.clear(),
@@ -233,12 +165,12 @@ pub fn pers_then_srst_resumes_the_saved_stream(kind: Kind) {
 /// follows the ACK.
 pub fn stop_all_is_acked_with_the_sdks_bytes(kind: Kind) {
     let mut d = start(kind);
-    d.c.send(&get(did::IMU, 1));
-    d.c.send(&get(did::PIMU, 1));
-    packet_of(&mut d.c, did::PIMU);
+    d.c.send(&isb_get(did::IMU, 1));
+    d.c.send(&isb_get(did::PIMU, 1));
+    isb_packet_of(&mut d.c, did::PIMU);
     d.c.send(&hex("ef 49 06 00 00 00 3e 1f"));
     let ack = loop {
-        let p = packet(&mut d.c);
+        let p = isb_packet(&mut d.c);
         if p.flags == 1 {
             break p;
         }
@@ -265,10 +197,10 @@ pub fn get_of_did_132_is_nacked(kind: Kind) {
         period: 0,
     };
     let mut out = [0u8; 32];
-    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    let n = message::encode_get(&req, &mut out).unwrap();
     d.c.send(&out[..n]);
     assert_eq!(
-        packet(&mut d.c).raw,
+        isb_packet(&mut d.c).raw,
         hex("ef 49 02 00 09 00 03 00 00 00 00 00 00 00 00 46 97")
     );
     assert_silent(
@@ -283,11 +215,11 @@ pub fn get_of_did_132_is_nacked(kind: Kind) {
 /// behind it is answered.
 pub fn bad_checksum_then_a_good_packet_is_answered(kind: Kind) {
     let mut d = start(kind);
-    let good = get(did::DEV_INFO, 0);
+    let good = isb_get(did::DEV_INFO, 0);
     let mut bad = good.clone();
     *bad.last_mut().unwrap() ^= 0xFF;
     d.c.send(&[bad, good].concat());
-    let p = packet(&mut d.c);
+    let p = isb_packet(&mut d.c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, did::DEV_INFO, 84));
     assert_silent(
         &mut d.c,

@@ -9,71 +9,9 @@ mod support;
 use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
-use imu_emu::isb::message::GetRequest;
-use imu_emu::isb::packet::{self, FLAG_OFFSET};
+
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
-use support::{hex, Conn, Emu};
-
-/// An ISB packet as received.
-#[derive(Debug)]
-struct Pkt {
-    flags: u8,
-    did: u8,
-    payload: Vec<u8>,
-}
-
-/// Reads the next ISB packet, skipping NMEA replies (a `$…\r\n` line);
-/// panics on a bad checksum.
-fn packet(c: &mut Conn) -> Pkt {
-    loop {
-        let b = c.read_bytes(1)[0];
-        if b == b'$' {
-            while c.read_bytes(1)[0] != b'\n' {}
-            continue;
-        }
-        assert_eq!(b, 0xEF, "not a packet start");
-        let head = [&[b][..], &c.read_bytes(5)].concat();
-        assert_eq!(head[1], 0x49);
-        let size = usize::from(u16::from_le_bytes([head[4], head[5]]));
-        let rest = c.read_bytes(size + 2);
-        let all = [&head[..], &rest[..size]].concat();
-        assert_eq!(packet::checksum(&all), rest[size..], "checksum");
-        return Pkt {
-            flags: head[2],
-            did: head[3],
-            payload: rest[..size].to_vec(),
-        };
-    }
-}
-
-/// The next packet with this DID in the header (others are skipped).
-fn packet_of(c: &mut Conn, did: u8) -> Pkt {
-    loop {
-        let p = packet(c);
-        if p.did == did {
-            return p;
-        }
-    }
-}
-
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 32];
-    let n = packet::encode(3, 0, &req.encode(), &mut out).unwrap();
-    out[..n].to_vec()
-}
-
-fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
-    let mut out = [0u8; 512];
-    let n =
-        packet::encode_parts(5 | FLAG_OFFSET, did, &offset.to_le_bytes(), data, &mut out).unwrap();
-    out[..n].to_vec()
-}
+use support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Emu};
 
 fn isb(args: &[&str]) -> Emu {
     let mut all = vec!["--protocol", "isb"];
@@ -107,7 +45,7 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
     for _ in 0..20 {
         let t0 = Instant::now();
         c.send(&hex("ef 49 03 00 08 00 01 00 00 00 00 00 00 00 44 43"));
-        let p = packet(&mut c);
+        let p = isb_packet(&mut c);
         worst = worst.max(t0.elapsed());
         assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
         assert!(DevInfo::decode(&p.payload.try_into().unwrap()).accepted_by_sdk());
@@ -115,27 +53,27 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
     // Reported, and asserted well inside the tool's ~10 ms.
     eprintln!("DEV_INFO round trip: worst {worst:?} of 20");
     assert!(worst < Duration::from_millis(5), "{worst:?}");
-    c.send(&get(did::SYS_PARAMS, 0));
-    let sp = SysParams::decode(&packet(&mut c).payload.try_into().unwrap());
-    c.send(&get(did::FLASH_CONFIG, 0));
-    let fc = packet(&mut c).payload;
+    c.send(&isb_get(did::SYS_PARAMS, 0));
+    let sp = SysParams::decode(&isb_packet(&mut c).payload.try_into().unwrap());
+    c.send(&isb_get(did::FLASH_CONFIG, 0));
+    let fc = isb_packet(&mut c).payload;
     assert_eq!(
         sp.flash_cfg_checksum,
         u32::from_le_bytes(fc[4..8].try_into().unwrap())
     );
-    c.send(&get(121, 0));
-    c.send(&get(123, 0));
+    c.send(&isb_get(121, 0));
+    c.send(&isb_get(123, 0));
     c.send(b"$STPC*14\r\n");
-    c.send(&get(did::DEV_INFO, 2000));
-    c.send(&get(did::IMU, 1));
+    c.send(&isb_get(did::DEV_INFO, 2000));
+    c.send(&isb_get(did::IMU, 1));
     // The first packets answer the GETs; then IMU every 4 ms of device
     // time, DEV_INFO every 2 s, nothing for 121/123.
-    let first = packet(&mut c);
+    let first = isb_packet(&mut c);
     assert_eq!(first.did, did::DEV_INFO);
     let mut imu_times = Vec::new();
     let mut dev_infos = 0;
     while imu_times.len() < 751 {
-        let p = packet(&mut c);
+        let p = isb_packet(&mut c);
         match p.did {
             did::IMU => imu_times.push(Imu::decode(&p.payload.try_into().unwrap()).time),
             did::DEV_INFO => dev_infos += 1,
@@ -156,14 +94,14 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
 fn pimu_streams_and_survives_a_reconnect() {
     let emu = isb(&[]);
     let mut c = emu.connect();
-    c.send(&get(did::PIMU, 5));
+    c.send(&isb_get(did::PIMU, 5));
     // The GET's own reply comes at once (its time is the request's); the
     // stream then runs on its period.
-    let first = packet_of(&mut c, did::PIMU);
+    let first = isb_packet_of(&mut c, did::PIMU);
     assert_eq!(first.payload.len(), 40);
     let mut last: Option<f64> = None;
     for _ in 0..50 {
-        let p = Pimu::decode(&packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
+        let p = Pimu::decode(&isb_packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
         if let Some(t) = last {
             assert!((p.time - t - 0.02f64).abs() < 1e-9);
             assert_eq!(p.dt, 0.02);
@@ -173,8 +111,8 @@ fn pimu_streams_and_survives_a_reconnect() {
     drop(c);
     std::thread::sleep(Duration::from_millis(100));
     let mut c = emu.connect();
-    let p = Pimu::decode(&packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
-    let q = Pimu::decode(&packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
+    let p = Pimu::decode(&isb_packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
+    let q = Pimu::decode(&isb_packet_of(&mut c, did::PIMU).payload.try_into().unwrap());
     assert!((q.time - p.time - 0.02).abs() < 1e-9);
     assert_eq!(q.dt, 0.02);
 }
@@ -192,33 +130,33 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
     {
         let emu = isb(&["--flash", path]);
         let mut c = emu.connect();
-        c.send(&set(
+        c.send(&isb_set(
             did::FLASH_CONFIG,
             flash::STARTUP_NAV_DT_MS as u16,
             &2u32.to_le_bytes(),
         ));
-        let ack = packet(&mut c);
+        let ack = isb_packet(&mut c);
         assert_eq!(ack.flags, 1);
         assert_eq!(ack.payload, [0x25, 12, 0, 0, 12, 4, 0, 16, 0]);
-        c.send(&get(did::FLASH_CONFIG, 0));
-        let fc = packet_of(&mut c, did::FLASH_CONFIG).payload;
+        c.send(&isb_get(did::FLASH_CONFIG, 0));
+        let fc = isb_packet_of(&mut c, did::FLASH_CONFIG).payload;
         assert_eq!(u32::from_le_bytes(fc[16..20].try_into().unwrap()), 2);
-        c.send(&get(did::SYS_PARAMS, 0));
+        c.send(&isb_get(did::SYS_PARAMS, 0));
         let sp = SysParams::decode(
-            &packet_of(&mut c, did::SYS_PARAMS)
+            &isb_packet_of(&mut c, did::SYS_PARAMS)
                 .payload
                 .try_into()
                 .unwrap(),
         );
         assert_eq!(sp.flash_cfg_checksum, flash::checksum(&fc));
         assert_ne!(sp.hdw_status & hdw_status::SYSTEM_RESET_REQUIRED, 0);
-        c.send(&get(did::IMU, 1));
+        c.send(&isb_get(did::IMU, 1));
         c.send(b"$PERS*14\r\n");
         c.send(b"$SRST*06\r\n");
         // After the reset the IMU stream resumes at the new 2 ms period.
         let mut times = Vec::new();
         while times.len() < 20 {
-            let p = packet_of(&mut c, did::IMU);
+            let p = isb_packet_of(&mut c, did::IMU);
             times.push(Imu::decode(&p.payload.try_into().unwrap()).time);
         }
         let t = &times[10..];
@@ -228,8 +166,8 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
     }
     let emu = isb(&["--flash", path]);
     let mut c = emu.connect();
-    let a = Imu::decode(&packet_of(&mut c, did::IMU).payload.try_into().unwrap());
-    let b = Imu::decode(&packet_of(&mut c, did::IMU).payload.try_into().unwrap());
+    let a = Imu::decode(&isb_packet_of(&mut c, did::IMU).payload.try_into().unwrap());
+    let b = Imu::decode(&isb_packet_of(&mut c, did::IMU).payload.try_into().unwrap());
     assert!((b.time - a.time - 0.002).abs() < 1e-9);
     c.send(b"$STPC*14\r\n");
     std::thread::sleep(Duration::from_millis(50));
@@ -244,8 +182,8 @@ fn flash_config_and_persistent_streams_survive_a_restart() {
 fn dev_info_over_a_pty() {
     let emu = Emu::start(&["--protocol", "isb", "--pty"]);
     let mut c = Conn::serial(&emu.pty_path());
-    c.send(&get(did::DEV_INFO, 0));
-    let p = packet(&mut c);
+    c.send(&isb_get(did::DEV_INFO, 0));
+    let p = isb_packet(&mut c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
     assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());
 }

@@ -8,10 +8,15 @@
 // Shared with the other host suites; not every helper is used here.
 #[allow(dead_code)]
 mod support;
+// Shared with the core suites; not every method is used here.
+#[allow(dead_code)]
+#[path = "../common/xorshift.rs"]
+mod xorshift;
 
 use std::time::{Duration, Instant};
 
 use support::{read_ram, save_flash, Conn, Emu};
+use xorshift::XorShift;
 
 /// Parameters the bursts write (id, length) and how to make a valid value
 /// of each: Data_Rate (divisors of 2000), Initial_Alignment_Time 0..30,
@@ -25,20 +30,6 @@ const PARAMS: [(u16, u16); 5] = [
 ];
 const RATES: [u16; 8] = [1, 10, 50, 100, 200, 250, 500, 1000];
 const KILLS: usize = 120;
-
-/// Deterministic xorshift32.
-struct XorShift(u32);
-
-impl XorShift {
-    fn next(&mut self) -> u32 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.0 = x;
-        x
-    }
-}
 
 /// A valid value for `PARAMS[i]`.
 fn value(rng: &mut XorShift, i: usize) -> Vec<u8> {

@@ -283,6 +283,81 @@ impl Conn {
     }
 }
 
+/// A GET_DATA packet for the whole data set `did`, every `period` source
+/// periods (0: once), with the core's `imu_emu::isb::message::encode_get`.
+pub fn isb_get(did: u8, period: u16) -> Vec<u8> {
+    let req = imu_emu::isb::message::GetRequest {
+        did: u16::from(did),
+        size: 0,
+        offset: 0,
+        period,
+    };
+    let mut out = [0u8; 32];
+    let n = imu_emu::isb::message::encode_get(&req, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// A SET_DATA packet of `data` at `offset` of data set `did`, with the
+/// core's `imu_emu::isb::message::encode_set`.
+pub fn isb_set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
+    let mut out = [0u8; 512];
+    let n = imu_emu::isb::message::encode_set(did, offset, data, &mut out).unwrap();
+    out[..n].to_vec()
+}
+
+/// An ISB packet as received (`docs/protocol-facts.md` "ISB").
+#[derive(Debug)]
+pub struct IsbPacket {
+    /// The header's `flags`.
+    pub flags: u8,
+    /// The header's DID.
+    pub did: u8,
+    /// The payload.
+    pub payload: Vec<u8>,
+    /// The whole packet, preamble to checksum.
+    pub raw: Vec<u8>,
+}
+
+/// Reads the next ISB packet, skipping NMEA replies (a `$…\r\n` line);
+/// panics on anything else or a bad checksum (checked with the core's
+/// `imu_emu::isb::packet::checksum`).
+pub fn isb_packet(c: &mut Conn) -> IsbPacket {
+    loop {
+        let b = c.read_bytes(1)[0];
+        if b == b'$' {
+            while c.read_bytes(1)[0] != b'\n' {}
+            continue;
+        }
+        assert_eq!(b, 0xEF, "not a packet start");
+        let head = [&[b][..], &c.read_bytes(5)].concat();
+        assert_eq!(head[1], 0x49, "preamble");
+        let size = usize::from(u16::from_le_bytes([head[4], head[5]]));
+        let rest = c.read_bytes(size + 2);
+        let raw = [&head[..], &rest[..]].concat();
+        assert_eq!(
+            imu_emu::isb::packet::checksum(&raw[..6 + size]),
+            rest[size..],
+            "checksum"
+        );
+        return IsbPacket {
+            flags: head[2],
+            did: head[3],
+            payload: rest[..size].to_vec(),
+            raw,
+        };
+    }
+}
+
+/// The next ISB packet with this DID in the header (others are skipped).
+pub fn isb_packet_of(c: &mut Conn, did: u8) -> IsbPacket {
+    loop {
+        let p = isb_packet(c);
+        if p.did == did {
+            return p;
+        }
+    }
+}
+
 /// A running emulator; killed on drop (its stderr is printed if the test
 /// is failing).
 pub struct Emu {

@@ -410,7 +410,7 @@ fn isb_get(did: u8, period: u16) -> Vec<u8> {
         period,
     };
     let mut out = [0u8; 32];
-    let n = imu_emu::isb::packet::encode(3, 0, &req.encode(), &mut out).unwrap();
+    let n = imu_emu::isb::message::encode_get(&req, &mut out).unwrap();
     out[..n].to_vec()
 }
 

@@ -1,15 +1,12 @@
-//! KERNEL output frames decoded into named values, from the core's own
-//! tables: the fixed formats ([`imu_emu::kernel::formats::FORMATS`], ICD
-//! Tables 5.5–5.12), the UDD types ([`imu_emu::kernel::udd::UDD_TYPES`],
-//! Tables 5.13–5.15) and the fields' scaling
-//! ([`imu_emu::kernel::fields::Field`]).
-//!
-//! (A typed decoder in the core, `imu_emu::kernel::decode`, is on its way;
-//! the client switches to it when it lands. This module is the client's
-//! stop-gap and stays small.)
+//! KERNEL output frames as named columns: the values come from the core's
+//! typed decoder ([`imu_emu::kernel::decode`], ICD Tables 5.5–5.15, the
+//! same tables and scales the device encodes with); this module only names
+//! them for the client's CSV / JSON rows and maps format names to codes
+//! (Table 5.4).
 
-use imu_emu::kernel::fields::Field;
-use imu_emu::kernel::{formats, udd};
+use imu_emu::kernel::decode as kernel;
+use imu_emu::kernel::fields::{Field, Scales, Value};
+use imu_emu::kernel::formats;
 use imu_emu::model::Product;
 
 /// One decoded frame: its identifier and `(column, value)` pairs in
@@ -29,114 +26,48 @@ impl Decoded {
     }
 }
 
-fn i16_at(p: &[u8], i: usize) -> f64 {
-    f64::from(i16::from_le_bytes([p[i], p[i + 1]]))
-}
-fn u16_at(p: &[u8], i: usize) -> f64 {
-    f64::from(u16::from_le_bytes([p[i], p[i + 1]]))
-}
-fn i32_at(p: &[u8], i: usize) -> f64 {
-    f64::from(i32::from_le_bytes([p[i], p[i + 1], p[i + 2], p[i + 3]]))
-}
-
-/// Column names and value of each item of `field` (none for reserved
-/// bytes), scaled to physical units.
-fn field_values(field: Field, p: &[u8], product: &Product, out: &mut Vec<(&'static str, f64)>) {
-    let triad = |names: [&'static str; 3], k: f64, wide: bool, out: &mut Vec<_>| {
-        for (i, n) in names.into_iter().enumerate() {
-            let v = if wide {
-                i32_at(p, 4 * i)
-            } else {
-                i16_at(p, 2 * i)
-            };
-            out.push((n, v / k));
-        }
-    };
-    let kg = f64::from(product.gyro.kg());
-    let ka = f64::from(product.accel.ka());
+/// The client's column names of `field`'s items (none for reserved bytes).
+fn columns(field: Field) -> &'static [&'static str] {
     match field {
-        Field::Euler => {
-            out.push(("heading", u16_at(p, 0) / 100.0));
-            out.push(("pitch", i16_at(p, 2) / 100.0));
-            out.push(("roll", i16_at(p, 4) / 100.0));
-        }
-        Field::EulerHr => triad(["heading", "pitch", "roll"], 1000.0, true, out),
-        Field::Quat => {
-            for (i, n) in ["q0", "q1", "q2", "q3"].into_iter().enumerate() {
-                out.push((n, i16_at(p, 2 * i) / 10_000.0));
-            }
-        }
-        Field::Gyro => triad(["gyro_x", "gyro_y", "gyro_z"], kg, false, out),
-        Field::GyroHr => triad(["gyro_x", "gyro_y", "gyro_z"], 1e5, true, out),
-        Field::Acc => triad(["acc_x", "acc_y", "acc_z"], ka, false, out),
-        Field::AccHr => triad(["acc_x", "acc_y", "acc_z"], 1e6, true, out),
-        Field::AuxAccHr => triad(["aux_acc_x", "aux_acc_y", "aux_acc_z"], 1e6, true, out),
-        Field::GyroBiasCompHr => triad(["gyro_bc_x", "gyro_bc_y", "gyro_bc_z"], 1e5, true, out),
-        Field::GyroBiasHr => triad(
-            ["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"],
-            1e5,
-            true,
-            out,
-        ),
-        Field::FilteredAccHr => triad(["acc_f_x", "acc_f_y", "acc_f_z"], 1e6, true, out),
-        Field::FilteredAuxAccHr => triad(
-            ["aux_acc_f_x", "aux_acc_f_y", "aux_acc_f_z"],
-            1e6,
-            true,
-            out,
-        ),
-        Field::Zero(_) => {}
-        Field::Usw => out.push(("usw", u16_at(p, 0))),
-        Field::UswExt => out.push(("usw_ext", u16_at(p, 0))),
-        Field::Counter => out.push(("counter", u16_at(p, 0))),
-        Field::Temperature => out.push(("temp_c", i16_at(p, 0) / 10.0)),
-        Field::TimeFlags => out.push(("time_flags", u16_at(p, 0))),
-        Field::SecondFraction => out.push((
-            "second_fraction_ns",
-            f64::from(u32::from_le_bytes([p[0], p[1], p[2], p[3]])),
-        )),
-        Field::ImuTime => {
-            let mut b = [0u8; 8];
-            b.copy_from_slice(&p[..8]);
-            out.push(("imu_time_ns", u64::from_le_bytes(b) as f64));
-        }
-        Field::SupplyVoltage => out.push(("supply_v", u16_at(p, 0) / 100.0)),
+        Field::Euler | Field::EulerHr => &["heading", "pitch", "roll"],
+        Field::Quat => &["q0", "q1", "q2", "q3"],
+        Field::Gyro | Field::GyroHr => &["gyro_x", "gyro_y", "gyro_z"],
+        Field::Acc | Field::AccHr => &["acc_x", "acc_y", "acc_z"],
+        Field::AuxAccHr => &["aux_acc_x", "aux_acc_y", "aux_acc_z"],
+        Field::GyroBiasCompHr => &["gyro_bc_x", "gyro_bc_y", "gyro_bc_z"],
+        Field::GyroBiasHr => &["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"],
+        Field::FilteredAccHr => &["acc_f_x", "acc_f_y", "acc_f_z"],
+        Field::FilteredAuxAccHr => &["aux_acc_f_x", "aux_acc_f_y", "aux_acc_f_z"],
+        Field::Zero(_) => &[],
+        Field::Usw => &["usw"],
+        Field::UswExt => &["usw_ext"],
+        Field::Counter => &["counter"],
+        Field::Temperature => &["temp_c"],
+        Field::TimeFlags => &["time_flags"],
+        Field::SecondFraction => &["second_fraction_ns"],
+        Field::ImuTime => &["imu_time_ns"],
+        Field::SupplyVoltage => &["supply_v"],
     }
-}
-
-/// Decodes `fields` laid out in order in `payload`; `None` if the payload
-/// is not exactly their size.
-fn decode_fields(
-    fields: &[Field],
-    payload: &[u8],
-    product: &Product,
-) -> Option<Vec<(&'static str, f64)>> {
-    let mut values = Vec::new();
-    let mut at = 0;
-    for &f in fields {
-        let n = f.size();
-        field_values(f, payload.get(at..at + n)?, product, &mut values);
-        at += n;
-    }
-    (at == payload.len()).then_some(values)
 }
 
 /// Decodes a data frame's payload (`id` = format code; UDD frames carry
-/// their own type list, Table 5.13). `None` for an unknown identifier or
-/// a payload whose size does not match its layout. `product` gives the
-/// KG/KA scale factors of the low-resolution fields (Table 5.6).
+/// their own type list, Table 5.13) with [`kernel::payload`]. `None` for
+/// an unknown identifier or a payload the core refuses (layout or length).
+/// `product` gives the KG/KA scale factors of the low-resolution fields
+/// (Table 5.6).
 pub fn decode(id: u8, payload: &[u8], product: &Product) -> Option<Decoded> {
-    let values = if id == formats::UDD {
-        let n = usize::from(*payload.first()?);
-        let types = payload.get(1..1 + n)?;
-        let fields: Option<Vec<Field>> = types
-            .iter()
-            .map(|&t| udd::find(t).map(|u| u.field))
-            .collect();
-        decode_fields(&fields?, &payload[1 + n..], product)?
-    } else {
-        decode_fields(formats::find(id)?.fields, payload, product)?
-    };
+    let mut values = Vec::new();
+    for (field, value) in kernel::payload(id, payload, Scales::of(product)).ok()? {
+        let items: &[f64] = match &value {
+            Value::Angles(v) | Value::Rate(v) | Value::Accel(v) => v,
+            Value::Quat(v) => v,
+            Value::Reserved => &[],
+            Value::Word(w) => &[f64::from(*w)],
+            Value::Celsius(x) | Value::Volts(x) => &[*x],
+            Value::Nanos(n) => &[*n as f64],
+        };
+        values.extend(columns(field).iter().copied().zip(items.iter().copied()));
+    }
     Some(Decoded { id, values })
 }
 
