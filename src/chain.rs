@@ -778,6 +778,16 @@ impl<I: Integrate> SignalChain<I> {
         self.output_with(true)
     }
 
+    /// Starts a new interval for the per-axis over-range flags of
+    /// [`SignalChain::health`] (they cover the last interval and the ticks
+    /// since), without taking an output: what a stream that reads no
+    /// [`Sample`] (the ISB's integral windows) does at each packet.
+    /// [`SignalChain::output_with`] does it too.
+    pub fn restart_health_interval(&mut self) {
+        self.sat_reported = self.sat_live;
+        self.sat_live = 0;
+    }
+
     /// [`SignalChain::output`], computing the orientation only if
     /// `attitude` (the frame carries it): without, [`Sample::quat`] is the
     /// identity and [`Sample::euler`] zeros. Nothing else differs; the
@@ -785,8 +795,7 @@ impl<I: Integrate> SignalChain<I> {
     pub fn output_with(&mut self, attitude: bool) -> Sample {
         let (o, ticks) = self.core.take(&self.bias, self.has_aux);
         self.interval = ticks as f32 * self.dt;
-        self.sat_reported = self.sat_live;
-        self.sat_live = 0;
+        self.restart_health_interval();
         let Outputs {
             gyro,
             acc,

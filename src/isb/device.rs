@@ -279,7 +279,7 @@ impl Personality for Isb {
         }
         if sent {
             // Saturation is reported since the previous packet.
-            let _ = sh.chain_mut().output_with(false);
+            sh.chain_mut().restart_health_interval();
         }
     }
 
