@@ -116,9 +116,21 @@ pub struct Args {
     #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
     pub power_on: PowerOnAt,
 
-    /// Seed of the device's random processes (sensor noise, …).
+    /// Seed of the device's random processes (sensor noise, …); with
+    /// --count, device K's seed is N + K.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+
+    /// Run N independent devices in this one process, driven by one loop
+    /// (see the `fleet` module): device K listens on the --tcp port + K (a
+    /// free port each with port 0) or on a pty of its own (--link PATH:
+    /// PATH.K), keeps its flash in FILE.K (--flash FILE), has the seed
+    /// --seed + K and powers on at its own first client. One stdout line
+    /// `listening on …` per device, in order; one control socket for all
+    /// (`dev K <command>`, `devices`). Not with --serial.
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u16).range(1..=crate::fleet::MAX_COUNT as i64))]
+    pub count: u16,
 
     /// Device seconds per host second: a factor (`1` real time, `10`,
     /// `0.5`) or `max` (as fast as the host computes and the client reads;
@@ -318,9 +330,147 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         signal_hook::flag::register(sig, Arc::clone(&stop))
             .context("installing signal handlers")?;
     }
+    if args.count > 1 {
+        return many(&args, &stop);
+    }
     match &args.flash {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
+    }
+}
+
+/// Device K's file for a --flash or --link PATH of a many-device run.
+pub fn numbered(path: &std::path::Path, k: usize) -> PathBuf {
+    let mut p = path.as_os_str().to_owned();
+    p.push(format!(".{k}"));
+    PathBuf::from(p)
+}
+
+/// `--count N`: N devices in one loop ([`crate::fleet`]).
+fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+    if args.serial.is_some() {
+        return Err(
+            UsageError("--count does not go with --serial (one port, one device)".into()).into(),
+        );
+    }
+    let n = usize::from(args.count);
+    match &args.flash {
+        Some(path) => {
+            let flashes = (0..n)
+                .map(|k| FileNor::open(&numbered(path, k)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            many_with(flashes, args, stop)
+        }
+        None => many_with((0..n).map(|_| MemNor::new()).collect(), args, stop),
+    }
+}
+
+fn many_with<F: NorFlash>(flashes: Vec<F>, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+    match args.protocol {
+        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop),
+        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop),
+    }
+}
+
+fn many_transports<F: NorFlash, P: HostPersonality>(
+    flashes: Vec<F>,
+    args: &Args,
+    stop: &AtomicBool,
+) -> anyhow::Result<()> {
+    let rate = match args.protocol {
+        Protocol::Kernel => 115_200,
+        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
+    };
+    if args.pty {
+        let mut parts = Vec::with_capacity(flashes.len());
+        for (k, f) in flashes.into_iter().enumerate() {
+            let link = args.link.as_deref().map(|p| numbered(p, k));
+            parts.push((f, PtyTransport::open(rate, link.as_deref())?));
+        }
+        serve_many::<F, _, P>(parts, args, stop)
+    } else {
+        let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
+        let sock: std::net::SocketAddr = addr
+            .parse()
+            .map_err(|_| UsageError(format!("--tcp {addr}: expected IP:PORT with --count")))?;
+        let mut parts = Vec::with_capacity(flashes.len());
+        for (k, f) in flashes.into_iter().enumerate() {
+            let port = match sock.port() {
+                0 => 0,
+                p => u16::try_from(usize::from(p) + k).map_err(|_| {
+                    UsageError(format!(
+                        "--tcp {addr} --count {}: ports beyond 65535",
+                        args.count
+                    ))
+                })?,
+            };
+            let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
+            parts.push((f, TcpTransport::bind(&a)?));
+        }
+        serve_many::<F, _, P>(parts, args, stop)
+    }
+}
+
+fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
+    parts: Vec<(F, T)>,
+    args: &Args,
+    stop: &AtomicBool,
+) -> anyhow::Result<()> {
+    let trajectory = match &args.trajectory {
+        Some(path) => Some(crate::trajectory::Trajectory::load(
+            path,
+            args.trajectory_loop,
+        )?),
+        None => None,
+    };
+    let control = match &args.control {
+        Some(addr) => Some(crate::control::Control::bind(addr)?),
+        None => None,
+    };
+    let mut out = std::io::stdout().lock();
+    for (_, t) in &parts {
+        writeln!(out, "listening on {}", t.describe())?;
+    }
+    if let Some(c) = &control {
+        writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    out.flush()?;
+    drop(out);
+    let (product, name) = product_of(args);
+    let setup = crate::fleet::Setup {
+        product,
+        name,
+        speed: args.speed,
+        seed: args.seed,
+        pps: args.pps,
+        trajectory,
+        power_on_now: args.power_on == PowerOnAt::Now,
+    };
+    eprintln!(
+        "imu-emu: {} devices ({}), flash {}; each powers on {}",
+        parts.len(),
+        setup.name,
+        args.flash.as_ref().map_or_else(
+            || "in memory".to_owned(),
+            |p| format!("{}", numbered(p, 0).with_extension("K").display())
+        ),
+        if setup.power_on_now {
+            "now"
+        } else {
+            "when its first client connects"
+        }
+    );
+    let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    fleet.run(stop)?;
+    eprintln!("imu-emu: stopped");
+    Ok(())
+}
+
+/// The product a run emulates and its name in messages.
+fn product_of(args: &Args) -> (Product, String) {
+    match args.protocol {
+        Protocol::Kernel => (args.model, args.model.code().to_string()),
+        Protocol::Isb => (Product::imx5(), "IMX-5 (ISB)".to_owned()),
     }
 }
 
@@ -395,6 +545,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
             if let Some(c) = control.as_mut() {
                 c.poll(&mut |cmd| match cmd {
                     crate::control::Command::Status => Ok("mode=off".to_owned()),
+                    crate::control::Command::Devices => Ok(format!(
+                        "count=1 dev0={}",
+                        transport.describe().replacen(' ', ":", 1)
+                    )),
                     _ => Err(
                         "the device is off: it powers on when a client connects to the UART \
                          (or use --power-on now)"
@@ -406,13 +560,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     }
     let epoch = std::time::Instant::now();
-    let (product, name) = match args.protocol {
-        Protocol::Kernel => (args.model, args.model.code()),
-        Protocol::Isb => (
-            Product::imx5(),
-            "IMX-5 (ISB)".try_into().unwrap_or_default(),
-        ),
-    };
+    let (product, name) = product_of(args);
     let cfg = PowerOn {
         product,
         boot: None,

@@ -10,6 +10,8 @@
 //! | line | effect |
 //! |---|---|
 //! | `help` | `ok` and the list of commands |
+//! | `devices` | `ok count=N dev0=tcp:ADDR dev1=…`: the devices and where each listens |
+//! | `dev K <command>` | any command below for device K (0-based) of a many-device run (`--count N`; required there, optional with one device) |
 //! | `status` | `ok` and `key=value` words: mode, format, output rate, line rate, frames and bytes sent, frames rejected and why, link faults |
 //! | `pps` | a 1PPS rising edge now (ICD 5.2.3.1) |
 //! | `extrig high` / `extrig low` | the EXTRIG input changes level now (4.1.3) |
@@ -28,7 +30,8 @@
 //!
 //! The device's TOV output (4.1.4) is reported to the client as lines
 //! `event tov high <ns>` / `event tov low <ns>` (device time, ns since
-//! power-on), in the order the device produces them.
+//! power-on), in the order the device produces them; in a many-device run
+//! as `event dev K tov high <ns>`.
 //!
 //! Limits (a hostile or broken client cannot stall the device or grow its
 //! memory): a line is at most [`MAX_LINE`] bytes — a longer one is answered
@@ -56,7 +59,8 @@ pub const HELP: &str = "help | status | pps | extrig high|low | power-cycle [boo
 | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
 | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
 | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
-| link stall <ms> | link cut | link clear";
+| link stall <ms> | link cut | link clear \
+| devices | dev <K> <command> (device K of a --count run)";
 
 /// A parsed control command.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +79,8 @@ pub enum Command {
     Status,
     /// List the commands (answered by the socket itself).
     Help,
+    /// List the devices and where each listens (`ok count=N dev0=…`).
+    Devices,
 }
 
 /// One change to [`Faults`].
@@ -144,6 +150,8 @@ fn dir(w: Option<&&str>, default: Dir) -> Result<Dir, String> {
 fn usage(word: &str) -> Option<&'static str> {
     Some(match word {
         "help" => "help",
+        "devices" => "devices",
+        "dev" => "dev <K> <command>",
         "status" => "status",
         "pps" => "pps",
         "extrig" => "extrig high|low",
@@ -166,7 +174,33 @@ fn usage(word: &str) -> Option<&'static str> {
 /// word that starts no command.
 pub fn parse(line: &str) -> Result<Command, String> {
     let words: Vec<&str> = line.split_whitespace().collect();
-    parse_words(&words).map_err(|e| {
+    parse_one(line, &words)
+}
+
+/// Parses one line that may address a device: `dev K <command>` gives
+/// `(Some(K), command)`, any other line `(None, command)`.
+pub fn parse_addressed(line: &str) -> Result<(Option<usize>, Command), String> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    match words.as_slice() {
+        ["dev", k, rest @ ..] if !rest.is_empty() => {
+            let k = k
+                .parse::<usize>()
+                .map_err(|_| format!("not a device number: {k}"))?;
+            let start = line.find(rest[0]).unwrap_or(0);
+            match parse_one(&line[start..], rest)? {
+                Command::Help | Command::Devices => {
+                    Err(format!("not a device command: {}", rest[0]))
+                }
+                c => Ok((Some(k), c)),
+            }
+        }
+        ["dev", ..] => Err(format!("bad syntax: {line}; expected dev <K> <command>")),
+        _ => Ok((None, parse_one(line, &words)?)),
+    }
+}
+
+fn parse_one(line: &str, words: &[&str]) -> Result<Command, String> {
+    parse_words(words).map_err(|e| {
         let first = words.first().copied().unwrap_or("");
         match usage(first) {
             Some(u) if e.is_empty() => format!("bad syntax: {line}; expected {u}"),
@@ -180,6 +214,7 @@ pub fn parse(line: &str) -> Result<Command, String> {
 fn parse_words(words: &[&str]) -> Result<Command, String> {
     match words {
         ["help"] => Ok(Command::Help),
+        ["devices"] => Ok(Command::Devices),
         ["status"] => Ok(Command::Status),
         ["pps"] => Ok(Command::Edge(Pin::Pps, Level::High)),
         ["extrig", "high"] => Ok(Command::Edge(Pin::Extrig, Level::High)),
@@ -477,6 +512,18 @@ impl Control {
         &mut self,
         apply: &mut dyn FnMut(Command) -> Result<String, String>,
     ) -> anyhow::Result<()> {
+        self.poll_addressed(&mut |k, c| match k {
+            None | Some(0) => apply(c),
+            Some(k) => Err(format!("no device {k}: this run has one device, dev 0")),
+        })
+    }
+
+    /// [`Control::poll`] for several devices: `apply` gets the device a
+    /// line addresses (`dev K …`), or `None`.
+    pub fn poll_addressed(
+        &mut self,
+        apply: &mut dyn FnMut(Option<usize>, Command) -> Result<String, String>,
+    ) -> anyhow::Result<()> {
         self.accept_new()?;
         let Some(c) = self.client.as_mut() else {
             return Ok(());
@@ -501,9 +548,9 @@ impl Control {
                         continue;
                     }
                     commands += 1;
-                    let answer = match parse(text).and_then(|c| match c {
+                    let answer = match parse_addressed(text).and_then(|(k, c)| match c {
                         Command::Help => Ok(format!("commands: {HELP}")),
-                        c => apply(c),
+                        c => apply(k, c),
                     }) {
                         Ok(t) if t.is_empty() => "ok\n".to_owned(),
                         Ok(t) => format!("ok {t}\n"),
@@ -535,6 +582,28 @@ impl Control {
             self.client = None;
         }
         Ok(())
+    }
+
+    /// Appends the descriptors to wait on for the control socket to have
+    /// work (a connection, a command, room for replies) to a `ppoll` shared
+    /// with the devices' transports ([`crate::fleet`]).
+    pub fn interest<'a>(&'a self, fds: &mut Vec<nix::poll::PollFd<'a>>) {
+        use nix::poll::{PollFd, PollFlags};
+        use std::os::fd::AsFd as _;
+        if !self.accept.paused() {
+            fds.push(PollFd::new(self.listener.as_fd(), PollFlags::POLLIN));
+        }
+        if let Some(c) = &self.client {
+            let mut ev = if c.read_closed {
+                PollFlags::empty()
+            } else {
+                PollFlags::POLLIN
+            };
+            if !c.out.is_empty() {
+                ev |= PollFlags::POLLOUT;
+            }
+            fds.push(PollFd::new(c.stream.as_fd(), ev));
+        }
     }
 
     /// Sends an event line to the client, if one is connected, as

@@ -34,6 +34,7 @@ pub mod client;
 pub mod clock;
 pub mod control;
 pub mod flash;
+pub mod fleet;
 pub mod link;
 pub mod monitor;
 pub mod runner;

@@ -161,6 +161,11 @@ struct HostPort<T: Transport> {
     held_back_ns: u64,
     /// Reused buffer of what passes the link faults.
     scratch: Vec<u8>,
+    /// Events (TOV edges) kept for the owner of a shared control socket
+    /// (the many-device mode) instead of sent to `control`.
+    events: Option<Vec<String>>,
+    /// Prefix of stderr messages naming the device (`dev 3: `), or empty.
+    label: String,
 }
 
 impl<T: Transport> HostPort<T> {
@@ -244,7 +249,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
-        eprintln!("imu-emu: line rate {bps} bit/s");
+        eprintln!("imu-emu: {}line rate {bps} bit/s", self.label);
         self.transport.set_line_rate(bps)
     }
 
@@ -271,8 +276,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 
     fn tov(&mut self, level: Level, at: Instant) -> anyhow::Result<()> {
         // The host board has no TOV pin: edges go to the control client.
-        if let Some(ctl) = self.control.as_mut() {
-            let l = if level == Level::High { "high" } else { "low" };
+        let l = if level == Level::High { "high" } else { "low" };
+        if let Some(events) = self.events.as_mut() {
+            events.push(format!("tov {l} {}", at.as_nanos()));
+        } else if let Some(ctl) = self.control.as_mut() {
             ctl.event(&format!("tov {l} {}", at.as_nanos()));
         }
         Ok(())
@@ -304,28 +311,48 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         let Some(mut ctl) = self.control.take() else {
             return Ok(());
         };
-        let mut noise = Vec::new();
         let r = ctl.poll(&mut |cmd| {
             tracing::debug!("control: {cmd:?}");
-            match cmd {
-                control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
-                control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
-                control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-                control::Command::Motion(m) => dev.chain_mut().set_motion(m),
-                control::Command::Link(change) => {
-                    self.link.apply(change, self.now_ns, &mut noise);
-                }
-                control::Command::Status => return Ok(self.status(dev)),
-                control::Command::Help => {}
-            }
-            Ok(String::new())
+            self.apply(dev, cmd, at)
         });
         self.control = Some(ctl);
-        r?;
-        if !noise.is_empty() {
-            self.transport.send(&noise)?;
+        r
+    }
+}
+
+impl<T: Transport> HostPort<T> {
+    /// Carries out one control command at device time `at`; the answer
+    /// for the control client (`Ok` text after `ok`, `Err` after `error`).
+    fn apply<F: NorFlash, P: Personality>(
+        &mut self,
+        dev: &mut Device<F, P>,
+        cmd: control::Command,
+        at: Instant,
+    ) -> Result<String, String> {
+        match cmd {
+            control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
+            control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
+            control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+            control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+            control::Command::Link(change) => {
+                let mut noise = Vec::new();
+                self.link.apply(change, self.now_ns, &mut noise);
+                if !noise.is_empty() {
+                    self.transport
+                        .send(&noise)
+                        .map_err(|e| format!("sending the noise: {e}"))?;
+                }
+            }
+            control::Command::Status => return Ok(self.status(dev)),
+            control::Command::Devices => {
+                return Ok(format!(
+                    "count=1 dev0={}",
+                    self.transport.describe().replacen(' ', ":", 1)
+                ))
+            }
+            control::Command::Help => {}
         }
-        Ok(())
+        Ok(String::new())
     }
 }
 
@@ -349,6 +376,8 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 line_bytes: 0,
                 held_back_ns: 0,
                 scratch: Vec::new(),
+                events: None,
+                label: String::new(),
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
@@ -392,6 +421,42 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self
     }
 
+    /// Keeps the device's events (TOV edges, as the control socket words
+    /// them) for [`Runner::take_events`] instead of sending them to a
+    /// control socket of its own, and draws no terminal status line: the
+    /// many-device mode ([`crate::fleet`]), whose one control socket
+    /// serves every device.
+    pub fn shared(mut self) -> Self {
+        self.io.events = Some(Vec::new());
+        self.status_at = None;
+        self
+    }
+
+    /// Names the device in the runner's stderr messages (`dev 3: …`).
+    pub fn with_label(mut self, label: String) -> Self {
+        self.io.label = label;
+        self
+    }
+
+    /// Carries out a control command now (device time of the last pass):
+    /// what the control socket does for a single device, for the owner of
+    /// a shared one. The answer is the reply's text (`ok …` / `error …`).
+    pub fn control(&mut self, cmd: control::Command) -> Result<String, String> {
+        let at = Instant::from_nanos(self.io.now_ns);
+        // Bytes a command queued (noise, a power cycle's announcement)
+        // leave with the next pass's flush.
+        self.io.apply(&mut self.dev, cmd, at)
+    }
+
+    /// The events the device raised since the last call ([`Runner::shared`]).
+    pub fn take_events(&mut self) -> Vec<String> {
+        self.io
+            .events
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
+    }
+
     /// The device.
     pub fn device(&self) -> &Device<F, P> {
         &self.dev
@@ -400,6 +465,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// The transport.
     pub fn transport(&self) -> &T {
         &self.io.transport
+    }
+
+    /// The transport, to wait on it together with others ([`crate::fleet`]).
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.io.transport
     }
 
     /// What the runner counted so far (loss, lag, traffic).
@@ -425,32 +495,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// pass, and a pass does bounded work.
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
-            let max = self.clock.speed() == Speed::Max;
-            // Nobody to read (output would be dropped): time waits.
-            let client_keeps_up =
-                self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG;
-            let pass = if max && client_keeps_up {
-                self.max_round()?
-            } else {
-                self.step()?
-            };
-            let now = self.now_ns();
-            self.report();
-            self.status_line();
-            let timeout = if pass.behind || pass.rx == MAX_RX_PER_PASS {
-                // More is due or waiting: go on at once.
-                Duration::ZERO
-            } else if max {
-                // Poll only, or wait (briefly) for the client to read.
-                if self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG {
-                    Duration::ZERO
-                } else {
-                    BUSY_WAKE
-                }
-            } else {
-                self.clock
-                    .host_wait(self.next_wake(now).saturating_sub(now))
-            };
+            let timeout = self.turn()?;
             self.io.transport.wait(timeout)?;
         }
         if self.status_at.is_some() {
@@ -458,6 +503,38 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             println!();
         }
         Ok(())
+    }
+
+    /// One turn of the loop without its wait: a pass (or a `--speed max`
+    /// round), the reports; how long the transport may then be waited on
+    /// (host time) before the next turn.
+    pub fn turn(&mut self) -> anyhow::Result<Duration> {
+        let max = self.clock.speed() == Speed::Max;
+        // Nobody to read (output would be dropped): time waits.
+        let client_keeps_up =
+            self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG;
+        let pass = if max && client_keeps_up {
+            self.max_round()?
+        } else {
+            self.step()?
+        };
+        let now = self.now_ns();
+        self.report();
+        self.status_line();
+        Ok(if pass.behind || pass.rx == MAX_RX_PER_PASS {
+            // More is due or waiting: go on at once.
+            Duration::ZERO
+        } else if max {
+            // Poll only, or wait (briefly) for the client to read.
+            if self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG {
+                Duration::ZERO
+            } else {
+                BUSY_WAKE
+            }
+        } else {
+            self.clock
+                .host_wait(self.next_wake(now).saturating_sub(now))
+        })
     }
 
     /// When to wake next, ns since the epoch (see the module docs).
@@ -529,12 +606,16 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             return;
         }
         if dropped != self.reported_drops {
-            eprintln!("imu-emu: device TX queue overflowed: {dropped} frames dropped so far");
+            eprintln!(
+                "imu-emu: {}device TX queue overflowed: {dropped} frames dropped so far",
+                self.io.label
+            );
             self.reported_drops = dropped;
         }
         if held != self.reported_held_ns {
             eprintln!(
-                "imu-emu: the host cannot keep up: device time held back by {} ms so far",
+                "imu-emu: {}the host cannot keep up: device time held back by {} ms so far",
+                self.io.label,
                 held / 1_000_000
             );
             self.reported_held_ns = held;

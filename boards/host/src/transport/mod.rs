@@ -26,8 +26,37 @@ pub trait Transport {
     fn describe(&self) -> String;
 
     /// Blocks until input may be readable, queued output may be writable,
-    /// a signal arrives, or `timeout` passes (sub-millisecond precision).
-    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()>;
+    /// a signal arrives, or `timeout` passes (sub-millisecond precision):
+    /// one `ppoll` over the descriptors [`Transport::interest`] names.
+    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+        self.prepare_wait()?;
+        let revents = {
+            let mut fds = Vec::with_capacity(2);
+            self.interest(&mut fds);
+            poll_fds(&mut fds, timeout)?;
+            revents(&fds)
+        };
+        self.polled(&revents);
+        Ok(())
+    }
+
+    /// The first step of a wait, which may be shared with other
+    /// transports in one `ppoll` (the many-device mode, [`crate::fleet`]):
+    /// notes what changed since the last wait (a pty opened or closed, a
+    /// listener's back-off over).
+    fn prepare_wait(&mut self) -> anyhow::Result<()> {
+        Ok(())
+    }
+
+    /// Appends the descriptors to wait on and the events of interest
+    /// (none: the transport only waits for the timeout).
+    fn interest<'a>(&'a self, fds: &mut Vec<nix::poll::PollFd<'a>>);
+
+    /// What the `ppoll` saw on the descriptors [`Transport::interest`]
+    /// appended, in the same order. A transport may skip its `accept` and
+    /// `read` calls in [`Transport::receive`] when it saw nothing readable
+    /// (level-triggered: what is not seen now is seen at the next wait).
+    fn polled(&mut self, revents: &[nix::poll::PollFlags]);
 
     /// Accepts pending connections and reads what is available, at most
     /// `max` bytes (the runner bounds its work per pass: a flood must not
@@ -79,6 +108,13 @@ pub(crate) fn poll_fds(fds: &mut [nix::poll::PollFd<'_>], timeout: Duration) -> 
         Ok(_) | Err(nix::errno::Errno::EINTR) => Ok(()),
         Err(e) => Err(anyhow::Error::new(e).context("ppoll")),
     }
+}
+
+/// The events each descriptor of a finished `ppoll` reported.
+pub(crate) fn revents(fds: &[nix::poll::PollFd<'_>]) -> Vec<nix::poll::PollFlags> {
+    fds.iter()
+        .map(|f| f.revents().unwrap_or(nix::poll::PollFlags::empty()))
+        .collect()
 }
 
 /// How long a listener is left alone after `accept()` failed for lack of
@@ -152,6 +188,12 @@ impl AcceptGuard {
                 true
             }
         }
+    }
+
+    /// Whether the listener is backing off now (not to be polled).
+    pub fn paused(&self) -> bool {
+        self.paused_until
+            .is_some_and(|t| std::time::Instant::now() < t)
     }
 
     /// Failed `accept()` calls so far.

@@ -37,7 +37,7 @@ use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::{PollFd, PollFlags, PollTimeout};
 use nix::sys::termios::{self, BaudRate, FlushArg, SetArg};
 
-use super::{poll_fds, Transport};
+use super::Transport;
 use crate::backlog::Backlog;
 
 /// A pty pair whose slave is the emulated serial port.
@@ -217,19 +217,25 @@ impl Transport for PtyTransport {
         format!("pty {}", self.slave_path.display())
     }
 
-    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
-        if !self.check_client()? {
+    fn prepare_wait(&mut self) -> anyhow::Result<()> {
+        self.check_client()?;
+        Ok(())
+    }
+
+    fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
+        if !self.open {
             // The master's hang-up would end every poll at once: sleep
             // instead (a signal still wakes it), looking again afterwards.
-            return poll_fds(&mut [], timeout);
+            return;
         }
         let mut ev = PollFlags::POLLIN;
         if !self.backlog.is_empty() {
             ev |= PollFlags::POLLOUT;
         }
-        let mut fds = [PollFd::new(self.master.as_fd(), ev)];
-        poll_fds(&mut fds, timeout)
+        fds.push(PollFd::new(self.master.as_fd(), ev));
     }
+
+    fn polled(&mut self, _revents: &[PollFlags]) {}
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         self.check_client()?;

@@ -23,7 +23,7 @@ use nix::poll::{PollFd, PollFlags};
 use nix::sys::termios::{self, SetArg};
 use serialport::{SerialPort as _, TTYPort};
 
-use super::{poll_fds, Transport};
+use super::Transport;
 use crate::backlog::Backlog;
 
 /// A serial port as the device's UART: the `serialport` handle configures
@@ -102,14 +102,15 @@ impl Transport for SerialTransport {
         format!("serial {}", self.path.display())
     }
 
-    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+    fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
         let mut ev = PollFlags::POLLIN;
         if !self.backlog.is_empty() {
             ev |= PollFlags::POLLOUT;
         }
-        let mut fds = [PollFd::new(self.io.as_fd(), ev)];
-        poll_fds(&mut fds, timeout)
+        fds.push(PollFd::new(self.io.as_fd(), ev));
     }
+
+    fn polled(&mut self, _revents: &[PollFlags]) {}
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let mut buf = [0u8; 4096];

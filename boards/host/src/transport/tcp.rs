@@ -17,11 +17,10 @@
 use std::io::{self, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::os::fd::AsFd;
-use std::time::Duration;
 
 use nix::poll::{PollFd, PollFlags};
 
-use super::{is_transient_accept_error, poll_fds, AcceptGuard, Transport};
+use super::{is_transient_accept_error, AcceptGuard, Transport};
 use crate::backlog::Backlog;
 
 /// A listening socket with at most one client.
@@ -36,6 +35,14 @@ pub struct TcpTransport {
     hung_up: bool,
     accept: AcceptGuard,
     backlog: Backlog,
+    /// The next wait polls the listener (its accept back-off is over).
+    poll_listener: bool,
+    /// A connection may be waiting: the last wait saw the listener
+    /// readable, or no wait ran since the last `receive`. Otherwise
+    /// `receive` makes no `accept` call (one syscall less a pass).
+    listener_ready: bool,
+    /// The client may have sent bytes or closed: as above, for `read`.
+    client_ready: bool,
 }
 
 impl TcpTransport {
@@ -53,6 +60,9 @@ impl TcpTransport {
             hung_up: false,
             accept: AcceptGuard::new("tcp"),
             backlog: Backlog::default(),
+            poll_listener: true,
+            listener_ready: true,
+            client_ready: true,
         })
     }
 
@@ -76,10 +86,11 @@ impl TcpTransport {
                     if let Some((_, old)) = self.client.replace((stream, peer)) {
                         eprintln!("imu-emu: client {old} replaced by {peer}");
                     } else {
-                        eprintln!("imu-emu: client {peer} connected");
+                        eprintln!("imu-emu: client {peer} connected to {}", self.local);
                     }
                     // What the old client did not take is not the new one's.
                     self.backlog.clear();
+                    self.client_ready = true;
                     self.read_closed = false;
                     self.hung_up = false;
                 }
@@ -106,12 +117,15 @@ impl Transport for TcpTransport {
         format!("tcp {}", self.local)
     }
 
-    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
-        let mut fds = Vec::with_capacity(2);
-        if self.accept.ready() {
+    fn prepare_wait(&mut self) -> anyhow::Result<()> {
+        self.poll_listener = self.accept.ready();
+        Ok(())
+    }
+
+    fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
+        if self.poll_listener {
             fds.push(PollFd::new(self.listener.as_fd(), PollFlags::POLLIN));
         }
-        let listening = fds.len();
         if let Some((stream, _)) = &self.client {
             // A half-closed client stays readable (end of file) for ever:
             // only its output and hang-ups matter then.
@@ -125,19 +139,30 @@ impl Transport for TcpTransport {
             }
             fds.push(PollFd::new(stream.as_fd(), ev));
         }
-        poll_fds(&mut fds, timeout)?;
-        if let Some(fd) = fds.get(listening) {
-            let gone = PollFlags::POLLHUP | PollFlags::POLLERR;
-            if fd.revents().is_some_and(|r| r.intersects(gone)) {
-                self.hung_up = true;
-            }
+    }
+
+    fn polled(&mut self, revents: &[PollFlags]) {
+        let (listener, client) = if self.poll_listener {
+            (revents.first().copied(), revents.get(1).copied())
+        } else {
+            (None, revents.first().copied())
+        };
+        let gone = PollFlags::POLLHUP | PollFlags::POLLERR;
+        let readable = PollFlags::POLLIN | gone;
+        // Level-triggered: a listener not polled (backing off) is not
+        // accepted from; what is not seen now is seen at the next wait.
+        self.listener_ready = listener.is_some_and(|r| r.intersects(readable));
+        self.client_ready = client.is_some_and(|r| r.intersects(readable));
+        if client.is_some_and(|r| r.intersects(gone)) {
+            self.hung_up = true;
         }
-        Ok(())
     }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let had = self.client.as_ref().map(|(_, p)| *p);
-        self.accept_all()?;
+        if std::mem::replace(&mut self.listener_ready, true) {
+            self.accept_all()?;
+        }
         if self.client.as_ref().map(|(_, p)| *p) != had {
             // A new client: hand it what was queued meanwhile.
             self.flush()?;
@@ -147,8 +172,9 @@ impl Transport for TcpTransport {
         }
         let mut buf = [0u8; 4096];
         let mut got = 0;
+        let ready = std::mem::replace(&mut self.client_ready, true);
         while let Some((stream, peer)) = &mut self.client {
-            if self.read_closed {
+            if self.read_closed || !ready {
                 break;
             }
             let want = (max - got).min(buf.len());
@@ -207,7 +233,9 @@ impl Transport for TcpTransport {
     }
 
     fn poll_client(&mut self) -> anyhow::Result<bool> {
-        self.accept_all()?;
+        if std::mem::replace(&mut self.listener_ready, true) {
+            self.accept_all()?;
+        }
         Ok(self.client.is_some())
     }
 }

@@ -1,0 +1,277 @@
+//! Many devices in one process (`--count N`): N independent virtual
+//! devices driven by one scheduler loop on one thread.
+//!
+//! Each device has its own transport (TCP port or pty), its own flash
+//! (`--flash FILE` keeps device K's in `FILE.K`), its own seed (`--seed S`
+//! gives device K the seed `S + K`), its own clock and its own
+//! [`Runner`] (schedule, pacer, link faults, monitor). The loop gives every
+//! device one [`Runner::turn`] a round and then waits once, in a single
+//! `ppoll` over every transport's descriptors and the control socket, for
+//! the earliest time any device asked for.
+//!
+//! **One wake for all.** A device powers on (when its first client
+//! connects, or at start with `--power-on now`) with its device-time epoch
+//! on a 1 ms grid of host time shared by the whole run ([`GRID`]): every
+//! internal rate the models have (1, 2 and 4 kHz) divides it, so the
+//! ticks of all devices fall due at the same host instants and the loop
+//! wakes once per tick period for all of them, not once per device.
+//!
+//! **One control socket** (`--control ADDR`) serves every device: a
+//! command addresses device K as `dev K <command>`; `devices` lists them
+//! (`ok count=N dev0=tcp:ADDR …`); TOV edges come as
+//! `event dev K tov high <ns>` ([`crate::control`]).
+//!
+//! What one device does is exactly what a single `imu-emu` does; a slow
+//! or absent client of one device never holds up another (each has its
+//! own bounded backlog and its own `--speed max` back-pressure).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant as HostInstant};
+
+use embedded_storage::nor_flash::NorFlash;
+use imu_emu::device::{Device, PowerOn};
+use imu_emu::model::Product;
+use imu_emu::time::Instant;
+
+use crate::clock::Speed;
+use crate::control::{Command, Control};
+use crate::runner::{HostPersonality, Runner, IDLE_WAKE};
+use crate::trajectory::Trajectory;
+use crate::transport::Transport;
+
+/// The host-time grid device epochs are aligned on (see the module docs).
+pub const GRID: Duration = Duration::from_millis(1);
+
+/// Most devices one process runs.
+pub const MAX_COUNT: usize = 1000;
+
+/// What every device of a run shares.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The product every device is.
+    pub product: Product,
+    /// Its name in messages.
+    pub name: String,
+    /// Device seconds per host second.
+    pub speed: Speed,
+    /// Device K's seed is `seed + K`.
+    pub seed: u64,
+    /// A 1PPS edge every device second.
+    pub pps: bool,
+    /// The motion each device replays, if any (each from its start).
+    pub trajectory: Option<Trajectory>,
+    /// Power on at start instead of at the first client.
+    pub power_on_now: bool,
+}
+
+/// One device: off (waiting for its first client) or running.
+enum Slot<F: NorFlash, T: Transport, P: HostPersonality> {
+    Off { flash: F, transport: T },
+    On(Box<Runner<F, T, P>>),
+}
+
+/// N devices, one loop.
+pub struct Fleet<F: NorFlash, T: Transport, P: HostPersonality> {
+    slots: Vec<Option<Slot<F, T, P>>>,
+    setup: Setup,
+    control: Option<Control>,
+    /// The start of the run: the grid's origin.
+    origin: HostInstant,
+    /// Where each device listens (`tcp 127.0.0.1:7000`).
+    places: Vec<String>,
+}
+
+impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
+    /// Devices on `parts` (flash and transport of device K at index K),
+    /// all off until [`Fleet::run`] powers them on.
+    pub fn new(parts: Vec<(F, T)>, setup: Setup, control: Option<Control>) -> Self {
+        let places = parts.iter().map(|(_, t)| t.describe()).collect();
+        Fleet {
+            slots: parts
+                .into_iter()
+                .map(|(flash, transport)| Some(Slot::Off { flash, transport }))
+                .collect(),
+            setup,
+            control,
+            origin: HostInstant::now(),
+            places,
+        }
+    }
+
+    /// How many devices.
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+
+    /// Device K's runner, once it is on.
+    pub fn runner(&self, k: usize) -> Option<&Runner<F, T, P>> {
+        match self.slots.get(k)? {
+            Some(Slot::On(r)) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// Powers device `k` on now, its epoch on the grid.
+    fn power_on(&mut self, k: usize) -> anyhow::Result<()> {
+        let Some(Some(Slot::Off { .. })) = self.slots.get(k) else {
+            return Ok(());
+        };
+        let Some(Slot::Off {
+            flash,
+            mut transport,
+        }) = self.slots[k].take()
+        else {
+            return Ok(());
+        };
+        let grid = GRID.as_nanos();
+        let since = self.origin.elapsed().as_nanos();
+        let epoch = self.origin + Duration::from_nanos(((since / grid) * grid) as u64);
+        let cfg = PowerOn {
+            product: self.setup.product,
+            boot: None,
+            seed: self.setup.seed.wrapping_add(k as u64),
+        };
+        let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+        transport.set_line_rate(dev.line_rate())?;
+        eprintln!(
+            "imu-emu: dev {k}: {} powered on at {} bit/s, seed {}",
+            self.setup.name,
+            dev.line_rate(),
+            cfg.seed
+        );
+        let mut runner = Runner::new(dev, transport, epoch)
+            .with_speed(self.setup.speed)
+            .with_seed(cfg.seed)
+            .with_label(format!("dev {k}: "))
+            .shared();
+        if self.setup.pps {
+            runner = runner.with_pps();
+        }
+        if let Some(t) = &self.setup.trajectory {
+            runner = runner.with_trajectory(t.clone());
+        }
+        self.slots[k] = Some(Slot::On(Box::new(runner)));
+        Ok(())
+    }
+
+    /// `devices`: how many and where each listens.
+    fn devices(&self) -> String {
+        let mut s = format!("count={}", self.slots.len());
+        for (k, p) in self.places.iter().enumerate() {
+            s.push_str(&format!(" dev{k}={}", p.replacen(' ', ":", 1)));
+        }
+        s
+    }
+
+    /// One control command for device `k` (or for the run).
+    fn command(&mut self, k: Option<usize>, cmd: Command) -> Result<String, String> {
+        if cmd == Command::Devices {
+            return Ok(self.devices());
+        }
+        let n = self.slots.len();
+        let Some(k) = k else {
+            return Err(format!(
+                "this run has {n} devices: address one, dev <K> <command> (K = 0..{})",
+                n - 1
+            ));
+        };
+        match self.slots.get_mut(k) {
+            Some(Some(Slot::On(r))) => r.control(cmd),
+            Some(Some(Slot::Off { .. })) if cmd == Command::Status => Ok("mode=off".to_owned()),
+            Some(_) => Err(format!(
+                "dev {k} is off: it powers on when a client connects to its UART \
+                 (or use --power-on now)"
+            )),
+            None => Err(format!("no device {k}: this run has devices 0..{}", n - 1)),
+        }
+    }
+
+    /// Serves every device until `stop` is set (SIGINT/SIGTERM).
+    pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
+        if self.setup.power_on_now {
+            for k in 0..self.slots.len() {
+                self.power_on(k)?;
+            }
+        }
+        while !stop.load(Ordering::Relaxed) {
+            let timeout = self.round()?;
+            self.wait(timeout)?;
+        }
+        Ok(())
+    }
+
+    /// One turn of every device, its events to the control client, the
+    /// control commands; how long the loop may then wait.
+    pub fn round(&mut self) -> anyhow::Result<Duration> {
+        let mut timeout = IDLE_WAKE;
+        for k in 0..self.slots.len() {
+            let off = match &mut self.slots[k] {
+                Some(Slot::Off { transport, .. }) => transport.poll_client()?,
+                _ => false,
+            };
+            if off {
+                self.power_on(k)?;
+            }
+            if let Some(Slot::On(r)) = &mut self.slots[k] {
+                timeout = timeout.min(r.turn()?);
+                let events = r.take_events();
+                if let Some(ctl) = self.control.as_mut() {
+                    for e in events {
+                        ctl.event(&format!("dev {k} {e}"));
+                    }
+                }
+            }
+        }
+        if let Some(mut ctl) = self.control.take() {
+            let r = ctl.poll_addressed(&mut |k, cmd| {
+                tracing::debug!("control: dev {k:?} {cmd:?}");
+                self.command(k, cmd)
+            });
+            self.control = Some(ctl);
+            r?;
+        }
+        Ok(timeout)
+    }
+
+    /// One `ppoll` over every device's transport and the control socket.
+    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+        for slot in self.slots.iter_mut().flatten() {
+            match slot {
+                Slot::Off { transport, .. } => transport.prepare_wait()?,
+                Slot::On(r) => r.transport_mut().prepare_wait()?,
+            }
+        }
+        let (revents, counts) = {
+            let mut fds = Vec::with_capacity(2 * self.slots.len() + 2);
+            let mut counts = Vec::with_capacity(self.slots.len());
+            for slot in self.slots.iter().flatten() {
+                let before = fds.len();
+                match slot {
+                    Slot::Off { transport, .. } => transport.interest(&mut fds),
+                    Slot::On(r) => r.transport().interest(&mut fds),
+                }
+                counts.push(fds.len() - before);
+            }
+            if let Some(ctl) = &self.control {
+                ctl.interest(&mut fds);
+            }
+            crate::transport::poll_fds(&mut fds, timeout)?;
+            (crate::transport::revents(&fds), counts)
+        };
+        let mut at = 0;
+        for (slot, n) in self.slots.iter_mut().flatten().zip(counts) {
+            let seen = &revents[at..at + n];
+            match slot {
+                Slot::Off { transport, .. } => transport.polled(seen),
+                Slot::On(r) => r.transport_mut().polled(seen),
+            }
+            at += n;
+        }
+        Ok(())
+    }
+}
