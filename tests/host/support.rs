@@ -365,6 +365,8 @@ pub struct Emu {
     /// What follows `listening on ` on the first stdout line.
     pub listening: String,
     stderr: Arc<Mutex<String>>,
+    /// The stdout lines after the first.
+    stdout: Arc<Mutex<Vec<String>>>,
 }
 
 impl Emu {
@@ -396,6 +398,8 @@ impl Emu {
             }
         });
         let (tx, rx) = mpsc::channel();
+        let rest = Arc::new(Mutex::new(Vec::new()));
+        let keep = Arc::clone(&rest);
         std::thread::spawn(move || {
             // Keep draining stdout so the emulator never writes to a
             // closed pipe.
@@ -403,12 +407,15 @@ impl Emu {
             if let Some(Ok(first)) = lines.next() {
                 let _ = tx.send(first);
             }
-            for _ in lines {}
+            for line in lines.map_while(Result::ok) {
+                keep.lock().unwrap().push(line);
+            }
         });
         let mut emu = Emu {
             child,
             listening: String::new(),
             stderr,
+            stdout: rest,
         };
         let line = rx
             .recv_timeout(TIMEOUT)
@@ -425,6 +432,24 @@ impl Emu {
         let mut all = vec!["--tcp", "127.0.0.1:0"];
         all.extend_from_slice(args);
         Emu::start(&all)
+    }
+
+    /// The first `n` stdout lines after the first, waiting (bounded) for
+    /// them.
+    pub fn more_lines(&self, n: usize) -> Vec<String> {
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            let lines = self.stdout.lock().unwrap().clone();
+            if lines.len() >= n {
+                return lines[..n].to_vec();
+            }
+            assert!(
+                Instant::now() < deadline,
+                "only {} more stdout lines: {lines:?}",
+                lines.len()
+            );
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// The TCP address it listens on.

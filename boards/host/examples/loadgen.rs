@@ -1,27 +1,34 @@
 //! Whole-process measurement client for `scripts/bench.sh` (README,
-//! "Performance"): connects to a running `imu-emu --tcp`, switches it to
-//! 2 Mbaud (Baud_Rate 0x0B, CommitBaudRate), Data_Rate 2000, optionally
-//! LPF 16 Hz and all cascade filters, starts GA and reads for a while.
+//! "Performance"): connects to one or more running devices (`imu-emu
+//! --tcp`, or the ports of `imu-emu --count N`), switches each to 2 Mbaud
+//! (Baud_Rate 0x0B, CommitBaudRate), Data_Rate 2000, optionally LPF 16 Hz
+//! and all cascade filters, starts GA and reads them all for a while, in
+//! one thread (one `ppoll` over every socket).
 //!
-//! Every GA frame's 2 kHz counter (Table 5.7) must step by exactly one —
-//! device time exact, no frame lost or repeated — or the client fails.
+//! Every GA frame's 2 kHz counter (Table 5.7) must step by exactly one on
+//! each device — device time exact, no frame lost or repeated — or the
+//! client fails.
 //!
 //! ```text
-//! loadgen ADDR SECONDS [--filters] [--pid PID]
+//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID]
 //! ```
 //!
-//! Prints one line of `key=value` pairs: `frames`, `wall_s`, `factor`
-//! (device seconds per wall second), and with `--pid` the emulator's CPU
-//! share of one core over the read (`/proc/PID/stat` utime + stime), and
-//! the lateness of each frame against its wire time, `late_p50_us`,
-//! `late_p99_us`, `late_p999_us`, `late_max_us`: a frame's wire time is
-//! the device's counter × 500 µs plus its own time on a 2 Mbaud line,
-//! aligned on the earliest frame (so lateness ≥ 0; only meaningful at
-//! `--speed 1`).
+//! Prints one line of `key=value` pairs: `devices`, `frames` (all
+//! devices), `wall_s`, `factor` (device seconds per wall second, the mean
+//! over the devices), and with `--pid` the emulator's CPU share of one
+//! core over the read (`/proc/PID/stat` utime + stime, from when every
+//! device streams), and the lateness of each frame against its wire time,
+//! `late_p50_us`, `late_p99_us`, `late_p999_us`, `late_max_us` over the
+//! frames of all devices: a frame's wire time is its device's counter ×
+//! 500 µs plus its own time on a 2 Mbaud line, aligned on that device's
+//! earliest frame (so lateness ≥ 0; only meaningful at `--speed 1`).
 
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
+use std::os::fd::AsFd;
 use std::time::{Duration, Instant};
+
+use nix::poll::{PollFd, PollFlags, PollTimeout};
 
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::Decoder;
@@ -53,9 +60,24 @@ fn cpu_ticks(pid: u32) -> u64 {
     f[11].parse::<u64>().unwrap() + f[12].parse::<u64>().unwrap()
 }
 
+/// One device being read.
+struct Dev {
+    s: TcpStream,
+    d: Decoder<1024>,
+    acked: bool,
+    last: Option<u16>,
+    /// Counter steps seen (device time in 500 µs).
+    unwrapped: u64,
+    frames: u64,
+    /// Host time of the first data frame.
+    t0: Option<Instant>,
+    /// (arrival ns since t0) − (counter × 500 µs) − wire time, per frame.
+    offsets: Vec<i64>,
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let addr = &args[1];
+    let addrs: Vec<&str> = args[1].split(',').collect();
     let secs: f64 = args[2].parse().expect("SECONDS");
     let filters = args.iter().any(|a| a == "--filters");
     let pid: Option<u32> = args
@@ -63,85 +85,136 @@ fn main() {
         .position(|a| a == "--pid")
         .map(|i| args[i + 1].parse().expect("PID"));
 
-    let mut s = TcpStream::connect(addr).expect("connect");
-    s.set_nodelay(true).ok();
-    save(&mut s, params::BAUD_RATE.id, &[0x0B]);
-    send(&mut s, Command::CommitBaudRate);
-    save(&mut s, params::DATA_RATE.id, &2000u16.to_le_bytes());
-    if filters {
-        save(&mut s, params::LPF_BANDWIDTH.id, &[0]);
-        save(&mut s, params::FILTER.id, &[7]);
-    }
+    let mut devs: Vec<Dev> = addrs
+        .iter()
+        .map(|addr| {
+            let mut s = TcpStream::connect(addr).expect("connect");
+            s.set_nodelay(true).ok();
+            save(&mut s, params::BAUD_RATE.id, &[0x0B]);
+            send(&mut s, Command::CommitBaudRate);
+            save(&mut s, params::DATA_RATE.id, &2000u16.to_le_bytes());
+            if filters {
+                save(&mut s, params::LPF_BANDWIDTH.id, &[0]);
+                save(&mut s, params::FILTER.id, &[7]);
+            }
+            Dev {
+                s,
+                d: Decoder::new(),
+                acked: false,
+                last: None,
+                unwrapped: 0,
+                frames: 0,
+                t0: None,
+                offsets: Vec::new(),
+            }
+        })
+        .collect();
     std::thread::sleep(Duration::from_millis(200));
-    send(&mut s, Command::Data(0x8F));
-    s.set_read_timeout(Some(Duration::from_secs(5))).ok();
+    for dev in &mut devs {
+        send(&mut dev.s, Command::Data(0x8F));
+        dev.s.set_nonblocking(true).expect("nonblocking");
+    }
 
-    let mut d = Decoder::<1024>::new();
     let mut buf = vec![0u8; 1 << 20];
-    let mut last: Option<u16> = None;
-    let mut acked = false;
-    let mut frames = 0u64;
-    let mut unwrapped = 0u64;
-    // (arrival ns since t0) − (counter × 500 µs), per frame.
-    let mut offsets: Vec<i64> = Vec::new();
-    let mut t0 = Instant::now();
+    // When every device streams, and the emulator's CPU time then.
+    let mut all_at: Option<Instant> = None;
     let mut cpu0 = 0;
+    let mut idle_since = Instant::now();
     // GA frame on a 2 Mbaud line: 40 bytes × 10 bits.
     let wire_ns = 40 * 10 * 1_000_000_000 / 2_000_000;
     loop {
-        let n = s.read(&mut buf).expect("read");
-        assert!(n > 0, "emulator closed the connection");
-        let at = Instant::now();
-        let mut input = &buf[..n];
-        while let Some(f) = d.next_frame(&mut input) {
-            if f.id != 0x8F {
-                continue;
-            }
-            if !acked {
-                // The acknowledgement (2 bytes) comes first.
-                if f.payload.len() == 2 {
-                    acked = true;
+        {
+            let mut fds: Vec<PollFd<'_>> = devs
+                .iter()
+                .map(|d| PollFd::new(d.s.as_fd(), PollFlags::POLLIN))
+                .collect();
+            nix::poll::poll(&mut fds, PollTimeout::from(100u16)).expect("poll");
+        }
+        let mut got_any = false;
+        for dev in &mut devs {
+            let n = match dev.s.read(&mut buf) {
+                Ok(0) => panic!("emulator closed the connection"),
+                Ok(n) => n,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => continue,
+                Err(e) => panic!("read: {e}"),
+            };
+            got_any = true;
+            let at = Instant::now();
+            let mut input = &buf[..n];
+            while let Some(f) = dev.d.next_frame(&mut input) {
+                if f.id != 0x8F {
+                    continue;
                 }
-                continue;
-            }
-            let c = u16::from_le_bytes([f.payload[24], f.payload[25]]);
-            match last {
-                None => {
-                    t0 = at;
-                    cpu0 = pid.map_or(0, cpu_ticks);
+                if !dev.acked {
+                    // The acknowledgement (2 bytes) comes first.
+                    if f.payload.len() == 2 {
+                        dev.acked = true;
+                    }
+                    continue;
                 }
-                Some(l) => {
-                    assert_eq!(c, l.wrapping_add(1), "frame lost or repeated");
-                    unwrapped += 1;
+                let c = u16::from_le_bytes([f.payload[24], f.payload[25]]);
+                match dev.last {
+                    None => dev.t0 = Some(at),
+                    Some(l) => {
+                        assert_eq!(c, l.wrapping_add(1), "frame lost or repeated");
+                        dev.unwrapped += 1;
+                    }
                 }
-            }
-            last = Some(c);
-            frames += 1;
-            if pid.is_some() {
-                let arrival = at.duration_since(t0).as_nanos() as i64;
-                offsets.push(arrival - (unwrapped * 500_000) as i64 - wire_ns);
+                dev.last = Some(c);
+                dev.frames += 1;
+                if pid.is_some() {
+                    let t0 = dev.t0.unwrap_or(at);
+                    let arrival = at.duration_since(t0).as_nanos() as i64;
+                    dev.offsets
+                        .push(arrival - (dev.unwrapped * 500_000) as i64 - wire_ns);
+                }
             }
         }
-        if last.is_some() && at.duration_since(t0).as_secs_f64() >= secs {
+        let now = Instant::now();
+        if got_any {
+            idle_since = now;
+        }
+        assert!(
+            now.duration_since(idle_since) < Duration::from_secs(5),
+            "no data for 5 s"
+        );
+        if all_at.is_none() && devs.iter().all(|d| d.t0.is_some()) {
+            all_at = Some(now);
+            cpu0 = pid.map_or(0, cpu_ticks);
+        }
+        if devs.iter().all(|d| {
+            d.t0.is_some_and(|t| now.duration_since(t).as_secs_f64() >= secs)
+        }) {
             break;
         }
     }
-    let wall = t0.elapsed().as_secs_f64();
-    let device_s = unwrapped as f64 / 2000.0;
+    let end = Instant::now();
+    let frames: u64 = devs.iter().map(|d| d.frames).sum();
+    let factor = devs
+        .iter()
+        .map(|d| d.unwrapped as f64 / 2000.0 / end.duration_since(d.t0.unwrap()).as_secs_f64())
+        .sum::<f64>()
+        / devs.len() as f64;
+    let wall = end.duration_since(devs.iter().filter_map(|d| d.t0).min().unwrap());
     print!(
-        "frames={frames} wall_s={wall:.3} factor={:.1}",
-        device_s / wall
+        "devices={} frames={frames} wall_s={:.3} factor={factor:.1}",
+        devs.len(),
+        wall.as_secs_f64()
     );
     if let Some(pid) = pid {
         let hz = 100.0; // USER_HZ on Linux
         let cpu = (cpu_ticks(pid) - cpu0) as f64 / hz;
-        let min = *offsets.iter().min().unwrap();
-        let mut late: Vec<i64> = offsets.iter().map(|o| o - min).collect();
+        let window = end.duration_since(all_at.unwrap()).as_secs_f64();
+        let mut late: Vec<i64> = Vec::with_capacity(frames as usize);
+        for d in &devs {
+            let min = *d.offsets.iter().min().unwrap();
+            late.extend(d.offsets.iter().map(|o| o - min));
+        }
         late.sort_unstable();
         let p = |q: f64| late[((late.len() - 1) as f64 * q).round() as usize] as f64 / 1000.0;
         print!(
             " cpu_pct={:.2} late_p50_us={:.0} late_p99_us={:.0} late_p999_us={:.0} late_max_us={:.0}",
-            100.0 * cpu / wall,
+            100.0 * cpu / window,
             p(0.5),
             p(0.99),
             p(0.999),
