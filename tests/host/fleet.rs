@@ -162,9 +162,9 @@ fn the_control_socket_addresses_each_device() {
         "error dev 2 is off: it powers on when a client connects to its UART (or use --power-on now)"
     );
     let mut c: Vec<Conn> = addrs.iter().map(|&a| Conn::tcp(a)).collect();
-    for k in 0..3 {
-        c[k].send(&command(STOP));
-        c[k].drain_for(Duration::from_millis(50));
+    for (k, c) in c.iter_mut().enumerate() {
+        c.send(&command(STOP));
+        c.drain_for(Duration::from_millis(50));
         let s = ctl.cmd(&format!("dev {k} status"));
         assert!(s.starts_with("ok mode=idle "), "{s}");
     }
