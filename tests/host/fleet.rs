@@ -274,3 +274,24 @@ fn count_with_a_serial_port_is_a_usage_error() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn devices_on_ptys_each_get_their_own_link() {
+    let dir = temp_dir("pty");
+    let link = dir.join("imu");
+    let emu = Emu::start(&["--count", "2", "--pty", "--link", link.to_str().unwrap()]);
+    let mut places = vec![format!("listening on {}", emu.listening)];
+    places.extend(emu.more_lines(1));
+    for (k, place) in places.iter().enumerate() {
+        let slave = PathBuf::from(place.strip_prefix("listening on pty ").unwrap());
+        let l = dir.join(format!("imu.{k}"));
+        assert_eq!(std::fs::read_link(&l).unwrap(), slave, "{}", l.display());
+        // Each answers on its own line, device 1 with its own Data_Rate.
+        let mut c = Conn::serial(&l);
+        if k == 1 {
+            save(&mut c, DATA_RATE, &50u16.to_le_bytes());
+        }
+        assert_eq!(data_rate(&mut c), [100, 50][k]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
