@@ -34,13 +34,19 @@ estimate() {
     ' "$3"
 }
 
-# Starts imu-emu with the given options; sets $pid and $addr.
+# Starts imu-emu with the given options (N devices with --count N); sets
+# $pid, $addr (the first device's address) and $addrs (all, comma-separated).
 start() {
+    local n=1
+    [ "${1:-}" = --count ] && n=$2
     "$emu" --model K110 --tcp 127.0.0.1:0 "$@" >"$log/emu.out" 2>"$log/emu.err" &
     pid=$!
     for _ in $(seq 50); do
-        addr=$(grep -o '127\.0\.0\.1:[0-9]*' "$log/emu.out" | head -1 || true)
-        [ -n "$addr" ] && return
+        if [ "$(grep -c '^listening on tcp' "$log/emu.out" || true)" -ge "$n" ]; then
+            addrs=$(grep -o '127\.0\.0\.1:[0-9]*' "$log/emu.out" | head -"$n" | paste -sd,)
+            addr=${addrs%%,*}
+            return
+        fi
         sleep 0.1
     done
     echo "imu-emu did not start" >&2
@@ -62,6 +68,11 @@ start
 rt=$("$loadgen" "$addr" 10 --pid "$pid")
 kill "$pid"; wait "$pid" 2>/dev/null || true
 
+echo "== 50 devices in one process, real time (10 s)" >&2
+start --count 50
+many=$("$loadgen" "$addrs" 10 --pid "$pid")
+kill "$pid"; wait "$pid" 2>/dev/null || true
+
 cpu=$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')
 cat <<EOF
 Ran on $(nproc) cores ($cpu), load average $(cut -d' ' -f1-3 /proc/loadavg) before the run, $(date -u +%Y-%m-%d).
@@ -77,4 +88,5 @@ Ran on $(nproc) cores ($cpu), load average $(cut -d' ' -f1-3 /proc/loadavg) befo
 | \`--speed max\`, GA at 2 kHz, LPF 16 Hz + all cascade filters | ≥ 2 000× | $(field factor "$max_f")× | same, \`--filters\` |
 | real time, GA at 2 kHz over TCP: CPU | ≤ 2 % of a core | $(field cpu_pct "$rt") % | \`/proc/PID/stat\` utime + stime over 10 s |
 | real time: lateness against the wire time, p50 / p99 / p99.9 (max) | p99.9 ≤ 1 ms | $(field late_p50_us "$rt") / $(field late_p99_us "$rt") / $(field late_p999_us "$rt") µs ($(field late_max_us "$rt") µs) | \`loadgen\`: arrival − (counter × 500 µs + 200 µs on the line), aligned on the earliest frame |
+| 50 KERNELs in one process (\`--count 50\`), GA at 2 kHz at 2 Mbaud, real time | every counter step, p99.9 ≤ 1 ms | $(field frames "$many") frames, every step checked; CPU $(field cpu_pct "$many") % of a core; lateness $(field late_p50_us "$many") / $(field late_p99_us "$many") / $(field late_p999_us "$many") µs ($(field late_max_us "$many") µs) | \`loadgen\` over the 50 ports in one thread, 10 s |
 EOF

@@ -639,4 +639,21 @@ mod tests {
         let a = Args::try_parse_from(["imu-emu", "--pty", "--link", "/tmp/x"]).unwrap();
         assert!(a.pty);
     }
+
+    #[test]
+    fn count_is_one_to_max_and_numbers_the_files() {
+        assert_eq!(Args::try_parse_from(["imu-emu"]).unwrap().count, 1);
+        let a = Args::try_parse_from(["imu-emu", "--count", "50"]).unwrap();
+        assert_eq!(a.count, 50);
+        for bad in ["0", "1001", "-1", "x"] {
+            assert!(
+                Args::try_parse_from(["imu-emu", "--count", bad]).is_err(),
+                "{bad}"
+            );
+        }
+        assert_eq!(
+            numbered(std::path::Path::new("/var/tmp/imu.flash"), 7),
+            PathBuf::from("/var/tmp/imu.flash.7")
+        );
+    }
 }
