@@ -56,6 +56,13 @@ pub struct PtyTransport {
     mismatch: Option<u32>,
     /// When the client's speed was last read (host time).
     checked_at: Option<std::time::Instant>,
+    /// The last wait saw the master hang up (or none ran yet): look at
+    /// the client again before trusting `open`.
+    recheck: bool,
+    /// The master may have input: the last wait saw it readable, or no
+    /// wait ran since the last `receive`. Otherwise `receive` does not
+    /// read (one syscall less a pass).
+    readable: bool,
 }
 
 /// How often the client's termios speed is read while it has the port
@@ -93,6 +100,8 @@ impl PtyTransport {
             bps,
             mismatch: None,
             checked_at: None,
+            recheck: true,
+            readable: true,
         })
     }
 
@@ -218,6 +227,11 @@ impl Transport for PtyTransport {
     }
 
     fn prepare_wait(&mut self) -> anyhow::Result<()> {
+        if self.open && !self.recheck {
+            // Open as of the last wait, which would have seen a hang-up.
+            return self.check_speed();
+        }
+        self.recheck = false;
         self.check_client()?;
         Ok(())
     }
@@ -235,9 +249,22 @@ impl Transport for PtyTransport {
         fds.push(PollFd::new(self.master.as_fd(), ev));
     }
 
-    fn polled(&mut self, _revents: &[PollFlags]) {}
+    fn polled(&mut self, revents: &[PollFlags]) {
+        // Polled only while open; level-triggered, as the TCP transport.
+        let r = revents.first().copied().unwrap_or(PollFlags::empty());
+        self.readable = !self.open || r.intersects(PollFlags::POLLIN | PollFlags::POLLERR);
+        if r.intersects(PollFlags::POLLHUP | PollFlags::POLLERR) {
+            self.recheck = true;
+            self.readable = true;
+        }
+    }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
+        if !std::mem::replace(&mut self.readable, true) {
+            // Open as of the last wait, and nothing to read then.
+            return Ok(());
+        }
+        self.recheck = false;
         self.check_client()?;
         let mut buf = [0u8; 4096];
         let mut got = 0;
