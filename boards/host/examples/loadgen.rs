@@ -13,6 +13,9 @@
 //! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID]
 //! ```
 //!
+//! An ADDR starting with `/` is a pty (`imu-emu --pty`'s slave or its
+//! `--link`), opened raw; the rest are TCP addresses.
+//!
 //! Prints one line of `key=value` pairs: `devices`, `frames` (all
 //! devices), `wall_s`, `factor` (device seconds per wall second, the mean
 //! over the devices), and with `--pid` the emulator's CPU share of one
@@ -23,6 +26,7 @@
 //! 500 µs plus its own time on a 2 Mbaud line, aligned on that device's
 //! earliest frame (so lateness ≥ 0; only meaningful at `--speed 1`).
 
+use std::fs::File;
 use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::os::fd::AsFd;
@@ -34,13 +38,96 @@ use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::Decoder;
 use imu_emu::kernel::params;
 
-fn send(s: &mut TcpStream, c: Command) {
+/// A device's line: a TCP connection or a pty opened raw.
+enum Line {
+    Tcp(TcpStream),
+    Pty(File),
+}
+
+impl Line {
+    fn open(addr: &str) -> Line {
+        if addr.starts_with('/') {
+            use nix::sys::termios;
+            use std::os::unix::fs::OpenOptionsExt;
+            let f = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
+                .open(addr)
+                .expect("open the pty");
+            let mut t = termios::tcgetattr(&f).expect("tcgetattr");
+            termios::cfmakeraw(&mut t);
+            // The device's factory rate; `follow_baud` switches later.
+            termios::cfsetspeed(&mut t, termios::BaudRate::B115200).expect("cfsetspeed");
+            termios::tcsetattr(&f, termios::SetArg::TCSANOW, &t).expect("tcsetattr");
+            Line::Pty(f)
+        } else {
+            let s = TcpStream::connect(addr).expect("connect");
+            s.set_nodelay(true).ok();
+            Line::Tcp(s)
+        }
+    }
+
+    /// After CommitBaudRate: a pty's port follows the device to 2 Mbaud
+    /// (a mismatch garbles, as on a real line); TCP has no rate.
+    fn follow_baud(&self) -> bool {
+        let Line::Pty(f) = self else { return false };
+        use nix::sys::termios;
+        let mut t = termios::tcgetattr(f).expect("tcgetattr");
+        termios::cfsetspeed(&mut t, termios::BaudRate::B2000000).expect("cfsetspeed");
+        termios::tcsetattr(f, termios::SetArg::TCSADRAIN, &t).expect("tcsetattr");
+        true
+    }
+
+    fn set_nonblocking(&self) {
+        match self {
+            Line::Tcp(s) => s.set_nonblocking(true).expect("nonblocking"),
+            Line::Pty(f) => {
+                use nix::fcntl::{fcntl, FcntlArg, OFlag};
+                let fl = OFlag::from_bits_truncate(fcntl(f, FcntlArg::F_GETFL).expect("F_GETFL"));
+                fcntl(f, FcntlArg::F_SETFL(fl | OFlag::O_NONBLOCK)).expect("F_SETFL");
+            }
+        }
+    }
+}
+
+impl Read for Line {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self {
+            Line::Tcp(s) => s.read(buf),
+            Line::Pty(f) => f.read(buf),
+        }
+    }
+}
+
+impl Write for Line {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Line::Tcp(s) => s.write(buf),
+            Line::Pty(f) => f.write(buf),
+        }
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl AsFd for Line {
+    fn as_fd(&self) -> std::os::fd::BorrowedFd<'_> {
+        match self {
+            Line::Tcp(s) => s.as_fd(),
+            Line::Pty(f) => f.as_fd(),
+        }
+    }
+}
+
+fn send(s: &mut Line, c: Command) {
     let mut out = [0u8; 64];
     let n = c.encode(&mut out).expect("encode");
     s.write_all(&out[..n]).expect("send");
 }
 
-fn save(s: &mut TcpStream, id: u16, value: &[u8]) {
+fn save(s: &mut Line, id: u16, value: &[u8]) {
     send(
         s,
         Command::SaveFlash {
@@ -62,7 +149,7 @@ fn cpu_ticks(pid: u32) -> u64 {
 
 /// One device being read.
 struct Dev {
-    s: TcpStream,
+    s: Line,
     d: Decoder<1024>,
     acked: bool,
     last: Option<u16>,
@@ -88,10 +175,14 @@ fn main() {
     let mut devs: Vec<Dev> = addrs
         .iter()
         .map(|addr| {
-            let mut s = TcpStream::connect(addr).expect("connect");
-            s.set_nodelay(true).ok();
+            let mut s = Line::open(addr);
             save(&mut s, params::BAUD_RATE.id, &[0x0B]);
             send(&mut s, Command::CommitBaudRate);
+            std::thread::sleep(Duration::from_millis(20));
+            if s.follow_baud() {
+                // The emulator reads the port's speed every 20 ms.
+                std::thread::sleep(Duration::from_millis(100));
+            }
             save(&mut s, params::DATA_RATE.id, &2000u16.to_le_bytes());
             if filters {
                 save(&mut s, params::LPF_BANDWIDTH.id, &[0]);
@@ -112,7 +203,7 @@ fn main() {
     std::thread::sleep(Duration::from_millis(200));
     for dev in &mut devs {
         send(&mut dev.s, Command::Data(0x8F));
-        dev.s.set_nonblocking(true).expect("nonblocking");
+        dev.s.set_nonblocking();
     }
 
     let mut buf = vec![0u8; 1 << 20];
