@@ -8,20 +8,12 @@ mod support;
 
 use std::time::{Duration, Instant};
 
-use support::{command, frame, save_flash, sum16, Conn, Control, Emu, Frame};
+use support::{command, frame, free_port, save_flash, sum16, Conn, Control, Emu, Frame};
 
 const GA: u8 = 0x8F;
 const STOP: u8 = 0xFE;
 const GET_DEV_INFO: u8 = 0x12;
 const DATA_RATE: u16 = 0x0012;
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
 
 fn with_control(args: &[&str]) -> (Emu, Conn, Control) {
     let addr = format!("127.0.0.1:{}", free_port());

@@ -11,7 +11,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use support::{command, frames_with_counter, read_ram, save, Conn, Control, Emu};
+use support::{command, frames_with_counter, free_port, read_ram, save, Conn, Control, Emu};
 
 const GA: u8 = 0x8F;
 const STOP: u8 = 0xFE;
@@ -20,14 +20,6 @@ const DATA_RATE: u16 = 0x0012;
 const BAUD_RATE: u16 = 0x03B2;
 /// Table 5.7: the 2 kHz counter at payload offset 24.
 const COUNTER: usize = 24;
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
 
 fn temp_dir(what: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("imu-emu-fleet-{what}-{}", std::process::id()));

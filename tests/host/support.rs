@@ -513,6 +513,15 @@ impl Drop for Emu {
     }
 }
 
+/// A TCP port free now on the loopback address (for `--control`).
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
 /// Saves a parameter and waits for its acknowledgement (ICD 5.3.7).
 pub fn save(c: &mut Conn, id: u16, value: &[u8]) {
     let cmd = save_flash(id, value);

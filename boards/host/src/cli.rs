@@ -377,10 +377,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    let rate = match args.protocol {
-        Protocol::Kernel => 115_200,
-        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
-    };
+    let rate = factory_rate(args.protocol);
     if args.pty {
         let mut parts = Vec::with_capacity(flashes.len());
         for (k, f) in flashes.into_iter().enumerate() {
@@ -466,6 +463,16 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     Ok(())
 }
 
+/// The rate a port starts at: the protocol's factory rate (KERNEL
+/// Baud_Rate 115 200, IMX ser0BaudRate 921 600), so a client that opens it
+/// before the device powers on sees the rate a factory unit starts at.
+fn factory_rate(protocol: Protocol) -> u32 {
+    match protocol {
+        Protocol::Kernel => 115_200,
+        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
+    }
+}
+
 /// The product a run emulates and its name in messages.
 fn product_of(args: &Args) -> (Product, String) {
     match args.protocol {
@@ -486,13 +493,7 @@ fn with_transport<F: NorFlash, P: HostPersonality>(
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    // The port starts at the protocol's factory rate (KERNEL Baud_Rate
-    // 115 200, IMX ser0BaudRate 921 600): a client that opens it before the
-    // device powers on sees the rate a factory unit starts at.
-    let rate = match args.protocol {
-        Protocol::Kernel => 115_200,
-        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
-    };
+    let rate = factory_rate(args.protocol);
     if let Some(dev) = &args.serial {
         let t = crate::transport::SerialTransport::open(dev, rate)?;
         serve::<F, _, P>(flash, t, args, stop)
