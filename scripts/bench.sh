@@ -68,6 +68,11 @@ start
 rt=$("$loadgen" "$addr" 10 --pid "$pid")
 kill "$pid"; wait "$pid" 2>/dev/null || true
 
+echo "== real time, GA at 100 Hz (10 s)" >&2
+start
+rt100=$("$loadgen" "$addr" 10 --pid "$pid" --rate 100)
+kill "$pid"; wait "$pid" 2>/dev/null || true
+
 echo "== real time over a pty (10 s)" >&2
 "$emu" --model K110 --pty >"$log/emu.out" 2>"$log/emu.err" &
 pid=$!
@@ -95,6 +100,7 @@ Ran on $(nproc) cores ($cpu), load average $(cut -d' ' -f1-3 /proc/loadavg) befo
 | \`--speed max\`, GA at 2 kHz, factory settings | ≥ 3 000× | $(field factor "$max")× | release \`imu-emu --speed max\` over TCP, \`loadgen\` checking every counter step for ${secs} s |
 | \`--speed max\`, GA at 2 kHz, LPF 16 Hz + all cascade filters | ≥ 2 000× | $(field factor "$max_f")× | same, \`--filters\` |
 | real time, GA at 2 kHz over TCP: CPU | ≤ 2 % of a core | $(field cpu_pct "$rt") % | \`/proc/PID/stat\` utime + stime over 10 s |
+| real time, GA at 100 Hz over TCP: CPU | ≤ 2 % of a core | $(field cpu_pct "$rt100") % | same, \`loadgen --rate 100\` |
 | real time, GA at 2 kHz over a pty: CPU; lateness p50 / p99 / p99.9 (max) | ≤ 2 % of a core; p99.9 ≤ 1 ms | $(field cpu_pct "$rt_pty") %; $(field late_p50_us "$rt_pty") / $(field late_p99_us "$rt_pty") / $(field late_p999_us "$rt_pty") µs ($(field late_max_us "$rt_pty") µs) | same, \`loadgen\` on the pty (raw, following the device to 2 Mbaud) |
 | real time: lateness against the wire time, p50 / p99 / p99.9 (max) | p99.9 ≤ 1 ms | $(field late_p50_us "$rt") / $(field late_p99_us "$rt") / $(field late_p999_us "$rt") µs ($(field late_max_us "$rt") µs) | \`loadgen\`: arrival − (counter × 500 µs + 200 µs on the line), aligned on the earliest frame |
 | 50 KERNELs in one process (\`--count 50\`), GA at 2 kHz at 2 Mbaud, real time | every counter step, p99.9 ≤ 1 ms | $(field frames "$many") frames, every step checked; CPU $(field cpu_pct "$many") % of a core; lateness $(field late_p50_us "$many") / $(field late_p99_us "$many") / $(field late_p999_us "$many") µs ($(field late_max_us "$many") µs) | \`loadgen\` over the 50 ports in one thread, 10 s |

@@ -10,8 +10,11 @@
 //! client fails.
 //!
 //! ```text
-//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID]
+//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID] [--rate HZ]
 //! ```
+//!
+//! `--rate HZ` streams at that Data_Rate instead of 2000 (a divisor of
+//! 2000): every counter step must then be 2000 / HZ.
 //!
 //! An ADDR starting with `/` is a pty (`imu-emu --pty`'s slave or its
 //! `--link`), opened raw; the rest are TCP addresses.
@@ -167,6 +170,12 @@ fn main() {
     let addrs: Vec<&str> = args[1].split(',').collect();
     let secs: f64 = args[2].parse().expect("SECONDS");
     let filters = args.iter().any(|a| a == "--filters");
+    let rate: u16 = args
+        .iter()
+        .position(|a| a == "--rate")
+        .map_or(2000, |i| args[i + 1].parse().expect("HZ"));
+    assert!(rate > 0 && 2000 % rate == 0, "--rate must divide 2000");
+    let step = 2000 / rate;
     let pid: Option<u32> = args
         .iter()
         .position(|a| a == "--pid")
@@ -183,7 +192,7 @@ fn main() {
                 // The emulator reads the port's speed every 20 ms.
                 std::thread::sleep(Duration::from_millis(100));
             }
-            save(&mut s, params::DATA_RATE.id, &2000u16.to_le_bytes());
+            save(&mut s, params::DATA_RATE.id, &rate.to_le_bytes());
             if filters {
                 save(&mut s, params::LPF_BANDWIDTH.id, &[0]);
                 save(&mut s, params::FILTER.id, &[7]);
@@ -247,8 +256,8 @@ fn main() {
                 match dev.last {
                     None => dev.t0 = Some(at),
                     Some(l) => {
-                        assert_eq!(c, l.wrapping_add(1), "frame lost or repeated");
-                        dev.unwrapped += 1;
+                        assert_eq!(c, l.wrapping_add(step), "frame lost or repeated");
+                        dev.unwrapped += u64::from(step);
                     }
                 }
                 dev.last = Some(c);
