@@ -354,6 +354,7 @@ fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
         );
     }
     let n = usize::from(args.count);
+    open_files_for(n);
     match &args.flash {
         Some(path) => {
             let flashes = (0..n)
@@ -362,6 +363,31 @@ fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
             many_with(flashes, args, stop)
         }
         None => many_with((0..n).map(|_| MemNor::new()).collect(), args, stop),
+    }
+}
+
+/// Raises the soft limit of open descriptors towards the hard one when N
+/// devices need more than it allows (a listener, a client and a flash
+/// file each, the control socket and a margin); says so when even the
+/// hard limit is too low (binding then fails with a clear error).
+fn open_files_for(n: usize) {
+    use nix::sys::resource::{getrlimit, setrlimit, Resource};
+    let need = (3 * n + 64) as u64;
+    let Ok((soft, hard)) = getrlimit(Resource::RLIMIT_NOFILE) else {
+        return;
+    };
+    if soft >= need {
+        return;
+    }
+    let want = need.min(hard);
+    if want > soft && setrlimit(Resource::RLIMIT_NOFILE, want, hard).is_ok() {
+        tracing::info!("open-file limit raised from {soft} to {want} for {n} devices");
+    }
+    if want < need {
+        eprintln!(
+            "imu-emu: warning: {n} devices need about {need} open files, the limit is {hard} \
+             (ulimit -n)"
+        );
     }
 }
 
