@@ -6,6 +6,8 @@ Standard library only. Three parts:
   commands, split a byte stream into checked frames, decode GA frames.
 * :class:`Emulator` -- start the ``imu-emu`` binary on a free TCP port with
   a control socket, connect to its UART, stop it.
+* :class:`Fleet` -- N devices in one ``imu-emu --count N``, each a
+  :class:`Uart`, with one control socket addressing each.
 * :class:`Control` -- the control socket (pins, faults, link faults,
   ``status``), with events kept apart from replies.
 
@@ -27,4 +29,4 @@ from .kernel import (  # noqa: F401
     start,
     stop,
 )
-from .emulator import Control, Emulator, find_binary  # noqa: F401
+from .emulator import Control, Emulator, Fleet, Uart, find_binary  # noqa: F401

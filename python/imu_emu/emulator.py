@@ -82,42 +82,17 @@ class Control:
         self.sock.close()
 
 
-class Emulator:
-    """A running ``imu-emu`` on a free loopback port with a control socket.
+class Uart:
+    """One device's UART over TCP: frames split and checked as they come.
+    Connected on first use (a device powers on when its first client
+    connects)."""
 
-    Use as a context manager, or call :meth:`stop`. ``args`` are extra
-    command-line options (``["--model", "K120", "--seed", "3"]``).
-    """
-
-    def __init__(self, args=(), binary=None, timeout=5.0):
+    def __init__(self, addr, timeout=5.0):
+        self.addr = addr
         self.timeout = timeout
-        cmd = [binary or find_binary(), "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0"]
-        cmd += list(args)
-        self.proc = subprocess.Popen(
-            cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-            text=True,
-        )
-        self.stderr_lines = []
-        self._err = threading.Thread(target=self._drain_stderr, daemon=True)
-        self._err.start()
-        self.addr = self._line("listening on tcp ")
-        self.control_addr = self._line("control on tcp ")
         self._uart = None
-        self._control = None
+        self._pending = []
         self.reader = FrameReader()
-
-    def _drain_stderr(self):
-        for line in self.proc.stderr:
-            self.stderr_lines.append(line.rstrip("\n"))
-
-    def _line(self, prefix):
-        line = self.proc.stdout.readline()
-        if not line.startswith(prefix):
-            self.stop()
-            raise RuntimeError(
-                "imu-emu did not start: %r; stderr: %s" % (line, "\n".join(self.stderr_lines))
-            )
-        return line[len(prefix):].strip()
 
     @property
     def port(self):
@@ -131,12 +106,6 @@ class Emulator:
             self._uart = socket.create_connection((host, int(port)), timeout=self.timeout)
             self._uart.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         return self._uart
-
-    def control(self):
-        """The :class:`Control` client (connected on first use)."""
-        if self._control is None:
-            self._control = Control(self.control_addr, self.timeout)
-        return self._control
 
     def send(self, frame):
         """Sends bytes to the device's UART."""
@@ -164,7 +133,7 @@ class Emulator:
         """The next frame with ``ident`` (others skipped); raises
         :class:`TimeoutError`."""
         end = time.monotonic() + (timeout or self.timeout)
-        pending = getattr(self, "_pending", [])
+        pending = self._pending
         while True:
             while pending:
                 f = pending.pop(0)
@@ -182,11 +151,52 @@ class Emulator:
         self.send(frame)
         return self.frame(ident, timeout)
 
+    def close(self):
+        """Closes the UART connection, if open."""
+        if self._uart is not None:
+            self._uart.close()
+            self._uart = None
+
+
+class _Process:
+    """A running ``imu-emu`` whose stdout lines announce its ports."""
+
+    def __init__(self, cmd, timeout):
+        self.timeout = timeout
+        self.proc = subprocess.Popen(
+            cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            text=True,
+        )
+        self.stderr_lines = []
+        self._err = threading.Thread(target=self._drain_stderr, daemon=True)
+        self._err.start()
+        self._control = None
+
+    def _drain_stderr(self):
+        for line in self.proc.stderr:
+            self.stderr_lines.append(line.rstrip("\n"))
+
+    def _line(self, prefix):
+        line = self.proc.stdout.readline()
+        if not line.startswith(prefix):
+            self.stop()
+            raise RuntimeError(
+                "imu-emu did not start: %r; stderr: %s" % (line, "\n".join(self.stderr_lines))
+            )
+        return line[len(prefix):].strip()
+
+    def control(self):
+        """The :class:`Control` client (connected on first use)."""
+        if self._control is None:
+            self._control = Control(self.control_addr, self.timeout)
+        return self._control
+
+    def _close_uarts(self):
+        pass
+
     def stop(self):
         """Stops the emulator (SIGTERM, then kill)."""
-        for s in (self._uart,):
-            if s is not None:
-                s.close()
+        self._close_uarts()
         if self._control is not None:
             self._control.close()
         if self.proc.poll() is None:
@@ -205,3 +215,53 @@ class Emulator:
 
     def __exit__(self, *exc):
         self.stop()
+
+
+class Emulator(_Process, Uart):
+    """A running ``imu-emu`` on a free loopback port with a control socket.
+
+    Use as a context manager, or call :meth:`stop`. ``args`` are extra
+    command-line options (``["--model", "K120", "--seed", "3"]``).
+    """
+
+    def __init__(self, args=(), binary=None, timeout=5.0):
+        cmd = [binary or find_binary(), "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0"]
+        cmd += list(args)
+        _Process.__init__(self, cmd, timeout)
+        Uart.__init__(self, self._line("listening on tcp "), timeout)
+        self.control_addr = self._line("control on tcp ")
+
+    def _close_uarts(self):
+        Uart.close(self)
+
+
+class Fleet(_Process):
+    """``count`` devices in one ``imu-emu --count N`` on free loopback
+    ports, with one control socket: :attr:`devices` ``[k]`` is device k's
+    :class:`Uart`; :meth:`dev` sends a control command to device k.
+
+    ``args`` are extra options for every device (``["--seed", "3"]``:
+    device k's seed is 3 + k; ``["--flash", path]``: device k keeps its
+    flash in ``path.k``).
+    """
+
+    def __init__(self, count, args=(), binary=None, timeout=5.0):
+        cmd = [binary or find_binary(), "--count", str(count), "--tcp", "127.0.0.1:0",
+               "--control", "127.0.0.1:0"]
+        cmd += list(args)
+        _Process.__init__(self, cmd, timeout)
+        self.devices = [Uart(self._line("listening on tcp "), timeout) for _ in range(count)]
+        self.control_addr = self._line("control on tcp ")
+
+    def dev(self, k, *words):
+        """A control command for device ``k`` (``dev(2, "fault", "comm",
+        "on")``); the reply text after ``ok``."""
+        return self.control().cmd("dev %d %s" % (k, " ".join(str(w) for w in words)))
+
+    def status(self, k):
+        """Device ``k``'s ``status`` as a dict of strings."""
+        return dict(w.split("=", 1) for w in self.dev(k, "status").split())
+
+    def _close_uarts(self):
+        for d in self.devices:
+            d.close()

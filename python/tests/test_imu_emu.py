@@ -93,6 +93,41 @@ class EmulatorTest(unittest.TestCase):
         self.assertTrue(all(e.split()[0] == "tov" for e in ctl.events))
 
 
+class FleetTest(unittest.TestCase):
+    def setUp(self):
+        self.fleet = imu_emu.Fleet(3, ["--seed", "1"])
+
+    def tearDown(self):
+        self.fleet.stop()
+
+    def test_each_device_streams_at_its_own_rate_and_takes_its_own_faults(self):
+        devs = self.fleet.devices
+        self.assertEqual(len({d.port for d in devs}), 3)
+        # Device 1 at 50 Hz (Data_Rate, ICD Table 5.24 ID 0x0012), the others at 100 Hz.
+        devs[1].request(imu_emu.save_flash(0x0012, (50).to_bytes(2, "little")), 0xB2)
+        for d in devs:
+            d.request(imu_emu.start("GA"), 0x8F)
+        for k, d in enumerate(devs):
+            frames = [f for f in d.frames(0.4) if f.ident == 0x8F]
+            counters = [kernel.decode_ga(f.payload)["counter"] for f in frames]
+            self.assertGreaterEqual(len(counters), 10)
+            for a, b in zip(counters, counters[1:]):
+                self.assertEqual((b - a) & 0xFFFF, 40 if k == 1 else 20)
+        self.assertEqual(self.fleet.status(2)["mode"], "continuous")
+        self.assertEqual(self.fleet.dev(2, "fault", "comm", "on"), "")
+        # USW bit 1 (sensor communication) on device 2 only (Table 5.7: USW at 26).
+        for k, d in enumerate(devs):
+            last = [f for f in d.frames(0.2) if f.ident == 0x8F][-1]
+            usw = int.from_bytes(last.payload[26:28], "little")
+            self.assertEqual(usw, 2 if k == 2 else 0, k)
+        with self.assertRaises(RuntimeError) as e:
+            self.fleet.control().cmd("status")
+        self.assertEqual(
+            str(e.exception),
+            "error this run has 3 devices: address one, dev <K> <command> (K = 0..2)",
+        )
+
+
 class PluginTest(unittest.TestCase):
     def test_the_fixture_module_imports_where_pytest_is(self):
         try:
