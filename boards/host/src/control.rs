@@ -316,6 +316,13 @@ pub struct Control {
     listener: TcpListener,
     accept: AcceptGuard,
     client: Option<Client>,
+    /// A connection may be waiting: the last shared `ppoll` saw the
+    /// listener readable, or none ran since the last poll (a single
+    /// device's loop does not wait on the control socket: always true
+    /// there).
+    listener_ready: bool,
+    /// The client may have sent something: as above, for its socket.
+    client_ready: bool,
 }
 
 /// The connected control client.
@@ -471,6 +478,8 @@ impl Control {
             listener,
             accept: AcceptGuard::new("control"),
             client: None,
+            listener_ready: true,
+            client_ready: true,
         })
     }
 
@@ -524,7 +533,13 @@ impl Control {
         &mut self,
         apply: &mut dyn FnMut(Option<usize>, Command) -> Result<String, String>,
     ) -> anyhow::Result<()> {
-        self.accept_new()?;
+        let mut may_read = std::mem::replace(&mut self.client_ready, true);
+        if std::mem::replace(&mut self.listener_ready, true) {
+            let had = self.client.is_some();
+            self.accept_new()?;
+            // A new client may have sent its commands already.
+            may_read |= !had && self.client.is_some();
+        }
         let Some(c) = self.client.as_mut() else {
             return Ok(());
         };
@@ -563,7 +578,7 @@ impl Control {
                     c.queue(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
                 }
                 Line::None => {
-                    if read >= MAX_READ_PER_POLL {
+                    if read >= MAX_READ_PER_POLL || !may_read {
                         break;
                     }
                     let (n, closed) = c.fill(MAX_READ_PER_POLL - read);
@@ -604,6 +619,24 @@ impl Control {
             }
             fds.push(PollFd::new(c.stream.as_fd(), ev));
         }
+    }
+
+    /// What the shared `ppoll` saw on the descriptors [`Control::interest`]
+    /// appended, in order: the next [`Control::poll_addressed`] skips its
+    /// `accept` and `read` calls where nothing was seen.
+    pub fn polled(&mut self, revents: &[nix::poll::PollFlags]) {
+        use nix::poll::PollFlags;
+        let readable = PollFlags::POLLIN | PollFlags::POLLHUP | PollFlags::POLLERR;
+        // The client's descriptor is last when there is one; the
+        // listener's comes first unless it was backing off.
+        let (listener, client) = match (revents, self.client.is_some()) {
+            ([l, c], _) => (Some(l), Some(c)),
+            ([c], true) => (None, Some(c)),
+            ([l], false) => (Some(l), None),
+            _ => (None, None),
+        };
+        self.listener_ready = listener.is_some_and(|r| r.intersects(readable));
+        self.client_ready = client.is_some_and(|r| r.intersects(readable));
     }
 
     /// Sends an event line to the client, if one is connected, as

@@ -263,6 +263,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             crate::transport::poll_fds(&mut fds, timeout)?;
             (crate::transport::revents(&fds), counts)
         };
+        let mine: usize = counts.iter().sum();
+        if let Some(ctl) = self.control.as_mut() {
+            ctl.polled(&revents[mine..]);
+        }
         let mut at = 0;
         for (slot, n) in self.slots.iter_mut().flatten().zip(counts) {
             let seen = &revents[at..at + n];
