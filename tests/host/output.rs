@@ -402,6 +402,41 @@ fn boot_high_at_power_on_silences_the_device_until_the_next_power_cycle() {
 }
 
 #[test]
+fn in_firmware_update_mode_the_monitor_does_not_decode_the_input() {
+    // What a loader sends in firmware-update mode is not KERNEL commands:
+    // `-v` logs no commands and no rejections for it, `status` counts none.
+    let (emu, mut c, mut ctl) = with_control(&["--model", "K110", "-v"]);
+    c.send(&command(0x1A));
+    assert_eq!(c.frame().id(), 0x1A);
+    assert_eq!(ctl.cmd("power-cycle boot=high"), "ok");
+    c.send(&command(0x1A));
+    c.send(&[0xAA, 0x55, 0x00, 0x00, 0x07, 0x00, 0x12, 0x00, 0x00]);
+    c.send(&[0x5A; 64]);
+    assert!(c
+        .frame_before(Instant::now() + Duration::from_millis(300))
+        .is_none());
+    let st = ctl.cmd("status");
+    assert!(
+        st.contains(" commands=1 ") && st.contains(" rejected=0"),
+        "{st}"
+    );
+    let log = emu.stderr();
+    assert!(
+        log.contains("firmware-update mode (BOOT high at power-on)"),
+        "{log}"
+    );
+    let after = &log[log.find("firmware-update mode").unwrap()..];
+    assert!(!after.contains("command "), "{after}");
+    assert!(!after.contains("rejected"), "{after}");
+    // After a normal power cycle it decodes again.
+    assert_eq!(ctl.cmd("power-cycle"), "ok");
+    c.send(&command(0x1A));
+    assert_eq!(c.frame().id(), 0x1A);
+    let st = ctl.cmd("status");
+    assert!(st.contains(" commands=2 "), "{st}");
+}
+
+#[test]
 fn injected_faults_and_motion_reach_usw_and_getbit_on_the_wire() {
     let (_emu, mut c, mut ctl) = with_control(&["--model", "KERNEL-110-G450-A40"]);
     c.send(&command(0x8F));

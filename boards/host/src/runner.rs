@@ -166,6 +166,10 @@ struct HostPort<T: Transport> {
     events: Option<Vec<String>>,
     /// Prefix of stderr messages naming the device (`dev 3: `), or empty.
     label: String,
+    /// The device is in firmware-update mode (BOOT high at power-on): its
+    /// input is firmware data, not KERNEL commands, so the monitor does
+    /// not decode, log or count it.
+    fw_update: bool,
 }
 
 impl<T: Transport> HostPort<T> {
@@ -270,7 +274,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             self.rx_carry.extend(&got[k..]);
             n += k;
         }
-        self.monitor.feed(&buf[..n]);
+        if !self.fw_update {
+            self.monitor.feed(&buf[..n]);
+        }
         Ok(n)
     }
 
@@ -300,6 +306,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             dev.chain_mut().set_motion(Motion::Sample(truth));
         }
         dev.on_tick(deadline);
+        self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
         Ok(())
     }
 
@@ -331,7 +338,17 @@ impl<T: Transport> HostPort<T> {
     ) -> Result<String, String> {
         match cmd {
             control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
-            control::Command::PowerCycle(boot) => dev.power_cycle_with(boot, at),
+            control::Command::PowerCycle(boot) => {
+                dev.power_cycle_with(boot, at);
+                self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
+                if self.fw_update {
+                    tracing::info!(
+                        "{}firmware-update mode (BOOT high at power-on): input is not decoded \
+                         until the next power cycle",
+                        self.label
+                    );
+                }
+            }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
             control::Command::Motion(m) => dev.chain_mut().set_motion(m),
             control::Command::Link(change) => {
@@ -378,6 +395,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 scratch: Vec::new(),
                 events: None,
                 label: String::new(),
+                fw_update: false,
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
