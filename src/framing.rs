@@ -27,6 +27,13 @@ pub trait Framing {
     fn total_len(header: &[u8]) -> Option<usize>;
     /// Whether a complete candidate packet's check bytes are right.
     fn check(packet: &[u8]) -> bool;
+    /// [`Framing::check`] of the candidate packet of `total` bytes at the
+    /// start of `avail`, which holds all of it and possibly bytes after it
+    /// (the rest of the input), which a faster check may read and ignore.
+    #[inline]
+    fn check_in(avail: &[u8], total: usize) -> bool {
+        avail.get(..total).is_some_and(Self::check)
+    }
 }
 
 /// Streaming packet scanner with a bounded buffer of `CAP` bytes (module
@@ -98,6 +105,7 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     /// found in `input` itself and returned borrowing it (no copy); only a
     /// candidate cut at the end of `input` is kept in the buffer. The
     /// packets found are the same either way.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub fn next_raw<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<&'r [u8]> {
         self.skip_consumed();
         // Hosts only: the firmware's decoder sees a few bytes at a time,
@@ -179,7 +187,8 @@ enum Scan {
 /// Skips garbage and bad candidates in `avail` (each dropped candidate
 /// counted in `errors`) up to the first complete valid packet of at most
 /// `cap` bytes.
-#[inline]
+#[cfg_attr(target_pointer_width = "64", inline(always))]
+#[cfg_attr(not(target_pointer_width = "64"), inline)]
 fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
     let mut at = 0;
     loop {
@@ -211,7 +220,7 @@ fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
         if cand.len() < total {
             return Scan::NeedMore { at };
         }
-        if !F::check(&cand[..total]) {
+        if !F::check_in(cand, total) {
             at += 1;
             *errors = errors.wrapping_add(1);
             continue;
