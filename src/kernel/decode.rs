@@ -82,40 +82,58 @@ impl<const I: usize> Format<I> {
 }
 
 /// The index in [`FORMATS`] of each data command code's fixed format,
-/// built at compile time (one load a frame).
-static FORMAT_OF: [Option<u8>; 256] = {
-    let mut t = [None; 256];
+/// [`UDD_INDEX`] for UDD, [`NOT_DATA`] for the others: built at compile
+/// time, one load and one dispatch a frame ([`payload`]).
+static FORMAT_OF: [u8; 256] = {
+    let mut t = [NOT_DATA; 256];
     let mut i = 0;
     while i < FORMATS.len() {
-        t[FORMATS[i].code as usize] = Some(i as u8);
+        t[FORMATS[i].code as usize] = i as u8;
         i += 1;
     }
+    t[UDD as usize] = UDD_INDEX;
     t
 };
 
-/// [`fixed`] for the indices `$i` of [`FORMATS`], every one of them
+/// [`FORMAT_OF`] of UDD.
+const UDD_INDEX: u8 = FORMATS.len() as u8;
+/// [`FORMAT_OF`] of a code that is no data command.
+const NOT_DATA: u8 = u8::MAX;
+
+/// [`by_index`] for the indices `$i` of [`FORMATS`], every one of them
 /// (checked at compile time): one specialised decoder an index.
 macro_rules! fixed_formats {
     ($($i:literal)*) => {
         const _: () = assert!([$($i),*].len() == FORMATS.len());
 
-        /// The fields of fixed format `FORMATS[index]`, its payload length
-        /// and, if `payload` is that long, the values of its fields.
+        /// [`payload`] of data command `id`, whose [`FORMAT_OF`] is
+        /// `index`: fixed format `FORMATS[index]` (its values decoded if
+        /// `payload` has its length), UDD or none.
         #[inline(always)]
-        fn fixed(
+        fn by_index(
             index: u8,
+            id: u8,
             payload: &[u8],
             scales: Scales,
-        ) -> Option<(&'static [Field], usize, Option<FixedValues>)> {
-            match index {
-                $($i => Some((
+        ) -> Result<Fields<'_>, DecodeError> {
+            let (fields, values) = match index {
+                $($i => (
                     Format::<$i>::FIELDS,
-                    Format::<$i>::LEN,
                     (payload.len() == Format::<$i>::LEN)
-                        .then(|| Format::<$i>::values(payload, scales)),
-                )),)*
-                _ => None,
-            }
+                        .then(|| Format::<$i>::values(payload, scales))
+                        .ok_or(DecodeError::Length {
+                            expected: Format::<$i>::LEN,
+                            got: payload.len(),
+                        })?,
+                ),)*
+                UDD_INDEX => return udd(payload, scales),
+                _ => return Err(DecodeError::UnknownId(id)),
+            };
+            Ok(Fields {
+                kinds: Kinds::Fixed(fields, values, 0),
+                data: &[],
+                scales,
+            })
         }
     };
 }
@@ -129,6 +147,18 @@ static UDD_FIELD: [Option<Field>; 256] = {
     let mut i = 0;
     while i < UDD_TYPES.len() {
         t[UDD_TYPES[i].code as usize] = Some(UDD_TYPES[i].field);
+        i += 1;
+    }
+    t
+};
+
+/// The size of each UDD type code's field (0: not a UDD type), built from
+/// [`UDD_TYPES`] at compile time.
+static UDD_SIZE: [u8; 256] = {
+    let mut t = [0; 256];
+    let mut i = 0;
+    while i < UDD_TYPES.len() {
+        t[UDD_TYPES[i].code as usize] = UDD_TYPES[i].field.size() as u8;
         i += 1;
     }
     t
@@ -207,39 +237,34 @@ impl Iterator for Fields<'_> {
 /// KG and KA (Table 5.6), used by the 16-bit gyro and accelerometer fields.
 #[inline]
 pub fn payload(id: u8, payload: &[u8], scales: Scales) -> Result<Fields<'_>, DecodeError> {
-    if id == UDD {
-        let (&n, rest) = payload.split_first().ok_or(DecodeError::UddHeader)?;
-        let n = usize::from(n);
-        if n == 0 || rest.len() < n {
-            return Err(DecodeError::UddHeader);
+    by_index(FORMAT_OF[usize::from(id)], id, payload, scales)
+}
+
+/// [`payload`] of UDD (Table 5.13).
+#[inline(always)]
+fn udd(payload: &[u8], scales: Scales) -> Result<Fields<'_>, DecodeError> {
+    let (&n, rest) = payload.split_first().ok_or(DecodeError::UddHeader)?;
+    let n = usize::from(n);
+    if n == 0 || rest.len() < n {
+        return Err(DecodeError::UddHeader);
+    }
+    let (types, data) = rest.split_at(n);
+    let mut expected = 0;
+    for &c in types {
+        match UDD_SIZE[usize::from(c)] {
+            0 => return Err(DecodeError::UnknownUddType(c)),
+            size => expected += usize::from(size),
         }
-        let (types, data) = rest.split_at(n);
-        let mut expected = 0;
-        for &c in types {
-            expected += udd_field(c).ok_or(DecodeError::UnknownUddType(c))?.size();
-        }
-        if data.len() != expected {
-            return Err(DecodeError::Length {
-                expected: 1 + n + expected,
-                got: payload.len(),
-            });
-        }
-        return Ok(Fields {
-            kinds: Kinds::Udd(types.iter()),
-            data,
-            scales,
+    }
+    if data.len() != expected {
+        return Err(DecodeError::Length {
+            expected: 1 + n + expected,
+            got: payload.len(),
         });
     }
-    let index = FORMAT_OF[usize::from(id)].ok_or(DecodeError::UnknownId(id))?;
-    let (fields, expected, values) =
-        fixed(index, payload, scales).ok_or(DecodeError::UnknownId(id))?;
-    let values = values.ok_or(DecodeError::Length {
-        expected,
-        got: payload.len(),
-    })?;
     Ok(Fields {
-        kinds: Kinds::Fixed(fields, values, 0),
-        data: &[],
+        kinds: Kinds::Udd(types.iter()),
+        data,
         scales,
     })
 }
