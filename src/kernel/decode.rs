@@ -215,19 +215,22 @@ impl Iterator for Fields<'_> {
 
     #[inline]
     fn next(&mut self) -> Option<(Field, Value)> {
-        let field = match &mut self.kinds {
+        match &mut self.kinds {
             Kinds::Fixed(fields, values, at) => {
                 let field = *fields.get(*at)?;
                 let value = *values.get(*at)?;
                 *at += 1;
-                return Some((field, value));
+                Some((field, value))
             }
-            Kinds::Udd(it) => udd_field(*it.next()?)?,
-        };
-        // The length was checked by `payload`: `read` cannot fail here.
-        let value = field.read(self.scales, self.data)?;
-        self.data = self.data.get(field.size()..).unwrap_or_default();
-        Some((field, value))
+            Kinds::Udd(it) => {
+                let code = usize::from(*it.next()?);
+                // The layout was checked by `payload`: these cannot fail.
+                let field = UDD_FIELD[code]?;
+                let (bytes, rest) = self.data.split_at_checked(usize::from(UDD_SIZE[code]))?;
+                self.data = rest;
+                Some((field, field.read(self.scales, bytes)?))
+            }
+        }
     }
 }
 
