@@ -338,6 +338,37 @@ mod tests {
         }
     }
 
+    /// A frame cut between two inputs is completed in the buffer with only
+    /// the bytes it lacks; the frames after it are found in the input in
+    /// place (returned borrowing it), as before the cut.
+    #[cfg(target_pointer_width = "64")]
+    #[test]
+    fn after_a_cut_frame_the_scan_is_back_in_the_input() {
+        let mut stream = std::vec::Vec::new();
+        let mut out = [0u8; 64];
+        for i in 0..4u8 {
+            let n = encode(1, 0x8F, &[i; 32], &mut out).unwrap();
+            stream.extend_from_slice(&out[..n]);
+        }
+        let (first, second) = stream.split_at(20);
+        let mut d = Decoder::<512>::new();
+        let mut input = first;
+        assert!(d.next_frame(&mut input).is_none());
+        assert!(d.has_partial());
+        let mut input = second;
+        let f = d.next_frame(&mut input).unwrap();
+        assert_eq!(f.payload, &[0; 32]);
+        let inside = |p: &[u8]| second.as_ptr_range().contains(&p.as_ptr());
+        assert!(!inside(f.payload));
+        for i in 1..4 {
+            let f = d.next_frame(&mut input).unwrap();
+            assert_eq!(f.payload, &[i; 32]);
+            assert!(inside(f.payload), "frame {i} copied");
+        }
+        assert!(d.next_frame(&mut input).is_none());
+        assert!(input.is_empty() && !d.has_partial());
+    }
+
     #[test]
     fn encode_matches_the_stop_command() {
         let mut out = [0u8; 16];
