@@ -7,7 +7,9 @@
 //! ns; [`Value`]).
 //!
 //! No allocation: [`payload`] checks the payload's layout and length once
-//! and returns an iterator over its fields.
+//! and returns an iterator over its fields — a fixed format's values
+//! decoded at once by a decoder specialised for the format (its fields and
+//! offsets constants), UDD's field by field.
 //!
 //! ```
 //! use imu_emu::kernel::decode;

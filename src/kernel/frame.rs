@@ -22,9 +22,10 @@ pub const TYPE_DATA: u8 = 0x01;
 ///
 /// A word at a time: a word's even and odd bytes are added in its 16-bit
 /// lanes (folded before a lane can carry) — on 64-bit hosts four lanes of
-/// a `u64`, eight bytes a step (a host decoder's frames), on the 32-bit
-/// firmware two lanes of a `u32` (no 64-bit arithmetic on a Cortex-M); a
-/// third to a sixth of the instructions of a byte loop.
+/// a `u64`, eight bytes a step, on the 32-bit firmware two lanes of a
+/// `u32` (no 64-bit arithmetic on a Cortex-M); a third to a sixth of the
+/// instructions of a byte loop. (The host's [`Decoder`] checks the frames
+/// it finds in its input in 64-byte blocks instead: `sum_from_header`.)
 pub fn checksum(bytes: &[u8]) -> u16 {
     #[cfg(target_pointer_width = "64")]
     {
