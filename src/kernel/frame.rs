@@ -187,7 +187,9 @@ impl Framing for Kernel {
     #[cfg(target_pointer_width = "64")]
     #[inline]
     fn check_in(avail: &[u8], total: usize) -> bool {
-        let Some(packet) = avail.get(..total) else {
+        // Shorter than header and checksum: no frame (the scanner only
+        // asks about candidates of 8 bytes or more).
+        let Some(packet) = avail.get(..total).filter(|p| p.len() >= 4) else {
             return false;
         };
         match sum_from_header(avail, total - 2) {
@@ -337,6 +339,11 @@ mod tests {
                 assert_eq!(Kernel::check(&avail[..n]), want);
             }
         }
+        // No panic on lengths no candidate has, or past the input.
+        for total in 0..4 {
+            assert!(!Kernel::check_in(&[0xAA, 0x55, 0, 0, 0, 0, 0, 0], total));
+        }
+        assert!(!Kernel::check_in(&[0xAA, 0x55, 0, 0], 9));
     }
 
     /// A frame cut between two inputs is completed in the buffer with only
