@@ -185,7 +185,7 @@ impl Framing for Kernel {
     /// and masked off); a frame too close to the end of `avail` for that,
     /// [`Kernel::check`].
     #[cfg(target_pointer_width = "64")]
-    #[inline]
+    #[inline(always)]
     fn check_in(avail: &[u8], total: usize) -> bool {
         // Shorter than header and checksum: no frame (the scanner only
         // asks about candidates of 8 bytes or more).
