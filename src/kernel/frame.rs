@@ -181,9 +181,9 @@ impl Framing for Kernel {
         checksum(&packet[2..n - 2]) == u16::from_le_bytes([packet[n - 2], packet[n - 1]])
     }
 
-    /// On hosts, [`sum_from_header`] over the frame (bytes after it read
-    /// and masked off); a frame too close to the end of `avail` for that,
-    /// [`Kernel::check`].
+    /// On hosts, the checksum summed in 64-byte blocks, the bytes of
+    /// `avail` after the frame read and masked off; a frame too close to
+    /// the end of `avail` for that, [`Kernel::check`].
     #[cfg(target_pointer_width = "64")]
     #[inline(always)]
     fn check_in(avail: &[u8], total: usize) -> bool {
