@@ -27,6 +27,13 @@ pub trait Framing {
     fn total_len(header: &[u8]) -> Option<usize>;
     /// Whether a complete candidate packet's check bytes are right.
     fn check(packet: &[u8]) -> bool;
+    /// [`Framing::check`] of the candidate packet of `total` bytes at the
+    /// start of `avail`, which holds all of it and possibly bytes after it
+    /// (the rest of the input), which a faster check may read and ignore.
+    #[inline]
+    fn check_in(avail: &[u8], total: usize) -> bool {
+        avail.get(..total).is_some_and(Self::check)
+    }
 }
 
 /// Streaming packet scanner with a bounded buffer of `CAP` bytes (module
@@ -96,33 +103,36 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     ///
     /// On 64-bit hosts, while no bytes of a candidate are held, packets are
     /// found in `input` itself and returned borrowing it (no copy); only a
-    /// candidate cut at the end of `input` is kept in the buffer. The
-    /// packets found are the same either way.
+    /// candidate cut at the end of `input` is kept in the buffer, and only
+    /// the bytes it needs are added to it from the next input, so that the
+    /// scan is back in place once it is decided. The packets found are the
+    /// same either way.
+    #[cfg_attr(target_pointer_width = "64", inline(always))]
     pub fn next_raw<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<&'r [u8]> {
         self.skip_consumed();
-        // Hosts only: the firmware's decoder sees a few bytes at a time,
-        // and its flash has no room for a second path (RP2040).
-        #[cfg(target_pointer_width = "64")]
-        if self.start == self.end {
-            // Nothing held: scan the input in place.
-            let bytes: &'i [u8] = input;
-            match scan::<F>(bytes, CAP, &mut self.errors) {
-                Scan::Found { at, total } => {
-                    *input = &bytes[at + total..];
-                    return Some(&bytes[at..at + total]);
-                }
-                Scan::NeedMore { at } => {
-                    // What is left is a candidate shorter than CAP.
-                    let rest = &bytes[at..];
-                    let n = rest.len().min(CAP);
-                    self.buf[..n].copy_from_slice(&rest[..n]);
-                    self.start = 0;
-                    self.end = n;
-                    *input = &rest[n..];
+        loop {
+            // Hosts only: the firmware's decoder sees a few bytes at a
+            // time, and its flash has no room for a second path (RP2040).
+            #[cfg(target_pointer_width = "64")]
+            if self.start == self.end {
+                // Nothing held: scan the input in place.
+                let bytes: &'i [u8] = input;
+                match scan::<F>(bytes, CAP, &mut self.errors) {
+                    Scan::Found { at, total } => {
+                        *input = &bytes[at + total..];
+                        return Some(&bytes[at..at + total]);
+                    }
+                    Scan::NeedMore { at } => {
+                        // What is left is a candidate shorter than CAP.
+                        let rest = &bytes[at..];
+                        let n = rest.len().min(CAP);
+                        self.buf[..n].copy_from_slice(&rest[..n]);
+                        self.start = 0;
+                        self.end = n;
+                        *input = &rest[n..];
+                    }
                 }
             }
-        }
-        loop {
             match scan::<F>(&self.buf[self.start..self.end], CAP, &mut self.errors) {
                 Scan::Found { at, total } => {
                     self.start += at;
@@ -134,18 +144,37 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
             if input.is_empty() {
                 return None;
             }
-            // Compact and take as many bytes as fit.
+            #[cfg(target_pointer_width = "64")]
+            if self.start == self.end {
+                continue;
+            }
+            // Compact and take as many bytes as fit (hosts: as the held
+            // candidate needs).
             if self.start > 0 {
                 self.buf.copy_within(self.start..self.end, 0);
                 self.end -= self.start;
                 self.start = 0;
             }
             let room = CAP - self.end;
+            #[cfg(target_pointer_width = "64")]
+            let room = room.min(self.wanted());
             let n = room.min(input.len());
             self.buf[self.end..self.end + n].copy_from_slice(&input[..n]);
             self.end += n;
             *input = &input[n..];
         }
+    }
+
+    /// Bytes the held candidate needs before it can be decided: up to its
+    /// header, then up to its length (at least one).
+    #[cfg(target_pointer_width = "64")]
+    fn wanted(&self) -> usize {
+        let held = &self.buf[self.start..self.end];
+        let need = match held.get(..F::HEADER_LEN) {
+            None => F::HEADER_LEN,
+            Some(header) => F::total_len(header).unwrap_or(0),
+        };
+        need.saturating_sub(held.len()).max(1)
     }
 }
 
@@ -179,7 +208,8 @@ enum Scan {
 /// Skips garbage and bad candidates in `avail` (each dropped candidate
 /// counted in `errors`) up to the first complete valid packet of at most
 /// `cap` bytes.
-#[inline]
+#[cfg_attr(target_pointer_width = "64", inline(always))]
+#[cfg_attr(not(target_pointer_width = "64"), inline)]
 fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
     let mut at = 0;
     loop {
@@ -211,7 +241,7 @@ fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
         if cand.len() < total {
             return Scan::NeedMore { at };
         }
-        if !F::check(&cand[..total]) {
+        if !F::check_in(cand, total) {
             at += 1;
             *errors = errors.wrapping_add(1);
             continue;

@@ -7,7 +7,9 @@
 //! ns; [`Value`]).
 //!
 //! No allocation: [`payload`] checks the payload's layout and length once
-//! and returns an iterator over its fields.
+//! and returns an iterator over its fields — a fixed format's values
+//! decoded at once by a decoder specialised for the format (its fields and
+//! offsets constants), UDD's field by field.
 //!
 //! ```
 //! use imu_emu::kernel::decode;
@@ -29,24 +31,116 @@ use super::formats::{FORMATS, UDD};
 use super::frame::{Frame, TYPE_DATA};
 use super::udd::UDD_TYPES;
 
-/// The fixed format of each data command code: its fields and payload
-/// length, built from [`FORMATS`] at compile time (one load a frame).
-static FORMAT_OF: [Option<(&[Field], u16)>; 256] = {
-    let mut t: [Option<(&[Field], u16)>; 256] = [None; 256];
+/// The most fields a fixed format has.
+const MAX_FIXED: usize = {
+    let mut most = 0;
     let mut i = 0;
     while i < FORMATS.len() {
-        let fields = FORMATS[i].fields;
-        let mut len = 0;
-        let mut j = 0;
-        while j < fields.len() {
-            len += fields[j].size();
-            j += 1;
+        if FORMATS[i].fields.len() > most {
+            most = FORMATS[i].fields.len();
         }
-        t[FORMATS[i].code as usize] = Some((fields, len as u16));
         i += 1;
     }
+    most
+};
+
+/// The values of a fixed format's fields, in order (the rest unused).
+type FixedValues = [Value; MAX_FIXED];
+
+/// The fixed format `FORMATS[I]`, with a decoder specialised for it: its
+/// fields and their offsets are constants, so the values of a payload are
+/// read by straight-line code (no dispatch on the field a value), all at
+/// once when the payload is checked ([`payload`]).
+struct Format<const I: usize>;
+
+impl<const I: usize> Format<I> {
+    const FIELDS: &'static [Field] = FORMATS[I].fields;
+    const LEN: usize = {
+        let mut len = 0;
+        let mut j = 0;
+        while j < Self::FIELDS.len() {
+            len += Self::FIELDS[j].size();
+            j += 1;
+        }
+        len
+    };
+
+    /// The values of `payload`, which is [`Format::LEN`] bytes long (the
+    /// `Reserved` fallbacks are never taken).
+    #[inline(always)]
+    fn values(payload: &[u8], scales: Scales) -> FixedValues {
+        let mut out = [Value::Reserved; MAX_FIXED];
+        let mut at = 0;
+        let mut j = 0;
+        while j < Self::FIELDS.len() {
+            let field = Self::FIELDS[j];
+            let bytes = payload.get(at..).unwrap_or_default();
+            out[j] = field.read(scales, bytes).unwrap_or(Value::Reserved);
+            at += field.size();
+            j += 1;
+        }
+        out
+    }
+}
+
+/// The index in [`FORMATS`] of each data command code's fixed format,
+/// [`UDD_INDEX`] for UDD, [`NOT_DATA`] for the others: built at compile
+/// time, one load and one dispatch a frame ([`payload`]).
+static FORMAT_OF: [u8; 256] = {
+    let mut t = [NOT_DATA; 256];
+    let mut i = 0;
+    while i < FORMATS.len() {
+        t[FORMATS[i].code as usize] = i as u8;
+        i += 1;
+    }
+    t[UDD as usize] = UDD_INDEX;
     t
 };
+
+/// [`FORMAT_OF`] of UDD.
+const UDD_INDEX: u8 = FORMATS.len() as u8;
+/// [`FORMAT_OF`] of a code that is no data command.
+const NOT_DATA: u8 = u8::MAX;
+
+/// [`by_index`] for the indices `$i` of [`FORMATS`], every one of them
+/// (checked at compile time): one specialised decoder an index.
+macro_rules! fixed_formats {
+    ($($i:literal)*) => {
+        const _: () = assert!([$($i),*].len() == FORMATS.len());
+
+        /// [`payload`] of data command `id`, whose [`FORMAT_OF`] is
+        /// `index`: fixed format `FORMATS[index]` (its values decoded if
+        /// `payload` has its length), UDD or none.
+        #[inline(always)]
+        fn by_index(
+            index: u8,
+            id: u8,
+            payload: &[u8],
+            scales: Scales,
+        ) -> Result<Fields<'_>, DecodeError> {
+            let (fields, values) = match index {
+                $($i => (
+                    Format::<$i>::FIELDS,
+                    (payload.len() == Format::<$i>::LEN)
+                        .then(|| Format::<$i>::values(payload, scales))
+                        .ok_or(DecodeError::Length {
+                            expected: Format::<$i>::LEN,
+                            got: payload.len(),
+                        })?,
+                ),)*
+                UDD_INDEX => return udd(payload, scales),
+                _ => return Err(DecodeError::UnknownId(id)),
+            };
+            Ok(Fields {
+                kinds: Kinds::Fixed(fields, values, 0),
+                data: &[],
+                scales,
+            })
+        }
+    };
+}
+
+fixed_formats!(0 1 2 3 4 5 6);
 
 /// The field of each UDD type code, built from [`UDD_TYPES`] at compile
 /// time.
@@ -55,6 +149,18 @@ static UDD_FIELD: [Option<Field>; 256] = {
     let mut i = 0;
     while i < UDD_TYPES.len() {
         t[UDD_TYPES[i].code as usize] = Some(UDD_TYPES[i].field);
+        i += 1;
+    }
+    t
+};
+
+/// The size of each UDD type code's field (0: not a UDD type), built from
+/// [`UDD_TYPES`] at compile time.
+static UDD_SIZE: [u8; 256] = {
+    let mut t = [0; 256];
+    let mut i = 0;
+    while i < UDD_TYPES.len() {
+        t[UDD_TYPES[i].code as usize] = UDD_TYPES[i].field.size() as u8;
         i += 1;
     }
     t
@@ -87,9 +193,13 @@ pub enum DecodeError {
     },
 }
 
+// The fixed variant holds its values (no heap to box them in): a `Fields`
+// lives on the stack of the loop that decodes a frame.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 enum Kinds<'a> {
-    Fixed(core::slice::Iter<'static, Field>),
+    /// A fixed format's fields, their values decoded, the next one's index.
+    Fixed(&'static [Field], FixedValues, usize),
     Udd(core::slice::Iter<'a, u8>),
 }
 
@@ -107,14 +217,22 @@ impl Iterator for Fields<'_> {
 
     #[inline]
     fn next(&mut self) -> Option<(Field, Value)> {
-        let field = match &mut self.kinds {
-            Kinds::Fixed(it) => *it.next()?,
-            Kinds::Udd(it) => udd_field(*it.next()?)?,
-        };
-        // The length was checked by `payload`: `read` cannot fail here.
-        let value = field.read(self.scales, self.data)?;
-        self.data = self.data.get(field.size()..).unwrap_or_default();
-        Some((field, value))
+        match &mut self.kinds {
+            Kinds::Fixed(fields, values, at) => {
+                let field = *fields.get(*at)?;
+                let value = *values.get(*at)?;
+                *at += 1;
+                Some((field, value))
+            }
+            Kinds::Udd(it) => {
+                let code = usize::from(*it.next()?);
+                // The layout was checked by `payload`: these cannot fail.
+                let field = UDD_FIELD[code]?;
+                let (bytes, rest) = self.data.split_at_checked(usize::from(UDD_SIZE[code]))?;
+                self.data = rest;
+                Some((field, field.read(self.scales, bytes)?))
+            }
+        }
     }
 }
 
@@ -124,40 +242,34 @@ impl Iterator for Fields<'_> {
 /// KG and KA (Table 5.6), used by the 16-bit gyro and accelerometer fields.
 #[inline]
 pub fn payload(id: u8, payload: &[u8], scales: Scales) -> Result<Fields<'_>, DecodeError> {
-    if id == UDD {
-        let (&n, rest) = payload.split_first().ok_or(DecodeError::UddHeader)?;
-        let n = usize::from(n);
-        if n == 0 || rest.len() < n {
-            return Err(DecodeError::UddHeader);
-        }
-        let (types, data) = rest.split_at(n);
-        let mut expected = 0;
-        for &c in types {
-            expected += udd_field(c).ok_or(DecodeError::UnknownUddType(c))?.size();
-        }
-        if data.len() != expected {
-            return Err(DecodeError::Length {
-                expected: 1 + n + expected,
-                got: payload.len(),
-            });
-        }
-        return Ok(Fields {
-            kinds: Kinds::Udd(types.iter()),
-            data,
-            scales,
-        });
+    by_index(FORMAT_OF[usize::from(id)], id, payload, scales)
+}
+
+/// [`payload`] of UDD (Table 5.13).
+#[inline(always)]
+fn udd(payload: &[u8], scales: Scales) -> Result<Fields<'_>, DecodeError> {
+    let (&n, rest) = payload.split_first().ok_or(DecodeError::UddHeader)?;
+    let n = usize::from(n);
+    if n == 0 || rest.len() < n {
+        return Err(DecodeError::UddHeader);
     }
-    let (fields, len) = FORMAT_OF[usize::from(id)].ok_or(DecodeError::UnknownId(id))?;
-    let expected = usize::from(len);
-    if payload.len() != expected {
+    let (types, data) = rest.split_at(n);
+    let mut expected = 0;
+    for &c in types {
+        match UDD_SIZE[usize::from(c)] {
+            0 => return Err(DecodeError::UnknownUddType(c)),
+            size => expected += usize::from(size),
+        }
+    }
+    if data.len() != expected {
         return Err(DecodeError::Length {
-            expected,
+            expected: 1 + n + expected,
             got: payload.len(),
         });
     }
     Ok(Fields {
-        kinds: Kinds::Fixed(fields.iter()),
-        data: payload,
+        kinds: Kinds::Udd(types.iter()),
+        data,
         scales,
     })
 }
@@ -502,6 +614,59 @@ mod tests {
                 (Field::EulerHr, Value::Angles([90.5, -0.001, 180.0])),
             ]
         );
+    }
+
+    /// The bits of a value (`f64` compared bit for bit, `-0.0` ≠ `0.0`).
+    fn value_bits(v: Value) -> Vec<u64> {
+        match v {
+            Value::Angles(a) | Value::Rate(a) | Value::Accel(a) => a.map(f64::to_bits).to_vec(),
+            Value::Quat(q) => q.map(f64::to_bits).to_vec(),
+            Value::Celsius(x) | Value::Volts(x) => std::vec![x.to_bits(), 1],
+            Value::Word(w) => std::vec![u64::from(w), 2],
+            Value::Nanos(n) => std::vec![n, 3],
+            Value::Reserved => std::vec![4],
+        }
+    }
+
+    /// The specialised decoders of the fixed formats give, bit for bit,
+    /// what [`Field::read`] gives field by field, for arbitrary payload
+    /// bytes and every product's scales; a field's read needs all its
+    /// bytes.
+    #[test]
+    fn the_fixed_format_decoders_are_the_field_reads() {
+        let mut r = Rng(0x0123_4567_89AB_CDEF);
+        for sc in [
+            Scales { kg: 50, ka: 4000 },
+            Scales { kg: 20, ka: 2000 },
+            Scales { kg: 10, ka: 500 },
+            Scales { kg: 1, ka: 7 },
+        ] {
+            for _ in 0..2000 {
+                for f in FORMATS {
+                    let p: Vec<u8> = (0..f.payload_len()).map(|_| r.u64() as u8).collect();
+                    let got: Vec<_> = payload(f.code, &p, sc)
+                        .unwrap()
+                        .map(|(field, v)| (field, value_bits(v)))
+                        .collect();
+                    let mut want = Vec::new();
+                    let mut at = 0;
+                    for &field in f.fields {
+                        let v = field.read(sc, &p[at..]).unwrap();
+                        want.push((field, value_bits(v)));
+                        at += field.size();
+                    }
+                    assert_eq!(got, want, "{:#x}", f.code);
+                }
+            }
+        }
+        let bytes = [0x5Au8; 16];
+        let sc = Scales { kg: 50, ka: 4000 };
+        let every = FORMATS.iter().flat_map(|f| f.fields.iter().copied());
+        for field in every.chain(UDD_TYPES.iter().map(|t| t.field)) {
+            let n = field.size();
+            assert_eq!(field.read(sc, &bytes[..n - 1]), None, "{field:?}");
+            assert!(field.read(sc, &bytes[..n]).is_some(), "{field:?}");
+        }
     }
 
     #[test]

@@ -422,23 +422,23 @@ pub enum Value {
 }
 
 #[inline(always)]
-fn i32_at(b: &[u8], i: usize) -> i32 {
+fn i32_at<const N: usize>(b: &[u8; N], i: usize) -> i32 {
     i32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
 }
 
 #[inline(always)]
-fn i16_at(b: &[u8], i: usize) -> i16 {
+fn i16_at<const N: usize>(b: &[u8; N], i: usize) -> i16 {
     i16::from_le_bytes([b[i], b[i + 1]])
 }
 
 #[inline(always)]
-fn u16_at(b: &[u8], i: usize) -> u16 {
+fn u16_at<const N: usize>(b: &[u8; N], i: usize) -> u16 {
     u16::from_le_bytes([b[i], b[i + 1]])
 }
 
 /// Three i32 values over `k`.
 #[inline(always)]
-fn get3_i32(b: &[u8], k: u32) -> [f64; 3] {
+fn get3_i32(b: &[u8; 12], k: u32) -> [f64; 3] {
     let k = f64::from(k);
     [
         f64::from(i32_at(b, 0)) / k,
@@ -449,7 +449,7 @@ fn get3_i32(b: &[u8], k: u32) -> [f64; 3] {
 
 /// Three i16 values over `k`.
 #[inline(always)]
-fn get3_i16(b: &[u8], k: u32) -> [f64; 3] {
+fn get3_i16(b: &[u8; 6], k: u32) -> [f64; 3] {
     let k = f64::from(k);
     [
         f64::from(i16_at(b, 0)) / k,
@@ -462,17 +462,21 @@ impl Field {
     /// Decodes the field from `bytes[..self.size()]` — the inverse of the
     /// writer, with the same scales (the constants above, `scales` for the
     /// 16-bit gyro and accelerometer); `None` if `bytes` is too short.
-    #[inline]
+    // Each arm reads a fixed-size array: its offsets need no checks.
+    #[inline(always)]
     pub fn read(self, scales: Scales, bytes: &[u8]) -> Option<Value> {
-        let b = bytes.get(..self.size())?;
         Some(match self {
-            Field::Euler => Value::Angles([
-                f64::from(u16_at(b, 0)) / f64::from(ANGLE_SCALE),
-                f64::from(i16_at(b, 2)) / f64::from(ANGLE_SCALE),
-                f64::from(i16_at(b, 4)) / f64::from(ANGLE_SCALE),
-            ]),
-            Field::EulerHr => Value::Angles(get3_i32(b, ANGLE_HR_SCALE)),
+            Field::Euler => {
+                let b = bytes.first_chunk::<6>()?;
+                Value::Angles([
+                    f64::from(u16_at(b, 0)) / f64::from(ANGLE_SCALE),
+                    f64::from(i16_at(b, 2)) / f64::from(ANGLE_SCALE),
+                    f64::from(i16_at(b, 4)) / f64::from(ANGLE_SCALE),
+                ])
+            }
+            Field::EulerHr => Value::Angles(get3_i32(bytes.first_chunk()?, ANGLE_HR_SCALE)),
             Field::Quat => {
+                let b = bytes.first_chunk::<8>()?;
                 let k = f64::from(QUAT_SCALE);
                 Value::Quat([
                     f64::from(i16_at(b, 0)) / k,
@@ -481,30 +485,31 @@ impl Field {
                     f64::from(i16_at(b, 6)) / k,
                 ])
             }
-            Field::Gyro => Value::Rate(get3_i16(b, scales.kg)),
-            Field::Acc => Value::Accel(get3_i16(b, scales.ka)),
+            Field::Gyro => Value::Rate(get3_i16(bytes.first_chunk()?, scales.kg)),
+            Field::Acc => Value::Accel(get3_i16(bytes.first_chunk()?, scales.ka)),
             Field::GyroHr | Field::GyroBiasCompHr | Field::GyroBiasHr => {
-                Value::Rate(get3_i32(b, RATE_HR_SCALE))
+                Value::Rate(get3_i32(bytes.first_chunk()?, RATE_HR_SCALE))
             }
             Field::AccHr | Field::AuxAccHr | Field::FilteredAccHr | Field::FilteredAuxAccHr => {
-                Value::Accel(get3_i32(b, ACC_HR_SCALE))
+                Value::Accel(get3_i32(bytes.first_chunk()?, ACC_HR_SCALE))
             }
-            Field::Zero(_) => Value::Reserved,
+            Field::Zero(n) => {
+                bytes.get(..usize::from(n))?;
+                Value::Reserved
+            }
             Field::Usw | Field::UswExt | Field::Counter | Field::TimeFlags => {
-                Value::Word(u16_at(b, 0))
+                Value::Word(u16::from_le_bytes(*bytes.first_chunk()?))
             }
-            Field::Temperature => {
-                Value::Celsius(f64::from(i16_at(b, 0)) / f64::from(TEMPERATURE_SCALE))
-            }
+            Field::Temperature => Value::Celsius(
+                f64::from(i16::from_le_bytes(*bytes.first_chunk()?)) / f64::from(TEMPERATURE_SCALE),
+            ),
             Field::SecondFraction => {
-                Value::Nanos(u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+                Value::Nanos(u64::from(u32::from_le_bytes(*bytes.first_chunk()?)))
             }
-            Field::ImuTime => Value::Nanos(u64::from_le_bytes([
-                b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],
-            ])),
-            Field::SupplyVoltage => {
-                Value::Volts(f64::from(u16_at(b, 0)) / f64::from(VOLTAGE_SCALE))
-            }
+            Field::ImuTime => Value::Nanos(u64::from_le_bytes(*bytes.first_chunk()?)),
+            Field::SupplyVoltage => Value::Volts(
+                f64::from(u16::from_le_bytes(*bytes.first_chunk()?)) / f64::from(VOLTAGE_SCALE),
+            ),
         })
     }
 }
