@@ -8,7 +8,9 @@
 //! UDD configuration at its largest rate at 2 Mbaud (1 kHz). Every
 //! iteration also takes the queued bytes out (`poll_tx`), as a board does;
 //! the benches check that a frame left at every output tick and none was
-//! dropped.
+//! dropped. `device_tick/GA K110` and `device_tick/GA K110 filters`: what
+//! `imu-emu --speed max` runs in `scripts/bench.sh` (a K110, GA at 2 kHz,
+//! 2 Mbaud; factory settings, then LPF 16 Hz and all cascade filters).
 //!
 //! The chain alone:
 //! `tick/worst`: K120 (aux accelerometer: all 9 channels live), LPF 16 Hz
@@ -196,6 +198,20 @@ fn device(cr: &mut Criterion) {
         g.bench_function(f.name, |b| b.iter(|| r.tick()));
         assert_eq!(r.dev.tx_dropped(), 0);
     }
+    // What `imu-emu --speed max` runs in `scripts/bench.sh`: a K110 at
+    // factory settings streaming GA at 2 kHz, and the same with LPF 16 Hz
+    // and all cascade filters (`loadgen --filters`).
+    let ga = 0x8F; // GA (Table 5.7)
+    let mut r = Rig::new("K110");
+    r.start(ga, 1);
+    g.bench_function("GA K110", |b| b.iter(|| r.tick()));
+    assert_eq!(r.dev.tx_dropped(), 0);
+    let mut r = Rig::new("K110");
+    r.save(params::LPF_BANDWIDTH.id, &[0]);
+    r.save(params::FILTER.id, &[7]);
+    r.start(ga, 1);
+    g.bench_function("GA K110 filters", |b| b.iter(|| r.tick()));
+    assert_eq!(r.dev.tx_dropped(), 0);
     // The worst case: K120, LPF 16 Hz, all cascade filters, incremental,
     // mounting, the largest UDD (the 16 largest types a K120 takes).
     let mut r = Rig::new("K120");
