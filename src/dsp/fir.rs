@@ -645,6 +645,10 @@ macro_rules! bank {
             mid: [[$t; CHANNELS]; MID_RING],
             mid_pos: usize,
             design: Option<&'static FirDesign>,
+            /// Host builds: ticks (at most [`MID_RING`]) since the
+            /// pre-filter last ran (see [`Self::push`]).
+            #[cfg(not(target_os = "none"))]
+            lag: usize,
         }
 
         impl $name {
@@ -656,6 +660,8 @@ macro_rules! bank {
                     mid: [*x; MID_RING],
                     mid_pos: 0,
                     design,
+                    #[cfg(not(target_os = "none"))]
+                    lag: 0,
                 }
             }
 
@@ -670,6 +676,10 @@ macro_rules! bank {
             /// Switches to `design`, keeping the histories.
             pub fn set_design(&mut self, design: Option<&'static FirDesign>) {
                 self.design = design;
+                #[cfg(not(target_os = "none"))]
+                if !Self::pre_unused(design) {
+                    self.catch_up();
+                }
             }
 
             /// The current design (`None` = off).
@@ -690,18 +700,91 @@ macro_rules! bank {
             pub fn fill(&mut self, x: &[$t; CHANNELS]) {
                 self.raw.fill(*x);
                 self.mid.fill(*x);
+                #[cfg(not(target_os = "none"))]
+                {
+                    self.lag = 0;
+                }
+            }
+
+            /// Whether `design` reads no pre-filter output (one stage, or
+            /// off).
+            #[cfg(not(target_os = "none"))]
+            #[inline(always)]
+            fn pre_unused(design: Option<&'static FirDesign>) -> bool {
+                design.is_none_or(|d| d.stride == 1)
+            }
+
+            /// Host builds: the pre-filter outputs of the last
+            /// [`Self::push`]es that skipped it (`lag` of them), computed
+            /// now by the same function on the same input rows, so the
+            /// history of its output is bit for bit the one of a
+            /// pre-filter run on every tick.
+            ///
+            /// While it is skipped, each push moves the input row leaving
+            /// the input ring into the output ring's slot of that tick: the
+            /// two rings then hold the last `lag + RING` input rows, and a
+            /// pre-filter output needs its tick's row and the
+            /// [`PRE`]`.order` before it (`lag` ≤ [`MID_RING`] = 177,
+            /// so at most 193 rows, of up to 226). Slots older than `lag`
+            /// hold outputs of the pre-filter (or of [`Self::fill`]).
+            #[cfg(not(target_os = "none"))]
+            #[cold]
+            #[inline(never)]
+            fn catch_up(&mut self) {
+                const SPAN: usize = PRE.order;
+                let n = self.lag;
+                if n == 0 {
+                    return;
+                }
+                let len = n + SPAN;
+                // The input row `age` pushes before the newest, oldest
+                // first in `hist`.
+                let mut hist = [[<$t>::default(); CHANNELS]; MID_RING + SPAN];
+                for (i, row) in hist[..len].iter_mut().enumerate() {
+                    let age = len - 1 - i;
+                    *row = if age < RING {
+                        self.raw[(self.raw_pos + RING - 1 - age) % RING]
+                    } else {
+                        self.mid[(self.mid_pos + MID_RING - 1 - (age - RING)) % MID_RING]
+                    };
+                }
+                // The output of the tick `age` pushes before the newest,
+                // oldest first (its window ends at its own row).
+                for j in 0..n {
+                    let age = n - 1 - j;
+                    let m = $run1(&hist[..len], SPAN + j, &PRE);
+                    self.mid[(self.mid_pos + MID_RING - 1 - age) % MID_RING] = m;
+                }
+                self.lag = 0;
             }
 
             /// Pushes one sample per channel and returns the filtered output.
             #[inline]
             pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
                 let p = self.raw_pos;
+                let q = self.mid_pos;
+                // Host builds: a design that reads no pre-filter output
+                // skips it; the input row leaving the ring is kept in the
+                // pre-filter's slot instead, and [`Self::catch_up`]
+                // computes the skipped outputs when a two-stage design
+                // needs them. Firmware runs the pre-filter on every tick
+                // (its output history is always ready, no catch-up).
+                #[cfg(not(target_os = "none"))]
+                let skip = Self::pre_unused(self.design);
+                #[cfg(target_os = "none")]
+                let skip = false;
+                #[cfg(not(target_os = "none"))]
+                if skip {
+                    self.mid[q] = self.raw[p];
+                    self.lag = (self.lag + 1).min(MID_RING);
+                } else if self.lag > 0 {
+                    self.catch_up();
+                }
                 self.raw[p] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
-                // The pre-filter runs on every tick.
-                let m = $run1(&self.raw, p, &PRE);
-                let q = self.mid_pos;
-                self.mid[q] = m;
+                if !skip {
+                    self.mid[q] = $run1(&self.raw, p, &PRE);
+                }
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,
@@ -731,6 +814,72 @@ bank!(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A row of pseudo-random samples (xorshift), float and fixed.
+    fn row(state: &mut u64) -> ([f32; CHANNELS], [i32; CHANNELS]) {
+        let mut f = [0.0f32; CHANNELS];
+        let mut i = [0i32; CHANNELS];
+        for c in 0..CHANNELS {
+            *state ^= *state << 13;
+            *state ^= *state >> 7;
+            *state ^= *state << 17;
+            i[c] = (*state >> 40) as i32 - (1 << 23);
+            f[c] = i[c] as f32 / 4096.0;
+        }
+        (f, i)
+    }
+
+    /// A bank that ran a one-stage design (or none) for `n` ticks and then
+    /// switches to a two-stage one gives, tick for tick and bit for bit,
+    /// what a bank that ran the two-stage design all along gives on the
+    /// same input (the skipped pre-filter outputs are caught up, host
+    /// builds): every count around the rings' lengths, float and fixed,
+    /// both two-stage designs, several switches.
+    #[test]
+    fn a_two_stage_design_after_a_one_stage_one_sees_the_whole_history() {
+        let counts = [
+            0, 1, 2, 15, 16, 17, 32, 33, 47, 48, 49, 50, 64, 160, 176, 177, 178, 192, 193, 194,
+            225, 226, 227, 300, 1000,
+        ];
+        for two in [&FIR_16HZ_2K, &FIR_33HZ_2K] {
+            for one in [None, Some(&FIR_262HZ_2K), Some(&FIR_66HZ_2K)] {
+                for &n in &counts {
+                    let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ n as u64;
+                    let (f0, i0) = row(&mut state);
+                    let (mut a, mut b) = (FirBank::new(one, &f0), FirBank::new(Some(two), &f0));
+                    let (mut ai, mut bi) = (
+                        FirBankFixed::new(one, &i0),
+                        FirBankFixed::new(Some(two), &i0),
+                    );
+                    for round in 0..3 {
+                        for _ in 0..n + round {
+                            let (f, i) = row(&mut state);
+                            a.push(&f);
+                            b.push(&f);
+                            ai.push(&i);
+                            bi.push(&i);
+                        }
+                        a.set_design(Some(two));
+                        ai.set_design(Some(two));
+                        for t in 0..200 {
+                            let (f, i) = row(&mut state);
+                            let (ya, yb) = (a.push(&f), b.push(&f));
+                            assert_eq!(
+                                ya.map(f32::to_bits),
+                                yb.map(f32::to_bits),
+                                "{} after {n} ticks of {:?}, round {round}, tick {t}",
+                                two.order,
+                                one.map(|d| d.order)
+                            );
+                            assert_eq!(ai.push(&i), bi.push(&i), "fixed {n} {round} {t}");
+                        }
+                        a.set_design(one);
+                        ai.set_design(one);
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn const_sine_is_accurate() {
