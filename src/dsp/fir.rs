@@ -758,33 +758,47 @@ macro_rules! bank {
                 self.lag = 0;
             }
 
+            /// [`Self::push`] without the pre-filter (host builds, a design
+            /// that reads none of it): the input row leaving the ring is
+            /// kept in the pre-filter's slot of this tick instead, and
+            /// [`Self::catch_up`] computes the skipped outputs when a
+            /// two-stage design needs them.
+            #[cfg(not(target_os = "none"))]
+            #[inline(always)]
+            fn push_skipping_pre(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
+                let p = self.raw_pos;
+                let q = self.mid_pos;
+                self.mid[q] = self.raw[p];
+                self.lag = (self.lag + 1).min(MID_RING);
+                self.raw[p] = *x;
+                self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
+                self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
+                match self.design {
+                    Some(d) => $run1(&self.raw, p, &d.stage),
+                    None => *x,
+                }
+            }
+
             /// Pushes one sample per channel and returns the filtered output.
             #[inline]
             pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
-                let p = self.raw_pos;
-                let q = self.mid_pos;
                 // Host builds: a design that reads no pre-filter output
-                // skips it; the input row leaving the ring is kept in the
-                // pre-filter's slot instead, and [`Self::catch_up`]
-                // computes the skipped outputs when a two-stage design
-                // needs them. Firmware runs the pre-filter on every tick
-                // (its output history is always ready, no catch-up).
+                // skips it ([`Self::push_skipping_pre`]). Firmware runs
+                // the pre-filter on every tick (its output history is
+                // always ready, no catch-up).
                 #[cfg(not(target_os = "none"))]
-                let skip = Self::pre_unused(self.design);
-                #[cfg(target_os = "none")]
-                let skip = false;
-                #[cfg(not(target_os = "none"))]
-                if skip {
-                    self.mid[q] = self.raw[p];
-                    self.lag = (self.lag + 1).min(MID_RING);
+                if Self::pre_unused(self.design) {
+                    return self.push_skipping_pre(x);
                 } else if self.lag > 0 {
                     self.catch_up();
                 }
+                let p = self.raw_pos;
                 self.raw[p] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
-                if !skip {
-                    self.mid[q] = $run1(&self.raw, p, &PRE);
-                }
+                // The pre-filter runs on every tick.
+                let m = $run1(&self.raw, p, &PRE);
+                let q = self.mid_pos;
+                self.mid[q] = m;
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,

@@ -207,18 +207,16 @@ fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
     (r ^ neg).wrapping_sub(neg)
 }
 
+// Firmware (the M4F's FPU is single precision, the RP2040 has none): the
+// integer path (with the M4F's f32 fast path) is `sat_signed` itself.
+#[cfg(target_os = "none")]
+use self::sat_signed_int as sat_signed;
+
 /// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
 /// `-lo_limit` and `hi_limit`: the callers' saturation without 64-bit
-/// signed compares (firmware: the M4F's FPU is single precision, the
-/// RP2040 has none).
-#[cfg(target_os = "none")]
-#[cfg_attr(feature = "fixed-point", inline(never))]
-#[cfg_attr(not(feature = "fixed-point"), inline(always))]
-fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
-    sat_signed_int(x, k, lo_limit, hi_limit)
-}
-
-/// [`sat_signed`] by [`fast_magnitude`] and [`scaled_magnitude`].
+/// signed compares, by [`fast_magnitude`] and [`scaled_magnitude`]
+/// (firmware's `sat_signed`; on hosts for the scales beyond the `f64`
+/// path).
 #[cfg_attr(feature = "fixed-point", inline(never))]
 #[cfg_attr(not(feature = "fixed-point"), inline(always))]
 fn sat_signed_int(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
@@ -336,6 +334,7 @@ impl Field {
     /// [`Field::write`] inlined: with a constant field (the fixed formats'
     /// writers of host builds, [`crate::kernel::formats`]) the dispatch
     /// and the scales fold away.
+    #[cfg(not(target_os = "none"))]
     #[inline(always)]
     pub(crate) fn write_inline(self, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
         let n = self.size();
