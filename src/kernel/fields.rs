@@ -262,14 +262,18 @@ pub(crate) fn heading_0_360(h: f32) -> f32 {
     }
 }
 
-/// Three [`sat_i32`] values (the saturation inlined: one call a triad).
+/// Three [`sat_i32`] values (the saturation inlined: one call a triad;
+/// in line on hosts, where the fixed formats' writers fold `out`'s length).
+#[cfg_attr(not(target_os = "none"), inline(always))]
 fn put3_i32(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(4).zip(v) {
         c.copy_from_slice(&sat_signed(x, k, 1 << 31, i32::MAX as u32).to_le_bytes());
     }
 }
 
-/// Three [`sat_i16`] values (the saturation inlined: one call a triad).
+/// Three [`sat_i16`] values (the saturation inlined: one call a triad;
+/// in line on hosts, as [`put3_i32`]).
+#[cfg_attr(not(target_os = "none"), inline(always))]
 fn put3_i16(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(2).zip(v) {
         let y = sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16;
