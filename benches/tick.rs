@@ -105,6 +105,8 @@ type Dev = Device<RamNor<8192>>;
 struct Rig {
     dev: Dev,
     now: u64,
+    /// `tick_period_ns`, read once (a division; the schedule holds it too).
+    period: u64,
     buf: Vec<u8>,
     frames: u64,
     reader: Decoder<1024>,
@@ -118,8 +120,10 @@ impl Rig {
             boot: None,
             seed: 7,
         };
+        let dev = Device::power_on_with(cfg, RamNor::new(), Instant::ZERO);
         Rig {
-            dev: Device::power_on_with(cfg, RamNor::new(), Instant::ZERO),
+            period: dev.tick_period_ns(),
+            dev,
             now: 0,
             buf: vec![0; 1 << 16],
             frames: 0,
@@ -162,7 +166,7 @@ impl Rig {
     /// One tick, as a board runs it: `on_tick`, then the bytes out.
     #[inline]
     fn tick(&mut self) {
-        self.now += self.dev.tick_period_ns();
+        self.now += self.period;
         self.dev.on_tick(Instant::from_nanos(self.now));
         self.drain(false);
     }
@@ -181,7 +185,7 @@ impl Rig {
         }
         self.frames = 0;
         for _ in 0..1000 {
-            self.now += self.dev.tick_period_ns();
+            self.now += self.period;
             self.dev.on_tick(Instant::from_nanos(self.now));
             self.drain(true);
         }

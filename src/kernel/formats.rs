@@ -148,7 +148,7 @@ mod tests {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
-            if i % 5 == 0 {
+            if i.is_multiple_of(5) {
                 specials[(state >> 60) as usize % specials.len()]
             } else {
                 ((state >> 32) as i32) as f32 * 1e-6
