@@ -421,9 +421,18 @@ pub fn payload_len(fields: &[Field]) -> usize {
 pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
     let mut at = 0;
     for f in fields {
-        let n = f.size();
-        f.write_exact(ctx, out.get_mut(at..at + n)?);
-        at += n;
+        // Hosts: the writer in line, one dispatch a field (UDD); firmware
+        // calls the one out-of-line copy (flash).
+        #[cfg(not(target_os = "none"))]
+        {
+            at += f.write_inline(ctx, out.get_mut(at..)?)?;
+        }
+        #[cfg(target_os = "none")]
+        {
+            let n = f.size();
+            f.write_exact(ctx, out.get_mut(at..at + n)?);
+            at += n;
+        }
     }
     Some(at)
 }
