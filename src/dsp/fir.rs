@@ -459,10 +459,25 @@ impl Window {
             };
             let coefs = &coefs[k0..k1];
             if l == 1 {
-                let a = ring[a0..].iter();
-                let b = ring[..=b0].iter().rev();
-                for ((a, b), h) in a.zip(b).zip(coefs) {
-                    f(a, b, h);
+                // Hosts: by index over three slices of the run's length
+                // (the bounds checks fold; the zipped iterators, one of
+                // them reversed, stepped each one). Same pairs, same order.
+                #[cfg(not(target_os = "none"))]
+                {
+                    let n = coefs.len();
+                    let a = &ring[a0..a0 + n];
+                    let b = &ring[b0 + 1 - n..=b0];
+                    for j in 0..n {
+                        f(&a[j], &b[n - 1 - j], &coefs[j]);
+                    }
+                }
+                #[cfg(target_os = "none")]
+                {
+                    let a = ring[a0..].iter();
+                    let b = ring[..=b0].iter().rev();
+                    for ((a, b), h) in a.zip(b).zip(coefs) {
+                        f(a, b, h);
+                    }
                 }
             } else {
                 // All but the last pair as whole chunks of L rows: rows
