@@ -677,6 +677,11 @@ impl<I: Integrate> SignalChain<I> {
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
         let truth = self.core.builtin_truth(now, self.dt);
+        // Hosts: a truth already within the bounds skips the bounding.
+        #[cfg(not(target_os = "none"))]
+        if self.core.builtin_truth_bounded() {
+            return self.process_bounded(&truth);
+        }
         self.process(&truth);
     }
 
@@ -688,7 +693,12 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     fn process(&mut self, truth: &arith::Truth) {
-        let truth = &arith::bounded(truth);
+        self.process_bounded(&arith::bounded(truth));
+    }
+
+    /// [`Self::process`] of a truth within the bounds.
+    #[inline(always)]
+    fn process_bounded(&mut self, truth: &arith::Truth) {
         self.begin_tick(truth.temperature_c);
         let c = &mut self.core;
         // Sensors (sensor axes).

@@ -152,6 +152,14 @@ impl Core {
         self.motion.next(now, dt)
     }
 
+    /// Host builds: the built-in motion's truth needs no [`bounded`]
+    /// (static, within the bounds).
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    pub fn builtin_truth_bounded(&self) -> bool {
+        self.motion.static_and_bounded()
+    }
+
     /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits
     /// 0–2) and accelerometer (bits 3–5) axes beyond their range.
     #[inline(always)]
