@@ -711,6 +711,14 @@ impl<I: Integrate> SignalChain<I> {
             arith::frozen(&self.fir.last_input())
         };
 
+        // Hosts: the filters first (they do not depend on the AHRS, nor it
+        // on them), so that the AHRS's long chain of dependent products
+        // overlaps the encoder's work after the tick instead of the
+        // filters' independent ones.
+        #[cfg(not(target_os = "none"))]
+        self.filters(&sensor);
+        let c = &mut self.core;
+
         // AHRS and the integrals on carrier axes, before the FIR.
         let (gc, ac) = c.carrier(&sensor);
         if I::ON {
@@ -724,10 +732,16 @@ impl<I: Integrate> SignalChain<I> {
             }
             Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
+        #[cfg(target_os = "none")]
+        self.filters(&sensor);
+    }
 
-        // Filters (sensor axes).
-        let y = self.fir.push(&arith::fir_input(&sensor));
+    /// The filters of a tick (sensor axes): FIR → cascade → accumulator.
+    #[inline(always)]
+    fn filters(&mut self, sensor: &arith::Sensor) {
+        let y = self.fir.push(&arith::fir_input(sensor));
         let mut z = y;
+        let c = &mut self.core;
         c.cascade.process(&mut z);
         c.variant.add(&y, &z);
     }
