@@ -94,7 +94,8 @@ pub enum Field {
 /// Cortex-M4), so no float arithmetic runs (the M4F's FPU is single
 /// precision; f64 would be software) and the result is the same on every
 /// platform. NaN gives 0; ±∞ and huge values give a magnitude beyond any
-/// field, which the callers saturate.
+/// field, which the callers saturate. (The field writers' saturating forms
+/// take one exact `f64` product on hosts instead: the same results.)
 pub fn scale_round(x: f32, k: u32) -> i64 {
     if x.is_infinite() {
         return if x < 0.0 { i64::MIN } else { i64::MAX };
