@@ -527,6 +527,10 @@ impl<I: Integrate> SignalChain<I> {
         *cfg_ = cfg;
         *core_ = core;
         fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
+        // Hosts: a unit without the aux accelerometer does not filter its
+        // (zero) channels; no output reads them (`Core::take`).
+        #[cfg(not(target_os = "none"))]
+        fir.set_aux_live(has_aux);
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
         *bias_failed = false;

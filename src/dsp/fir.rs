@@ -557,9 +557,17 @@ macro_rules! each_channel {
 /// the rows from the slice pointer with small offsets (inlined into the
 /// chain it re-derives every row from the chain's base with offsets beyond
 /// the VLDR range: one extra instruction per load).
+///
+/// Channels `N` and beyond are not filtered (they read 0): `N` <
+/// [`CHANNELS`] only for a unit without the aux accelerometer on hosts
+/// ([`FirBank::set_aux_live`]).
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
-fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> [f32; CHANNELS] {
+fn run_f32<const L: usize, const N: usize>(
+    ring: &[[f32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+) -> [f32; CHANNELS] {
     // Every stage has taps; no `expect`, whose panic would bring `&str`
     // formatting into the firmware (0.7 KiB on the RP2040).
     let Some((centre, coefs)) = st.half.split_last() else {
@@ -568,25 +576,56 @@ fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> 
     let w = Window::new(ring.len(), end, coefs.len(), L);
     let mid = &ring[w.centre];
     let mut acc = [0.0f32; CHANNELS];
-    each_channel!(c => acc[c] = centre * mid[c]);
+    each_channel!(c => if c < N { acc[c] = centre * mid[c] });
     w.pairs(ring, coefs, |a, b, &h| {
-        each_channel!(c => acc[c] += h * (a[c] + b[c]));
+        each_channel!(c => if c < N { acc[c] += h * (a[c] + b[c]) });
     });
     acc
 }
 
-/// [`run_f32`] for the two-stage designs' prototypes (stride 2 or 4).
+/// The first aux channel: a unit without the aux accelerometer filters
+/// the channels before it only (hosts).
+#[cfg(not(target_os = "none"))]
+const AUX_FIRST: usize = 6;
+
+/// [`run_f32`] with taps one row apart (the pre-filter, the one-stage
+/// designs), every channel or (`live` false, hosts) those before the aux
+/// accelerometer's.
+#[inline(always)]
+fn run_f32_1(ring: &[[f32; CHANNELS]], end: usize, st: &Stage, live: bool) -> [f32; CHANNELS] {
+    #[cfg(not(target_os = "none"))]
+    if !live {
+        return run_f32::<1, AUX_FIRST>(ring, end, st);
+    }
+    #[cfg(target_os = "none")]
+    let _ = live;
+    run_f32::<1, CHANNELS>(ring, end, st)
+}
+
+/// [`run_f32`] for the two-stage designs' prototypes (stride 2 or 4), the
+/// channels as [`run_f32_1`].
 #[inline(always)]
 fn run_f32_strided(
     ring: &[[f32; CHANNELS]],
     end: usize,
     st: &Stage,
     stride: usize,
+    live: bool,
 ) -> [f32; CHANNELS] {
+    #[cfg(not(target_os = "none"))]
+    if !live {
+        return if stride == 2 {
+            run_f32::<2, AUX_FIRST>(ring, end, st)
+        } else {
+            run_f32::<4, AUX_FIRST>(ring, end, st)
+        };
+    }
+    #[cfg(target_os = "none")]
+    let _ = live;
     if stride == 2 {
-        run_f32::<2>(ring, end, st)
+        run_f32::<2, CHANNELS>(ring, end, st)
     } else {
-        run_f32::<4>(ring, end, st)
+        run_f32::<4, CHANNELS>(ring, end, st)
     }
 }
 
@@ -608,6 +647,18 @@ fn run_i32_strided(
     stride: usize,
 ) -> [i32; CHANNELS] {
     run_i32(ring, end, st, if stride == 2 { 2 } else { 4 })
+}
+
+/// [`run_i32_strided`] for the bank (every channel, always).
+#[inline(always)]
+fn run_i32_strided_all(
+    ring: &[[i32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+    stride: usize,
+    _live: bool,
+) -> [i32; CHANNELS] {
+    run_i32_strided(ring, end, st, stride)
 }
 
 /// One symmetric stage with taps `l` rows apart, fixed point (module doc),
@@ -668,6 +719,10 @@ macro_rules! bank {
             /// pre-filter last ran (see [`Self::push`]).
             #[cfg(not(target_os = "none"))]
             lag: usize,
+            /// Host builds: whether the aux channels are filtered
+            /// ([`Self::set_aux_live`]).
+            #[cfg(not(target_os = "none"))]
+            aux_live: bool,
         }
 
         impl $name {
@@ -681,7 +736,28 @@ macro_rules! bank {
                     design,
                     #[cfg(not(target_os = "none"))]
                     lag: 0,
+                    #[cfg(not(target_os = "none"))]
+                    aux_live: true,
                 }
+            }
+
+            /// Host builds: whether the aux accelerometer's channels (the
+            /// last three) are filtered. A unit without one turns them off
+            /// after [`Self::reset`]: they then read 0 (the chain reports
+            /// zeros for them anyway) and a tick costs a third less. (The
+            /// float bank only; firmware filters every channel.)
+            #[cfg(not(target_os = "none"))]
+            pub fn set_aux_live(&mut self, live: bool) {
+                self.aux_live = live;
+            }
+
+            /// Whether every channel is filtered.
+            #[inline(always)]
+            fn live(&self) -> bool {
+                #[cfg(not(target_os = "none"))]
+                return self.aux_live;
+                #[cfg(target_os = "none")]
+                true
             }
 
             /// [`Self::new`] in place (no second bank on the stack).
@@ -771,7 +847,7 @@ macro_rules! bank {
                 // oldest first (its window ends at its own row).
                 for j in 0..n {
                     let age = n - 1 - j;
-                    let m = $run1(&hist[..len], SPAN + j, &PRE);
+                    let m = $run1(&hist[..len], SPAN + j, &PRE, self.live());
                     self.mid[(self.mid_pos + MID_RING - 1 - age) % MID_RING] = m;
                 }
                 self.lag = 0;
@@ -793,7 +869,7 @@ macro_rules! bank {
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
-                    Some(d) => $run1(&self.raw, p, &d.stage),
+                    Some(d) => $run1(&self.raw, p, &d.stage, self.live()),
                     None => *x,
                 }
             }
@@ -815,14 +891,14 @@ macro_rules! bank {
                 self.raw[p] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
                 // The pre-filter runs on every tick.
-                let m = $run1(&self.raw, p, &PRE);
+                let m = $run1(&self.raw, p, &PRE, self.live());
                 let q = self.mid_pos;
                 self.mid[q] = m;
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,
-                    Some(d) if d.stride == 1 => $run1(&self.raw, p, &d.stage),
-                    Some(d) => $strided(&self.mid, q, &d.stage, d.stride),
+                    Some(d) if d.stride == 1 => $run1(&self.raw, p, &d.stage, self.live()),
+                    Some(d) => $strided(&self.mid, q, &d.stage, d.stride, self.live()),
                 }
             }
         }
@@ -832,15 +908,15 @@ macro_rules! bank {
 bank!(
     FirBank,
     f32,
-    run_f32::<1>,
+    run_f32_1,
     run_f32_strided,
     "The float FIR over [`CHANNELS`] channels."
 );
 bank!(
     FirBankFixed,
     i32,
-    run_i32_1,
-    run_i32_strided,
+    |ring: &[[i32; CHANNELS]], end: usize, st: &Stage, _: bool| run_i32_1(ring, end, st),
+    run_i32_strided_all,
     "The fixed-point FIR over [`CHANNELS`] channels (module doc); samples |x| < 2²⁹."
 );
 
