@@ -51,9 +51,11 @@
 
 use super::fir::CHANNELS;
 
-/// The first aux channel (see [`Cascade::set_aux_live`]).
+/// The channels a unit without the aux accelerometer filters (hosts, see
+/// [`Cascade::set_aux_live`]): the first eight, two whole four-lane
+/// vectors (aux X and Y among them, on zeros).
 #[cfg(not(target_os = "none"))]
-const AUX_FIRST: usize = 6;
+const AUX_FIRST: usize = 8;
 use super::fixed::{mul64, mul_q};
 use crate::math::tanf;
 use libm::{cos, sin};
@@ -301,8 +303,9 @@ impl Cascade {
     }
 
     /// Host builds: whether the aux accelerometer's channels (the last
-    /// three) are filtered; off (a unit without one), [`Cascade::process`]
-    /// leaves them as they are (the chain reports zeros for them).
+    /// three) are live; off (a unit without one), [`Cascade::process`]
+    /// leaves the last channel as it is (the chain reports zeros for the
+    /// aux channels).
     #[cfg(not(target_os = "none"))]
     pub fn set_aux_live(&mut self, live: bool) {
         self.aux_live = live;

@@ -560,7 +560,7 @@ macro_rules! each_channel {
 ///
 /// Channels `N` and beyond are not filtered (they read 0): `N` <
 /// [`CHANNELS`] only for a unit without the aux accelerometer on hosts
-/// ([`FirBank::set_aux_live`]).
+/// (`FirBank::set_aux_live`).
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn run_f32<const L: usize, const N: usize>(
@@ -583,10 +583,11 @@ fn run_f32<const L: usize, const N: usize>(
     acc
 }
 
-/// The first aux channel: a unit without the aux accelerometer filters
-/// the channels before it only (hosts).
+/// The channels a unit without the aux accelerometer filters (hosts): the
+/// first eight, two whole four-lane vectors (the aux X and Y channels
+/// among them, on zeros); the last, aux Z, is left out.
 #[cfg(not(target_os = "none"))]
-const AUX_FIRST: usize = 6;
+const AUX_FIRST: usize = 8;
 
 /// [`run_f32`] with taps one row apart (the pre-filter, the one-stage
 /// designs), every channel or (`live` false, hosts) those before the aux
@@ -742,10 +743,12 @@ macro_rules! bank {
             }
 
             /// Host builds: whether the aux accelerometer's channels (the
-            /// last three) are filtered. A unit without one turns them off
-            /// after [`Self::reset`]: they then read 0 (the chain reports
-            /// zeros for them anyway) and a tick costs a third less. (The
-            /// float bank only; firmware filters every channel.)
+            /// last three) are live. A unit without one turns them off
+            /// after [`Self::reset`]: the last channel is then not filtered
+            /// and reads 0 (the first eight make two whole four-lane
+            /// vectors; the chain reports zeros for the aux channels
+            /// anyway). The float bank only: the fixed-point bank, and
+            /// firmware, filter every channel.
             #[cfg(not(target_os = "none"))]
             pub fn set_aux_live(&mut self, live: bool) {
                 self.aux_live = live;
