@@ -51,10 +51,10 @@
 
 use super::fir::CHANNELS;
 
-/// The channels a unit without the aux accelerometer filters (hosts, see
-/// [`Cascade::set_aux_live`]): the first eight, two whole four-lane
-/// vectors (aux X and Y among them, on zeros).
-#[cfg(not(target_os = "none"))]
+/// The channels run section by section (not on ARM): the first eight, two
+/// whole four-lane vectors; the ninth (aux Z) runs on its own, or not at
+/// all for a unit without the aux accelerometer (hosts, see
+/// [`Cascade::set_aux_live`]).
 const AUX_FIRST: usize = 8;
 use super::fixed::{mul64, mul_q};
 use crate::math::tanf;
@@ -375,11 +375,15 @@ impl Cascade {
         if cfg!(target_arch = "arm") {
             self.run_by_channel::<M>(x)
         } else {
+            // The first eight channels section by section (two whole
+            // four-lane vectors), the ninth on its own: its arithmetic is
+            // the same in either order (`both_loop_orders_are_bit_identical`).
+            self.run_by_section::<M, AUX_FIRST>(x);
             #[cfg(not(target_os = "none"))]
             if !self.aux_live {
-                return self.run_by_section::<M, AUX_FIRST>(x);
+                return;
             }
-            self.run_by_section::<M, CHANNELS>(x)
+            self.run_channels::<M>(x, AUX_FIRST)
         }
     }
 
@@ -421,12 +425,18 @@ impl Cascade {
     /// [`Cascade::run`] channel by channel.
     #[inline(always)]
     fn run_by_channel<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        self.run_channels::<M>(x, 0)
+    }
+
+    /// [`Cascade::run_by_channel`] for the channels from `from` on.
+    #[inline(always)]
+    fn run_channels<const M: u8>(&mut self, x: &mut [f32; CHANNELS], from: usize) {
         let s = &self.sections;
         let f1 = s[0];
         let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
         let f3 = s[self.n.saturating_sub(1)];
         let st = &mut self.state;
-        for c in 0..CHANNELS {
+        for c in from..CHANNELS {
             let mut u = x[c];
             let mut p = [st[at(0, c)], st[at(1, c)]];
             st[at(1, c)] = st[at(0, c)];
@@ -472,6 +482,8 @@ mod order_tests {
             let x0 = [0.5f32, -1.0, 3.0, 0.0, 0.1, 1.0, -0.2, 0.3, 9.0];
             let mut a = Cascade::new(&cfg, 2000, &x0);
             let mut b = a.clone();
+            // `process`: eight channels section by section, the ninth alone.
+            let mut c = a.clone();
             let mut s = 0x2545_F491u32;
             for _ in 0..5000 {
                 let mut x = x0;
@@ -482,6 +494,8 @@ mod order_tests {
                     *v += (s as f32 / u32::MAX as f32) - 0.5;
                 }
                 let mut y = x;
+                let mut z = x;
+                c.process(&mut z);
                 match mask {
                     1 => (
                         a.run_by_section::<1, CHANNELS>(&mut x),
@@ -514,8 +528,10 @@ mod order_tests {
                     _ => ((), ()),
                 };
                 assert_eq!(x.map(f32::to_bits), y.map(f32::to_bits), "mask {mask}");
+                assert_eq!(x.map(f32::to_bits), z.map(f32::to_bits), "mask {mask}");
             }
             assert_eq!(a.state, b.state);
+            assert_eq!(a.state, c.state);
         }
     }
 }
