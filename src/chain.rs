@@ -527,6 +527,10 @@ impl<I: Integrate> SignalChain<I> {
         *cfg_ = cfg;
         *core_ = core;
         fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
+        // Hosts: a unit without the aux accelerometer does not filter its
+        // (zero) channels; no output reads them (`Core::take`).
+        #[cfg(not(target_os = "none"))]
+        fir.set_aux_live(has_aux);
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
         *bias_failed = false;
@@ -677,6 +681,11 @@ impl<I: Integrate> SignalChain<I> {
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
         let truth = self.core.builtin_truth(now, self.dt);
+        // Hosts: a truth already within the bounds skips the bounding.
+        #[cfg(not(target_os = "none"))]
+        if self.core.builtin_truth_bounded() {
+            return self.process_bounded(&truth);
+        }
         self.process(&truth);
     }
 
@@ -688,7 +697,12 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     fn process(&mut self, truth: &arith::Truth) {
-        let truth = &arith::bounded(truth);
+        self.process_bounded(&arith::bounded(truth));
+    }
+
+    /// [`Self::process`] of a truth within the bounds.
+    #[inline(always)]
+    fn process_bounded(&mut self, truth: &arith::Truth) {
         self.begin_tick(truth.temperature_c);
         let c = &mut self.core;
         // Sensors (sensor axes).
@@ -700,6 +714,14 @@ impl<I: Integrate> SignalChain<I> {
             // Frozen: the FIR's newest input is the last good measurement.
             arith::frozen(&self.fir.last_input())
         };
+
+        // Hosts: the filters first (they do not depend on the AHRS, nor it
+        // on them), so that the AHRS's long chain of dependent products
+        // overlaps the encoder's work after the tick instead of the
+        // filters' independent ones.
+        #[cfg(not(target_os = "none"))]
+        self.filters(&sensor);
+        let c = &mut self.core;
 
         // AHRS and the integrals on carrier axes, before the FIR.
         let (gc, ac) = c.carrier(&sensor);
@@ -714,10 +736,16 @@ impl<I: Integrate> SignalChain<I> {
             }
             Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
+        #[cfg(target_os = "none")]
+        self.filters(&sensor);
+    }
 
-        // Filters (sensor axes).
-        let y = self.fir.push(&arith::fir_input(&sensor));
+    /// The filters of a tick (sensor axes): FIR → cascade → accumulator.
+    #[inline(always)]
+    fn filters(&mut self, sensor: &arith::Sensor) {
+        let y = self.fir.push(&arith::fir_input(sensor));
         let mut z = y;
+        let c = &mut self.core;
         c.cascade.process(&mut z);
         c.variant.add(&y, &z);
     }

@@ -212,6 +212,15 @@ impl Core {
         self.motion.step()
     }
 
+    /// Host builds: whether the built-in truth needs no [`bounded`] (which
+    /// is the identity here: the fixed-point truth is clamped as it is
+    /// made).
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    pub fn builtin_truth_bounded(&self) -> bool {
+        true
+    }
+
     /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits
     /// 0–2) and accelerometer (bits 3–5) axes beyond their range.
     #[inline(always)]

@@ -115,7 +115,8 @@ impl Core {
     /// The core at power-on (or a placeholder) measuring `t0`.
     pub fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
         let x = fir_row(t0);
-        Core {
+        #[allow(unused_mut)]
+        let mut core = Core {
             engines: [
                 TriadEngine::new(product.gyro.full_scale() as f32),
                 TriadEngine::new(product.accel.full_scale() as f32),
@@ -126,7 +127,13 @@ impl Core {
             cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
             variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
-        }
+        };
+        // Hosts: a unit without the aux accelerometer does not filter its
+        // (zero) channels; no output reads them (`Core::take`).
+        #[cfg(not(target_os = "none"))]
+        core.cascade
+            .set_aux_live(product.model.has(crate::model::Capability::AuxAccel));
+        core
     }
 
     /// The error model was (re)configured.
@@ -150,6 +157,14 @@ impl Core {
     #[inline(always)]
     pub fn builtin_truth(&mut self, now: Instant, dt: f32) -> Truth {
         self.motion.next(now, dt)
+    }
+
+    /// Host builds: the built-in motion's truth needs no [`bounded`]
+    /// (static, within the bounds).
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    pub fn builtin_truth_bounded(&self) -> bool {
+        self.motion.static_and_bounded()
     }
 
     /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits

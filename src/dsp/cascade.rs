@@ -50,6 +50,12 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::fir::CHANNELS;
+
+/// The channels run section by section (not on ARM): the first eight, two
+/// whole four-lane vectors; the ninth (aux Z) runs on its own, or not at
+/// all for a unit without the aux accelerometer (hosts, see
+/// [`Cascade::set_aux_live`]).
+const AUX_FIRST: usize = 8;
 use super::fixed::{mul64, mul_q};
 use crate::math::tanf;
 use libm::{cos, sin};
@@ -208,6 +214,10 @@ pub struct Cascade {
     mask: u8,
     /// Slot (see [`STATE`]) × channel, laid out by [`at`].
     state: [f32; STATE * CHANNELS],
+    /// Host builds: whether the aux channels are filtered
+    /// ([`Cascade::set_aux_live`]).
+    #[cfg(not(target_os = "none"))]
+    aux_live: bool,
 }
 
 /// Slot-major (each slot's nine channels contiguous: the section-by-section
@@ -249,10 +259,10 @@ fn second_f32(
     u + wn
 }
 
-/// `second_f32` for all channels at once, in whole-row loops (slots `K`,
-/// `K + 1`; `p0`, `p1` the input history rows).
+/// `second_f32` for the first `N` channels at once, in whole-row loops
+/// (slots `K`, `K + 1`; `p0`, `p1` the input history rows).
 #[inline(always)]
-fn rows<const K: usize>(
+fn rows<const K: usize, const N: usize>(
     st: &mut [f32; STATE * CHANNELS],
     f: &Section,
     x: &mut [f32; CHANNELS],
@@ -261,16 +271,16 @@ fn rows<const K: usize>(
     last: bool,
 ) {
     let mut wn = [0.0f32; CHANNELS];
-    for c in 0..CHANNELS {
+    for c in 0..N {
         wn[c] = f.g * (x[c] - p1[c]) - f.a1 * st[at(K, c)] - f.a2 * st[at(K + 1, c)];
     }
     if !last {
-        for c in 0..CHANNELS {
+        for c in 0..N {
             p0[c] += st[at(K, c)];
             p1[c] += st[at(K + 1, c)];
         }
     }
-    for c in 0..CHANNELS {
+    for c in 0..N {
         st[at(K + 1, c)] = st[at(K, c)];
         st[at(K, c)] = wn[c];
         x[c] += wn[c];
@@ -285,9 +295,20 @@ impl Cascade {
             n: 0,
             mask: 0,
             state: [0.0; STATE * CHANNELS],
+            #[cfg(not(target_os = "none"))]
+            aux_live: true,
         };
         c.configure(cfg, rate_hz, x);
         c
+    }
+
+    /// Host builds: whether the aux accelerometer's channels (the last
+    /// three) are live; off (a unit without one), [`Cascade::process`]
+    /// leaves the last channel as it is (the chain reports zeros for the
+    /// aux channels).
+    #[cfg(not(target_os = "none"))]
+    pub fn set_aux_live(&mut self, live: bool) {
+        self.aux_live = live;
     }
 
     /// Re-designs the sections and puts them in steady state for input `x`
@@ -354,13 +375,21 @@ impl Cascade {
         if cfg!(target_arch = "arm") {
             self.run_by_channel::<M>(x)
         } else {
-            self.run_by_section::<M>(x)
+            // The first eight channels section by section (two whole
+            // four-lane vectors), the ninth on its own: its arithmetic is
+            // the same in either order (`both_loop_orders_are_bit_identical`).
+            self.run_by_section::<M, AUX_FIRST>(x);
+            #[cfg(not(target_os = "none"))]
+            if !self.aux_live {
+                return;
+            }
+            self.run_channels::<M>(x, AUX_FIRST)
         }
     }
 
     /// [`Cascade::run`] section by section.
     #[inline(always)]
-    fn run_by_section<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+    fn run_by_section<const M: u8, const N: usize>(&mut self, x: &mut [f32; CHANNELS]) {
         let s = &self.sections;
         let f1 = s[0];
         let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
@@ -369,22 +398,22 @@ impl Cascade {
         // The input history rows, then the same arithmetic as `second_f32`
         // in whole-row loops (contiguous on hosts: they vectorise).
         let (mut p0, mut p1) = ([0.0f32; CHANNELS], [0.0f32; CHANNELS]);
-        for c in 0..CHANNELS {
+        for c in 0..N {
             p0[c] = st[at(0, c)];
             p1[c] = st[at(1, c)];
             st[at(1, c)] = p0[c];
             st[at(0, c)] = x[c];
         }
         if M & 1 != 0 {
-            rows::<2>(st, &f1, x, &mut p0, &mut p1, false);
-            rows::<4>(st, &f1, x, &mut p0, &mut p1, M & 6 == 0);
+            rows::<2, N>(st, &f1, x, &mut p0, &mut p1, false);
+            rows::<4, N>(st, &f1, x, &mut p0, &mut p1, M & 6 == 0);
         }
         if M & 2 != 0 {
-            rows::<6>(st, &f2, x, &mut p0, &mut p1, false);
-            rows::<8>(st, &f2, x, &mut p0, &mut p1, M & 4 == 0);
+            rows::<6, N>(st, &f2, x, &mut p0, &mut p1, false);
+            rows::<8, N>(st, &f2, x, &mut p0, &mut p1, M & 4 == 0);
         }
         if M & 4 != 0 {
-            for c in 0..CHANNELS {
+            for c in 0..N {
                 let u = x[c];
                 let wn = f3.g * (u - p0[c]) - f3.a1 * st[at(10, c)];
                 st[at(10, c)] = wn;
@@ -396,12 +425,18 @@ impl Cascade {
     /// [`Cascade::run`] channel by channel.
     #[inline(always)]
     fn run_by_channel<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        self.run_channels::<M>(x, 0)
+    }
+
+    /// [`Cascade::run_by_channel`] for the channels from `from` on.
+    #[inline(always)]
+    fn run_channels<const M: u8>(&mut self, x: &mut [f32; CHANNELS], from: usize) {
         let s = &self.sections;
         let f1 = s[0];
         let f2 = s[if M & 1 != 0 { 2 } else { 0 }];
         let f3 = s[self.n.saturating_sub(1)];
         let st = &mut self.state;
-        for c in 0..CHANNELS {
+        for c in from..CHANNELS {
             let mut u = x[c];
             let mut p = [st[at(0, c)], st[at(1, c)]];
             st[at(1, c)] = st[at(0, c)];
@@ -447,6 +482,8 @@ mod order_tests {
             let x0 = [0.5f32, -1.0, 3.0, 0.0, 0.1, 1.0, -0.2, 0.3, 9.0];
             let mut a = Cascade::new(&cfg, 2000, &x0);
             let mut b = a.clone();
+            // `process`: eight channels section by section, the ninth alone.
+            let mut c = a.clone();
             let mut s = 0x2545_F491u32;
             for _ in 0..5000 {
                 let mut x = x0;
@@ -457,19 +494,44 @@ mod order_tests {
                     *v += (s as f32 / u32::MAX as f32) - 0.5;
                 }
                 let mut y = x;
+                let mut z = x;
+                c.process(&mut z);
                 match mask {
-                    1 => (a.run_by_section::<1>(&mut x), b.run_by_channel::<1>(&mut y)),
-                    2 => (a.run_by_section::<2>(&mut x), b.run_by_channel::<2>(&mut y)),
-                    3 => (a.run_by_section::<3>(&mut x), b.run_by_channel::<3>(&mut y)),
-                    4 => (a.run_by_section::<4>(&mut x), b.run_by_channel::<4>(&mut y)),
-                    5 => (a.run_by_section::<5>(&mut x), b.run_by_channel::<5>(&mut y)),
-                    6 => (a.run_by_section::<6>(&mut x), b.run_by_channel::<6>(&mut y)),
-                    7 => (a.run_by_section::<7>(&mut x), b.run_by_channel::<7>(&mut y)),
+                    1 => (
+                        a.run_by_section::<1, CHANNELS>(&mut x),
+                        b.run_by_channel::<1>(&mut y),
+                    ),
+                    2 => (
+                        a.run_by_section::<2, CHANNELS>(&mut x),
+                        b.run_by_channel::<2>(&mut y),
+                    ),
+                    3 => (
+                        a.run_by_section::<3, CHANNELS>(&mut x),
+                        b.run_by_channel::<3>(&mut y),
+                    ),
+                    4 => (
+                        a.run_by_section::<4, CHANNELS>(&mut x),
+                        b.run_by_channel::<4>(&mut y),
+                    ),
+                    5 => (
+                        a.run_by_section::<5, CHANNELS>(&mut x),
+                        b.run_by_channel::<5>(&mut y),
+                    ),
+                    6 => (
+                        a.run_by_section::<6, CHANNELS>(&mut x),
+                        b.run_by_channel::<6>(&mut y),
+                    ),
+                    7 => (
+                        a.run_by_section::<7, CHANNELS>(&mut x),
+                        b.run_by_channel::<7>(&mut y),
+                    ),
                     _ => ((), ()),
                 };
                 assert_eq!(x.map(f32::to_bits), y.map(f32::to_bits), "mask {mask}");
+                assert_eq!(x.map(f32::to_bits), z.map(f32::to_bits), "mask {mask}");
             }
             assert_eq!(a.state, b.state);
+            assert_eq!(a.state, c.state);
         }
     }
 }

@@ -32,7 +32,11 @@
 //! delay N/2 — built from 32 (30) pre-added multiply-adds per channel instead
 //! of 97 (49). P is the same for both, so it runs on every tick whatever the
 //! design and its output history is always ready: switching designs never
-//! needs a refill.
+//! needs a refill. (Host builds skip P while the design reads none of it —
+//! one stage, or off — keeping the input rows that leave the input ring in
+//! P's ring instead, and compute the skipped outputs from them, by the same
+//! function on the same rows, when a two-stage design starts: the output is
+//! bit for bit the same, a factory tick ~10 ns cheaper.)
 //!
 //! **Structure.** Nine channels (gyro, acc, aux acc × 3) are filtered in one
 //! pass over channel-interleaved histories; symmetric taps are pre-added
@@ -459,10 +463,25 @@ impl Window {
             };
             let coefs = &coefs[k0..k1];
             if l == 1 {
-                let a = ring[a0..].iter();
-                let b = ring[..=b0].iter().rev();
-                for ((a, b), h) in a.zip(b).zip(coefs) {
-                    f(a, b, h);
+                // Hosts: by index over three slices of the run's length
+                // (the bounds checks fold; the zipped iterators, one of
+                // them reversed, stepped each one). Same pairs, same order.
+                #[cfg(not(target_os = "none"))]
+                {
+                    let n = coefs.len();
+                    let a = &ring[a0..a0 + n];
+                    let b = &ring[b0 + 1 - n..=b0];
+                    for j in 0..n {
+                        f(&a[j], &b[n - 1 - j], &coefs[j]);
+                    }
+                }
+                #[cfg(target_os = "none")]
+                {
+                    let a = ring[a0..].iter();
+                    let b = ring[..=b0].iter().rev();
+                    for ((a, b), h) in a.zip(b).zip(coefs) {
+                        f(a, b, h);
+                    }
                 }
             } else {
                 // All but the last pair as whole chunks of L rows: rows
@@ -538,9 +557,17 @@ macro_rules! each_channel {
 /// the rows from the slice pointer with small offsets (inlined into the
 /// chain it re-derives every row from the chain's base with offsets beyond
 /// the VLDR range: one extra instruction per load).
+///
+/// Channels `N` and beyond are not filtered (they read 0): `N` <
+/// [`CHANNELS`] only for a unit without the aux accelerometer on hosts
+/// (`FirBank::set_aux_live`).
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
-fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> [f32; CHANNELS] {
+fn run_f32<const L: usize, const N: usize>(
+    ring: &[[f32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+) -> [f32; CHANNELS] {
     // Every stage has taps; no `expect`, whose panic would bring `&str`
     // formatting into the firmware (0.7 KiB on the RP2040).
     let Some((centre, coefs)) = st.half.split_last() else {
@@ -549,25 +576,57 @@ fn run_f32<const L: usize>(ring: &[[f32; CHANNELS]], end: usize, st: &Stage) -> 
     let w = Window::new(ring.len(), end, coefs.len(), L);
     let mid = &ring[w.centre];
     let mut acc = [0.0f32; CHANNELS];
-    each_channel!(c => acc[c] = centre * mid[c]);
+    each_channel!(c => if c < N { acc[c] = centre * mid[c] });
     w.pairs(ring, coefs, |a, b, &h| {
-        each_channel!(c => acc[c] += h * (a[c] + b[c]));
+        each_channel!(c => if c < N { acc[c] += h * (a[c] + b[c]) });
     });
     acc
 }
 
-/// [`run_f32`] for the two-stage designs' prototypes (stride 2 or 4).
+/// The channels a unit without the aux accelerometer filters (hosts): the
+/// first eight, two whole four-lane vectors (the aux X and Y channels
+/// among them, on zeros); the last, aux Z, is left out.
+#[cfg(not(target_os = "none"))]
+const AUX_FIRST: usize = 8;
+
+/// [`run_f32`] with taps one row apart (the pre-filter, the one-stage
+/// designs), every channel or (`live` false, hosts) those before the aux
+/// accelerometer's.
+#[inline(always)]
+fn run_f32_1(ring: &[[f32; CHANNELS]], end: usize, st: &Stage, live: bool) -> [f32; CHANNELS] {
+    #[cfg(not(target_os = "none"))]
+    if !live {
+        return run_f32::<1, AUX_FIRST>(ring, end, st);
+    }
+    #[cfg(target_os = "none")]
+    let _ = live;
+    run_f32::<1, CHANNELS>(ring, end, st)
+}
+
+/// [`run_f32`] for the two-stage designs' prototypes (stride 2 or 4), the
+/// channels as [`run_f32_1`].
 #[inline(always)]
 fn run_f32_strided(
     ring: &[[f32; CHANNELS]],
     end: usize,
     st: &Stage,
     stride: usize,
+    live: bool,
 ) -> [f32; CHANNELS] {
+    #[cfg(not(target_os = "none"))]
+    if !live {
+        return if stride == 2 {
+            run_f32::<2, AUX_FIRST>(ring, end, st)
+        } else {
+            run_f32::<4, AUX_FIRST>(ring, end, st)
+        };
+    }
+    #[cfg(target_os = "none")]
+    let _ = live;
     if stride == 2 {
-        run_f32::<2>(ring, end, st)
+        run_f32::<2, CHANNELS>(ring, end, st)
     } else {
-        run_f32::<4>(ring, end, st)
+        run_f32::<4, CHANNELS>(ring, end, st)
     }
 }
 
@@ -589,6 +648,18 @@ fn run_i32_strided(
     stride: usize,
 ) -> [i32; CHANNELS] {
     run_i32(ring, end, st, if stride == 2 { 2 } else { 4 })
+}
+
+/// [`run_i32_strided`] for the bank (every channel, always).
+#[inline(always)]
+fn run_i32_strided_all(
+    ring: &[[i32; CHANNELS]],
+    end: usize,
+    st: &Stage,
+    stride: usize,
+    _live: bool,
+) -> [i32; CHANNELS] {
+    run_i32_strided(ring, end, st, stride)
 }
 
 /// One symmetric stage with taps `l` rows apart, fixed point (module doc),
@@ -645,6 +716,14 @@ macro_rules! bank {
             mid: [[$t; CHANNELS]; MID_RING],
             mid_pos: usize,
             design: Option<&'static FirDesign>,
+            /// Host builds: ticks (at most [`MID_RING`]) since the
+            /// pre-filter last ran (see [`Self::push`]).
+            #[cfg(not(target_os = "none"))]
+            lag: usize,
+            /// Host builds: whether the aux channels are filtered
+            /// ([`Self::set_aux_live`]).
+            #[cfg(not(target_os = "none"))]
+            aux_live: bool,
         }
 
         impl $name {
@@ -656,7 +735,32 @@ macro_rules! bank {
                     mid: [*x; MID_RING],
                     mid_pos: 0,
                     design,
+                    #[cfg(not(target_os = "none"))]
+                    lag: 0,
+                    #[cfg(not(target_os = "none"))]
+                    aux_live: true,
                 }
+            }
+
+            /// Host builds: whether the aux accelerometer's channels (the
+            /// last three) are live. A unit without one turns them off
+            /// after [`Self::reset`]: the last channel is then not filtered
+            /// and reads 0 (the first eight make two whole four-lane
+            /// vectors; the chain reports zeros for the aux channels
+            /// anyway). The float bank only: the fixed-point bank, and
+            /// firmware, filter every channel.
+            #[cfg(not(target_os = "none"))]
+            pub fn set_aux_live(&mut self, live: bool) {
+                self.aux_live = live;
+            }
+
+            /// Whether every channel is filtered.
+            #[inline(always)]
+            fn live(&self) -> bool {
+                #[cfg(not(target_os = "none"))]
+                return self.aux_live;
+                #[cfg(target_os = "none")]
+                true
             }
 
             /// [`Self::new`] in place (no second bank on the stack).
@@ -670,6 +774,10 @@ macro_rules! bank {
             /// Switches to `design`, keeping the histories.
             pub fn set_design(&mut self, design: Option<&'static FirDesign>) {
                 self.design = design;
+                #[cfg(not(target_os = "none"))]
+                if !Self::pre_unused(design) {
+                    self.catch_up();
+                }
             }
 
             /// The current design (`None` = off).
@@ -690,23 +798,110 @@ macro_rules! bank {
             pub fn fill(&mut self, x: &[$t; CHANNELS]) {
                 self.raw.fill(*x);
                 self.mid.fill(*x);
+                #[cfg(not(target_os = "none"))]
+                {
+                    self.lag = 0;
+                }
+            }
+
+            /// Whether `design` reads no pre-filter output (one stage, or
+            /// off).
+            #[cfg(not(target_os = "none"))]
+            #[inline(always)]
+            fn pre_unused(design: Option<&'static FirDesign>) -> bool {
+                design.is_none_or(|d| d.stride == 1)
+            }
+
+            /// Host builds: the pre-filter outputs of the last
+            /// [`Self::push`]es that skipped it (`lag` of them), computed
+            /// now by the same function on the same input rows, so the
+            /// history of its output is bit for bit the one of a
+            /// pre-filter run on every tick.
+            ///
+            /// While it is skipped, each push moves the input row leaving
+            /// the input ring into the output ring's slot of that tick: the
+            /// two rings then hold the last `lag + RING` input rows, and a
+            /// pre-filter output needs its tick's row and the
+            /// [`PRE`]`.order` before it (`lag` ≤ [`MID_RING`] = 177,
+            /// so at most 193 rows, of up to 226). Slots older than `lag`
+            /// hold outputs of the pre-filter (or of [`Self::fill`]).
+            #[cfg(not(target_os = "none"))]
+            #[cold]
+            #[inline(never)]
+            fn catch_up(&mut self) {
+                const SPAN: usize = PRE.order;
+                let n = self.lag;
+                if n == 0 {
+                    return;
+                }
+                let len = n + SPAN;
+                // The input row `age` pushes before the newest, oldest
+                // first in `hist`.
+                let mut hist = [[<$t>::default(); CHANNELS]; MID_RING + SPAN];
+                for (i, row) in hist[..len].iter_mut().enumerate() {
+                    let age = len - 1 - i;
+                    *row = if age < RING {
+                        self.raw[(self.raw_pos + RING - 1 - age) % RING]
+                    } else {
+                        self.mid[(self.mid_pos + MID_RING - 1 - (age - RING)) % MID_RING]
+                    };
+                }
+                // The output of the tick `age` pushes before the newest,
+                // oldest first (its window ends at its own row).
+                for j in 0..n {
+                    let age = n - 1 - j;
+                    let m = $run1(&hist[..len], SPAN + j, &PRE, self.live());
+                    self.mid[(self.mid_pos + MID_RING - 1 - age) % MID_RING] = m;
+                }
+                self.lag = 0;
+            }
+
+            /// [`Self::push`] without the pre-filter (host builds, a design
+            /// that reads none of it): the input row leaving the ring is
+            /// kept in the pre-filter's slot of this tick instead, and
+            /// [`Self::catch_up`] computes the skipped outputs when a
+            /// two-stage design needs them.
+            #[cfg(not(target_os = "none"))]
+            #[inline(always)]
+            fn push_skipping_pre(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
+                let p = self.raw_pos;
+                let q = self.mid_pos;
+                self.mid[q] = self.raw[p];
+                self.lag = (self.lag + 1).min(MID_RING);
+                self.raw[p] = *x;
+                self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
+                self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
+                match self.design {
+                    Some(d) => $run1(&self.raw, p, &d.stage, self.live()),
+                    None => *x,
+                }
             }
 
             /// Pushes one sample per channel and returns the filtered output.
             #[inline]
             pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
+                // Host builds: a design that reads no pre-filter output
+                // skips it ([`Self::push_skipping_pre`]). Firmware runs
+                // the pre-filter on every tick (its output history is
+                // always ready, no catch-up).
+                #[cfg(not(target_os = "none"))]
+                if Self::pre_unused(self.design) {
+                    return self.push_skipping_pre(x);
+                } else if self.lag > 0 {
+                    self.catch_up();
+                }
                 let p = self.raw_pos;
                 self.raw[p] = *x;
                 self.raw_pos = if p + 1 == RING { 0 } else { p + 1 };
                 // The pre-filter runs on every tick.
-                let m = $run1(&self.raw, p, &PRE);
+                let m = $run1(&self.raw, p, &PRE, self.live());
                 let q = self.mid_pos;
                 self.mid[q] = m;
                 self.mid_pos = if q + 1 == MID_RING { 0 } else { q + 1 };
                 match self.design {
                     None => *x,
-                    Some(d) if d.stride == 1 => $run1(&self.raw, p, &d.stage),
-                    Some(d) => $strided(&self.mid, q, &d.stage, d.stride),
+                    Some(d) if d.stride == 1 => $run1(&self.raw, p, &d.stage, self.live()),
+                    Some(d) => $strided(&self.mid, q, &d.stage, d.stride, self.live()),
                 }
             }
         }
@@ -716,21 +911,87 @@ macro_rules! bank {
 bank!(
     FirBank,
     f32,
-    run_f32::<1>,
+    run_f32_1,
     run_f32_strided,
     "The float FIR over [`CHANNELS`] channels."
 );
 bank!(
     FirBankFixed,
     i32,
-    run_i32_1,
-    run_i32_strided,
+    |ring: &[[i32; CHANNELS]], end: usize, st: &Stage, _: bool| run_i32_1(ring, end, st),
+    run_i32_strided_all,
     "The fixed-point FIR over [`CHANNELS`] channels (module doc); samples |x| < 2²⁹."
 );
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A row of pseudo-random samples (xorshift), float and fixed.
+    fn row(state: &mut u64) -> ([f32; CHANNELS], [i32; CHANNELS]) {
+        let mut f = [0.0f32; CHANNELS];
+        let mut i = [0i32; CHANNELS];
+        for c in 0..CHANNELS {
+            *state ^= *state << 13;
+            *state ^= *state >> 7;
+            *state ^= *state << 17;
+            i[c] = (*state >> 40) as i32 - (1 << 23);
+            f[c] = i[c] as f32 / 4096.0;
+        }
+        (f, i)
+    }
+
+    /// A bank that ran a one-stage design (or none) for `n` ticks and then
+    /// switches to a two-stage one gives, tick for tick and bit for bit,
+    /// what a bank that ran the two-stage design all along gives on the
+    /// same input (the skipped pre-filter outputs are caught up, host
+    /// builds): every count around the rings' lengths, float and fixed,
+    /// both two-stage designs, several switches.
+    #[test]
+    fn a_two_stage_design_after_a_one_stage_one_sees_the_whole_history() {
+        let counts = [
+            0, 1, 2, 15, 16, 17, 32, 33, 47, 48, 49, 50, 64, 160, 176, 177, 178, 192, 193, 194,
+            225, 226, 227, 300, 1000,
+        ];
+        for two in [&FIR_16HZ_2K, &FIR_33HZ_2K] {
+            for one in [None, Some(&FIR_262HZ_2K), Some(&FIR_66HZ_2K)] {
+                for &n in &counts {
+                    let mut state = 0x9E37_79B9_7F4A_7C15u64 ^ n as u64;
+                    let (f0, i0) = row(&mut state);
+                    let (mut a, mut b) = (FirBank::new(one, &f0), FirBank::new(Some(two), &f0));
+                    let (mut ai, mut bi) = (
+                        FirBankFixed::new(one, &i0),
+                        FirBankFixed::new(Some(two), &i0),
+                    );
+                    for round in 0..3 {
+                        for _ in 0..n + round {
+                            let (f, i) = row(&mut state);
+                            a.push(&f);
+                            b.push(&f);
+                            ai.push(&i);
+                            bi.push(&i);
+                        }
+                        a.set_design(Some(two));
+                        ai.set_design(Some(two));
+                        for t in 0..200 {
+                            let (f, i) = row(&mut state);
+                            let (ya, yb) = (a.push(&f), b.push(&f));
+                            assert_eq!(
+                                ya.map(f32::to_bits),
+                                yb.map(f32::to_bits),
+                                "{} after {n} ticks of {:?}, round {round}, tick {t}",
+                                two.order,
+                                one.map(|d| d.order)
+                            );
+                            assert_eq!(ai.push(&i), bi.push(&i), "fixed {n} {round} {t}");
+                        }
+                        a.set_design(one);
+                        ai.set_design(one);
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn const_sine_is_accurate() {

@@ -249,6 +249,22 @@ fn queue_frame<F: NorFlash>(
     })
 }
 
+/// The fields of `layout` written into `out`: host builds write a fixed
+/// format by its own writer ([`formats::write_payload`], the same bytes as
+/// the loop over its fields); UDD and firmware take the loop.
+#[inline(always)]
+fn write_payload(code: u8, layout: &Layout, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
+    #[cfg(not(target_os = "none"))]
+    if layout.header.is_empty() {
+        if let Some(n) = formats::write_payload(code, ctx, out) {
+            return Some(n);
+        }
+    }
+    #[cfg(target_os = "none")]
+    let _ = code;
+    fields::write_all(&layout.fields, ctx, out)
+}
+
 /// Queues a device frame with `payload`; dropped whole if it does not fit.
 fn send<F: NorFlash>(sh: &mut Shell<F, Kernel>, id: u8, payload: &[u8]) -> Option<Instant> {
     queue_frame(sh, id, payload.len(), |out| {
@@ -539,10 +555,11 @@ impl Kernel {
         };
         let layout = &stream.layout;
         let tov = stream.tov;
-        let end = queue_frame(sh, stream.code, layout.len, |out| {
+        let code = stream.code;
+        let end = queue_frame(sh, code, layout.len, |out| {
             let (head, body) = out.split_at_mut(layout.header.len());
             head.copy_from_slice(&layout.header);
-            fields::write_all(&layout.fields, &ctx, body) == Some(body.len())
+            write_payload(code, layout, &ctx, body) == Some(body.len())
         });
         if let Some(end) = end {
             sh.clear_pps_flag();

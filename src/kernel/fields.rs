@@ -94,7 +94,8 @@ pub enum Field {
 /// Cortex-M4), so no float arithmetic runs (the M4F's FPU is single
 /// precision; f64 would be software) and the result is the same on every
 /// platform. NaN gives 0; ±∞ and huge values give a magnitude beyond any
-/// field, which the callers saturate.
+/// field, which the callers saturate. (The field writers' saturating forms
+/// take one exact `f64` product on hosts instead: the same results.)
 pub fn scale_round(x: f32, k: u32) -> i64 {
     if x.is_infinite() {
         return if x < 0.0 { i64::MIN } else { i64::MAX };
@@ -175,12 +176,51 @@ fn fast_magnitude(_x: f32, _k: u32) -> Option<u32> {
     None
 }
 
+/// Scales below this take [`sat_signed`]'s `f64` path on hosts.
+#[cfg(not(target_os = "none"))]
+const F64_SCALE_LIMIT: u32 = 1 << 28;
+
+/// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
+/// `-lo_limit` and `hi_limit`, on a host (a double-precision FPU): one
+/// `f64` product, `+ 0.5`, truncation. Exact for 2 ≤ `k <` 2^28: the product
+/// of the 24-bit mantissa and `k` has at most 52 significant bits, so it
+/// is exact, and so is the sum when `|x|·k ≥ ¼` (at most 53 bits); below
+/// ¼ the sum is below ¾ whatever its rounding and truncates to 0, as it
+/// should. NaN truncates to 0 and ∞ or a huge product to `i64::MAX`
+/// (Rust's saturating casts), which the limits then clip: the same
+/// results as the integer path, which larger scales take
+/// (`scale_round_is_exact`, `the_f64_path_is_the_integer_path`).
+#[cfg(not(target_os = "none"))]
+#[inline(always)]
+fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
+    // Scales 0 and 1 too: the integer path saturates every |x| ≥ 2^30,
+    // which for them is not beyond every field.
+    if !(2..F64_SCALE_LIMIT).contains(&k) {
+        return sat_signed_int(x, k, lo_limit, hi_limit);
+    }
+    let m = (f64::from(x.abs()) * f64::from(k) + 0.5) as i64;
+    // Without a branch on the sign (a noisy value's sign is random): all
+    // ones for a negative `x`, the limit of its sign, then a conditional
+    // negation (−2^31 wraps to itself: i32::MIN).
+    let neg = (x.to_bits() as i32) >> 31;
+    let limit = hi_limit ^ ((hi_limit ^ lo_limit) & neg as u32);
+    let r = m.min(i64::from(limit)) as i32;
+    (r ^ neg).wrapping_sub(neg)
+}
+
+// Firmware (the M4F's FPU is single precision, the RP2040 has none): the
+// integer path (with the M4F's f32 fast path) is `sat_signed` itself.
+#[cfg(target_os = "none")]
+use self::sat_signed_int as sat_signed;
+
 /// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
 /// `-lo_limit` and `hi_limit`: the callers' saturation without 64-bit
-/// signed compares.
+/// signed compares, by [`fast_magnitude`] and [`scaled_magnitude`]
+/// (firmware's `sat_signed`; on hosts for the scales beyond the `f64`
+/// path).
 #[cfg_attr(feature = "fixed-point", inline(never))]
 #[cfg_attr(not(feature = "fixed-point"), inline(always))]
-fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
+fn sat_signed_int(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
     // Zero and subnormals (|x·k| < 2^-94) round to 0 (most often an
     // output the model does not have).
     if x.to_bits() & 0x7F80_0000 == 0 {
@@ -223,14 +263,18 @@ pub(crate) fn heading_0_360(h: f32) -> f32 {
     }
 }
 
-/// Three [`sat_i32`] values (the saturation inlined: one call a triad).
+/// Three [`sat_i32`] values (the saturation inlined: one call a triad;
+/// in line on hosts, where the fixed formats' writers fold `out`'s length).
+#[cfg_attr(not(target_os = "none"), inline(always))]
 fn put3_i32(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(4).zip(v) {
         c.copy_from_slice(&sat_signed(x, k, 1 << 31, i32::MAX as u32).to_le_bytes());
     }
 }
 
-/// Three [`sat_i16`] values (the saturation inlined: one call a triad).
+/// Three [`sat_i16`] values (the saturation inlined: one call a triad;
+/// in line on hosts, as [`put3_i32`]).
+#[cfg_attr(not(target_os = "none"), inline(always))]
 fn put3_i16(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(2).zip(v) {
         let y = sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16;
@@ -289,6 +333,23 @@ impl Field {
 
     /// Writes the field into `out`, which is [`Field::size`] bytes long.
     fn write_exact(self, ctx: &OutputCtx<'_>, out: &mut [u8]) {
+        self.write_exact_inline(ctx, out)
+    }
+
+    /// [`Field::write`] inlined: with a constant field (the fixed formats'
+    /// writers of host builds, [`crate::kernel::formats`]) the dispatch
+    /// and the scales fold away.
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    pub(crate) fn write_inline(self, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
+        let n = self.size();
+        self.write_exact_inline(ctx, out.get_mut(..n)?);
+        Some(n)
+    }
+
+    /// [`Field::write_exact`]'s body.
+    #[inline(always)]
+    fn write_exact_inline(self, ctx: &OutputCtx<'_>, out: &mut [u8]) {
         let s = ctx.sample;
         // The triads first, through one call site of each writer (so
         // that it can be inlined once).
@@ -361,9 +422,18 @@ pub fn payload_len(fields: &[Field]) -> usize {
 pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
     let mut at = 0;
     for f in fields {
-        let n = f.size();
-        f.write_exact(ctx, out.get_mut(at..at + n)?);
-        at += n;
+        // Hosts: the writer in line, one dispatch a field (UDD); firmware
+        // calls the one out-of-line copy (flash).
+        #[cfg(not(target_os = "none"))]
+        {
+            at += f.write_inline(ctx, out.get_mut(at..)?)?;
+        }
+        #[cfg(target_os = "none")]
+        {
+            let n = f.size();
+            f.write_exact(ctx, out.get_mut(at..at + n)?);
+            at += n;
+        }
     }
     Some(at)
 }
@@ -575,5 +645,80 @@ mod tests {
         assert_eq!(sat_i32(3.0e38, 1_000_000), i32::MAX);
         assert_eq!(sat_u16(-5.0, 100), 0);
         assert_eq!(sat_i32(1e-40, 1_000_000), 0);
+    }
+
+    /// The host's `f64` path of [`sat_signed`] gives the integer path's
+    /// result for every exponent (subnormals, ∞ and NaN included), both
+    /// signs, the mantissas next to the rounding ties, and every scale a
+    /// field uses plus the largest the path takes.
+    #[cfg(not(target_os = "none"))]
+    #[test]
+    fn the_f64_path_is_the_integer_path() {
+        let scales = [
+            0,
+            1,
+            2,
+            3,
+            7,
+            10,
+            20,
+            50,
+            100,
+            500,
+            1000,
+            2000,
+            4000,
+            10_000,
+            100_000,
+            1_000_000,
+            (1 << 24) - 1,
+            1 << 24,
+            F64_SCALE_LIMIT - 1,
+            F64_SCALE_LIMIT,
+        ];
+        let limits = [
+            (1u32 << 31, i32::MAX as u32),
+            (1 << 15, i16::MAX as u32),
+            (0, u32::from(u16::MAX)),
+        ];
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let check = |bits: u32| {
+            let x = f32::from_bits(bits);
+            for &k in &scales {
+                for &(lo, hi) in &limits {
+                    assert_eq!(
+                        sat_signed(x, k, lo, hi),
+                        sat_signed_int(x, k, lo, hi),
+                        "{x:e} ({bits:#010x}) x {k}"
+                    );
+                }
+            }
+        };
+        for exp in 0..=255u32 {
+            for _ in 0..32 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let frac = (state >> 41) as u32;
+                for sign in [0, 1u32 << 31] {
+                    check(sign | exp << 23 | frac);
+                    // Few low bits set or clear: products at or next to
+                    // a half-integer.
+                    check(sign | exp << 23 | (frac & 0x7F_F000));
+                    check(sign | exp << 23 | (frac | 0xFFF));
+                    check(sign | exp << 23 | (frac & 0x7F_F000).wrapping_sub(1) & 0x7F_FFFF);
+                }
+            }
+        }
+        // Exact ties and their neighbours for the scales of the fields.
+        for &k in &scales[3..16] {
+            for n in 0..20_000u32 {
+                let x = (n as f32 + 0.5) / k as f32;
+                for d in [-1i32, 0, 1] {
+                    check(x.to_bits().wrapping_add(d as u32));
+                    check((-x).to_bits().wrapping_add(d as u32));
+                }
+            }
+        }
     }
 }

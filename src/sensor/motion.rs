@@ -273,6 +273,9 @@ pub struct BuiltinMotion {
     earth: Vec3,
     dt: f32,
     started: bool,
+    /// Host builds: [`BuiltinMotion::static_and_bounded`].
+    #[cfg(not(target_os = "none"))]
+    static_bounded: bool,
     state: State,
 }
 
@@ -357,6 +360,8 @@ impl BuiltinMotion {
             earth,
             dt,
             started: false,
+            #[cfg(not(target_os = "none"))]
+            static_bounded: static_bounded(&state),
             state,
         }
     }
@@ -462,8 +467,43 @@ impl BuiltinMotion {
     }
 }
 
+impl BuiltinMotion {
+    /// Host builds: the motion is static and its (constant) truth is
+    /// already what [`Truth::bounded`] makes of it, bit for bit, so a
+    /// chain may skip the bounding.
+    #[cfg(not(target_os = "none"))]
+    #[inline(always)]
+    pub fn static_and_bounded(&self) -> bool {
+        self.static_bounded
+    }
+}
+
+/// Whether `state` is static with a truth [`Truth::bounded`] leaves the
+/// same, bit for bit.
+#[cfg(not(target_os = "none"))]
+fn static_bounded(state: &State) -> bool {
+    let bits = |t: &Truth| {
+        (
+            t.rate_dps.map(f32::to_bits),
+            t.specific_force_g.map(f32::to_bits),
+            t.temperature_c.map(f32::to_bits),
+        )
+    };
+    match state {
+        State::Static { truth, .. } => bits(truth) == bits(&truth.bounded()),
+        _ => false,
+    }
+}
+
 impl MotionSource for BuiltinMotion {
     fn next(&mut self, _now: Instant, _dt: f32) -> Truth {
+        // Hosts: a static motion has nothing to advance and its truth in
+        // place (without the matches on a copy of the motion below).
+        #[cfg(not(target_os = "none"))]
+        if let State::Static { truth, .. } = &self.state {
+            self.started = true;
+            return *truth;
+        }
         if self.started {
             self.advance();
         }
