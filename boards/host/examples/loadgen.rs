@@ -10,11 +10,14 @@
 //! client fails.
 //!
 //! ```text
-//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID] [--rate HZ]
+//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID] [--rate HZ] [--worst N]
 //! ```
 //!
 //! `--rate HZ` streams at that Data_Rate instead of 2000 (a divisor of
-//! 2000): every counter step must then be 2000 / HZ.
+//! 2000): every counter step must then be 2000 / HZ. `--worst N` (with
+//! `--pid`) also lists the N latest frames on stderr (`late_us= dev=
+//! frame=`): frames of every device late at the same frame index are a
+//! stall of the whole emulator, client or machine, not of one device.
 //!
 //! An ADDR starting with `/` is a pty (`imu-emu --pty`'s slave or its
 //! `--link`), opened raw; the rest are TCP addresses.
@@ -176,6 +179,10 @@ fn main() {
         .map_or(2000, |i| args[i + 1].parse().expect("HZ"));
     assert!(rate > 0 && 2000 % rate == 0, "--rate must divide 2000");
     let step = 2000 / rate;
+    let worst: usize = args
+        .iter()
+        .position(|a| a == "--worst")
+        .map_or(0, |i| args[i + 1].parse().expect("N"));
     let pid: Option<u32> = args
         .iter()
         .position(|a| a == "--pid")
@@ -305,6 +312,19 @@ fn main() {
         let hz = 100.0; // USER_HZ on Linux
         let cpu = (cpu_ticks(pid) - cpu0) as f64 / hz;
         let window = end.duration_since(all_at.unwrap()).as_secs_f64();
+        if worst > 0 {
+            let mut w: Vec<(i64, usize, usize)> = Vec::new();
+            for (k, d) in devs.iter().enumerate() {
+                let min = *d.offsets.iter().min().unwrap();
+                for (i, o) in d.offsets.iter().enumerate() {
+                    w.push((o - min, k, i));
+                }
+            }
+            w.sort_unstable();
+            for (l, k, i) in w.iter().rev().take(worst) {
+                eprintln!("late_us={} dev={k} frame={i}", l / 1000);
+            }
+        }
         let mut late: Vec<i64> = Vec::with_capacity(frames as usize);
         for d in &devs {
             let min = *d.offsets.iter().min().unwrap();
