@@ -239,3 +239,77 @@ impl Transport for TcpTransport {
         Ok(self.client.is_some())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write as _;
+    use std::time::Duration;
+
+    fn received(t: &mut TcpTransport) -> Vec<u8> {
+        let mut got = Vec::new();
+        t.receive(4096, &mut |b| got.extend_from_slice(b)).unwrap();
+        got
+    }
+
+    #[test]
+    fn input_after_a_wait_that_saw_nothing_is_read_after_the_next_wait() {
+        let mut t = TcpTransport::bind("127.0.0.1:0").unwrap();
+        let mut c = TcpStream::connect(t.local_addr()).unwrap();
+        c.write_all(b"abc").unwrap();
+        // The wait sees the connection (and, level-triggered, later the
+        // input): accepted and read.
+        let mut got = Vec::new();
+        for _ in 0..50 {
+            t.wait(Duration::from_millis(100)).unwrap();
+            got.extend(received(&mut t));
+            if got.len() == 3 {
+                break;
+            }
+        }
+        assert!(t.connected());
+        assert_eq!(got, b"abc");
+        // A wait that sees nothing: the next receive reads nothing, not
+        // even what arrived since; the wait after it sees the bytes.
+        t.wait(Duration::ZERO).unwrap();
+        c.write_all(b"x").unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        assert_eq!(received(&mut t), b"");
+        t.wait(Duration::from_millis(500)).unwrap();
+        assert_eq!(received(&mut t), b"x");
+        // Without a wait in between, receive reads what is there.
+        c.write_all(b"yz").unwrap();
+        let mut got = Vec::new();
+        for _ in 0..200 {
+            got.extend(received(&mut t));
+            if got.len() >= 2 {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        assert_eq!(got, b"yz");
+    }
+
+    #[test]
+    fn a_replacing_client_is_accepted_at_the_wait_that_sees_it() {
+        let mut t = TcpTransport::bind("127.0.0.1:0").unwrap();
+        let _a = TcpStream::connect(t.local_addr()).unwrap();
+        assert!(t.poll_client().unwrap());
+        let first = t.client.as_ref().unwrap().1;
+        t.wait(Duration::ZERO).unwrap();
+        let mut b = TcpStream::connect(t.local_addr()).unwrap();
+        b.write_all(b"hi").unwrap();
+        t.wait(Duration::from_millis(500)).unwrap();
+        let got = received(&mut t);
+        assert_ne!(t.client.as_ref().unwrap().1, first, "not replaced");
+        // The new client's first bytes may come with this receive or the
+        // next wait's.
+        let got = if got.is_empty() {
+            t.wait(Duration::from_millis(500)).unwrap();
+            received(&mut t)
+        } else {
+            got
+        };
+        assert_eq!(got, b"hi");
+    }
+}
