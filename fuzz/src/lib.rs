@@ -270,6 +270,10 @@ struct Harness {
     /// Per parameter ID, the values it may hold after a power cycle.
     allowed: BTreeMap<u16, Vec<Vec<u8>>>,
     dropped_at_start: u32,
+    /// The SaveFlash sent while a power cut was scheduled: the cut may
+    /// come after its last flash step (a torn step can end fully done), so
+    /// the new value may load although no acknowledgement left.
+    cut_save: Option<(u16, Vec<u8>)>,
     /// Periodic-output tracking: (rate, tick of the last stream frame).
     last_output: Option<(u32, u64)>,
     tick_no: u64,
@@ -301,6 +305,7 @@ impl Harness {
             acks: Vec::new(),
             allowed,
             dropped_at_start: 0,
+            cut_save: None,
             last_output: None,
             tick_no: 0,
         };
@@ -427,11 +432,24 @@ impl Harness {
         self.drain();
         self.tx.end_session();
         self.settle_acks();
+        let cut = self.cut_save.take();
+        if let Some((id, value)) = &cut {
+            // Old or new, never anything else (ICD 5.3.7 and power loss).
+            let v = self.allowed.entry(*id).or_default();
+            v.push(value.clone());
+            v.sort();
+            v.dedup();
+        }
         self.dev.flash_mut().restore_power();
         self.now += 1_000_000;
         self.dev.power_cycle_with(boot, Instant(self.now));
         self.last_output = None;
         self.check_params();
+        if let Some((id, _)) = cut {
+            // Whichever it was, it is what the flash holds from now on.
+            let got = self.dev.param_ram(id).expect("a Table 5.24 ID").to_vec();
+            self.allowed.insert(id, vec![got]);
+        }
         self.drain();
         self.invariants();
     }
@@ -471,7 +489,8 @@ impl Harness {
         self.dropped_at_start = self.dev.tx_dropped();
     }
 
-    /// Every parameter holds the factory default or a value acknowledged
+    /// Every parameter holds the factory default, the value of a save a
+    /// power cut interrupted (see `cut_save`) or a value acknowledged
     /// by SaveFlash (ICD 5.3.7).
     fn check_params(&self) {
         for p in PARAMS {
@@ -514,7 +533,8 @@ const SAVES: &[(u16, &[u8])] = &[
 /// cycles with and without BOOT, power cuts at any step of a flash save,
 /// TX reads of any size. Invariants: TX bytes always parse as whole frames
 /// with good checksums; after every power cycle each parameter holds the
-/// factory default or a value SaveFlash acknowledged; periodic output only
+/// factory default, a value SaveFlash acknowledged or the value whose save
+/// a power cut interrupted (old or new, nothing else); periodic output only
 /// at divisors of the internal rate, exactly every `internal / rate`
 /// ticks; the TX queue stays within [`TX_CAP`]; nothing panics.
 pub fn device(data: &[u8]) {
@@ -599,6 +619,7 @@ pub fn device(data: &[u8]) {
                 .encode(&mut out)
                 .unwrap_or(0);
                 h.rx(&out[..n]);
+                h.cut_save = Some((id, value.to_vec()));
                 h.power_cycle(None);
             }
             9 => {
