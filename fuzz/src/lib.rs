@@ -313,6 +313,19 @@ impl Harness {
         h
     }
 
+    /// Sends a SaveFlash frame (ICD 5.3.7) of `value` for parameter `id`.
+    fn save_flash(&mut self, id: u16, value: &[u8]) {
+        let mut out = [0u8; 32];
+        let n = Command::SaveFlash {
+            id,
+            len: value.len() as u16,
+            value,
+        }
+        .encode(&mut out)
+        .unwrap_or(0);
+        self.rx(&out[..n]);
+    }
+
     fn rx(&mut self, bytes: &[u8]) {
         self.rx.extend_from_slice(bytes);
         self.dev.on_rx(bytes, Instant(self.now));
@@ -570,15 +583,7 @@ pub fn device(data: &[u8]) {
             }
             4 => {
                 let (id, value) = SAVES[usize::from(c.u8()) % SAVES.len()];
-                let mut out = [0u8; 32];
-                let k = Command::SaveFlash {
-                    id,
-                    len: value.len() as u16,
-                    value,
-                }
-                .encode(&mut out)
-                .unwrap_or(0);
-                h.rx(&out[..k]);
+                h.save_flash(id, value);
             }
             5 => {
                 let n = u32::from(c.u8()) * 8;
@@ -610,15 +615,7 @@ pub fn device(data: &[u8]) {
                 let seed = c.u32();
                 h.dev.flash_mut().cut_power_torn(k, seed);
                 let (id, value) = SAVES[usize::from(c.u8()) % SAVES.len()];
-                let mut out = [0u8; 32];
-                let n = Command::SaveFlash {
-                    id,
-                    len: value.len() as u16,
-                    value,
-                }
-                .encode(&mut out)
-                .unwrap_or(0);
-                h.rx(&out[..n]);
+                h.save_flash(id, value);
                 h.cut_save = Some((id, value.to_vec()));
                 h.power_cycle(None);
             }

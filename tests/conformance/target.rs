@@ -19,12 +19,13 @@
 //! `…/fw-qemu-isb`, or `IMU_EMU_QEMU_ISB_ELF`).
 
 use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::net::{SocketAddr, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
+pub use crate::support::free_port;
 use crate::support::{Conn, Control as HostControl, Emu, TIMEOUT};
 
 /// Which implementation runs the device.
@@ -229,14 +230,6 @@ fn launch(kind: Kind, opts: &Opts, flash: &Path) -> (Proc, Conn) {
 }
 
 /// A free TCP port on the loopback (bound, then released for the child).
-pub fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
 /// The device's other pins, as a test rig drives them.
 pub trait Pins {
     /// A 1PPS pulse (rising edge now).

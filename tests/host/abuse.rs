@@ -12,7 +12,7 @@ use std::net::{Shutdown, TcpListener, TcpStream};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use support::{command, save, Conn, Control, Emu, Frame, TIMEOUT};
+use support::{command, free_port, save, Conn, Control, Emu, Frame, TIMEOUT};
 
 const GA: u8 = 0x8F;
 const DATA_RATE: u16 = 0x0012;
@@ -31,14 +31,6 @@ fn i32_at(p: &[u8], i: usize) -> i32 {
 }
 
 /// A free local port.
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
 /// The GA 2 kHz counter (Table 5.7, payload offset 24).
 fn counter(f: &Frame) -> u16 {
     assert_eq!(f.id(), GA, "{:02X?}", f.bytes);

@@ -7,12 +7,11 @@
 #[allow(dead_code)]
 mod support;
 
-use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
 use support::{
-    assert_rate, bytes_per_device_second, command, device_times, read_ram, save, Conn, Control,
-    DeviceClock, Emu, Frame,
+    assert_rate, bytes_per_device_second, command, device_times, free_port, read_ram, save, Conn,
+    Control, DeviceClock, Emu, Frame,
 };
 
 const DATA_RATE: u16 = 0x0012;
@@ -250,14 +249,6 @@ fn a_slow_baud_rate_really_limits_the_line() {
 }
 
 /// A free local port for `--control`.
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
 /// Starts an emulator with a control socket; returns it, a UART client and
 /// the control connection.
 fn with_control(args: &[&str]) -> (Emu, Conn, Control) {

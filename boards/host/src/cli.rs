@@ -572,10 +572,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
             if let Some(c) = control.as_mut() {
                 c.poll(&mut |cmd| match cmd {
                     crate::control::Command::Status => Ok("mode=off".to_owned()),
-                    crate::control::Command::Devices => Ok(format!(
-                        "count=1 dev0={}",
-                        transport.describe().replacen(' ', ":", 1)
-                    )),
+                    crate::control::Command::Devices => {
+                        Ok(crate::control::devices_reply(&[transport.describe()]))
+                    }
                     _ => Err(
                         "the device is off: it powers on when a client connects to the UART \
                          (or use --power-on now)"

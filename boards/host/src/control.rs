@@ -305,6 +305,17 @@ pub const MAX_PENDING_OUTPUT: usize = 64 * 1024;
 /// [`MAX_LINE`] line.
 const REPLY_ROOM: usize = MAX_LINE + 64;
 
+/// The answer to `devices`: how many devices and where each listens,
+/// from their transports' [`crate::transport::Transport::describe`]
+/// (`count=2 dev0=tcp:127.0.0.1:7000 dev1=tcp:127.0.0.1:7001`).
+pub fn devices_reply(places: &[String]) -> String {
+    let mut s = format!("count={}", places.len());
+    for (k, p) in places.iter().enumerate() {
+        s.push_str(&format!(" dev{k}={}", p.replacen(' ', ":", 1)));
+    }
+    s
+}
+
 /// The control listener and its client.
 ///
 /// Input is scanned once as it arrives (O(n) in the bytes received) from a

@@ -159,19 +159,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         Ok(())
     }
 
-    /// `devices`: how many and where each listens.
-    fn devices(&self) -> String {
-        let mut s = format!("count={}", self.slots.len());
-        for (k, p) in self.places.iter().enumerate() {
-            s.push_str(&format!(" dev{k}={}", p.replacen(' ', ":", 1)));
-        }
-        s
-    }
-
     /// One control command for device `k` (or for the run).
     fn command(&mut self, k: Option<usize>, cmd: Command) -> Result<String, String> {
         if cmd == Command::Devices {
-            return Ok(self.devices());
+            return Ok(crate::control::devices_reply(&self.places));
         }
         let n = self.slots.len();
         let Some(k) = k else {

@@ -362,10 +362,7 @@ impl<T: Transport> HostPort<T> {
             }
             control::Command::Status => return Ok(self.status(dev)),
             control::Command::Devices => {
-                return Ok(format!(
-                    "count=1 dev0={}",
-                    self.transport.describe().replacen(' ', ":", 1)
-                ))
+                return Ok(control::devices_reply(&[self.transport.describe()]))
             }
             control::Command::Help => {}
         }
