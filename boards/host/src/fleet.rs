@@ -118,13 +118,14 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
 
     /// Powers device `k` on now, its epoch on the grid.
     fn power_on(&mut self, k: usize) -> anyhow::Result<()> {
-        let Some(Some(Slot::Off { .. })) = self.slots.get(k) else {
-            return Ok(());
-        };
+        // Only an Off slot is taken (a running one stays where it is).
         let Some(Slot::Off {
             flash,
             mut transport,
-        }) = self.slots[k].take()
+        }) = self
+            .slots
+            .get_mut(k)
+            .and_then(|s| s.take_if(|s| matches!(s, Slot::Off { .. })))
         else {
             return Ok(());
         };
