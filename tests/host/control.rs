@@ -55,6 +55,21 @@ fn ga_frames_for(c: &mut Conn, d: Duration) -> Vec<(Instant, Frame)> {
 }
 
 #[test]
+fn a_single_device_answers_devices_and_dev_0() {
+    let (emu, _c, mut ctl) = with_control(&[]);
+    assert_eq!(
+        ctl.cmd("devices"),
+        format!("ok count=1 dev0=tcp:{}", emu.addr())
+    );
+    assert!(ctl.cmd("dev 0 status").starts_with("ok mode="));
+    assert_eq!(
+        ctl.cmd("dev 1 status"),
+        "error no device 1: this run has one device, dev 0"
+    );
+    assert_eq!(ctl.cmd("dev 0 help"), "error not a device command: help");
+}
+
+#[test]
 fn help_and_errors_name_the_syntax() {
     let (_emu, _c, mut ctl) = with_control(&[]);
     let help = ctl.cmd("help");

@@ -287,3 +287,47 @@ fn devices_on_ptys_each_get_their_own_link() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `Max open files` of a process: (soft, hard).
+fn open_file_limits(pid: &str) -> (u64, u64) {
+    let limits = std::fs::read_to_string(format!("/proc/{pid}/limits")).unwrap();
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max open files"))
+        .unwrap();
+    let w: Vec<&str> = line.split_whitespace().collect();
+    (w[3].parse().unwrap(), w[4].parse().unwrap())
+}
+
+#[test]
+fn many_devices_raise_the_soft_open_file_limit() {
+    // 100 devices need about 3 × 100 + 64 descriptors: started under a
+    // soft limit of 128, the program raises it (up to the hard limit) and
+    // every device listens.
+    let (_, hard) = open_file_limits("self");
+    let mut cmd = std::process::Command::new("sh");
+    cmd.args([
+        "-c",
+        "ulimit -Sn 128 && exec \"$0\" \"$@\"",
+        env!("CARGO_BIN_EXE_imu-emu"),
+        "--count",
+        "100",
+        "--tcp",
+        "127.0.0.1:0",
+        "--power-on",
+        "now",
+    ]);
+    let emu = Emu::start_command(cmd);
+    let lines = emu.more_lines(99);
+    assert!(lines.iter().all(|l| l.starts_with("listening on tcp ")));
+    let (soft, _) = open_file_limits(&emu.pid().to_string());
+    assert_eq!(soft, 364.min(hard));
+    let mut c = Conn::tcp(
+        lines[98]
+            .strip_prefix("listening on tcp ")
+            .unwrap()
+            .parse()
+            .unwrap(),
+    );
+    assert_eq!(data_rate(&mut c), 100);
+}
