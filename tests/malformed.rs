@@ -162,7 +162,7 @@ fn silent(model: &str, bad: &[u8]) {
     case(model, bad, &[]);
 }
 
-/// The UDD config reply (Table 5.20 as corrected in NOTES.md).
+/// The UDD config reply (Table 5.20 as corrected in protocol-facts.md).
 fn udd_reply(checksum: u16, errors: u8, wrong: u16, max: u32) -> Vec<u8> {
     let c = checksum.to_le_bytes();
     let w = wrong.to_le_bytes();
@@ -196,7 +196,7 @@ fn wrong_header_is_skipped_silently() {
 
 #[test]
 fn wrong_type_byte_or_id_is_ignored() {
-    // Only `type 0, id 0` frames are commands (Table 5.2, NOTES.md): a
+    // Only `type 0, id 0` frames are commands (Table 5.2, protocol-facts.md): a
     // well-formed GetBIT as a device frame (type 1), an unknown type, or
     // with a non-zero id gets no answer.
     for (t, id) in [
@@ -303,7 +303,7 @@ fn unknown_command_gets_no_answer() {
         &[0x13],
         &[0xFF],
         &[0x12, 0x00],       // a known code with a trailing byte
-        &[0xB1, 0x6C],       // the vendor SDK's 2-byte request (NOTES.md)
+        &[0xB1, 0x6C],       // the vendor SDK's 2-byte request (protocol-facts.md)
         &[0xB3, 0xFF, 0x12], // neither SaveFlash nor ReadRAM
     ] {
         silent("K110", &frame(payload));
