@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Firmware image sizes against the budgets (README "Image sizes"): flash is
+# Firmware image sizes against the budgets (docs/firmware.md "Image sizes"): flash is
 # .vector_table (+ .boot2) + .text + .rodata + .data, static RAM is
 # .data + .bss + .uninit, as `llvm-size -A` reports them.
 #

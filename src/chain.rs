@@ -45,7 +45,7 @@
 //! imports `kernel` or `isb`; [`ChainConfig`] and [`Health`] are neutral and
 //! each personality maps its parameters and status words onto them.
 //!
-//! # Decisions (README "Protocol notes")
+//! # Decisions (docs/kernel.md "Protocol notes")
 //!
 //! - FIR: Blackman-windowed sinc, −3 dB exactly at the Table 5.29 bandwidth,
 //!   order 192…12 at 2 kHz (doubled on the K201 at 4 kHz), coefficients in
@@ -166,8 +166,8 @@
 //! tests): 3 800 with a GA frame at 2 kHz, 5 640–5 840 with the largest UDD
 //! frame. With `fixed-point` on thumbv6m (`scripts/v6m-tick.sh`, worst of
 //! 40 ticks, ±40): 11 920 a tick without output, 15 600 GA at 2 kHz,
-//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. README
-//! "Performance", docs/firmware-budget.md.
+//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. `docs/performance.md`,
+//! `docs/firmware-budget.md`.
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 

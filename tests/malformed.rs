@@ -2,7 +2,7 @@
 //! host → device input, each asserting
 //!
 //! 1. the documented reaction — the exact reply bytes, or exact silence
-//!    (README "Protocol notes", "Malformed input");
+//!    (docs/kernel.md "Protocol notes", "Malformed input");
 //! 2. that the device resyncs on the next good frame: a GetBIT (ICD 5.3.4)
 //!    sent right behind the bad bytes — in the same chunk, in a chunk of its
 //!    own, and byte by byte — is answered exactly once;

@@ -3,8 +3,7 @@
 //! filters, pins, line and flash store as the KERNEL, speaking the ISB
 //! protocol (`docs/isb-data-sets.md`, `docs/protocol-facts.md` "ISB").
 //!
-//! What it does with each input (decisions marked; README "ISB
-//! personality"):
+//! What it does with each input (decisions marked; `docs/isb.md`):
 //!
 //! - **GET_DATA** ([`message::resolve_get`]): NACK for DID ≥ 132 and 95,
 //!   silence for an in-range DID it does not serve, else one DATA packet

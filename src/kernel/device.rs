@@ -505,8 +505,8 @@ impl Kernel {
         }
         // The first frame's "1PPS received between the last and current
         // frame" (Table 5.8 time flags) covers the time since this data
-        // command: a 1PPS edge while idle is not reported (README
-        // "Protocol notes").
+        // command: a 1PPS edge while idle is not reported
+        // (docs/kernel.md "Protocol notes").
         sh.clear_pps_flag();
         self.stream = Some(Stream {
             code,

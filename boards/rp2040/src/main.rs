@@ -1,6 +1,6 @@
 //! # imu-emu on a Raspberry Pi Pico (RP2040)
 //!
-//! Pinout (README "Flash it to a board"):
+//! Pinout (docs/firmware.md "Flash it to a board"):
 //!
 //! | pin | function |
 //! |---|---|
