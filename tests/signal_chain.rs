@@ -456,8 +456,9 @@ fn from_block_reads_the_parameter_rows() {
     );
 }
 
-/// The RAM budget (the firmware has 20 KiB for the whole image; the device
-/// around the chain takes ~6 KiB): the chain fits 10 KiB in either build.
+/// The chain's share of RAM (the firmware has 64 KiB of static RAM for the
+/// whole image; the device around the chain takes ~6 KiB): the chain fits
+/// 10 KiB in either build.
 #[test]
 fn size_of_the_chain_fits_the_10_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();
