@@ -2,12 +2,12 @@
 //! output variants (5.3.6), status words (5.4) and GetBIT (Table 5.18),
 //! faults, temperature, the K201's 4 kHz rate.
 
-use imu_emu::ahrs::rotation::{quat_conj, quat_mul, Quat};
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::dsp::OutputVariant;
 use imu_emu::kernel::config::{self, lpf_bandwidth};
 use imu_emu::kernel::status::{usw, Status};
+use imu_emu::math::rotation::{quat_conj, quat_mul, Quat};
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion, Sample};
 use imu_emu::time::Instant;
