@@ -109,7 +109,7 @@
 //! | stage | representation |
 //! |---|---|
 //! | truth ([`crate::sensor::motion::BuiltinMotionFixed`]) | °/s·2¹⁹, g·2²³; attitude Q62, phasors Q30, static truth cached |
-//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::dsp::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
+//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::math::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
 //! | mounting ([`crate::ahrs::mounting::MountingFixed`]) | Q30 matrix |
 //! | attitude ([`crate::ahrs::attitude::AttitudeFixed`]) | rates in Q36 rad a tick, quaternion Q62, Euler angles by CORDIC |
 //! | FIR ([`crate::dsp::fir::FirBankFixed`]) | °/s·2¹⁷, g·2²⁰ (the sensor scale rounded), Q15 taps |
@@ -119,7 +119,7 @@
 //! The attitude runs every tick at full rate (no decimation): its stated
 //! bounds hold unchanged (coning 5° at 2 Hz, 10 s: 2e-4° against 1e-2°; a
 //! static unit stays within 1e-3° over 120 s). Products are exact
-//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::dsp::fixed::mul64`]),
+//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::math::fixed::mul64`]),
 //! since a plain `i64` product is a library call on ARMv6-M.
 //!
 //! # Cost
@@ -172,11 +172,11 @@
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
 use crate::ahrs::alignment::{AlignConfig, Alignment};
-use crate::ahrs::rotation::{Quat, Vec3};
 use crate::dsp::cascade::CascadeConfig;
 use crate::dsp::fir::{self, Bandwidth, FirDesign, CHANNELS};
 use crate::dsp::integrals::{Integrals, Integrate, NoIntegrals};
 use crate::dsp::variant::OutputVariant;
+use crate::math::rotation::{Quat, Vec3};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};

@@ -56,7 +56,7 @@ use super::fir::CHANNELS;
 /// all for a unit without the aux accelerometer (hosts, see
 /// [`Cascade::set_aux_live`]).
 const AUX_FIRST: usize = 8;
-use super::fixed::{mul64, mul_q};
+use crate::math::fixed::{mul64, mul_q};
 use crate::math::tanf;
 use libm::{cos, sin};
 
