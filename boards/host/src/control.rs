@@ -27,7 +27,9 @@
 //! at most [`MAX_READ_PER_POLL`] bytes, the rest waiting for the next pass;
 //! a client that does not read its replies gets no more commands executed
 //! once [`MAX_PENDING_OUTPUT`] bytes wait for it (events that do not
-//! fit are dropped). A client that closes its sending side still gets its
+//! fit are dropped; an answer never is: every line gets its whole answer,
+//! however long, in order). A blank line is answered `error empty line`.
+//! A device number is canonical decimal (`dev 01`, `dev +1` are refused). A client that closes its sending side still gets its
 //! replies and the events.
 
 use std::collections::VecDeque;
@@ -335,9 +337,7 @@ pub fn parse_addressed(line: &str) -> Result<(Option<usize>, Command), String> {
     let words: Vec<&str> = line.split_whitespace().collect();
     match words.as_slice() {
         ["dev", k, rest @ ..] if !rest.is_empty() => {
-            let k = k
-                .parse::<usize>()
-                .map_err(|_| format!("not a device number: {k}"))?;
+            let k = device_number(k).ok_or_else(|| format!("not a device number: {k}"))?;
             let start = line.find(rest[0]).unwrap_or(0);
             match parse_one(&line[start..], rest)? {
                 (form, _) if !form.device => Err(format!("not a device command: {}", rest[0])),
@@ -347,6 +347,21 @@ pub fn parse_addressed(line: &str) -> Result<(Option<usize>, Command), String> {
         ["dev", ..] => Err(format!("bad syntax: {line}; expected dev <K> <command>")),
         _ => Ok((None, parse_one(line, &words)?.1)),
     }
+}
+
+/// A device number in canonical decimal (`0`, `17`; not `+1`, `01`).
+fn device_number(w: &str) -> Option<usize> {
+    let canonical = w.bytes().all(|b| b.is_ascii_digit()) && (w == "0" || !w.starts_with('0'));
+    canonical.then(|| w.parse().ok()).flatten()
+}
+
+/// [`parse_addressed`] for a line as received (trimmed): a blank line is
+/// answered `error empty line` (every line gets exactly one answer).
+fn parse_line(text: &str) -> Result<(Option<usize>, Command), String> {
+    if text.is_empty() {
+        return Err("empty line".to_owned());
+    }
+    parse_addressed(text)
 }
 
 /// The form of [`COMMANDS`] that takes `words` and its command.
@@ -535,13 +550,18 @@ impl Client {
         }
     }
 
-    /// Queues `line` if there is room (else drops it); whether it was queued.
-    fn queue(&mut self, line: &[u8]) -> bool {
-        if self.out.len() + line.len() > MAX_PENDING_OUTPUT {
-            return false;
+    /// Queues an event `line` if there is room (else drops it).
+    fn event(&mut self, line: &[u8]) {
+        if self.out.len() + line.len() <= MAX_PENDING_OUTPUT {
+            self.out.extend(line);
         }
+    }
+
+    /// Queues the answer to a line, whole, however long: a command is only
+    /// executed while the queue has room ([`MAX_PENDING_OUTPUT`] less
+    /// [`REPLY_ROOM`]), so the queue stays below that plus one answer.
+    fn answer(&mut self, line: &[u8]) {
         self.out.extend(line);
-        true
     }
 
     /// Writes queued output the socket takes now; `false` if the client is
@@ -654,11 +674,8 @@ impl Control {
                 Line::Complete(from, to) => {
                     let text = String::from_utf8_lossy(&c.inbuf[from..to]);
                     let text = text.trim();
-                    if text.is_empty() {
-                        continue;
-                    }
                     commands += 1;
-                    let answer = match parse_addressed(text).and_then(|(k, c)| match c {
+                    let answer = match parse_line(text).and_then(|(k, c)| match c {
                         Command::Help => Ok(help()),
                         c => apply(k, c),
                     }) {
@@ -666,11 +683,11 @@ impl Control {
                         Ok(t) => format!("ok {t}\n"),
                         Err(e) => format!("error {e}\n"),
                     };
-                    c.queue(answer.as_bytes());
+                    c.answer(answer.as_bytes());
                 }
                 Line::TooLong => {
                     commands += 1;
-                    c.queue(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
+                    c.answer(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
                 }
                 Line::None => {
                     if read >= MAX_READ_PER_POLL || !may_read {
@@ -740,7 +757,7 @@ impl Control {
     /// [`MAX_PENDING_OUTPUT`] bytes wait, rather than stalling the device).
     pub fn event(&mut self, what: &str) {
         if let Some(c) = self.client.as_mut() {
-            c.queue(format!("event {what}\n").as_bytes());
+            c.event(format!("event {what}\n").as_bytes());
             if !c.flush() {
                 self.client = None;
             }
