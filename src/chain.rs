@@ -527,9 +527,8 @@ impl<I: Integrate> SignalChain<I> {
         *cfg_ = cfg;
         *core_ = core;
         fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
-        // Hosts: a unit without the aux accelerometer does not filter its
-        // (zero) channels; no output reads them (`Core::take`).
-        #[cfg(not(target_os = "none"))]
+        // A unit without the aux accelerometer does not filter its (zero)
+        // channels; no output reads them (`Core::take`).
         fir.set_aux_live(has_aux);
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
@@ -681,8 +680,7 @@ impl<I: Integrate> SignalChain<I> {
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
         let truth = self.core.builtin_truth(now, self.dt);
-        // Hosts: a truth already within the bounds skips the bounding.
-        #[cfg(not(target_os = "none"))]
+        // A truth already within the bounds skips the bounding.
         if self.core.builtin_truth_bounded() {
             return self.process_bounded(&truth);
         }
@@ -715,11 +713,10 @@ impl<I: Integrate> SignalChain<I> {
             arith::frozen(&self.fir.last_input())
         };
 
-        // Hosts: the filters first (they do not depend on the AHRS, nor it
+        // The filters first (they do not depend on the AHRS, nor it
         // on them), so that the AHRS's long chain of dependent products
         // overlaps the encoder's work after the tick instead of the
         // filters' independent ones.
-        #[cfg(not(target_os = "none"))]
         self.filters(&sensor);
         let c = &mut self.core;
 
@@ -736,8 +733,6 @@ impl<I: Integrate> SignalChain<I> {
             }
             Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
-        #[cfg(target_os = "none")]
-        self.filters(&sensor);
     }
 
     /// The filters of a tick (sensor axes): FIR → cascade → accumulator.

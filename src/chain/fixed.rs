@@ -213,10 +213,8 @@ impl Core {
         self.motion.step()
     }
 
-    /// Host builds: whether the built-in truth needs no [`bounded`] (which
-    /// is the identity here: the fixed-point truth is clamped as it is
-    /// made).
-    #[cfg(not(target_os = "none"))]
+    /// Whether the built-in truth needs no [`bounded`] (which is the
+    /// identity here: the fixed-point truth is clamped as it is made).
     #[inline(always)]
     pub fn builtin_truth_bounded(&self) -> bool {
         true

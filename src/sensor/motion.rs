@@ -272,8 +272,7 @@ pub struct BuiltinMotion {
     earth: Vec3,
     dt: f32,
     started: bool,
-    /// Host builds: [`BuiltinMotion::static_and_bounded`].
-    #[cfg(not(target_os = "none"))]
+    /// [`BuiltinMotion::static_and_bounded`].
     static_bounded: bool,
     state: State,
 }
@@ -359,7 +358,6 @@ impl BuiltinMotion {
             earth,
             dt,
             started: false,
-            #[cfg(not(target_os = "none"))]
             static_bounded: static_bounded(&state),
             state,
         }
@@ -467,10 +465,9 @@ impl BuiltinMotion {
 }
 
 impl BuiltinMotion {
-    /// Host builds: the motion is static and its (constant) truth is
-    /// already what [`Truth::bounded`] makes of it, bit for bit, so a
-    /// chain may skip the bounding.
-    #[cfg(not(target_os = "none"))]
+    /// The motion is static and its (constant) truth is already what
+    /// [`Truth::bounded`] makes of it, bit for bit, so a chain may skip the
+    /// bounding.
     #[inline(always)]
     pub fn static_and_bounded(&self) -> bool {
         self.static_bounded
@@ -479,7 +476,6 @@ impl BuiltinMotion {
 
 /// Whether `state` is static with a truth [`Truth::bounded`] leaves the
 /// same, bit for bit.
-#[cfg(not(target_os = "none"))]
 fn static_bounded(state: &State) -> bool {
     let bits = |t: &Truth| {
         (
@@ -496,9 +492,8 @@ fn static_bounded(state: &State) -> bool {
 
 impl MotionSource for BuiltinMotion {
     fn next(&mut self, _now: Instant, _dt: f32) -> Truth {
-        // Hosts: a static motion has nothing to advance and its truth in
-        // place (without the matches on a copy of the motion below).
-        #[cfg(not(target_os = "none"))]
+        // A static motion has nothing to advance and its truth in place
+        // (without the matches on a copy of the motion below).
         if let State::Static { truth, .. } = &self.state {
             self.started = true;
             return *truth;
