@@ -87,3 +87,129 @@ fn blank_lines_are_answered_and_device_numbers_are_canonical() {
         assert_eq!(a, "ok mode=off", "{got:?}");
     }
 }
+
+/// Runs `imu-emu ARGS…` to its end, killed (and the test failed) after
+/// `limit`.
+fn run_for(args: &[&str], limit: Duration) -> std::process::Output {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + limit;
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let o = child.wait_with_output().unwrap();
+            panic!(
+                "imu-emu {args:?} still running after {limit:?}; stderr: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Issue 22 item 5: `client --timeout` takes a finite time in (0, 3600]
+/// seconds; NaN (which panicked), infinities and absurd values (which
+/// waited for ever) are usage errors, exit status 2, one line naming the
+/// option.
+#[test]
+fn client_timeouts_that_are_not_a_time_are_usage_errors() {
+    for bad in ["nan", "NaN", "inf", "-inf", "1e300", "3601", "0", "-1", "x"] {
+        let o = run_for(
+            &[
+                "client",
+                "--tcp",
+                "127.0.0.1:1",
+                &format!("--timeout={bad}"),
+                "info",
+            ],
+            TIMEOUT,
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "--timeout {bad}: {err}");
+        assert!(err.contains("--timeout"), "--timeout {bad}: {err}");
+        assert!(!err.contains("panicked"), "--timeout {bad}: {err}");
+    }
+}
+
+/// Issue 22 item 4: `client record --frames 10` against a peer that
+/// sends only valid frames that are not data (an acknowledgement, every
+/// 20 ms, for ever) ends after `--timeout` with one line saying no data
+/// frame came (it used to wait for ever).
+#[test]
+fn client_record_times_out_when_only_non_data_frames_come() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let peer = {
+        let stop = std::sync::Arc::clone(&stop);
+        std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            let ack = support::hex("aa 55 01 8f 08 00 96 00 2e 01");
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                if s.write_all(&ack).is_err() {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        })
+    };
+    let t0 = std::time::Instant::now();
+    let o = run_for(
+        &[
+            "client",
+            "--tcp",
+            &addr,
+            "--timeout",
+            "0.5",
+            "record",
+            "--frames",
+            "10",
+        ],
+        Duration::from_secs(10),
+    );
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    peer.join().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(
+        err,
+        format!(
+            "imu-emu: --tcp {addr}: no data frame within 500ms after 0 rows (is a stream \
+             running? --format GA starts one)\n"
+        )
+    );
+    assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+}
+
+/// Issue 22 (minor): `client decode` streams its input: decoding
+/// `/dev/zero` (endless) keeps the process's resident memory small
+/// (under 32 MiB after 1.5 s at GB/s; reading it whole grew without
+/// bound).
+#[test]
+fn client_decode_streams_its_input_in_bounded_memory() {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "decode", "/dev/zero", "--out", "/dev/null"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = std::fs::read_to_string(format!("/proc/{}/status", child.id()));
+    let _ = child.kill();
+    let _ = child.wait();
+    let status = status.expect("still running");
+    let kb = |key: &str| -> u64 {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix(key))
+            .and_then(|v| v.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("no {key} in {status}"))
+    };
+    assert!(kb("VmHWM:") < 32 * 1024, "peak RSS {} kB", kb("VmHWM:"));
+}
