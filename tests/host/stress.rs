@@ -213,3 +213,36 @@ fn client_decode_streams_its_input_in_bounded_memory() {
     };
     assert!(kb("VmHWM:") < 32 * 1024, "peak RSS {} kB", kb("VmHWM:"));
 }
+
+/// Issue 22 item 6: under `ulimit -n 6` a UART client that connects and
+/// closes without sending holds the last descriptor; the emulator notices
+/// the close while the device is idle (a client that closed its sending
+/// side and is sent nothing for a second is closed), so the control
+/// socket, whose accept failed with EMFILE meanwhile, then answers.
+#[test]
+fn a_closed_idle_client_frees_its_descriptor_for_the_control_socket() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let mut cmd = std::process::Command::new("bash");
+    cmd.args([
+        "-c",
+        &format!(
+            "ulimit -n 6; exec {} --tcp 127.0.0.1:0 --control {addr}",
+            env!("CARGO_BIN_EXE_imu-emu")
+        ),
+    ]);
+    let mut emu = Emu::start_command(cmd);
+    let uart = TcpStream::connect(emu.addr()).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    drop(uart);
+    let ctl = TcpStream::connect(&addr).unwrap();
+    ctl.set_read_timeout(Some(TIMEOUT)).unwrap();
+    let mut w = ctl.try_clone().unwrap();
+    w.write_all(b"status\n").unwrap();
+    let mut line = String::new();
+    BufReader::new(ctl).read_line(&mut line).unwrap();
+    assert!(line.starts_with("ok mode=idle "), "{line:?}");
+    assert!(emu.running());
+    let err = emu.stderr();
+    assert!(err.contains("control accept failed"), "{err}");
+    assert!(err.contains("was sent nothing for 1 s: closed"), "{err}");
+}
