@@ -246,3 +246,87 @@ fn a_closed_idle_client_frees_its_descriptor_for_the_control_socket() {
     assert!(err.contains("control accept failed"), "{err}");
     assert!(err.contains("was sent nothing for 1 s: closed"), "{err}");
 }
+
+/// CPU time (user + system) the process `pid` used so far, in clock
+/// ticks (`/proc/PID/stat` fields 14 and 15).
+fn cpu_ticks(pid: u32) -> u64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap();
+    // The fields after the command name, which is in parentheses.
+    let rest = &stat[stat.rfind(')').unwrap() + 2..];
+    let f: Vec<&str> = rest.split(' ').collect();
+    f[11].parse::<u64>().unwrap() + f[12].parse::<u64>().unwrap()
+}
+
+/// A pty pair: the master (the far end of the cable), the slave and the
+/// slave's path.
+fn pty_pair() -> (std::fs::File, std::os::fd::OwnedFd, String) {
+    let (master, slave, path) = support::pty_pair();
+    (std::fs::File::from(master), slave, path)
+}
+
+/// GetDevInfo sent every 200 ms until its answer (174 bytes) comes, for
+/// at most [`TIMEOUT`].
+fn dev_info_answered(c: &mut support::Conn) -> bool {
+    let end = std::time::Instant::now() + TIMEOUT;
+    while std::time::Instant::now() < end {
+        c.send(&support::command(0x12));
+        let until = std::time::Instant::now() + Duration::from_millis(200);
+        while let Some(f) = c.frame_before(until) {
+            if f.id() == 0x12 {
+                return f.bytes.len() == 174;
+            }
+        }
+    }
+    false
+}
+
+/// Issue 22 item 1 and a minor item: `--serial` says the device powers on
+/// at start (not "when a client connects"); when the port hangs up (the
+/// pty's master closed) the emulator says so once, does not spin (under
+/// 0.2 s of CPU in 1 s; it used to take a whole core) and keeps running;
+/// when the path opens again (here a symlink now pointing at another
+/// pty) the device answers there.
+#[test]
+fn a_hung_up_serial_port_is_waited_on_and_opened_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyUSB0");
+    let (master, slave, path) = pty_pair();
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    let mut emu = Emu::start(&["--serial", link.to_str().unwrap()]);
+    let mut c = support::Conn::new(Box::new(support::Master(master)));
+    assert!(dev_info_answered(&mut c));
+    drop(c);
+    drop(slave);
+    std::thread::sleep(Duration::from_millis(500));
+    let before = cpu_ticks(emu.pid());
+    std::thread::sleep(Duration::from_secs(1));
+    let used = cpu_ticks(emu.pid()) - before;
+    let hz: u64 = String::from_utf8(
+        std::process::Command::new("getconf")
+            .arg("CLK_TCK")
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap()
+    .trim()
+    .parse()
+    .unwrap();
+    assert!(
+        used * 5 < hz,
+        "{used} ticks of CPU in 1 s after the hang-up"
+    );
+    assert!(emu.running());
+    // The port comes back (an adapter re-enumerated): a new pty behind
+    // the same path.
+    let (master, _slave, path) = pty_pair();
+    let tmp = dir.path().join("next");
+    std::os::unix::fs::symlink(&path, &tmp).unwrap();
+    std::fs::rename(&tmp, &link).unwrap();
+    let mut c = support::Conn::new(Box::new(support::Master(master)));
+    assert!(dev_info_answered(&mut c), "{}", emu.stderr());
+    let err = emu.stderr();
+    assert_eq!(err.matches("the port hung up").count(), 1, "{err}");
+    assert_eq!(err.matches("the port is back").count(), 1, "{err}");
+    assert!(!err.contains("when a client connects"), "{err}");
+}
