@@ -533,9 +533,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     out.flush()?;
     drop(out);
 
-    if args.power_on == PowerOnAt::Connect {
+    // A serial port counts as connected at once: no message then.
+    if args.power_on == PowerOnAt::Connect && !transport.poll_client()? {
         eprintln!("imu-emu: the device powers on when a client connects (--power-on now: at once)");
-        while !transport.poll_client()? {
+        loop {
             if stop.load(std::sync::atomic::Ordering::Relaxed) {
                 eprintln!("imu-emu: stopped");
                 return Ok(());
@@ -554,6 +555,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
                 })?;
             }
             transport.wait(crate::runner::IDLE_WAKE)?;
+            if transport.poll_client()? {
+                break;
+            }
         }
     }
     let epoch = std::time::Instant::now();
