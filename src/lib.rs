@@ -63,6 +63,7 @@ pub mod schedule;
 pub mod sensor;
 pub mod store;
 pub mod time;
+pub mod vehicle;
 
 pub use chain::{Faults, SignalChain};
 pub use device::{Device, Event, Level, Mode, Pin, PowerOn, Shell};
