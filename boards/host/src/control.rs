@@ -20,6 +20,9 @@
 //! | `fault temperature <°C>\|off` | force the sensor temperature (USW bit 14 outside −40…85 °C) |
 //! | `motion static [lat heading]` | the unit at rest (default 45° N, heading 0) |
 //! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
+//! | `motion script <statements>` | fly a manoeuvre script from now, statements separated by `;` (docs/motion.md) |
+//! | `motion file <path>` | a manoeuvre script or full-state CSV file from now (docs/motion.md) |
+//! | `truth` | `ok` and the vehicle truth in `key=value` words (docs/motion.md) |
 //! | `link drop\|corrupt\|duplicate <rate> [tx\|rx]` | each byte lost / XORed / doubled with probability `rate` (both directions unless `tx` = device → client or `rx`) |
 //! | `link noise <bytes> [tx\|rx]` | a burst of random bytes now (default `tx`) |
 //! | `link stall <ms>` | the output held for `ms` of device time, then sent at once |
@@ -58,12 +61,13 @@ use crate::transport::AcceptGuard;
 pub const HELP: &str = "help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
 | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
 | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+| motion script <statement>; … | motion file <path> | truth \
 | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
 | link stall <ms> | link cut | link clear \
 | devices | dev <K> <command> (device K of a --count run)";
 
 /// A parsed control command.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// A pin edge now.
     Edge(Pin, Level),
@@ -73,6 +77,12 @@ pub enum Command {
     Fault(FaultChange),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Fly a manoeuvre script from now (`motion script …`).
+    Script(Box<imu_emu::vehicle::Script>),
+    /// A manoeuvre script or full-state CSV file from now (`motion file …`).
+    MotionFile(std::path::PathBuf),
+    /// Report the vehicle truth (`ok key=value …`).
+    Truth,
     /// Change the link faults.
     Link(LinkChange),
     /// Report the device's and the line's state (`ok key=value …`).
@@ -159,7 +169,11 @@ fn usage(word: &str) -> Option<&'static str> {
         "fault" => {
             "fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
         }
-        "motion" => "motion static [<lat> <heading>], or motion rotate <x> <y> <z>",
+        "motion" => {
+            "motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+             motion script <statement>; …, or motion file <path>"
+        }
+        "truth" => "truth",
         "link" => {
             "link drop|corrupt|duplicate <rate 0..1> [tx|rx], link noise <bytes> [tx|rx], \
              link stall <ms>, link cut, or link clear"
@@ -250,6 +264,13 @@ fn parse_words(words: &[&str]) -> Result<Command, String> {
             heading_deg: 0.0,
             rate_dps: [number(x)?, number(y)?, number(z)?],
         })),
+        ["motion", "script", rest @ ..] if !rest.is_empty() => {
+            imu_emu::vehicle::Script::parse(&rest.join(" "))
+                .map(|s| Command::Script(Box::new(s)))
+                .map_err(|e| format!("manoeuvre script: {e}"))
+        }
+        ["motion", "file", path] => Ok(Command::MotionFile(path.into())),
+        ["truth"] => Ok(Command::Truth),
         ["link", what @ ("drop" | "corrupt" | "duplicate"), p, rest @ ..] if rest.len() <= 1 => {
             let (p, d) = (rate(p)?, dir(rest.first(), Dir::Both)?);
             Ok(Command::Link(match *what {
