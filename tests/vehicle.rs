@@ -225,46 +225,49 @@ fn ideal(t: &Truth, build: Build) -> (V, V) {
     (body(w.map(f64::to_radians)), body(f.map(|x| x * G_ICD)))
 }
 
-/// Integrates a source's ideal output for `ticks` and returns the worst
+/// Integrates a source's ideal output in each of `builds` for `ticks`
+/// of `dt` seconds (one pass of the source) and asserts the worst
 /// (position, velocity, attitude) error against the source's own state.
 fn check(
     name: &str,
     kind: Samples,
-    build: Build,
-    ticks: u64,
+    builds: &[Build],
+    (ticks, dt): (u64, f64),
     metres: f64,
     mut source: impl FnMut(u64) -> (VehicleState, Truth),
-) -> (f64, f64, f64) {
+) {
     let (s0, t0) = source(0);
-    let (w, f) = ideal(&t0, build);
-    let mut nav = Nav::from(&s0, w, f);
-    let mut worst: (f64, f64, f64) = (0.0, 0.0, 0.0);
+    let mut navs: Vec<Nav> = builds
+        .iter()
+        .map(|&b| {
+            let (w, f) = ideal(&t0, b);
+            Nav::from(&s0, w, f)
+        })
+        .collect();
+    let mut worst = vec![(0.0f64, 0.0f64, 0.0f64); builds.len()];
     for k in 1..=ticks {
         let (s, t) = source(k);
-        let (w, f) = ideal(&t, build);
-        nav.step(w, f, DT, kind);
-        if k % 200 == 0 || k == ticks {
-            let e = nav.error(&s);
-            worst = (worst.0.max(e.0), worst.1.max(e.1), worst.2.max(e.2));
+        for ((nav, &b), worst) in navs.iter_mut().zip(builds).zip(&mut worst) {
+            let (w, f) = ideal(&t, b);
+            nav.step(w, f, dt, kind);
+            if k % 200 == 0 || k == ticks {
+                let e = nav.error(&s);
+                *worst = (worst.0.max(e.0), worst.1.max(e.1), worst.2.max(e.2));
+            }
         }
     }
-    eprintln!(
-        "{name} {build:?}: worst {:.3} m, {:.4} m/s, {:.5}°",
-        worst.0, worst.1, worst.2
-    );
-    assert!(
-        worst.0 <= metres,
-        "{name} {build:?}: position {} m",
-        worst.0
-    );
-    assert!(
-        worst.1 <= 0.05,
-        "{name} {build:?}: velocity {} m/s",
-        worst.1
-    );
-    assert!(worst.2 <= 0.01, "{name} {build:?}: attitude {}°", worst.2);
-    worst
+    for (b, w) in builds.iter().zip(worst) {
+        eprintln!(
+            "{name} {b:?}: worst {:.3} m, {:.4} m/s, {:.5}°",
+            w.0, w.1, w.2
+        );
+        assert!(w.0 <= metres, "{name} {b:?}: position {} m", w.0);
+        assert!(w.1 <= 0.05, "{name} {b:?}: velocity {} m/s", w.1);
+        assert!(w.2 <= 0.01, "{name} {b:?}: attitude {}°", w.2);
+    }
 }
+
+const BOTH: &[Build] = &[Build::Float, Build::Fixed];
 
 /// Ten minutes of turns (flat and coordinated), climbs, descents,
 /// accelerations and holds.
@@ -295,17 +298,16 @@ fn script() -> Script {
     s
 }
 
-const TEN_MIN_TICKS: u64 = 1_200_000;
+/// Ten minutes at 2 kHz.
+const TEN_MIN: (u64, f64) = (1_200_000, DT);
 
 #[test]
 fn manoeuvre_script_integrates_back_to_its_state() {
-    for build in [Build::Float, Build::Fixed] {
-        let mut m = Manoeuvres::new(script());
-        check("script", Samples::Mean, build, TEN_MIN_TICKS, 1.0, |k| {
-            let s = m.at(k as f64 * DT);
-            (s, s.truth())
-        });
-    }
+    let mut m = Manoeuvres::new(script());
+    check("script", Samples::Mean, BOTH, TEN_MIN, 1.0, |k| {
+        let s = m.at(k as f64 * DT);
+        (s, s.truth())
+    });
 }
 
 /// The script written as full-state rows at 10 Hz (text, through the row
@@ -336,20 +338,11 @@ fn full_state_rows_integrate_back_to_their_state() {
             FullStateRow::parse(&line, &layout).unwrap()
         })
         .collect();
-    for build in [Build::Float, Build::Fixed] {
-        check(
-            "full-state",
-            Samples::Mean,
-            build,
-            TEN_MIN_TICKS,
-            1.0,
-            |k| {
-                let t = k as f64 * DT;
-                let s = fullstate::sample(&rows, t - DT, t).unwrap();
-                (s, s.truth())
-            },
-        );
-    }
+    check("full-state", Samples::Mean, BOTH, TEN_MIN, 1.0, |k| {
+        let t = k as f64 * DT;
+        let s = fullstate::sample(&rows, t - DT, t).unwrap();
+        (s, s.truth())
+    });
 }
 
 /// Rate/force rows (`--trajectory`): the state is the core's strapdown
@@ -384,21 +377,14 @@ fn rate_rows_integrate_back_to_their_state() {
         start.rate_ib_b = w;
         start.force_b = f;
         let mut sd = Strapdown::new(start);
-        check(
-            "rate rows",
-            Samples::Point,
-            build,
-            TEN_MIN_TICKS,
-            1.0,
-            |k| {
-                let t = at(k as f64 * DT);
-                if k > 0 {
-                    let (w, f) = ideal(&t, build);
-                    sd.step(&w, &f, None, DT);
-                }
-                (*sd.state(), t)
-            },
-        );
+        check("rate rows", Samples::Point, &[build], TEN_MIN, 1.0, |k| {
+            let t = at(k as f64 * DT);
+            if k > 0 {
+                let (w, f) = ideal(&t, build);
+                sd.step(&w, &f, None, DT);
+            }
+            (*sd.state(), t)
+        });
     }
 }
 
@@ -434,31 +420,40 @@ fn built_in_motions_integrate_back_to_their_state() {
             heading_deg: 250.0,
         },
     ];
-    let ticks = 1_200_000;
     for m in motions {
-        let mut float = BuiltinMotion::new(m, DT as f32);
+        // Ten minutes: at 400 Hz for the constant rates (2 kHz would only
+        // make the test five times longer), at the internal 2 kHz for
+        // coning (whose integration needs the rate).
+        let run = match m {
+            Motion::Coning { .. } => TEN_MIN,
+            _ => (240_000, 0.0025),
+        };
+        let dt = run.1;
+        let ns = (dt * 1e9) as u64;
+        let name = format!("{m:?}");
+        let mut float = BuiltinMotion::new(m, dt as f32);
         check(
-            &format!("{m:?}"),
+            &name,
             Samples::Point,
-            Build::Float,
-            ticks,
+            &[Build::Float],
+            run,
             BUILT_IN_METRES,
             |k| {
-                let t = float.next(Instant::from_nanos(k * 500_000), DT as f32);
-                (builtin_state(&m, float.attitude(), &t, k as f64 * DT), t)
+                let t = float.next(Instant::from_nanos(k * ns), dt as f32);
+                (builtin_state(&m, float.attitude(), &t, k as f64 * dt), t)
             },
         );
-        let mut fixed = BuiltinMotionFixed::new(m, DT as f32);
+        let mut fixed = BuiltinMotionFixed::new(m, dt as f32);
         check(
-            &format!("{m:?}"),
+            &name,
             Samples::Point,
-            Build::Fixed,
-            ticks,
+            &[Build::Fixed],
+            run,
             BUILT_IN_METRES,
             |k| {
                 fixed.step();
                 let t = fixed.truth_now();
-                (builtin_state(&m, fixed.attitude(), &t, k as f64 * DT), t)
+                (builtin_state(&m, fixed.attitude(), &t, k as f64 * dt), t)
             },
         );
     }
