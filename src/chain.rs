@@ -184,6 +184,7 @@ use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
 use crate::time::Instant;
+use crate::vehicle::VehicleState;
 
 // Float or fixed point: chosen here, once. Both files define the same items
 // (`Core` with the same methods, `Fir`, `Attitude`, `Truth`, `Sensor`,
@@ -356,6 +357,9 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     ticks: u64,
     interval: f32,
     integrals: I,
+    /// The vehicle a board's source set for this tick
+    /// ([`SignalChain::set_vehicle`]); `None`: the built-in motion's.
+    vehicle: Option<VehicleState>,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -460,6 +464,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks: 0,
             interval: dt,
             integrals: I::default(),
+            vehicle: None,
         }
     }
 
@@ -513,6 +518,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks,
             interval,
             integrals,
+            vehicle,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -538,6 +544,7 @@ impl<I: Integrate> SignalChain<I> {
         *ticks = 0;
         *interval = dt;
         *integrals = I::default();
+        *vehicle = None;
         self.refresh_errors();
     }
 
@@ -565,12 +572,47 @@ impl<I: Integrate> SignalChain<I> {
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
+        self.vehicle = None;
         self.core.set_motion(m, self.dt);
+    }
+
+    /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
+    /// the chain measures `truth` (for the script and full-state sources
+    /// `state.truth()`; for rate/force rows the row's own values, so their
+    /// bytes stay as they were) and reports `state` as the unit's vehicle
+    /// ([`SignalChain::vehicle`]) until the next call or
+    /// [`SignalChain::set_motion`].
+    pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
+        self.core.set_motion(Motion::Sample(truth), self.dt);
+        self.vehicle = Some(state);
+    }
+
+    /// The unit's vehicle now: the state a board's source set
+    /// ([`SignalChain::set_vehicle`]), or the built-in motion's
+    /// ([`crate::vehicle::builtin_state`]: its site, at rest, its attitude
+    /// and its last truth; time = ticks × tick period). Derived when read:
+    /// the tick does no `f64` work for it.
+    pub fn vehicle(&self) -> VehicleState {
+        match &self.vehicle {
+            Some(v) => *v,
+            None => crate::vehicle::builtin_state(
+                self.core.motion.motion(),
+                self.core.motion.attitude(),
+                &self.core.motion.truth_now(),
+                self.ticks as f64 * f64::from(self.dt),
+            ),
+        }
     }
 
     /// Which axes the motion describes (default: the unit's own).
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;
+    }
+
+    /// The built-in motion in force (a board's vehicle source plays as a
+    /// [`Motion::Sample`]).
+    pub fn core_motion(&self) -> &Motion {
+        self.core.motion.motion()
     }
 
     /// The true attitude of the built-in motion at the last tick (housing or

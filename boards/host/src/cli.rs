@@ -103,6 +103,13 @@ pub struct Args {
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
 
+    /// The vehicle the unit rides on, from a file: a manoeuvre script
+    /// (first statement `start lat lon height heading speed`) or a
+    /// full-state CSV (header `time,lat,lon,height,vn,ve,vd,roll,pitch,yaw`
+    /// [`,wx,wy,wz,fx,fy,fz`][`,temp`]); docs/motion.md.
+    #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
+    pub motion: Option<PathBuf>,
+
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
     /// power-cycle the device and inject faults: the program says so on
@@ -405,6 +412,16 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     }
 }
 
+/// `--motion FILE`, loaded (and said on stderr), if given.
+fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSource>> {
+    let Some(path) = &args.motion else {
+        return Ok(None);
+    };
+    let v = crate::vehicle::VehicleSource::load(path)?;
+    eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
+    Ok(Some(v))
+}
+
 fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     parts: Vec<(F, T)>,
     args: &Args,
@@ -417,6 +434,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -438,6 +456,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         seed: args.seed,
         pps: args.pps,
         trajectory,
+        vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
     };
     eprintln!(
@@ -521,6 +540,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -590,6 +610,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     if let Some(t) = trajectory {
         runner = runner.with_trajectory(t);
+    }
+    if let Some(v) = vehicle {
+        runner = runner.with_vehicle(v);
     }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");

@@ -10,8 +10,8 @@
 //! The grammar is one table, [`COMMANDS`]: a row per form of a command
 //! (its syntax, whether `dev K` may address it, its parser). The parser,
 //! the `help` answer and the syntax an error names all read it, so a new
-//! command is a new row (what each command does: README, "The control
-//! protocol"; `runner::HostPort::apply` carries it out).
+//! command is a new row (what each command does: `docs/host-runner.md`,
+//! "The control protocol"; `runner::HostPort::apply` carries it out).
 //!
 //! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
@@ -44,7 +44,7 @@ use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;
 
 /// A parsed control command.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// A pin edge now.
     Edge(Pin, Level),
@@ -54,6 +54,12 @@ pub enum Command {
     Fault(FaultChange),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Fly a manoeuvre script from now (`motion script …`).
+    Script(Box<imu_emu::vehicle::Script>),
+    /// A manoeuvre script or full-state CSV file from now (`motion file …`).
+    MotionFile(std::path::PathBuf),
+    /// Report the vehicle truth (`ok key=value …`).
+    Truth,
     /// Change the link faults.
     Link(LinkChange),
     /// Report the device's and the line's state (`ok key=value …`).
@@ -239,6 +245,19 @@ pub const COMMANDS: &[Form] = &[
         })()),
         _ => None,
     }),
+    form("motion script <statement>; …", true, |w| match w {
+        ["script", rest @ ..] if !rest.is_empty() => Some(
+            imu_emu::vehicle::Script::parse(&rest.join(" "))
+                .map(|s| Command::Script(Box::new(s)))
+                .map_err(|e| format!("manoeuvre script: {e}")),
+        ),
+        _ => None,
+    }),
+    form("motion file <path>", true, |w| match w {
+        ["file", path] => Some(Ok(Command::MotionFile((*path).into()))),
+        _ => None,
+    }),
+    form("truth", true, |w| w.is_empty().then_some(Ok(Command::Truth))),
     form(
         "link drop|corrupt|duplicate <rate 0..1> [tx|rx]",
         true,
