@@ -257,7 +257,9 @@ pub const COMMANDS: &[Form] = &[
         ["file", path] => Some(Ok(Command::MotionFile((*path).into()))),
         _ => None,
     }),
-    form("truth", true, |w| w.is_empty().then_some(Ok(Command::Truth))),
+    form("truth", true, |w| {
+        w.is_empty().then_some(Ok(Command::Truth))
+    }),
     form(
         "link drop|corrupt|duplicate <rate 0..1> [tx|rx]",
         true,
@@ -877,6 +879,7 @@ mod tests {
             "commands: help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
              | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
              | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+             | motion script <statement>; … | motion file <path> | truth \
              | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
              | link stall <ms> | link cut | link clear \
              | devices | dev <K> <command> (device K of a --count run)"
@@ -887,7 +890,10 @@ mod tests {
         );
         assert_eq!(
             usage("motion").as_deref(),
-            Some("motion static [<lat> <heading>], or motion rotate <x> <y> <z>")
+            Some(
+                "motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+                 motion script <statement>; …, or motion file <path>"
+            )
         );
         assert_eq!(usage("pps").as_deref(), Some("pps"));
         assert_eq!(usage("dev").as_deref(), Some("dev <K> <command>"));
@@ -907,7 +913,8 @@ mod tests {
         assert_eq!(
             parse("motion static 1"),
             Err("bad syntax: motion static 1; expected \
-            motion static [<lat> <heading>], or motion rotate <x> <y> <z>"
+            motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+            motion script <statement>; …, or motion file <path>"
                 .to_owned())
         );
         assert_eq!(
