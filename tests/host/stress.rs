@@ -485,3 +485,90 @@ fn an_isb_burst_over_a_pty_gets_every_reply() {
 fn an_isb_burst_over_a_serial_port_gets_every_reply() {
     a_burst_gets_every_reply(Via::Serial, true);
 }
+
+/// Issue 22 (minor): saves that fail to reach the flash file (here every
+/// write refused with EFBIG: `ulimit -f 0` on an existing image, as a
+/// full disk refuses them) are said on stderr at most once a second, with
+/// the count, not once per save.
+#[test]
+fn failed_flash_writes_are_reported_at_most_once_a_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let flash = dir.path().join("imu.flash");
+    std::fs::write(&flash, vec![0xFF; 8192]).unwrap();
+    let mut cmd = std::process::Command::new("bash");
+    cmd.args([
+        "-c",
+        &format!(
+            "trap '' XFSZ; ulimit -f 0; exec {} --tcp 127.0.0.1:0 --flash {}",
+            env!("CARGO_BIN_EXE_imu-emu"),
+            flash.display()
+        ),
+    ]);
+    let emu = Emu::start_command(cmd);
+    let mut c = emu.connect();
+    let t0 = std::time::Instant::now();
+    for k in 0..20u16 {
+        c.send(&support::save_flash(
+            0x0012,
+            &(100 + k % 2 * 100).to_le_bytes(),
+        ));
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    c.send(&support::read_ram(0x0012, 2));
+    c.frame_with_id(0xB1);
+    let secs = t0.elapsed().as_secs() + 1;
+    let err = emu.stderr();
+    let lines = err.lines().filter(|l| l.contains("File too large")).count();
+    assert!(lines >= 1, "{err}");
+    assert!(lines as u64 <= secs, "{lines} lines in {secs} s: {err}");
+    assert!(err.contains("failed writes so far"), "{err}");
+}
+
+/// Issue 22 (minor): a `--count` start that fails (device 2's flash path
+/// is a directory; device 2's port is taken) leaves none of the `FILE.K`
+/// files it created; a file that was there before stays.
+#[test]
+fn a_fleet_start_that_fails_leaves_no_flash_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let flash = dir.path().join("imu");
+    let k = |n: usize| dir.path().join(format!("imu.{n}"));
+    std::fs::create_dir(k(2)).unwrap();
+    let o = run_for(
+        &[
+            "--count",
+            "3",
+            "--tcp",
+            "127.0.0.1:0",
+            "--flash",
+            flash.to_str().unwrap(),
+        ],
+        TIMEOUT,
+    );
+    assert!(!o.status.success());
+    assert!(!k(0).exists() && !k(1).exists(), "FILE.0/FILE.1 left");
+    assert!(k(2).is_dir());
+    std::fs::remove_dir(k(2)).unwrap();
+
+    // The third port taken; device 0's file was there before.
+    std::fs::write(k(0), vec![0xFF; 8192]).unwrap();
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let o = run_for(
+        &[
+            "--count",
+            "3",
+            "--tcp",
+            &format!("127.0.0.1:{}", port - 2),
+            "--flash",
+            flash.to_str().unwrap(),
+        ],
+        TIMEOUT,
+    );
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(k(0).exists(), "a file that was there before was removed");
+    assert!(!k(1).exists() && !k(2).exists(), "FILE.1/FILE.2 left");
+}
