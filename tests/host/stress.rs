@@ -572,3 +572,17 @@ fn a_fleet_start_that_fails_leaves_no_flash_files() {
     assert!(k(0).exists(), "a file that was there before was removed");
     assert!(!k(1).exists() && !k(2).exists(), "FILE.1/FILE.2 left");
 }
+
+/// Issue 22 (minor), a documented decision: the control socket serves one
+/// client; a new one replaces the previous one, whose connection is
+/// closed (it reads end of file), and is answered.
+#[test]
+fn a_new_control_client_replaces_the_previous_one() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let _emu = Emu::tcp(&["--control", &addr]);
+    let mut first = support::Control::connect(&addr);
+    assert_eq!(first.cmd("devices").split(' ').next(), Some("ok"));
+    let mut second = support::Control::connect(&addr);
+    assert_eq!(second.cmd("devices").split(' ').next(), Some("ok"));
+    assert_eq!(first.line(), "", "the first client was not closed");
+}
