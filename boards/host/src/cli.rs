@@ -333,14 +333,33 @@ fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
     }
     let n = usize::from(args.count);
     open_files_for(n);
+    let started = std::cell::Cell::new(false);
     match &args.flash {
         Some(path) => {
-            let flashes = (0..n)
-                .map(|k| FileNor::open(&numbered(path, k)))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            many_with(flashes, args, stop)
+            let files: Vec<PathBuf> = (0..n).map(|k| numbered(path, k)).collect();
+            let new: Vec<&PathBuf> = files
+                .iter()
+                .filter(|p| std::fs::symlink_metadata(p).is_err())
+                .collect();
+            let r = files
+                .iter()
+                .map(|p| FileNor::open(p))
+                .collect::<anyhow::Result<Vec<_>>>()
+                .and_then(|flashes| many_with(flashes, args, stop, &started));
+            if r.is_err() && !started.get() {
+                // A start that failed leaves no FILE.K it created.
+                for p in new {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            r
         }
-        None => many_with((0..n).map(|_| MemNor::new()).collect(), args, stop),
+        None => many_with(
+            (0..n).map(|_| MemNor::new()).collect(),
+            args,
+            stop,
+            &started,
+        ),
     }
 }
 
@@ -369,10 +388,16 @@ fn open_files_for(n: usize) {
     }
 }
 
-fn many_with<F: NorFlash>(flashes: Vec<F>, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+/// `started` is set once every device is set up and the fleet runs.
+fn many_with<F: NorFlash>(
+    flashes: Vec<F>,
+    args: &Args,
+    stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
+) -> anyhow::Result<()> {
     match args.protocol {
-        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop),
-        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop),
+        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop, started),
+        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop, started),
     }
 }
 
@@ -380,6 +405,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     flashes: Vec<F>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let rate = factory_rate(args.protocol);
     if args.pty {
@@ -388,7 +414,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
             let link = args.link.as_deref().map(|p| numbered(p, k));
             parts.push((f, PtyTransport::open(rate, link.as_deref())?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     } else {
         let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
         let sock: std::net::SocketAddr = addr
@@ -408,7 +434,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
             let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
             parts.push((f, TcpTransport::bind(&a)?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     }
 }
 
@@ -426,6 +452,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     parts: Vec<(F, T)>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let trajectory = match &args.trajectory {
         Some(path) => Some(crate::trajectory::Trajectory::load(
@@ -474,6 +501,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     );
     let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
