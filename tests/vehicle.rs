@@ -9,10 +9,10 @@
 //! NIMA TR8350.2 and the textbook NED mechanization, independently of
 //! `src/vehicle/`; they share only the `VehicleState` they compare.
 
+use imu_emu::math::units::{ACC_BITS, GYRO_BITS};
 use imu_emu::sensor::motion::{
     BuiltinMotion, BuiltinMotionFixed, Motion, MotionSource, Truth, TruthFixed,
 };
-use imu_emu::sensor::units::{ACC_BITS, GYRO_BITS};
 
 use imu_emu::time::Instant;
 use imu_emu::vehicle::{

@@ -178,7 +178,7 @@ pub fn housing_to_body(v: &V3) -> V3 {
 /// The built-ins rotate and vibrate in place (docs/motion.md).
 pub fn builtin_state(
     motion: &Motion,
-    attitude: Option<crate::ahrs::rotation::Quat>,
+    attitude: Option<crate::math::rotation::Quat>,
     truth: &Truth,
     time_s: f64,
 ) -> VehicleState {
@@ -415,7 +415,7 @@ pub fn wrap_pi(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ahrs::rotation::quat_from_euler as quat_from_euler_c;
+    use crate::math::rotation::quat_from_euler as quat_from_euler_c;
 
     fn close(a: &V3, b: &V3, tol: f64) -> bool {
         (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
