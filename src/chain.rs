@@ -83,7 +83,10 @@
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
 //! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
-//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The
+//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The vehicle
+//! state a board may set ([`SignalChain::set_vehicle`]) adds 144 B to
+//! both (measured on x86-64: 10 208 → 10 352 B; `f64` fields align alike
+//! on thumbv7em). The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192

@@ -263,3 +263,49 @@ fn a_full_state_csv_moves_the_unit() {
     assert!(t.starts_with("ok source=full-state "), "{t}");
     drop(emu);
 }
+
+/// Runs `imu-emu` with `args` to its exit (it refuses them at once).
+fn refused(args: &[&str]) -> (Option<i32>, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A `--motion` file that is neither kind, or a bad row, stops the program
+/// before it listens, naming the file, the line and the reason;
+/// `--motion` with `--trajectory` is a usage error.
+#[test]
+fn bad_motion_files_are_refused_at_start() {
+    let rate = TempFile::new("rate.csv", "time_s,wx,wy,wz,fx,fy,fz\n0,0,0,0,0,0,1\n");
+    let (code, out, err) = refused(&["--tcp", "127.0.0.1:0", "--motion", rate.path()]);
+    assert_ne!(code, Some(0), "{err}");
+    assert!(out.is_empty(), "listened anyway: {out}");
+    assert!(
+        err.contains(rate.path()) && err.contains("neither a manoeuvre script"),
+        "{err}"
+    );
+    let row = TempFile::new(
+        "row.csv",
+        "time,lat,lon,height,vn,ve,vd,roll,pitch,yaw\n0,45,7,300,0,0,0,0,0,0\n1,45,7,x,0,0,0,0,0,0\n",
+    );
+    let (_, out, err) = refused(&["--tcp", "127.0.0.1:0", "--motion", row.path()]);
+    assert!(out.is_empty(), "listened anyway: {out}");
+    assert!(err.contains("line 3: not a finite number"), "{err}");
+    let (code, _, err) = refused(&[
+        "--tcp",
+        "127.0.0.1:0",
+        "--motion",
+        row.path(),
+        "--trajectory",
+        rate.path(),
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--trajectory"), "{err}");
+}
