@@ -22,23 +22,35 @@ pub const DEV_INFO: u8 = 1;
 pub const SYS_FAULT: u8 = 2;
 /// `pimu_t`: preintegrated IMU (coning and sculling integrals).
 pub const PIMU: u8 = 3;
-/// `ins_1_t`: INS output, Euler (not served in IMU mode).
+/// `ins_1_t`: INS output, Euler attitude and NED offset.
 pub const INS_1: u8 = 4;
-/// `ins_2_t`: INS output, quaternion (not served in IMU mode).
+/// `ins_2_t`: INS output, quaternion attitude.
 pub const INS_2: u8 = 5;
+/// `ins_3_t`: INS output, quaternion attitude and MSL height.
+pub const INS_3: u8 = 65;
+/// `ins_4_t`: INS output, ECEF.
+pub const INS_4: u8 = 66;
+/// `gps_pos_t`: GNSS position (the better of GPS1_RCVR_POS / RTK).
+pub const GPS1_POS: u8 = 13;
+/// `gps_vel_t`: GNSS velocity.
+pub const GPS1_VEL: u8 = 30;
+/// `imu_mag_t`: IMU and magnetometer.
+pub const IMU_MAG: u8 = 85;
+/// `pimu_mag_t`: PIMU and magnetometer.
+pub const PIMU_MAG: u8 = 86;
 /// `system_command_t`: system commands.
 pub const SYS_CMD: u8 = 7;
 /// `rmc_t`: realtime message controller.
 pub const RMC: u8 = 9;
 /// `sys_params_t`: system parameters.
 pub const SYS_PARAMS: u8 = 10;
-/// `sys_sensors_t`: system sensors (not served).
+/// `sys_sensors_t`: system sensors.
 pub const SYS_SENSORS: u8 = 11;
 /// `nvm_flash_cfg_t`: flash configuration.
 pub const FLASH_CONFIG: u8 = 12;
-/// `magnetometer_t` (not served: no magnetometer in the model).
+/// `magnetometer_t`: magnetometer.
 pub const MAGNETOMETER: u8 = 52;
-/// `barometer_t` (not served: no barometer in the model).
+/// `barometer_t`: barometer.
 pub const BAROMETER: u8 = 53;
 /// `imu3_t` uncalibrated triple IMU (not served).
 pub const IMU3_UNCAL: u8 = 57;

@@ -16,7 +16,9 @@
 
 pub mod device;
 pub mod did;
+pub mod layout;
 pub mod message;
+pub mod nav_sets;
 pub mod nmea;
 pub mod packet;
 pub mod sets;
