@@ -7,7 +7,7 @@ use imu_emu::isb::did;
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
-    dev_info, flash, hdw_status, imu_status, rmc, sys_params, DevInfo, Imu, Pimu, Rmc,
+    dev_info, flash, hdw_status, imu_status, rmc, sys_cmd, sys_params, DevInfo, Imu, Pimu, Rmc,
     StrobeInTime, SysParams, SystemCommand,
 };
 use imu_emu::isb::Isb;
@@ -176,6 +176,8 @@ fn the_vendor_tools_connection_sequence() {
         assert!(d.accepted_by_sdk(), "{d:?}");
         assert_eq!(d.hardware_type, dev_info::HARDWARE_TYPE_IMX);
         assert_eq!(d.protocol_ver, [2, 1, 0, 0]);
+        // The IMX-5 firmware released with SDK 2.7.1, not the protocol.
+        assert_eq!(d.firmware_ver, [2, 7, 1, 0]);
         assert_eq!(d.serial_number, 10_000_011);
     }
     for _ in 0..2 {
@@ -218,13 +220,14 @@ fn imu_streams_every_nav_period_with_exact_time() {
     b.run_ticks(100);
     let r = b.send(&hex("ef 49 03 00 08 00 3a 00 00 00 00 00 01 00 7e 0d"));
     assert_eq!(r.len(), 1, "one packet at once");
-    // Whole, without the offset flag, the last tick's sample.
+    // Whole, without the offset flag: the last whole navigation period,
+    // which ended at tick 96 (on the 4 ms grid).
     assert_eq!(
         (r[0].flags, r[0].did, r[0].payload.len()),
         (4, did::IMU, 36)
     );
     let imu = Imu::decode(&r[0].payload.clone().try_into().unwrap());
-    assert_eq!(imu.time, 0.05);
+    assert_eq!(imu.time, 0.048);
     assert!((imu.acc[2] + 9.81).abs() < 0.1, "{:?}", imu.acc);
     let r = b.run_ticks(2000);
     assert_eq!(r.len(), 250);
@@ -236,7 +239,8 @@ fn imu_streams_every_nav_period_with_exact_time() {
         })
         .collect();
     for (k, (p, imu)) in r.iter().zip(&imus).enumerate() {
-        assert_eq!(p.tick, 100 + 8 * (k as u64 + 1));
+        // On the grid: 104, 112, …
+        assert_eq!(p.tick, 96 + 8 * (k as u64 + 1));
         assert_eq!(imu.time, (p.tick * 500_000) as f64 / 1e9, "{k}");
         assert_eq!(imu.status, imu_status::ALL_OK);
         assert!((imu.acc[2] + 9.81).abs() < 0.05, "{:?}", imu.acc);
@@ -261,12 +265,17 @@ fn pimu_integrates_exactly_its_period() {
         rate_dps: [0.0, 0.0, 90.0],
     });
     b.run_ticks(10);
-    b.send(&get(did::PIMU, 2));
+    // The reply at once covers the last whole navigation period (ticks
+    // 0..8): dt = startupNavDtMs, time on the grid.
+    let once = b.send(&get(did::PIMU, 2));
+    let first = Pimu::decode(&once[0].payload.clone().try_into().unwrap());
+    assert_eq!((first.dt, first.time), (0.004, 0.004));
     let r = b.run_ticks(4000);
     assert_eq!(r.len(), 250);
     let mut total = 0.0f64;
     for (k, p) in r.iter().enumerate() {
-        assert_eq!(p.tick, 10 + 16 * (k as u64 + 1));
+        // The stream starts where the reply ended (tick 8): 24, 40, …
+        assert_eq!(p.tick, 8 + 16 * (k as u64 + 1));
         let pimu = Pimu::decode(&p.payload.clone().try_into().unwrap());
         assert_eq!(pimu.dt, 0.008, "{k}");
         assert_eq!(pimu.time, (p.tick * 500_000) as f64 / 1e9);
@@ -634,4 +643,44 @@ fn a_changed_key_restores_the_factory_defaults_at_boot() {
     let fc = b.flash_config();
     assert_eq!(u32_at(&fc, flash::KEY), flash::FACTORY_KEY);
     assert_eq!(u32_at(&fc, flash::STARTUP_NAV_DT_MS), 4);
+}
+
+/// The vendor tool's `-factoryReset`: SYS_CMD 1122334455 (unlock) then
+/// 1357924680 back to back restores the FLASH_CONFIG defaults, saves them
+/// and resets; without the unlock right before it, it does nothing.
+#[test]
+fn the_factory_reset_pair_restores_the_defaults_and_resets() {
+    let mut b = Bench::new();
+    let factory = b.flash_config();
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::STARTUP_NAV_DT_MS as u16,
+        &8u32.to_le_bytes(),
+    ));
+    b.run_ticks(1);
+    let changed = b.flash_config();
+    assert_ne!(changed, factory);
+    // The factory reset alone, or with another command between: nothing.
+    for code in [
+        sys_cmd::MANF_FACTORY_RESET,
+        sys_cmd::MANF_UNLOCK,
+        sys_cmd::ZERO_MOTION,
+        sys_cmd::MANF_FACTORY_RESET,
+    ] {
+        b.send(&set(did::SYS_CMD, 0, &SystemCommand::new(code).encode()));
+    }
+    b.run_ticks(2);
+    assert_eq!(b.flash_config(), changed);
+    // The pair as the tool sends it ({1122334455, 3172632840} then
+    // {1357924680, 2937042615}), back to back: each ACKed, then the reset.
+    b.send(&get(did::IMU, 1));
+    let both = hex("ef 49 05 07 08 00 f7 76 e5 42 08 89 1a bd 48 e6 \
+         ef 49 05 07 08 00 48 49 f0 50 b7 b6 0f af 48 da");
+    let r = b.send(&both);
+    assert_eq!(r.iter().filter(|p| p.flags == 1).count(), 2, "{r:?}");
+    b.run_ticks(1);
+    assert_eq!(b.flash_config(), factory, "defaults in RAM");
+    assert!(b.dev.personality().streams().next().is_none(), "it reset");
+    let mut b = b.power_cycle();
+    assert_eq!(b.flash_config(), factory, "and in flash");
 }

@@ -19,7 +19,10 @@
 //!   exactly the ticks since its previous packet (PIMU: coning- and
 //!   sculling-corrected Δθ, Δv, with `dt` that window; IMU and IMU_RAW: the
 //!   window's mean rate and specific force). The packet a GET sends at
-//!   once covers the last tick. Axes: the IMX's body frame is forward,
+//!   once covers the last whole source period (on the grid of periods
+//!   counted from power-on), a stream starts where it ended and sends on
+//!   that grid, so `time` is a multiple of the period and PIMU `dt` is
+//!   always `n ×` the period. Axes: the IMX's body frame is forward,
 //!   right, down; the chain's carrier frame is the KERNEL's (x, y, z up),
 //!   so the IMX reports `(x, −y, −z)` — at rest `acc = (0, 0, −g)`.
 //! - **SET_DATA** ([`message::apply_set`]): FLASH_CONFIG (checksum
@@ -28,7 +31,8 @@
 //!   apply after a reset: "system reset required" while they differ from
 //!   the running values), RMC (below), SYS_CMD (1 save persistent
 //!   messages, 97 save flash, 99 software reset, 5 zero motion: accepted,
-//!   no effect; ignored unless `invCommand == !command`), SYS_PARAMS
+//!   no effect; 1122334455 then 1357924680: factory reset of FLASH_CONFIG,
+//!   saved, then a reset; ignored unless `invCommand == !command`), SYS_PARAMS
 //!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
 //!   done, the result from the chain's BIT faults).
 //! - **RMC**: its bits stand for the streams of the data sets that have an
@@ -127,9 +131,15 @@ struct State {
     save_pending: bool,
     streams: Vec<Stream, MAX_STREAMS>,
     rmc_options: u32,
-    /// The integrals before the last tick (the window of a one-shot
-    /// IMU/PIMU: that tick).
-    prev: Integrals,
+    /// The integrals at the last two boundaries of the navigation period
+    /// and of the IMU sample period (ticks since power-on a multiple of
+    /// it): a one-shot IMU/PIMU covers the last whole period, a stream
+    /// starts at the last boundary (module doc).
+    nav_grid: [Integrals; 2],
+    imu_grid: [Integrals; 2],
+    /// The manufacturing unlock (SYS_CMD 1122334455) was the last command:
+    /// a factory reset may follow.
+    unlocked: bool,
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
@@ -163,7 +173,9 @@ impl Personality for Isb {
                 save_pending: false,
                 streams: Vec::new(),
                 rmc_options: 0,
-                prev: Integrals::default(),
+                nav_grid: [Integrals::default(); 2],
+                imu_grid: [Integrals::default(); 2],
+                unlocked: false,
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
@@ -200,7 +212,10 @@ impl Personality for Isb {
         st.save_pending = false;
         st.streams.clear();
         st.rmc_options = 0;
-        st.prev = sh.chain().integrals();
+        let at_boot = sh.chain().integrals();
+        st.nav_grid = [at_boot; 2];
+        st.imu_grid = [at_boot; 2];
+        st.unlocked = false;
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
@@ -245,11 +260,9 @@ impl Personality for Isb {
         st.parse_errors = self.input.isb_errors();
     }
 
-    /// The integrals before this tick are kept (a one-shot IMU covers the
-    /// last tick); a packet or sentence cut short ([`RX_IDLE_ABANDON_NS`]
-    /// without a byte) is dropped.
+    /// A packet or sentence cut short ([`RX_IDLE_ABANDON_NS`] without a
+    /// byte) is dropped.
     fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
-        self.st.prev = sh.chain().integrals();
         if self.input.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
             self.input.abandon();
             sh.touch_rx(now);
@@ -257,9 +270,21 @@ impl Personality for Isb {
         }
     }
 
-    /// Pending flash writes happen; every periodic stream due sends.
+    /// The period grids advance; pending flash writes happen; every
+    /// periodic stream due sends.
     fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
         let st = &mut self.st;
+        let (nav, imu) = (
+            st.grid_ticks(sh, st.nav_dt_ms),
+            st.grid_ticks(sh, st.imu_dt_ms),
+        );
+        let ticks = sh.ticks();
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], sh.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], sh.chain().integrals()];
+        }
         if st.save_pending {
             st.save(sh);
         }
@@ -374,6 +399,31 @@ impl State {
         (ms.saturating_mul(rate_hz) / 1000).max(1)
     }
 
+    /// Ticks in `ms` (at least 1).
+    fn grid_ticks<F: NorFlash>(&self, sh: &Shell<F, Isb>, ms: u32) -> u32 {
+        (ms.saturating_mul(rate(sh)) / 1000).max(1)
+    }
+
+    /// The period grid a windowed data set lives on: IMU_RAW the IMU
+    /// sample period's, the others the navigation period's.
+    fn grid(&self, did: u8) -> [Integrals; 2] {
+        if did == did::IMU_RAW {
+            self.imu_grid
+        } else {
+            self.nav_grid
+        }
+    }
+
+    /// Ticks of the period of [`Self::grid`]`(did)`.
+    fn window_ticks<F: NorFlash>(&self, sh: &Shell<F, Isb>, did: u8) -> u32 {
+        let ms = if did == did::IMU_RAW {
+            self.imu_dt_ms
+        } else {
+            self.nav_dt_ms
+        };
+        self.grid_ticks(sh, ms)
+    }
+
     /// Starts (or replaces) the stream of `set`.
     fn start_stream<F: NorFlash>(
         &mut self,
@@ -389,14 +439,19 @@ impl State {
             self.source_ticks(sh.product().model.internal_rate_hz, set)
                 .saturating_mul(u32::from(period))
         };
+        // The first packet falls on the source period's grid (ticks since
+        // power-on a multiple of it) and a windowed one covers `period`
+        // whole source periods from the last boundary (module doc).
+        let src = self.source_ticks(rate(sh), set);
+        let phase = (sh.ticks() % u64::from(src)) as u32;
         let s = Stream {
             did: set.did,
             offset,
             size,
             period,
             every,
-            countdown: every,
-            start: sh.chain().integrals(),
+            countdown: every.saturating_sub(phase).max(1),
+            start: self.grid(set.did)[1],
         };
         match self.find(set.did) {
             Some(i) => self.streams[i] = s,
@@ -495,10 +550,20 @@ impl State {
             did::SYS_CMD => {
                 let mut b = [0u8; sys_cmd::SIZE];
                 b.copy_from_slice(&image[..sys_cmd::SIZE]);
-                match SystemCommand::decode(&b).valid() {
+                let cmd = SystemCommand::decode(&b).valid();
+                let unlocked = core::mem::replace(&mut self.unlocked, false);
+                match cmd {
                     Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(sh),
                     Some(sys_cmd::SAVE_FLASH) => self.save(sh),
                     Some(sys_cmd::SOFTWARE_RESET) => sh.request_reset(),
+                    Some(sys_cmd::MANF_UNLOCK) => self.unlocked = true,
+                    // FLASH_CONFIG back to the factory defaults, saved, then
+                    // a reset (docs/isb.md); only right after the unlock.
+                    Some(sys_cmd::MANF_FACTORY_RESET) if unlocked => {
+                        self.cfg = FlashConfig::factory();
+                        self.save(sh);
+                        sh.request_reset();
+                    }
                     _ => {}
                 }
             }
@@ -632,9 +697,11 @@ impl State {
             }
             .encode()),
             did::IMU | did::IMU_RAW | did::PIMU => {
-                let w = integrals::window(&self.prev, &sh.chain().integrals(), rate(sh));
+                let [a, b] = self.grid(did);
+                let w = integrals::window(&a, &b, rate(sh));
                 let n = windowed_len(did);
-                put(&self.windowed(sh, did, &w, now)[..n])
+                let end = sh.ticks() - sh.ticks() % u64::from(self.window_ticks(sh, did));
+                put(&self.windowed(sh, did, &w, end)[..n])
             }
             _ => 0,
         }
@@ -654,11 +721,12 @@ impl State {
         sh: &Shell<F, Isb>,
         did: u8,
         w: &Increment,
-        now: Instant,
+        end_tick: u64,
     ) -> [u8; sets::pimu::SIZE] {
         let h = sh.chain().health();
         let status = imu_status_of(&h);
-        let time = now.since(sh.powered_at()) as f64 / 1e9;
+        // On the sample grid: the tick that ends the window.
+        let time = end_tick as f64 / f64::from(rate(sh));
         let dt = w.samples as f64 / f64::from(rate(sh));
         let mut out = [0u8; sets::pimu::SIZE];
         if did == did::PIMU {
@@ -711,7 +779,7 @@ impl State {
                 let end = sh.chain().integrals();
                 let w = integrals::window(&s.start, &end, rate(sh));
                 self.streams[i].start = end;
-                let b = self.windowed(sh, s.did, &w, now);
+                let b = self.windowed(sh, s.did, &w, sh.ticks());
                 let n = windowed_len(s.did);
                 image[..n].copy_from_slice(&b[..n]);
                 n
@@ -824,8 +892,8 @@ fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
         hdw_run_state: dev_info::RUN_STATE_APP,
         serial_number: 10_000_000 + (sh.seed() % 90_000_000) as u32,
         hardware_ver: [5, 0, 0, 0],
-        firmware_ver: [2, 1, 0, 0],
-        build_number: 1,
+        firmware_ver: dev_info::FIRMWARE_2_7_1,
+        build_number: dev_info::BUILD_NUMBER_2_7_1,
         protocol_ver: dev_info::PROTOCOL_2_1,
         repo_revision: 0,
         manufacturer: sets::str24("Inertial Sense Inc"),

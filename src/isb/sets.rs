@@ -103,6 +103,13 @@ pub mod dev_info {
     /// Protocol version 2.1.0.0 (protocol-facts.md: the SDK 2.7.1 speaks it and
     /// accepts a device only with `protocolVer[0] == 2`).
     pub const PROTOCOL_2_1: [u8; 4] = [2, 1, 0, 0];
+    /// Firmware 2.7.1.0: the IMX-5 firmware released with SDK 2.7.1 (each
+    /// SDK release ships the IMX-5 firmware of its own version,
+    /// `IS_IMX-5_vX.Y.Z…hex`: the SDK's release page; docs/isb.md).
+    pub const FIRMWARE_2_7_1: [u8; 4] = [2, 7, 1, 0];
+    /// `buildNumber` reported with it (the 2.7.1 build number is not
+    /// public; the emulator's choice, docs/isb.md).
+    pub const BUILD_NUMBER_2_7_1: u32 = 1;
 }
 
 /// `dev_info_t` ([`dev_info`]).
@@ -381,6 +388,11 @@ crate::data_set! {
     pub const SAVE_FLASH: u32 = 97;
     /// Software reset.
     pub const SOFTWARE_RESET: u32 = 99;
+    /// Manufacturing unlock (`SYS_CMD_MANF_UNLOCK`): must come right before
+    /// a manufacturing command.
+    pub const MANF_UNLOCK: u32 = 1_122_334_455;
+    /// Factory reset (`SYS_CMD_MANF_FACTORY_RESET`), after the unlock.
+    pub const MANF_FACTORY_RESET: u32 = 1_357_924_680;
 }
 
 impl SystemCommand {
