@@ -574,6 +574,12 @@ impl<I: Integrate> SignalChain<I> {
         self.truth_frame = frame;
     }
 
+    /// The built-in motion in force (its site and heading; what a
+    /// personality's navigation outputs read until a vehicle state exists).
+    pub fn motion(&self) -> Motion {
+        *self.core.motion.motion()
+    }
+
     /// The true attitude of the built-in motion at the last tick (housing or
     /// carrier per [`TruthFrame`], Appendix C convention).
     pub fn truth_attitude(&self) -> Option<Quat> {

@@ -4,7 +4,12 @@
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
 use imu_emu::isb::did;
+use imu_emu::isb::ins::NavFaults;
 use imu_emu::isb::message::{self, GetRequest};
+use imu_emu::isb::nav;
+use imu_emu::isb::nav_sets::{
+    hdw_nav, ins_status, rmc_nav, Barometer, GpsPos, Ins1, Ins2, Ins4, Magnetometer,
+};
 use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
     dev_info, flash, hdw_status, imu_status, rmc, sys_cmd, sys_params, DevInfo, Imu, Pimu, Rmc,
@@ -683,4 +688,284 @@ fn the_factory_reset_pair_restores_the_defaults_and_resets() {
     assert!(b.dev.personality().streams().next().is_none(), "it reset");
     let mut b = b.power_cycle();
     assert_eq!(b.flash_config(), factory, "and in flash");
+}
+
+// ---- navigation (docs/isb.md "Navigation") -------------------------------
+
+fn ins2_of(p: &Pkt) -> Ins2 {
+    Ins2::decode(&p.payload.clone().try_into().unwrap())
+}
+
+/// Element by element within `tol`.
+fn close(a: &[f64], b: &[f64], tol: f64) {
+    assert!(
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol),
+        "{a:?} vs {b:?}"
+    );
+}
+
+fn of_did(r: &[Pkt], d: u8) -> Vec<Pkt> {
+    r.iter().filter(|p| p.did == d).cloned().collect()
+}
+
+/// After power-on the INS aligns (5 s), runs as an AHRS until the
+/// receiver's cold-start fix (30 s), then navigates: insStatus through
+/// those phases, INS_2 every 4 ms and GPS1_POS every 200 ms by their own
+/// time fields, GPS time once known (week 2399 for the default epoch),
+/// `towOffset` tying the IMU's time since boot to the time of week.
+#[test]
+fn ins_phases_gps_time_and_periods() {
+    let mut b = Bench::new();
+    b.send(&get(did::INS_2, 1));
+    b.send(&get(did::GPS1_POS, 1));
+    let r = b.run_ticks(2000);
+    let ins = of_did(&r, did::INS_2);
+    assert_eq!(ins.len(), 250);
+    let first = ins2_of(&ins[0]);
+    assert_eq!(ins_status::solution(first.ins_status), 1, "aligning");
+    assert_eq!((first.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
+    // Before GPS time: time since boot.
+    assert_eq!(first.time_of_week, ins[0].tick as f64 / 2000.0);
+    let r = b.run_ticks(10_000);
+    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap()).ins_status;
+    assert_eq!(ins_status::solution(s), ins_status::SOLUTION_AHRS);
+    assert_eq!(s & ins_status::NAV_MODE, 0);
+    let r = b.run_ticks(50_000);
+    let gps = of_did(&r, did::GPS1_POS);
+    let fixes: Vec<GpsPos> = gps
+        .iter()
+        .map(|p| GpsPos::decode(&p.payload.clone().try_into().unwrap()))
+        .filter(|g| g.status != 0)
+        .collect();
+    assert!(!fixes.is_empty());
+    for w in fixes.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+        assert_eq!(w[1].time_of_week_ms % 200, 0);
+    }
+    let g = fixes.last().unwrap();
+    assert_eq!(g.status, 0x0001_030C);
+    assert_eq!((g.week, g.leap_s, g.sats_used), (2399, 18, 12));
+    let ins = of_did(&r, did::INS_2);
+    let last = ins2_of(ins.last().unwrap());
+    assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
+    assert_eq!(last.week, 2399);
+    let since_boot = ins.last().unwrap().tick as f64 / 2000.0;
+    assert!((last.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
+    for w in ins.windows(2) {
+        let (a, c) = (ins2_of(&w[0]), ins2_of(&w[1]));
+        if a.week == c.week && a.week != 0 {
+            assert!((c.time_of_week - a.time_of_week - 0.004).abs() < 1e-6);
+        }
+    }
+    // SYS_PARAMS carries the same words.
+    let sp = b.sys_params();
+    assert_eq!(sp.ins_status, 0x0103_5970);
+    assert_ne!(sp.hdw_status & hdw_nav::GPS_TIME_OF_WEEK_VALID, 0);
+}
+
+/// INS_1's NED offset agrees with its LLA and `refLla`; INS_4's ECEF with
+/// INS_2's LLA; qe2b with qe2n ⊗ qn2b; GPS1_POS with the INS within the
+/// stated errors (σ 1 m / 1.5 m receiver, 0.7 m / 1 m INS).
+#[test]
+fn the_navigation_data_sets_agree() {
+    let mut b = Bench::new();
+    let mut ref_lla = Vec::new();
+    for v in [44.9f64, 0.1, -20.0] {
+        ref_lla.extend_from_slice(&v.to_le_bytes());
+    }
+    let r = b.send(&set(did::FLASH_CONFIG, flash::REF_LLA as u16, &ref_lla));
+    assert_eq!(r[0].flags, 1);
+    b.run_ticks(62_000);
+    let one = |b: &mut Bench, d| b.get_once(d);
+    let i1 = Ins1::decode(&one(&mut b, did::INS_1).try_into().unwrap());
+    let i2 = Ins2::decode(&one(&mut b, did::INS_2).try_into().unwrap());
+    let i4 = Ins4::decode(&one(&mut b, did::INS_4).try_into().unwrap());
+    let g = GpsPos::decode(&one(&mut b, did::GPS1_POS).try_into().unwrap());
+    let want = nav::ned_from_ref(&i1.lla, &[44.9, 0.1, -20.0]);
+    close(&i1.ned.map(f64::from), &want, 0.01);
+    assert!((f64::from(i1.ned[0]) - 0.1f64.to_radians() * 6_366_707.019_5).abs() < 5.0);
+    assert_eq!(i1.lla, i2.lla);
+    close(&i4.ecef, &nav::ecef_of(&i2.lla), 1e-6);
+    let q = nav::quat_mul(
+        &nav::quat_e2n(i2.lla[0], i2.lla[1]),
+        &i2.qn2b.map(f64::from),
+    );
+    close(&i4.qe2b.map(f64::from), &q, 1e-6);
+    // Euler of INS_1 = the quaternion of INS_2.
+    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    close(&i1.theta.map(f64::from), &e, 1e-5);
+    // GPS vs INS: within 4σ of the two errors combined.
+    let d = nav::ned_from_ref(&g.lla, &i2.lla);
+    assert!(d[0].hypot(d[1]) < 4.0 * 1.22 * 2f64.sqrt(), "{d:?}");
+    assert!(d[2].abs() < 4.0 * 1.8, "{d:?}");
+    assert_eq!(g.ecef, nav::ecef_of(&g.lla));
+    // The truth: 45° N, level; heading error ≤ 4σ (0.3°).
+    assert!((i2.lla[0] - 45.0).abs() < 1e-4);
+}
+
+/// `fault gps off` (Isb::set_nav_faults): the fix drops, insStatus says
+/// dead reckoning (fix 0, GPS aiding clear), the position error grows as
+/// the drawn acceleration error integrates twice and, after 10 s, the
+/// solution reads "high variance"; once the fix is back the error shrinks
+/// (τ 5 s) and the status is NAV again. Faults outlast a reset.
+#[test]
+fn a_gps_outage_and_its_recovery() {
+    let mut b = Bench::new();
+    b.run_ticks(64_000);
+    assert!(b.dev.personality().nav().has_fix());
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        gps_off: true,
+        ..NavFaults::default()
+    });
+    b.run_ticks(4000);
+    let sp = b.sys_params();
+    assert!(
+        ins_status::dead_reckoning(sp.ins_status),
+        "{:#x}",
+        sp.ins_status
+    );
+    assert_eq!(sp.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+    assert_eq!(sp.hdw_status & hdw_nav::GPS_SATELLITE_RX_VALID, 0);
+    let g = GpsPos::decode(&b.get_once(did::GPS1_POS).try_into().unwrap());
+    assert_eq!(g.status, 0);
+    let e2 = b.dev.personality().nav().dead_reckoning_error();
+    b.run_ticks(40_000);
+    let sp = b.sys_params();
+    assert_eq!(
+        ins_status::solution(sp.ins_status),
+        4,
+        "{:#x}",
+        sp.ins_status
+    );
+    let e22 = b.dev.personality().nav().dead_reckoning_error();
+    let h = |e: [f64; 3]| e[0].hypot(e[1]);
+    assert!(h(e22) > 50.0 * h(e2), "{e2:?} {e22:?}");
+    b.dev.personality_mut().set_nav_faults(NavFaults::default());
+    b.run_ticks(40_000);
+    let sp = b.sys_params();
+    assert_eq!(sp.ins_status, 0x0103_5970);
+    let back = b.dev.personality().nav().dead_reckoning_error();
+    assert!(h(back) < 0.05 * h(e22), "{back:?}");
+}
+
+/// MAGNETOMETER every 10 ms and BAROMETER every 8 ms by their time fields;
+/// the field's inclination at 45° N is the dipole's atan(2) = 63.4°; the
+/// pressure is the ISA's at 0 m; a magnetic disturbance and a barometer
+/// failure reach insStatus / hdwStatus.
+#[test]
+fn magnetometer_and_barometer() {
+    let mut b = Bench::new();
+    b.send(&get(did::MAGNETOMETER, 1));
+    b.send(&get(did::BAROMETER, 1));
+    let r = b.run_ticks(12_000);
+    let mags: Vec<Magnetometer> = of_did(&r, did::MAGNETOMETER)
+        .iter()
+        .map(|p| Magnetometer::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    let baros: Vec<Barometer> = of_did(&r, did::BAROMETER)
+        .iter()
+        .map(|p| Barometer::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!((mags.len(), baros.len()), (600, 750));
+    for w in mags.windows(2) {
+        assert!((w[1].time - w[0].time - 0.010).abs() < 1e-9);
+    }
+    for w in baros.windows(2) {
+        assert!((w[1].time - w[0].time - 0.008).abs() < 1e-9);
+    }
+    let m = mags.last().unwrap().mag.map(f64::from);
+    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    assert!((n - 1.0).abs() < 0.01, "{m:?}");
+    // Body down = −(chain z): at rest the vertical component is m[2].
+    let incl = (m[2] / n).asin().to_degrees();
+    assert!((incl - 2f64.atan().to_degrees()).abs() < 0.5, "{incl}");
+    let p = baros.last().unwrap();
+    assert!(
+        (p.bar - 101.325).abs() < 0.01 && p.msl_bar.abs() < 1.0,
+        "{p:?}"
+    );
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        mag_disturbed: true,
+        baro_failed: true,
+        ..NavFaults::default()
+    });
+    b.run_ticks(40);
+    let sp = b.sys_params();
+    assert_ne!(sp.ins_status & ins_status::MAG_INTERFERENCE_OR_BAD_CAL, 0);
+    assert_eq!(sp.ins_status & ins_status::MAG_AIDING_HEADING, 0);
+    assert_ne!(sp.hdw_status & hdw_nav::SATURATION_BARO, 0);
+    let r = b.run_ticks(400);
+    let frozen: Vec<f32> = of_did(&r, did::BAROMETER)
+        .iter()
+        .map(|p| Barometer::decode(&p.payload.clone().try_into().unwrap()).bar)
+        .collect();
+    assert!(frozen.windows(2).all(|w| w[0] == w[1]), "{frozen:?}");
+}
+
+/// The RMC presets of SDK 2.7.1: INS (INS_2 and GPS1_POS at their source
+/// periods) and PPD (INS_2 every 100 ms, PIMU every 4 ms, MAGNETOMETER,
+/// BAROMETER, GPS1_POS, GPS1_VEL at theirs); persistent with `$PERS`.
+#[test]
+fn rmc_presets_and_persistent_navigation_streams() {
+    let mut b = Bench::new();
+    let rmc_set = |b: &mut Bench, bits: u64| {
+        let r = b.send(&set(did::RMC, 0, &Rmc { bits, options: 0 }.encode()));
+        assert_eq!(r[0].flags, 1);
+    };
+    rmc_set(&mut b, rmc_nav::PRESET_INS);
+    let r = b.run_ticks(2000);
+    assert_eq!(of_did(&r, did::INS_2).len(), 250);
+    assert_eq!(of_did(&r, did::GPS1_POS).len(), 5);
+    rmc_set(&mut b, rmc_nav::PRESET_PPD);
+    let r = b.run_ticks(2000);
+    let count = |d| of_did(&r, d).len();
+    assert_eq!(
+        [
+            count(did::INS_2),
+            count(did::PIMU),
+            count(did::MAGNETOMETER),
+            count(did::BAROMETER),
+            count(did::GPS1_POS),
+            count(did::GPS1_VEL),
+            count(did::IMU)
+        ],
+        [10, 250, 100, 125, 5, 5, 0]
+    );
+    b.send(b"$PERS*14\r\n");
+    let mut b = b.power_cycle();
+    let r = b.run_ticks(2000);
+    assert_eq!(of_did(&r, did::INS_2).len(), 10);
+    assert_eq!(of_did(&r, did::BAROMETER).len(), 125);
+}
+
+/// Bad input: writes to the read-only navigation sets are NACKed; an
+/// absurd `refLla` or `startupGPSDtMs` is NACKed and changes nothing; a
+/// GET window past the end gives the whole set.
+#[test]
+fn bad_navigation_input() {
+    let mut b = Bench::new();
+    for d in [did::INS_1, did::INS_2, did::GPS1_POS, did::BAROMETER] {
+        let r = b.send(&set(d, 0, &[0xFF; 8]));
+        assert_eq!(r[0].flags, 2, "DID {d}");
+    }
+    let before = b.flash_config();
+    for (off, v) in [
+        (flash::REF_LLA, 91f64.to_le_bytes().to_vec()),
+        (flash::REF_LLA + 16, f64::NAN.to_le_bytes().to_vec()),
+        (flash::STARTUP_GPS_DT_MS, 50u32.to_le_bytes().to_vec()),
+    ] {
+        let r = b.send(&set(did::FLASH_CONFIG, off as u16, &v));
+        assert_eq!(r[0].flags, 2, "offset {off}");
+    }
+    assert_eq!(b.flash_config(), before);
+    let req = GetRequest {
+        did: u16::from(did::INS_1),
+        size: 200,
+        offset: 70,
+        period: 0,
+    };
+    let mut out = [0u8; 64];
+    let n = message::encode_get(&req, &mut out).unwrap();
+    let r = b.send(&out[..n]);
+    assert_eq!((r[0].flags, r[0].payload.len()), (4, 80));
 }

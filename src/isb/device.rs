@@ -65,7 +65,10 @@ use crate::chain::{ChainConfig, Health};
 use crate::device::{Level, Mode, Pin, Shell};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::isb::did::{self, DataSet};
+use crate::isb::ins::{self, InsHeader, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
+use crate::isb::nav::{self, GpsTime};
+use crate::isb::nav_sets::rmc_nav;
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
@@ -76,8 +79,11 @@ use crate::personality::Personality;
 use crate::store::ImageSpec;
 use crate::time::Instant;
 
-/// Streams the device runs at once (one per DID; there are 10 data sets).
+/// Persistent streams the image holds (the first ten running streams are
+/// saved; the image layout is unchanged since the IMU-mode device).
 pub const MAX_STREAMS: usize = 10;
+/// Streams the device runs at once (one per served data set).
+pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// Bytes of one persistent-stream entry in the image: `u8 did, u8 0,
 /// u16 size, u16 offset, u16 period`.
 const ENTRY: usize = 8;
@@ -129,7 +135,7 @@ struct State {
     nav_dt_ms: u32,
     baud: u32,
     save_pending: bool,
-    streams: Vec<Stream, MAX_STREAMS>,
+    streams: Vec<Stream, MAX_RUNNING>,
     rmc_options: u32,
     /// The integrals at the last two boundaries of the navigation period
     /// and of the IMU sample period (ticks since power-on a multiple of
@@ -148,6 +154,13 @@ struct State {
     tx_limited: bool,
     /// ISB candidates dropped (bad checksum, size) since power-on.
     parse_errors: u32,
+    /// `startupGPSDtMs` at boot.
+    gps_dt_ms: u32,
+    /// The navigation side: INS, GNSS, magnetometer, barometer.
+    nav: NavState,
+    /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
+    /// board: `Isb::set_gps_time`).
+    gps_ns_at_zero: u64,
 }
 
 /// The ISB personality (module doc): an IMX-5 in IMU mode.
@@ -182,6 +195,9 @@ impl Personality for Isb {
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
+                gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
+                nav: NavState::new(0),
+                gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
             },
         }
     }
@@ -222,6 +238,11 @@ impl Personality for Isb {
         st.dropped_seen = sh.line().dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
+        st.gps_dt_ms = st.cfg.u32_at(flash::STARTUP_GPS_DT_MS).clamp(200, 60_000);
+        // Injected faults outlast a reset (the antenna is still cut).
+        let faults = st.nav.faults();
+        st.nav = NavState::new(sh.seed());
+        st.nav.set_faults(faults);
         let product = sh.product();
         sh.chain_mut().configure(&ChainConfig::defaults(&product));
         sh.set_line_rate(st.baud);
@@ -284,6 +305,10 @@ impl Personality for Isb {
         }
         if ticks.is_multiple_of(u64::from(imu)) {
             st.imu_grid = [st.imu_grid[1], sh.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(st.grid_ticks(sh, ins::STEP_MS))) {
+            let truth = nav::truth_of(sh.chain());
+            st.nav.step(ticks as f64 / f64::from(rate(sh)), &truth);
         }
         if st.save_pending {
             st.save(sh);
@@ -356,6 +381,24 @@ impl Isb {
         &self.st.cfg
     }
 
+    /// The navigation state (INS phases, errors, faults).
+    pub fn nav(&self) -> &NavState {
+        &self.st.nav
+    }
+
+    /// Injects or clears navigation faults (GPS outage, magnetic
+    /// disturbance, barometer failure); they outlast resets.
+    pub fn set_nav_faults(&mut self, f: NavFaults) {
+        self.st.nav.set_faults(f);
+    }
+
+    /// Sets the GPS time: `gps_ns_at_zero` GPS nanoseconds since
+    /// 1980-01-06 at device instant 0 (a host passes its clock or
+    /// `--gps-time`; firmware keeps [`nav::DEFAULT_GPS_S_AT_ZERO`]).
+    pub fn set_gps_time(&mut self, gps_ns_at_zero: u64) {
+        self.st.gps_ns_at_zero = gps_ns_at_zero;
+    }
+
     /// DIDs streaming now, in the order they were started.
     pub fn streams(&self) -> impl Iterator<Item = u8> + '_ {
         self.st.streams.iter().map(|s| s.did)
@@ -395,7 +438,9 @@ impl State {
 
     /// Ticks per source period of `set` (at least 1).
     fn source_ticks(&self, rate_hz: u32, set: &DataSet) -> u32 {
-        let ms = set.source.period_ms(self.imu_dt_ms, self.nav_dt_ms);
+        let ms = set
+            .source
+            .period_ms(self.imu_dt_ms, self.nav_dt_ms, self.gps_dt_ms);
         (ms.saturating_mul(rate_hz) / 1000).max(1)
     }
 
@@ -525,6 +570,11 @@ impl State {
             SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(sh, &info, true),
             SetOutcome::Silent => {}
             SetOutcome::AckOnly(info) => send_ack(sh, &info, false),
+            SetOutcome::Written { ack, .. }
+                if req.did == did::FLASH_CONFIG && !ins::flash_nav_valid(&image[..n]) =>
+            {
+                send_ack(sh, &ack, true)
+            }
             SetOutcome::Written { ack, .. } => {
                 // The ACK goes first: a software reset clears the queue
                 // only after it has been handed out.
@@ -580,10 +630,21 @@ impl State {
     /// An RMC write (module doc).
     fn rmc<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, r: &Rmc) {
         let preserve = r.options & rmc::OPTIONS_PRESERVE_CTRL != 0;
+        let preset = r.bits & rmc::BITS_PRESET != 0;
         for set in did::DATA_SETS.iter().filter(|s| s.rmc_bit != 0) {
             if r.bits & set.rmc_bit != 0 {
-                if self.find(set.did).is_none() {
-                    self.start_stream(sh, set, 0, set.size, 1);
+                // A preset chooses the period multiples (docs/isb.md): in
+                // a PPD preset INS_2 every 100 ms, everything else at its
+                // source period.
+                let ppd = preset && r.bits & rmc_nav::BITS_INTERNAL_PPD != 0;
+                let n = if ppd && set.did == did::INS_2 {
+                    (rmc_nav::PPD_NAV_PERIOD_MS / self.nav_dt_ms).max(1) as u16
+                } else {
+                    1
+                };
+                let same = self.find(set.did).map(|i| self.streams[i].period);
+                if same.is_none() || (preset && same != Some(n)) {
+                    self.start_stream(sh, set, 0, set.size, n);
                 }
             } else if !preserve {
                 self.stop_stream(set.did);
@@ -696,12 +757,101 @@ impl State {
                 count: self.strobe_count,
             }
             .encode()),
+            did::INS_1
+            | did::INS_2
+            | did::INS_3
+            | did::INS_4
+            | did::GPS1_POS
+            | did::GPS1_VEL
+            | did::MAGNETOMETER
+            | did::BAROMETER => {
+                let hdw = self.sys_params(sh, now).hdw_status;
+                self.nav_image(sh, did, hdw, out)
+            }
             did::IMU | did::IMU_RAW | did::PIMU => {
                 let [a, b] = self.grid(did);
                 let w = integrals::window(&a, &b, rate(sh));
                 let n = windowed_len(did);
                 let end = sh.ticks() - sh.ticks() % u64::from(self.window_ticks(sh, did));
                 put(&self.windowed(sh, did, &w, end)[..n])
+            }
+            _ => 0,
+        }
+    }
+
+    /// `(since boot, GPS time)` at the last tick (on the sample grid).
+    fn gps_time<F: NorFlash>(&self, sh: &Shell<F, Isb>) -> (u64, GpsTime) {
+        let since_boot = sh.ticks() * (1_000_000_000 / u64::from(rate(sh)));
+        let gps = self.gps_ns_at_zero + sh.powered_at().0 + since_boot;
+        (since_boot, GpsTime::of_ns(gps))
+    }
+
+    /// The FLASH_CONFIG fields the navigation uses.
+    fn nav_config(&self) -> NavConfig {
+        let b = &self.cfg.0;
+        let f64x3 = |off: usize| [0, 8, 16].map(|k| le::f64(b, off + k));
+        NavConfig {
+            ref_lla: f64x3(flash::REF_LLA),
+            last_lla: f64x3(flash::LAST_LLA),
+            ins_rotation: le::f32x3(b, flash::INS_ROTATION),
+            ins_offset: le::f32x3(b, flash::INS_OFFSET),
+            gps1_ant_offset: le::f32x3(b, flash::GPS1_ANT_OFFSET),
+        }
+    }
+
+    /// The bytes of a navigation data set now (`docs/isb.md`
+    /// "Navigation").
+    fn nav_image<F: NorFlash>(
+        &self,
+        sh: &Shell<F, Isb>,
+        did: u8,
+        hdw: u32,
+        out: &mut [u8; flash::SIZE],
+    ) -> usize {
+        let mut put = |b: &[u8]| {
+            out[..b.len()].copy_from_slice(b);
+            b.len()
+        };
+        let truth = nav::truth_of(sh.chain());
+        let cfg = self.nav_config();
+        let (since_ns, gps) = self.gps_time(sh);
+        let since_s = since_ns as f64 / 1e9;
+        let valid = self.nav.gps_time_valid();
+        let h = InsHeader {
+            week: if valid { gps.week } else { 0 },
+            time_of_week: if valid { gps.tow_s() } else { since_s },
+            ins_status: self.nav.ins_status(),
+            hdw_status: hdw,
+        };
+        // The receiver's last epoch (GPS time a multiple of its period).
+        let gps_dt_ns = u64::from(self.gps_dt_ms) * 1_000_000;
+        let epoch = if valid {
+            GpsTime {
+                week: gps.week,
+                tow_ns: gps.tow_ns - gps.tow_ns % gps_dt_ns,
+            }
+        } else {
+            GpsTime {
+                week: 0,
+                tow_ns: since_ns - since_ns % gps_dt_ns,
+            }
+        };
+        let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
+        let fix = self.nav.gnss(&truth, &cfg);
+        let tick = sh.ticks();
+        match did {
+            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
+            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
+            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::MAGNETOMETER => {
+                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
+            }
+            did::BAROMETER => {
+                let p = self.nav.pressure_kpa(&truth, tick);
+                put(&ins::barometer(since_s, p, sh.chain().temperature()).encode())
             }
             _ => 0,
         }
@@ -822,12 +972,18 @@ impl State {
         if sh.line().dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;
         }
+        hdw |= self.nav.hdw_bits();
         hdw = hdw_status::with_parse_errors(hdw, self.parse_errors);
         let t = sh.chain().temperature();
         let up = now.since(sh.powered_at()) as f64 / 1e9;
+        let time_of_week_ms = if self.nav.gps_time_valid() {
+            self.gps_time(sh).1.tow_ms()
+        } else {
+            ms_since(sh, now)
+        };
         SysParams {
-            time_of_week_ms: ms_since(sh, now),
-            ins_status: 0,
+            time_of_week_ms,
+            ins_status: self.nav.ins_status(),
             hdw_status: hdw,
             imu_temp: t,
             baro_temp: t,
