@@ -18,6 +18,7 @@
 //! | `power-cycle [boot=high\|boot=low]` | power cycle, BOOT at that level (or floating) |
 //! | `fault comm\|config\|gyro-bit\|accel-bit\|flash on\|off` | inject a sensor fault (USW bits 1–2, GetBIT) |
 //! | `fault temperature <°C>\|off` | force the sensor temperature (USW bit 14 outside −40…85 °C) |
+//! | `fault gps off\|on`, `fault mag\|baro on\|off` | ISB: GPS outage, magnetic disturbance, barometer failure (`docs/isb.md`) |
 //! | `motion static [lat heading]` | the unit at rest (default 45° N, heading 0) |
 //! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
 //! | `link drop\|corrupt\|duplicate <rate> [tx\|rx]` | each byte lost / XORed / doubled with probability `rate` (both directions unless `tx` = device → client or `rx`) |
@@ -57,6 +58,7 @@ use crate::transport::AcceptGuard;
 /// The commands and their syntax, as `help` lists them.
 pub const HELP: &str = "help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
 | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
+| fault gps off|on | fault mag|baro on|off \
 | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
 | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
 | link stall <ms> | link cut | link clear \
@@ -69,6 +71,9 @@ pub enum Command {
     Edge(Pin, Level),
     /// Power cycle with BOOT at a level (`None` = floating).
     PowerCycle(Option<Level>),
+    /// A navigation fault (ISB): `fault gps off|on`, `fault mag on|off`,
+    /// `fault baro on|off`.
+    NavFault(NavFault),
     /// Change the injected faults.
     Fault(FaultChange),
     /// Change the motion the unit undergoes.
@@ -81,6 +86,17 @@ pub enum Command {
     Help,
     /// List the devices and where each listens (`ok count=N dev0=…`).
     Devices,
+}
+
+/// A navigation fault of the ISB personality (`docs/isb.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NavFault {
+    /// GPS fix available (`fault gps on`) or lost (`fault gps off`).
+    Gps(bool),
+    /// Magnetic disturbance on/off.
+    Mag(bool),
+    /// Barometer failure on/off.
+    Baro(bool),
 }
 
 /// One change to [`Faults`].
@@ -157,7 +173,8 @@ fn usage(word: &str) -> Option<&'static str> {
         "extrig" => "extrig high|low",
         "power-cycle" => "power-cycle [boot=high|boot=low]",
         "fault" => {
-            "fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
+            "fault comm|config|gyro-bit|accel-bit|flash|mag|baro on|off, fault gps off|on, or \
+             fault temperature <degC>|off"
         }
         "motion" => "motion static [<lat> <heading>], or motion rotate <x> <y> <z>",
         "link" => {
@@ -226,6 +243,9 @@ fn parse_words(words: &[&str]) -> Result<Command, String> {
         ["fault", "temperature", t] => {
             Ok(Command::Fault(FaultChange::Temperature(Some(number(t)?))))
         }
+        ["fault", "gps", s] => Ok(Command::NavFault(NavFault::Gps(on_off(s)?))),
+        ["fault", "mag", s] => Ok(Command::NavFault(NavFault::Mag(on_off(s)?))),
+        ["fault", "baro", s] => Ok(Command::NavFault(NavFault::Baro(on_off(s)?))),
         ["fault", which, state] => {
             let on = on_off(state)?;
             Ok(Command::Fault(match *which {
@@ -694,6 +714,14 @@ mod tests {
             Ok(Command::Fault(FaultChange::Temperature(None)))
         );
         assert!(parse("fault comm maybe").is_err());
+        assert_eq!(
+            parse("fault gps off"),
+            Ok(Command::NavFault(NavFault::Gps(false)))
+        );
+        assert_eq!(
+            parse("fault baro on"),
+            Ok(Command::NavFault(NavFault::Baro(true)))
+        );
         assert!(parse("fault temperature NaN").is_err());
         assert!(matches!(
             parse("motion rotate 0 600 0"),
