@@ -8,7 +8,8 @@ use imu_emu::isb::ins::NavFaults;
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::nav;
 use imu_emu::isb::nav_sets::{
-    hdw_nav, ins_status, rmc_nav, Barometer, GpsPos, Ins1, Ins2, Ins4, Magnetometer,
+    hdw_nav, ins_status, rmc_nav, Barometer, GpsPos, ImuMag, Ins1, Ins2, Ins4, Magnetometer,
+    PimuMag, SysSensors,
 };
 use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
@@ -968,4 +969,49 @@ fn bad_navigation_input() {
     let n = message::encode_get(&req, &mut out).unwrap();
     let r = b.send(&out[..n]);
     assert_eq!((r[0].flags, r[0].payload.len()), (4, 80));
+}
+
+/// PIMU_MAG every 2 navigation periods: the PIMU part is the same window
+/// PIMU gives (dt 8 ms, on the grid), the magnetometer part carries the
+/// same time; IMU_MAG the same with an IMU; SYS_SENSORS at once with the
+/// measurement at rest (−g down), the ISA pressure and a unit field; the
+/// RMC bits of IMU_MAG and PIMU_MAG start them.
+#[test]
+fn imu_mag_pimu_mag_and_sys_sensors() {
+    let mut b = Bench::new();
+    b.run_ticks(10);
+    b.send(&get(did::PIMU_MAG, 2));
+    let r = b.run_ticks(400);
+    let ps: Vec<PimuMag> = of_did(&r, did::PIMU_MAG)
+        .iter()
+        .map(|p| PimuMag::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(ps.len(), 25);
+    for (p, pkt) in ps.iter().zip(of_did(&r, did::PIMU_MAG)) {
+        assert_eq!(p.pimu.dt, 0.008);
+        assert_eq!(p.pimu.time, pkt.tick as f64 / 2000.0);
+        assert_eq!(p.mag.time, p.pimu.time);
+        assert!((p.pimu.vel[2] + 9.8106 * 0.008).abs() < 2e-3, "{p:?}");
+    }
+    let s = SysSensors::decode(&b.get_once(did::SYS_SENSORS).try_into().unwrap());
+    assert!((s.acc[2] + 9.81).abs() < 0.1, "{s:?}");
+    assert!((s.bar - 101.325).abs() < 0.01 && s.msl_bar.abs() < 1.0);
+    let m = s.mag.map(f64::from);
+    assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);
+    let r = b.send(&set(
+        did::RMC,
+        0,
+        &Rmc {
+            bits: rmc_nav::BITS_IMU_MAG,
+            options: 0,
+        }
+        .encode(),
+    ));
+    assert_eq!(r[0].flags, 1);
+    let r = b.run_ticks(80);
+    let im = of_did(&r, did::IMU_MAG);
+    assert_eq!(im.len(), 10);
+    let i = ImuMag::decode(&im[0].payload.clone().try_into().unwrap());
+    assert_eq!((i.imu.time, i.mag.time), (i.imu.time, i.imu.time));
+    assert!((i.imu.acc[2] + 9.81).abs() < 0.1);
 }

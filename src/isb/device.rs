@@ -68,7 +68,7 @@ use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, InsHeader, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime};
-use crate::isb::nav_sets::rmc_nav;
+use crate::isb::nav_sets::{rmc_nav, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
@@ -768,12 +768,12 @@ impl State {
                 let hdw = self.sys_params(sh, now).hdw_status;
                 self.nav_image(sh, did, hdw, out)
             }
-            did::IMU | did::IMU_RAW | did::PIMU => {
+            did::SYS_SENSORS => put(&self.sys_sensors(sh).encode()),
+            d if is_windowed(d) => {
                 let [a, b] = self.grid(did);
                 let w = integrals::window(&a, &b, rate(sh));
-                let n = windowed_len(did);
                 let end = sh.ticks() - sh.ticks() % u64::from(self.window_ticks(sh, did));
-                put(&self.windowed(sh, did, &w, end)[..n])
+                self.windowed(sh, did, &w, end, out)
             }
             _ => 0,
         }
@@ -864,22 +864,24 @@ impl State {
             .fold(0, |b, set| b | set.rmc_bit)
     }
 
-    /// IMU / IMU_RAW / PIMU of the window `w` (module doc); 40 bytes used
-    /// at most.
+    /// IMU / IMU_RAW / PIMU (and IMU_MAG / PIMU_MAG: the same then the
+    /// magnetometer at the window's end) of the window `w` into `image`
+    /// (module doc); its size.
     fn windowed<F: NorFlash>(
         &self,
         sh: &Shell<F, Isb>,
         did: u8,
         w: &Increment,
         end_tick: u64,
-    ) -> [u8; sets::pimu::SIZE] {
+        image: &mut [u8; flash::SIZE],
+    ) -> usize {
         let h = sh.chain().health();
         let status = imu_status_of(&h);
         // On the sample grid: the tick that ends the window.
         let time = end_tick as f64 / f64::from(rate(sh));
         let dt = w.samples as f64 / f64::from(rate(sh));
         let mut out = [0u8; sets::pimu::SIZE];
-        if did == did::PIMU {
+        let base = if matches!(did, did::PIMU | did::PIMU_MAG) {
             out.copy_from_slice(
                 &Pimu {
                     time,
@@ -890,6 +892,7 @@ impl State {
                 }
                 .encode(),
             );
+            sets::pimu::SIZE
         } else {
             let inv = if dt > 0.0 { 1.0 / dt } else { 0.0 };
             let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
@@ -902,8 +905,43 @@ impl State {
                 }
                 .encode(),
             );
+            sets::imu::SIZE
+        };
+        image[..base].copy_from_slice(&out[..base]);
+        if !matches!(did, did::IMU_MAG | did::PIMU_MAG) {
+            return base;
         }
-        out
+        let truth = nav::truth_of(sh.chain());
+        let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
+        image[base..base + m.len()].copy_from_slice(&m);
+        base + m.len()
+    }
+
+    /// SYS_SENSORS now: the last measurement (body axes), the magnetometer
+    /// and barometer, the temperatures; supply 5 V, analog inputs 0.
+    fn sys_sensors<F: NorFlash>(&self, sh: &Shell<F, Isb>) -> SysSensors {
+        let tick = sh.ticks();
+        let time = tick as f64 / f64::from(rate(sh));
+        let truth = nav::truth_of(sh.chain());
+        let [g, a, _] = sh.chain().last_sensor();
+        let g = frd(g.map(|x| f64::from(x).to_radians()));
+        let a = frd(a.map(|x| f64::from(x) * f64::from(crate::sensor::motion::G)));
+        let temp = sh.chain().temperature();
+        let bar = self.nav.pressure_kpa(&truth, tick);
+        let b = ins::barometer(time, bar, temp);
+        SysSensors {
+            time,
+            temp,
+            pqr: g,
+            acc: a,
+            mag: self.nav.magnetometer(&truth, tick),
+            bar,
+            bar_temp: temp,
+            msl_bar: b.msl_bar,
+            humidity: b.humidity,
+            vin: 5.0,
+            ana: [0.0; 3],
+        }
     }
 
     /// One DATA packet of `set` now (the GET's reply).
@@ -925,14 +963,11 @@ impl State {
         let s = self.streams[i];
         let mut image = [0u8; flash::SIZE];
         let n = match s.did {
-            did::IMU | did::IMU_RAW | did::PIMU => {
+            d if is_windowed(d) => {
                 let end = sh.chain().integrals();
                 let w = integrals::window(&s.start, &end, rate(sh));
                 self.streams[i].start = end;
-                let b = self.windowed(sh, s.did, &w, sh.ticks());
-                let n = windowed_len(s.did);
-                image[..n].copy_from_slice(&b[..n]);
-                n
+                self.windowed(sh, s.did, &w, sh.ticks(), &mut image)
             }
             _ => self.image_of(sh, s.did, &mut image, now),
         };
@@ -1007,13 +1042,13 @@ fn send_data<F: NorFlash>(sh: &mut Shell<F, Isb>, did: u8, image: &[u8], offset:
     push(sh, n, |f| message::encode_data(did, image, offset, size, f));
 }
 
-/// Bytes of a windowed data set: `pimu_t` or `imu_t`.
-fn windowed_len(did: u8) -> usize {
-    if did == did::PIMU {
-        sets::pimu::SIZE
-    } else {
-        sets::imu::SIZE
-    }
+/// Whether `did` is a window of the integrals (IMU, IMU_RAW, PIMU and
+/// their `_MAG` forms).
+fn is_windowed(did: u8) -> bool {
+    matches!(
+        did,
+        did::IMU | did::IMU_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
+    )
 }
 
 fn rate<F: NorFlash>(sh: &Shell<F, Isb>) -> u32 {

@@ -8,7 +8,10 @@
 //! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
 //! DID 95, silence for any other DID the table does not hold.
 
-use super::nav_sets::{barometer, gps_pos, gps_vel, ins1, ins2, ins3, ins4, magnetometer, rmc_nav};
+use super::nav_sets::{
+    barometer, gps_pos, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag, rmc_nav,
+    sys_sensors,
+};
 use super::sets;
 
 /// Count of DIDs (including the null DID 0): `DID_COUNT` in `data_sets.h`.
@@ -197,7 +200,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 18] = [
+pub const DATA_SETS: [DataSet; 21] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -333,6 +336,27 @@ pub const DATA_SETS: [DataSet; 18] = [
         barometer::SIZE,
         Source::Fixed(8),
         rmc_nav::BITS_BAROMETER,
+    ),
+    nav(
+        SYS_SENSORS,
+        "sys_sensors_t",
+        sys_sensors::SIZE,
+        Source::Millisecond,
+        0,
+    ),
+    nav(
+        IMU_MAG,
+        "imu_mag_t",
+        imu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_IMU_MAG,
+    ),
+    nav(
+        PIMU_MAG,
+        "pimu_mag_t",
+        pimu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_PIMU_MAG,
     ),
 ];
 
