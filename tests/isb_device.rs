@@ -1015,3 +1015,40 @@ fn imu_mag_pimu_mag_and_sys_sensors() {
     assert_eq!((i.imu.time, i.mag.time), (i.imu.time, i.imu.time));
     assert!((i.imu.acc[2] + 9.81).abs() < 0.1);
 }
+
+/// FLASH_CONFIG navigation fields take effect: `gps1AntOffset` 10 m up
+/// (sensor z is down) raises GPS1_POS by 10 m against the INS; a yaw of
+/// 90° in `insRotation` turns INS_1's yaw by 90°; a strobe after the fix
+/// carries GPS week and time of week.
+#[test]
+fn navigation_flash_config_fields_take_effect() {
+    let mut b = Bench::new();
+    b.run_ticks(62_000);
+    let yaw0 = Ins1::decode(&b.get_once(did::INS_1).try_into().unwrap()).theta[2];
+    let mut ant = Vec::new();
+    for v in [0f32, 0.0, -10.0] {
+        ant.extend_from_slice(&v.to_le_bytes());
+    }
+    b.send(&set(did::FLASH_CONFIG, flash::GPS1_ANT_OFFSET as u16, &ant));
+    let mut rot = Vec::new();
+    for v in [0f32, 0.0, std::f32::consts::FRAC_PI_2] {
+        rot.extend_from_slice(&v.to_le_bytes());
+    }
+    b.send(&set(did::FLASH_CONFIG, flash::INS_ROTATION as u16, &rot));
+    b.run_ticks(1);
+    let i1 = Ins1::decode(&b.get_once(did::INS_1).try_into().unwrap());
+    let g = GpsPos::decode(&b.get_once(did::GPS1_POS).try_into().unwrap());
+    let up = g.lla[2] - i1.lla[2];
+    assert!((up - 10.0).abs() < 4.0 * 1.8, "{up}");
+    let turned = (i1.theta[2] - yaw0).rem_euclid(std::f32::consts::TAU);
+    assert!(
+        (turned - std::f32::consts::FRAC_PI_2).abs() < 0.01,
+        "{turned}"
+    );
+    b.send(&get(did::STROBE_IN_TIME, 1));
+    b.dev.on_pin(Pin::Extrig, Level::High, Instant(b.now));
+    let r = b.drain();
+    let s = StrobeInTime::decode(&r[0].payload.clone().try_into().unwrap());
+    assert_eq!(s.week, 2399);
+    assert!(s.time_of_week_ms > 4 * 86_400_000);
+}

@@ -750,13 +750,23 @@ impl State {
             .encode()),
             did::SYS_CMD => put(&SystemCommand::default().encode()),
             did::BIT => put(&self.bit.encode()),
-            did::STROBE_IN_TIME => put(&StrobeInTime {
-                week: 0,
-                time_of_week_ms: ms_since(sh, now),
-                pin: 0,
-                count: self.strobe_count,
+            did::STROBE_IN_TIME => {
+                // GPS time of the edge once GPS time is known.
+                let (week, time_of_week_ms) = if self.nav.gps_time_valid() {
+                    let since = now.since(sh.powered_at());
+                    let t = GpsTime::of_ns(self.gps_ns_at_zero + sh.powered_at().0 + since);
+                    (t.week, t.tow_ms())
+                } else {
+                    (0, ms_since(sh, now))
+                };
+                put(&StrobeInTime {
+                    week,
+                    time_of_week_ms,
+                    pin: 0,
+                    count: self.strobe_count,
+                }
+                .encode())
             }
-            .encode()),
             did::INS_1
             | did::INS_2
             | did::INS_3
