@@ -276,3 +276,57 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
     assert!(back, "NAV again once the fix is back");
     assert!(ctl.cmd("fault mag on").starts_with("ok"));
 }
+
+/// The vendor tool's `-presetINS` bytes (RMC {0x8000000000000402, 0x100})
+/// over TCP: INS_2 every 4 ms and GPS1_POS every 200 ms by their own time
+/// fields; `$PERS` then `$SRST`: both resume unasked after the reset.
+#[test]
+fn the_ins_preset_persists_across_a_reset() {
+    let emu = isb(&["--speed", "5"]);
+    let mut c = emu.connect();
+    c.send(&hex(
+        "ef 49 05 09 0c 00 02 04 00 00 00 00 00 80 00 01 00 00 d9 ed",
+    ));
+    let ack = isb_packet(&mut c);
+    assert_eq!((ack.flags, ack.payload[1]), (1, did::RMC));
+    let collect = |c: &mut Conn| {
+        let (mut ins, mut gps) = (Vec::new(), Vec::new());
+        while gps.len() < 4 {
+            let p = isb_packet(c);
+            match p.did {
+                did::INS_2 => ins.push(Ins2::decode(&p.payload.try_into().unwrap())),
+                did::GPS1_POS => gps.push(GpsPos::decode(&p.payload.try_into().unwrap())),
+                d => panic!("unexpected DID {d}"),
+            }
+        }
+        (ins, gps)
+    };
+    let check = |ins: &[Ins2], gps: &[GpsPos]| {
+        for w in ins.windows(2) {
+            assert!((w[1].time_of_week - w[0].time_of_week - 0.004).abs() < 1e-9);
+        }
+        for w in gps.windows(2) {
+            assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+        }
+        assert!(ins.len() >= 100, "{}", ins.len());
+    };
+    let (ins, gps) = collect(&mut c);
+    check(&ins, &gps);
+    c.send(b"$PERS*14\r\n");
+    c.send(b"$SRST*06\r\n");
+    // After the reset time since boot starts again.
+    let mut ins = Vec::new();
+    loop {
+        let p = isb_packet(&mut c);
+        if p.did == did::INS_2 {
+            let i = Ins2::decode(&p.payload.try_into().unwrap());
+            if i.time_of_week < 0.1 {
+                ins.push(i);
+                break;
+            }
+        }
+    }
+    let (more, gps) = collect(&mut c);
+    ins.extend(more);
+    check(&ins, &gps);
+}
