@@ -109,7 +109,7 @@
 //! | stage | representation |
 //! |---|---|
 //! | truth ([`crate::sensor::motion::BuiltinMotionFixed`]) | °/s·2¹⁹, g·2²³; attitude Q62, phasors Q30, static truth cached |
-//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::dsp::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
+//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::math::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
 //! | mounting ([`crate::ahrs::mounting::MountingFixed`]) | Q30 matrix |
 //! | attitude ([`crate::ahrs::attitude::AttitudeFixed`]) | rates in Q36 rad a tick, quaternion Q62, Euler angles by CORDIC |
 //! | FIR ([`crate::dsp::fir::FirBankFixed`]) | °/s·2¹⁷, g·2²⁰ (the sensor scale rounded), Q15 taps |
@@ -119,7 +119,7 @@
 //! The attitude runs every tick at full rate (no decimation): its stated
 //! bounds hold unchanged (coning 5° at 2 Hz, 10 s: 2e-4° against 1e-2°; a
 //! static unit stays within 1e-3° over 120 s). Products are exact
-//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::dsp::fixed::mul64`]),
+//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::math::fixed::mul64`]),
 //! since a plain `i64` product is a library call on ARMv6-M.
 //!
 //! # Cost
@@ -172,11 +172,11 @@
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
 use crate::ahrs::alignment::{AlignConfig, Alignment};
-use crate::ahrs::rotation::{Quat, Vec3};
 use crate::dsp::cascade::CascadeConfig;
 use crate::dsp::fir::{self, Bandwidth, FirDesign, CHANNELS};
 use crate::dsp::integrals::{Integrals, Integrate, NoIntegrals};
 use crate::dsp::variant::OutputVariant;
+use crate::math::rotation::{Quat, Vec3};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
@@ -527,9 +527,8 @@ impl<I: Integrate> SignalChain<I> {
         *cfg_ = cfg;
         *core_ = core;
         fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
-        // Hosts: a unit without the aux accelerometer does not filter its
-        // (zero) channels; no output reads them (`Core::take`).
-        #[cfg(not(target_os = "none"))]
+        // A unit without the aux accelerometer does not filter its (zero)
+        // channels; no output reads them (`Core::take`).
         fir.set_aux_live(has_aux);
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
@@ -687,8 +686,7 @@ impl<I: Integrate> SignalChain<I> {
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
         let truth = self.core.builtin_truth(now, self.dt);
-        // Hosts: a truth already within the bounds skips the bounding.
-        #[cfg(not(target_os = "none"))]
+        // A truth already within the bounds skips the bounding.
         if self.core.builtin_truth_bounded() {
             return self.process_bounded(&truth);
         }
@@ -721,11 +719,10 @@ impl<I: Integrate> SignalChain<I> {
             arith::frozen(&self.fir.last_input())
         };
 
-        // Hosts: the filters first (they do not depend on the AHRS, nor it
+        // The filters first (they do not depend on the AHRS, nor it
         // on them), so that the AHRS's long chain of dependent products
         // overlaps the encoder's work after the tick instead of the
         // filters' independent ones.
-        #[cfg(not(target_os = "none"))]
         self.filters(&sensor);
         let c = &mut self.core;
 
@@ -742,8 +739,6 @@ impl<I: Integrate> SignalChain<I> {
             }
             Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
-        #[cfg(target_os = "none")]
-        self.filters(&sensor);
     }
 
     /// The filters of a tick (sensor axes): FIR → cascade → accumulator.

@@ -54,6 +54,7 @@ pub mod chain;
 pub mod device;
 pub mod dsp;
 pub mod framing;
+pub mod io;
 pub mod isb;
 pub mod kernel;
 pub mod line;
@@ -67,7 +68,8 @@ pub mod store;
 pub mod time;
 
 pub use chain::{Faults, SignalChain};
-pub use device::{Device, Event, Level, Mode, Pin, PowerOn, Shell};
+pub use device::{Device, PowerOn, Shell};
+pub use io::{Event, Level, Mode, Pin};
 pub use kernel::Kernel;
 pub use model::Product;
 pub use nor::RamNor;

@@ -19,11 +19,12 @@ mod common;
 use common::xorshift::XorShift;
 use common::*;
 
-use imu_emu::device::{Device, Event, Mode, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+use imu_emu::device::{Device, Event, Mode};
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::encode;
 use imu_emu::kernel::params::PARAMS;
 use imu_emu::kernel::rate::max_rate;
+use imu_emu::kernel::{RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
 use imu_emu::time::Instant;
 
 /// GetBIT, the good frame every case ends with (ICD 5.3.4 example).

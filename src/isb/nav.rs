@@ -10,9 +10,9 @@
 
 use libm::{asin, atan2, cos, sin, sqrt};
 
-use crate::ahrs::rotation::dcm_from_quat;
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
+use crate::math::rotation::dcm_from_quat;
 use crate::sensor::motion::site;
 
 /// Longitude of the built-in site, degrees east (the motions carry only a

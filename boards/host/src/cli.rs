@@ -15,7 +15,7 @@
 //! `--tcp` and `--control` must be loopback addresses unless
 //! `--allow-remote` is given (then a warning says what is exposed). Errors
 //! are one line (`imu-emu: …`, [`report`]): exit status 2 for a bad
-//! argument ([`UsageError`]), 1 for a failure while running.
+//! argument ([`UsageError`], [`crate::error`]), 1 for a failure while running.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -32,6 +32,7 @@ use imu_emu::model::Product;
 use imu_emu::time::Instant;
 
 use crate::clock::Speed;
+use crate::error::UsageError;
 use crate::flash::{FileNor, MemNor};
 use crate::runner::{HostPersonality, Runner};
 use crate::transport::{PtyTransport, TcpTransport, Transport};
@@ -212,36 +213,6 @@ pub enum PowerOnAt {
 
 fn parse_product(s: &str) -> Result<Product, String> {
     Product::parse(s).map_err(|e| e.to_string())
-}
-
-/// An error in what the user asked for (exit status 2, as clap's usage
-/// errors), as opposed to one met while running (exit status 1).
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl core::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
-
-/// The error of binding `addr` for `option` (`--tcp`, `--control`), with a
-/// hint where one helps: a port in use suggests port 0, an address that
-/// does not parse says `HOST:PORT` is expected.
-pub fn bind_error(e: std::io::Error, option: &str, addr: &str) -> anyhow::Error {
-    use std::io::ErrorKind;
-    match e.kind() {
-        ErrorKind::AddrInUse => anyhow::anyhow!(
-            "{option} {addr}: address already in use (another imu-emu?); \
-             hint: {option} 127.0.0.1:0 picks a free port"
-        ),
-        ErrorKind::InvalidInput => anyhow::Error::new(UsageError(format!(
-            "{option} {addr}: {e}; expected HOST:PORT, e.g. {option} 127.0.0.1:7000"
-        ))),
-        _ => anyhow::anyhow!("{option} {addr}: {e}"),
-    }
 }
 
 /// Checks that `addr` (`HOST:PORT`) given to `option` is a loopback

@@ -31,7 +31,7 @@ use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
 use imu_emu::model::Product;
 
-use crate::cli::UsageError;
+use crate::error::UsageError;
 
 /// Options of `imu-emu client`.
 #[derive(clap::Args, Debug, Clone)]

@@ -49,7 +49,7 @@ impl TcpTransport {
     /// Binds `addr` (`host:port`; port 0 picks a free port).
     pub fn bind(addr: &str) -> anyhow::Result<Self> {
         let listener =
-            TcpListener::bind(addr).map_err(|e| crate::cli::bind_error(e, "--tcp", addr))?;
+            TcpListener::bind(addr).map_err(|e| crate::error::bind_error(e, "--tcp", addr))?;
         listener.set_nonblocking(true)?;
         let local = listener.local_addr()?;
         Ok(TcpTransport {
