@@ -945,9 +945,48 @@ fn rmc_presets_and_persistent_navigation_streams() {
 #[test]
 fn bad_navigation_input() {
     let mut b = Bench::new();
-    for d in [did::INS_1, did::INS_2, did::GPS1_POS, did::BAROMETER] {
-        let r = b.send(&set(d, 0, &[0xFF; 8]));
-        assert_eq!(r[0].flags, 2, "DID {d}");
+    let nav_dids = [
+        did::INS_1,
+        did::INS_2,
+        did::INS_3,
+        did::INS_4,
+        did::GPS1_POS,
+        did::GPS1_VEL,
+        did::MAGNETOMETER,
+        did::BAROMETER,
+        did::SYS_SENSORS,
+        did::IMU_MAG,
+        did::PIMU_MAG,
+    ];
+    for d in nav_dids {
+        let size = did::lookup(u16::from(d)).unwrap().size;
+        // Read-only: a SET changing bytes is NACKed, at any offset.
+        for off in [0u16, 4, size - 4] {
+            let r = b.send(&set(d, off, &[0xFF; 4]));
+            assert_eq!(r[0].flags, 2, "DID {d} @{off}");
+        }
+        // A part: the offset flag and exactly those bytes; a window past
+        // the end: the whole set without it.
+        for (sz, off, flags, len) in [
+            (4u16, 4u16, 0x24, 6),
+            (size, 8, 4, size),
+            (4, size, 4, size),
+        ] {
+            let req = GetRequest {
+                did: u16::from(d),
+                size: sz,
+                offset: off,
+                period: 0,
+            };
+            let mut out = [0u8; 64];
+            let n = message::encode_get(&req, &mut out).unwrap();
+            let r = b.send(&out[..n]);
+            assert_eq!(
+                (r[0].flags, r[0].payload.len()),
+                (flags, usize::from(len)),
+                "DID {d} size {sz} offset {off}"
+            );
+        }
     }
     let before = b.flash_config();
     for (off, v) in [

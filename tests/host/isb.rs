@@ -248,6 +248,15 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
     }
     let last = navigating.last().unwrap();
     assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
+    // The navigation-period grid sits on GPS time: whole 4 ms steps of a
+    // GPS second (the epoch is a whole second, so 1PPS edges fall on GPS
+    // seconds).
+    let steps = last.time_of_week * 250.0;
+    assert!(
+        (steps - steps.round()).abs() < 1e-6,
+        "{}",
+        last.time_of_week
+    );
     assert!((last.lla[0] - 45.0).abs() < 1e-4);
 
     assert!(ctl.cmd("fault gps off").starts_with("ok"));
