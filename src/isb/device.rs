@@ -36,11 +36,18 @@
 //!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
 //!   done, the result from the chain's BIT faults).
 //! - **RMC**: its bits stand for the streams of the data sets that have an
-//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW); a SET starts those whose
+//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW and the navigation sets;
+//!   with `RMC_BITS_PRESET` the device picks the multiples, `docs/isb.md`); a SET starts those whose
 //!   bit is set (period multiple 1) and, without `OPTIONS_PRESERVE_CTRL`,
 //!   stops those whose bit is clear; `OPTIONS_PERSISTENT` then saves the
 //!   streams as persistent. The port mask is ignored (one port). A GET of
 //!   RMC reads the bits of the running streams.
+//! - **Navigation** (INS_1..4, GPS1_POS, GPS1_VEL, MAGNETOMETER,
+//!   BAROMETER, SYS_SENSORS, IMU_MAG, PIMU_MAG): built by
+//!   [`crate::isb::ins`] from [`crate::isb::nav::truth_of`], the INS and
+//!   GNSS models stepped every [`ins::STEP_MS`]; GPS time from
+//!   [`Isb::set_gps_time`]; faults from [`Isb::set_nav_faults`]
+//!   (`docs/isb.md` "Navigation").
 //! - **STROBE_IN_TIME** is sent on every rising EXTRIG edge while its
 //!   stream is on (a GET with `n > 0`, or its RMC bit), counting edges
 //!   since power-on, time of week = ms since power-on (no GPS).

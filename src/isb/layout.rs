@@ -1,4 +1,4 @@
-//! One declaration per ISB data set: [`data_set!`] turns a list of typed
+//! One declaration per ISB data set: [`crate::data_set!`] turns a list of typed
 //! fields with their byte offsets into the offset constants, the size, the
 //! struct and its encoder and decoder, and checks at compile time that the
 //! offsets are those of the packed C struct (each field starts where the
