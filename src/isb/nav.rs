@@ -3,17 +3,13 @@
 //! Sense SDK 2.7.1 conventions: `docs/protocol-facts.md` "ISB navigation
 //! (SDK 2.7.1)").
 //!
-//! [`truth_of`] is the one place the truth is read: today it derives it
-//! from the chain's built-in motion (its latitude and attitude; longitude
-//! [`DEFAULT_LON_DEG`], height [`DEFAULT_HEIGHT_M`], velocity zero); a
-//! vehicle state replaces its body without touching its callers.
+//! [`truth_of`] is the one place the truth is read: the unit's vehicle
+//! ([`crate::vehicle`]), whatever its source.
 
 use libm::{asin, atan2, cos, sin, sqrt};
 
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
-use crate::math::rotation::dcm_from_quat;
-use crate::sensor::motion::site;
 
 /// Longitude of the built-in site, degrees east (the motions carry only a
 /// latitude; the emulator's choice, `docs/isb.md`).
@@ -56,45 +52,33 @@ pub struct NavTruth {
     pub q_nb: [f64; 4],
 }
 
-/// The navigation truth of `chain` now (module doc). The IMX body frame is
-/// the chain's (x, y, z up) turned half a turn about x (`isb::device`), the
-/// chain's attitude maps it to ENU (ICD Appendix C).
+/// The navigation truth of `chain` now: the unit's vehicle
+/// ([`SignalChain::vehicle`]: a board's vehicle source — manoeuvre script,
+/// full-state rows, live feed — or the built-in motion's site and
+/// attitude). Its body frame (forward, right, down) is the IMX's. A
+/// built-in motion's site is placed at longitude [`DEFAULT_LON_DEG`] and
+/// height [`DEFAULT_HEIGHT_M`]: the vehicle puts it where normal gravity is
+/// the ICD's 1 g (≈ 1.4 km below the ellipsoid at 45° N, so the KERNEL at
+/// rest reads exactly 1 g), which is no place to report an INS at.
 pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
-    let (lat, heading) = site(chain.core_motion());
-    let (lat, heading) = (f64::from(lat), f64::from(heading));
-    // Object (chain) → ENU.
-    let c = match chain.truth_attitude() {
-        Some(q) => {
-            let m = dcm_from_quat(&q);
-            let mut out = [[0.0f64; 3]; 3];
-            for (o, r) in out.iter_mut().zip(m.iter()) {
-                for (x, y) in o.iter_mut().zip(r.iter()) {
-                    *x = f64::from(*y);
-                }
-            }
-            out
-        }
-        None => {
-            let (s, k) = (sin(heading.to_radians()), cos(heading.to_radians()));
-            // (C.1) with pitch = roll = 0.
-            [[k, s, 0.0], [-s, k, 0.0], [0.0, 0.0, 1.0]]
-        }
+    let (v, builtin) = match chain.vehicle_source() {
+        Some(v) => (*v, false),
+        None => (chain.vehicle(), true),
     };
-    // C_nb = T · C · P: P = diag(1, −1, −1) (FRD → chain), T swaps E/N and
-    // negates up (ENU → NED).
-    let mut cnb = [[0.0f64; 3]; 3];
-    for j in 0..3 {
-        let sign = if j == 0 { 1.0 } else { -1.0 };
-        cnb[0][j] = c[1][j] * sign;
-        cnb[1][j] = c[0][j] * sign;
-        cnb[2][j] = -c[2][j] * sign;
-    }
     NavTruth {
-        lat_deg: lat,
-        lon_deg: DEFAULT_LON_DEG,
-        h_m: DEFAULT_HEIGHT_M,
-        v_ned: [0.0; 3],
-        q_nb: quat_from_dcm(&cnb),
+        lat_deg: v.lat_rad.to_degrees(),
+        lon_deg: if builtin {
+            DEFAULT_LON_DEG
+        } else {
+            v.lon_rad.to_degrees()
+        },
+        h_m: if builtin {
+            DEFAULT_HEIGHT_M
+        } else {
+            v.height_m
+        },
+        v_ned: v.vel_ned,
+        q_nb: v.q_nb,
     }
 }
 
