@@ -51,6 +51,7 @@ pub mod ahrs;
 pub mod chain;
 pub mod device;
 pub mod dsp;
+pub mod feed;
 pub mod framing;
 pub mod isb;
 pub mod kernel;
