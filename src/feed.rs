@@ -19,7 +19,9 @@
 //! to the next line end or binary sync (one [`Reject::Malformed`] for the
 //! torn line); a binary frame whose length or checksum is wrong is
 //! rejected and the search for a sync goes on from its second byte, so a
-//! good frame inside a bad one is still found.
+//! good frame inside a bad one is still found (what follows a bad frame is
+//! skipped up to the next `\n` or sync: a text row right after it is lost
+//! with it).
 //!
 //! [`Track`] keeps the last two samples of one device: it rejects times
 //! that do not increase ([`Reject::NonIncreasing`]), holds the last sample
