@@ -466,7 +466,7 @@ fn parse_line(line: &[u8]) -> Option<Result<Sample, Reject>> {
     let mut v = [0f64; 8];
     let mut n = 0;
     for cell in line.split(',').map(str::trim) {
-        let Ok(x) = cell.parse::<f64>() else {
+        let Some(x) = parse_number(cell) else {
             return header(line);
         };
         if n == v.len() {
@@ -489,6 +489,85 @@ fn parse_line(line: &[u8]) -> Option<Result<Sample, Reject>> {
     };
     let time_ns = libm::round(v[0] * 1e9) as u64;
     Some(checked(OWN_DEVICE, time_ns, truth))
+}
+
+/// Exact powers of ten in `f64` (10²² is the last one).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// A decimal number (`-12.5`, `3e-4`, `.5`, `+7`): at most 19 significant
+/// digits are kept (the rest only scale), then `digits × 10^exp` —
+/// correctly rounded while both fit the exact `f64` range (≤ 2⁵³,
+/// |exp| ≤ 22), within a few ulps beyond. Not `str::parse::<f64>`: its
+/// tables cost 15 KiB of an MCU's flash, and a feed's values are `f32`
+/// anyway. `None` for anything else (`inf`, `NaN`, a header word).
+fn parse_number(s: &str) -> Option<f64> {
+    let b = s.as_bytes();
+    let (neg, mut i) = match b.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
+    };
+    let (mut m, mut exp, mut digits, mut kept) = (0u64, 0i32, 0u32, 0u32);
+    let mut dot = false;
+    while let Some(&c) = b.get(i) {
+        match c {
+            b'0'..=b'9' => {
+                digits += 1;
+                if kept < 19 {
+                    if m > 0 || c != b'0' {
+                        kept += 1;
+                    }
+                    m = m * 10 + u64::from(c - b'0');
+                    exp -= i32::from(dot);
+                } else {
+                    exp += i32::from(!dot);
+                }
+            }
+            b'.' if !dot => dot = true,
+            _ => break,
+        }
+        i += 1;
+    }
+    if digits == 0 {
+        return None;
+    }
+    if let Some(b'e' | b'E') = b.get(i) {
+        i += 1;
+        let (eneg, start) = match b.get(i) {
+            Some(b'-') => (true, i + 1),
+            Some(b'+') => (false, i + 1),
+            _ => (false, i),
+        };
+        i = start;
+        let mut e = 0i32;
+        while let Some(&c @ b'0'..=b'9') = b.get(i) {
+            e = (e * 10 + i32::from(c - b'0')).min(10_000);
+            i += 1;
+        }
+        if i == start {
+            return None;
+        }
+        exp += if eneg { -e } else { e };
+    }
+    if i != b.len() {
+        return None;
+    }
+    let mut v = m as f64;
+    let mut e = exp;
+    while e > 0 && v != 0.0 && v.is_finite() {
+        let k = e.min(22);
+        v *= POW10[k as usize];
+        e -= k;
+    }
+    while e < 0 && v != 0.0 {
+        let k = (-e).min(22);
+        v /= POW10[k as usize];
+        e += k;
+    }
+    Some(if neg { -v } else { v })
 }
 
 /// A line that is not all numbers: the rate header (skipped), the
@@ -629,6 +708,77 @@ impl Track {
     }
 }
 
+/// A device's feed in real time (host and firmware boards alike): a sample
+/// applies from the first tick at or after the device time it arrived at
+/// and holds until the next; silence beyond the timeout is the fault
+/// ([`crate::chain::Faults::motion_feed_lost`]) until a sample returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Live {
+    track: Track,
+    /// Device time the newest sample arrived at, ns.
+    arrived_ns: Option<u64>,
+    /// The truth the last tick used.
+    applied: Option<Truth>,
+    lost: bool,
+    timeout_ns: u64,
+}
+
+impl Live {
+    /// No sample yet; the fault after `timeout_ns` of silence.
+    pub const fn new(timeout_ns: u64) -> Self {
+        Live {
+            track: Track::new(),
+            arrived_ns: None,
+            applied: None,
+            lost: false,
+            timeout_ns,
+        }
+    }
+
+    /// Takes a sample arrived at device time `now_ns` (its own time must
+    /// increase: [`Reject::NonIncreasing`]).
+    pub fn offer(&mut self, time_ns: u64, truth: Truth, now_ns: u64) -> Result<(), Reject> {
+        self.track.accept(time_ns, truth)?;
+        self.arrived_ns = Some(now_ns);
+        Ok(())
+    }
+
+    /// The truth of the tick at `deadline_ns` (`None` before the first
+    /// sample: the device's own motion goes on) and whether the feed is
+    /// lost then.
+    pub fn at(&mut self, deadline_ns: u64) -> (Option<Truth>, bool) {
+        if let (Some(a), Some((_, newest))) = (self.arrived_ns, self.track.last()) {
+            if deadline_ns >= a {
+                self.applied = Some(newest);
+            }
+        }
+        self.lost = self
+            .arrived_ns
+            .is_some_and(|a| deadline_ns.saturating_sub(a) > self.timeout_ns);
+        (self.applied, self.lost)
+    }
+
+    /// Whether the last [`Live::at`] found the feed lost.
+    pub fn lost(&self) -> bool {
+        self.lost
+    }
+
+    /// Device time since the newest sample arrived, ns (`None`: never).
+    pub fn age_ns(&self, now_ns: u64) -> Option<u64> {
+        self.arrived_ns.map(|a| now_ns.saturating_sub(a))
+    }
+
+    /// The newest sample.
+    pub fn track(&self) -> &Track {
+        &self.track
+    }
+
+    /// The silence after which the feed is lost, ns.
+    pub fn timeout_ns(&self) -> u64 {
+        self.timeout_ns
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -680,6 +830,43 @@ mod tests {
     }
 
     #[test]
+    fn numbers_parse_as_the_standard_parser_does() {
+        for s in [
+            "0",
+            "-0",
+            "1",
+            "+7",
+            "12.5",
+            "-12.5",
+            ".5",
+            "5.",
+            "0.001",
+            "1e-3",
+            "3E4",
+            "2.5e+2",
+            "123456789.123456789",
+            "1e300",
+            "1e-300",
+            "0.000000000000000000000000123",
+            "98.10600000000000000000001",
+            "-1e40",
+            "9.8106",
+        ] {
+            let want: f64 = s.parse().unwrap();
+            let got = parse_number(s).unwrap_or_else(|| panic!("{s}"));
+            assert!(
+                (got - want).abs() <= want.abs() * 4e-16,
+                "{s}: {got} vs {want}"
+            );
+        }
+        for s in [
+            "", "-", ".", "e5", "1e", "1.2.3", "1x", "inf", "NaN", "time", "1 2",
+        ] {
+            assert_eq!(parse_number(s), None, "{s}");
+        }
+    }
+
+    #[test]
     fn binary_round_trips_with_and_without_temperature() {
         for temp in [None, Some(31.5)] {
             let s = rs(3, 123_456_789, 12.5, temp);
@@ -711,6 +898,7 @@ mod tests {
         assert_eq!(f[35..39], 1f32.to_le_bytes());
         assert_eq!(CRC.checksum(b"123456789"), 0x29B1);
         assert_eq!(u16::from_le_bytes([f[39], f[40]]), CRC.checksum(&f[2..39]));
+        assert_eq!(f[39..], [0x0C, 0x3E]);
     }
 
     #[test]
@@ -729,7 +917,7 @@ mod tests {
             (b"-1,0,0,0,0,0,1\n", OutOfRange),
             (b"0,3000,0,0,0,0,1\n", OutOfRange),
             (b"0,0,0,0,0,0,200\n", OutOfRange),
-            (b"0,0,0,0,0,0,1,NaN\n", OutOfRange),
+            (b"0,0,0,0,0,0,1,NaN\n", Malformed),
             (b"0,0,0,0,0,0,1,1e40\n", OutOfRange),
             (b"1e300,0,0,0,0,0,1\n", OutOfRange),
             (b"time,lat,lon,h,vn,ve,vd,roll,pitch,yaw\n", UnsupportedKind),
@@ -801,6 +989,25 @@ mod tests {
         assert_eq!(mid.temperature_c, Some(20.0));
         assert_eq!(t.at(9_000), Some(b));
         assert_eq!(t.at(500), Some(a));
+    }
+
+    #[test]
+    fn live_applies_from_arrival_holds_and_times_out() {
+        let mut l = Live::new(1_000_000);
+        assert_eq!(l.at(0), (None, false));
+        let a = rs(0, 0, 1.0, None).truth;
+        let b = rs(0, 0, 2.0, None).truth;
+        l.offer(5, a, 1_000).unwrap();
+        assert_eq!(l.at(500), (None, false));
+        assert_eq!(l.at(1_000), (Some(a), false));
+        l.offer(6, b, 1_500).unwrap();
+        assert_eq!(l.at(1_400).0, Some(a));
+        assert_eq!(l.offer(6, b, 1_600), Err(Reject::NonIncreasing));
+        assert_eq!(l.at(2_600_000), (Some(b), true));
+        assert!(l.lost());
+        assert_eq!(l.age_ns(2_600_000), Some(2_598_500));
+        l.offer(7, a, 2_700_000).unwrap();
+        assert_eq!(l.at(2_700_000), (Some(a), false));
     }
 
     fn stream() -> impl Strategy<Value = Vec<u8>> {

@@ -13,11 +13,12 @@ use std::io::Write as _;
 use std::net::{SocketAddr, TcpStream, UdpSocket};
 use std::time::{Duration, Instant};
 
-use imu_emu::feed::{encode, RateSample, MAX_FRAME, OWN_DEVICE};
+use imu_emu::feed::OWN_DEVICE;
 use imu_emu::isb::did;
 use imu_emu::isb::sets::{imu_status, Imu};
-use imu_emu::sensor::Truth;
-use support::{command, free_port, isb_get, isb_packet_of, Conn, Control, Emu, TIMEOUT};
+use support::{
+    command, feed_sample as sample, free_port, isb_get, isb_packet_of, Conn, Control, Emu, TIMEOUT,
+};
 
 const GA: u8 = 0x8F;
 /// USW bit 1: communication failure of internal sensors (ICD Table 5.26).
@@ -42,21 +43,6 @@ fn feed_addrs(emu: &Emu, lines: usize) -> Vec<String> {
         .into_iter()
         .filter_map(|l| l.strip_prefix("feed on ").map(str::to_owned))
         .collect()
-}
-
-fn sample(device: u16, time_s: f64, w: [f32; 3]) -> Vec<u8> {
-    let s = RateSample {
-        device,
-        time_ns: (time_s * 1e9) as u64,
-        truth: Truth {
-            rate_dps: w,
-            specific_force_g: [0.0, 0.0, 1.0],
-            temperature_c: None,
-        },
-    };
-    let mut f = [0u8; MAX_FRAME];
-    let n = encode(&s, &mut f);
-    f[..n].to_vec()
 }
 
 fn start_ga(c: &mut Conn) {

@@ -28,7 +28,7 @@ use std::io::{self, Read};
 use std::net::{SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::os::fd::AsFd;
 
-use imu_emu::feed::{Counts, Decoder, Reject, Sample, Track, OWN_DEVICE};
+use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, OWN_DEVICE};
 use imu_emu::sensor::Truth;
 use nix::poll::{PollFd, PollFlags};
 
@@ -236,16 +236,13 @@ pub struct FeedState {
     /// Whether samples naming no device ([`OWN_DEVICE`]) are this
     /// device's (its own feed) or rejected (a shared feed).
     own: bool,
+    /// Lockstep: the newest two samples the device reached.
     track: Track,
+    /// Real time: the samples as they arrive, the fault.
+    live: Live,
     counts: Counts,
-    /// Device time the newest sample arrived at (real time).
-    arrived_ns: Option<u64>,
-    /// The truth the last tick used (real time).
-    applied: Option<Truth>,
     /// Samples waiting for the device to reach their time (lockstep).
     pending: VecDeque<(u64, Truth)>,
-    /// The fault is raised.
-    lost: bool,
     /// Host time of the newest sample (status in lockstep).
     last_host: Option<std::time::Instant>,
     label: String,
@@ -260,11 +257,9 @@ impl FeedState {
             device,
             own,
             track: Track::new(),
+            live: Live::new(cfg.timeout_ns),
             counts: Counts::default(),
-            arrived_ns: None,
-            applied: None,
             pending: VecDeque::new(),
-            lost: false,
             last_host: None,
             label: label.to_owned(),
         }
@@ -319,9 +314,7 @@ impl FeedState {
                     Ok(())
                 }
             }
-            Ok((t, truth)) => self.track.accept(t, truth).map(|()| {
-                self.arrived_ns = Some(now_ns);
-            }),
+            Ok((t, truth)) => self.live.offer(t, truth, now_ns),
             Err(e) => Err(e),
         };
         match r {
@@ -350,16 +343,9 @@ impl FeedState {
         if self.cfg.lockstep {
             return (self.track.at(deadline_ns), false);
         }
-        if let (Some(a), Some((_, newest))) = (self.arrived_ns, self.track.last()) {
-            if deadline_ns >= a {
-                self.applied = Some(newest);
-            }
-        }
-        let lost = self
-            .arrived_ns
-            .is_some_and(|a| deadline_ns.saturating_sub(a) > self.cfg.timeout_ns);
-        if lost != self.lost {
-            self.lost = lost;
+        let was = self.live.lost();
+        let (truth, lost) = self.live.at(deadline_ns);
+        if lost != was {
             if lost {
                 eprintln!(
                     "imu-emu: {}motion feed silent for more than {} ms: sensor fault reported, \
@@ -374,7 +360,7 @@ impl FeedState {
                 );
             }
         }
-        (self.applied, lost)
+        (truth, lost)
     }
 
     /// `status` words: `feed-clock`, `feed-samples`, `feed-age-ms`
@@ -386,8 +372,9 @@ impl FeedState {
             self.last_host
                 .map(|h| (h.elapsed().as_millis() as u64).to_string())
         } else {
-            self.arrived_ns
-                .map(|a| (now_ns.saturating_sub(a) / 1_000_000).to_string())
+            self.live
+                .age_ns(now_ns)
+                .map(|a| (a / 1_000_000).to_string())
         };
         let mut s = format!(
             " feed-clock={} feed-samples={} feed-age-ms={} feed-lost={} feed-rejected={}",
@@ -398,7 +385,7 @@ impl FeedState {
             },
             self.counts.samples,
             age.as_deref().unwrap_or("never"),
-            u8::from(self.lost),
+            u8::from(self.live.lost()),
             self.counts.rejected_total(),
         );
         for r in Reject::ALL {
