@@ -126,8 +126,21 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         self
     }
 
-    /// Reads the shared feed, handing each sample to the device it names.
+    /// Whether a running device's lockstep queue is full.
+    fn shared_feed_full(&self) -> bool {
+        self.slots.iter().flatten().any(|s| match s {
+            Slot::On(r) => !r.feed_wants_more(),
+            Slot::Off { .. } => false,
+        })
+    }
+
+    /// Reads the shared feed, handing each sample to the device it names;
+    /// not while a device's lockstep queue is full (the socket's buffer
+    /// then holds the simulator back).
     fn read_shared_feed(&mut self) -> anyhow::Result<()> {
+        if self.shared_feed_full() {
+            return Ok(());
+        }
         let Some(mut sock) = self.shared_feed.take() else {
             return Ok(());
         };
@@ -332,7 +345,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
                     r.feed_interest(&mut fds);
                 }
             }
-            if let Some(f) = &self.shared_feed {
+            if let Some(f) = self
+                .shared_feed
+                .as_ref()
+                .filter(|_| !self.shared_feed_full())
+            {
                 f.interest(&mut fds);
             }
             counts.push(ctl_n);

@@ -457,10 +457,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.io.feed.as_ref().is_some_and(FeedState::wants_more)
     }
 
-    /// Appends the feed socket's descriptors to wait on.
+    /// Appends the feed socket's descriptors to wait on (none while the
+    /// lockstep queue is full: the socket is not read then).
     pub fn feed_interest<'a>(&'a self, fds: &mut Vec<nix::poll::PollFd<'a>>) {
         if let Some(s) = &self.io.feed_socket {
-            s.interest(fds);
+            if self.feed_wants_more() {
+                s.interest(fds);
+            }
         }
     }
 
