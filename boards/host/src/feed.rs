@@ -95,7 +95,7 @@ impl FeedSocket {
     /// Binds `addr` (port 0 picks a free port).
     pub fn bind(addr: &FeedAddr) -> anyhow::Result<Self> {
         let a = addr.host_port();
-        let err = |e| crate::cli::bind_error(e, "--motion-feed", a);
+        let err = |e| crate::error::bind_error(e, "--motion-feed", a);
         let (socket, local) = match addr {
             FeedAddr::Tcp(_) => {
                 let l = TcpListener::bind(a).map_err(err)?;

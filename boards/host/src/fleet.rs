@@ -61,6 +61,9 @@ pub struct Setup {
     pub pps: bool,
     /// The motion each device replays, if any (each from its start).
     pub trajectory: Option<Trajectory>,
+    /// The vehicle each device rides on (`--motion`), if any (each from
+    /// its start).
+    pub vehicle: Option<crate::vehicle::VehicleSource>,
     /// Power on at start instead of at the first client.
     pub power_on_now: bool,
     /// The live motion feed's clock and timeout, if there is a feed.
@@ -224,6 +227,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         }
         if let Some(t) = &self.setup.trajectory {
             runner = runner.with_trajectory(t.clone());
+        }
+        if let Some(v) = &self.setup.vehicle {
+            runner = runner.with_vehicle(v.clone());
         }
         if let Some(cfg) = self.setup.feed {
             let own = self.feeds.get_mut(k).and_then(Option::take);
