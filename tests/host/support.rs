@@ -570,6 +570,17 @@ impl Control {
         l.trim().to_owned()
     }
 
+    /// Waits (bounded) until the device is on: a client's connection
+    /// powers it on when the runner's next pass sees it, which on a loaded
+    /// host may come after a control command sent right behind it.
+    pub fn wait_powered(&mut self) {
+        let deadline = Instant::now() + TIMEOUT;
+        while self.cmd("status").starts_with("ok mode=off") {
+            assert!(Instant::now() < deadline, "the device never powered on");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
     /// Sends a command and returns its answer, skipping events.
     pub fn cmd(&mut self, c: &str) -> String {
         use std::io::Write as _;
