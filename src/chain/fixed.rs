@@ -238,10 +238,10 @@ impl Core {
                 self.mounting.to_sensor(&truth.force),
             ),
         };
-        let (g, over) = self.engines[0].measure(&rate, rng);
-        let (a, over_a) = self.engines[1].measure(&force, rng);
+        let (g, over) = self.engines[0].measure(&rate, &force, rng);
+        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
         let aux = if has_aux {
-            self.engines[2].measure(&force, rng).0
+            self.engines[2].measure(&force, &force, rng).0
         } else {
             [0; 3]
         };

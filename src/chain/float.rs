@@ -77,7 +77,7 @@ pub fn truth_of(t: &TruthF32) -> Truth {
     *t
 }
 
-/// The truth clamped to what the sensor model can take (±2048 °/s,
+/// The truth clamped to what the sensor model can take (±8192 °/s,
 /// ±128 g: [`TruthF32::bounded`]), so a value beyond `f32` saturates the
 /// sensor instead of turning into NaN.
 #[inline(always)]
@@ -184,10 +184,10 @@ impl Core {
                 self.mounting.to_sensor(&truth.specific_force_g),
             ),
         };
-        let (g, over) = self.engines[0].measure(&rate, rng);
-        let (a, over_a) = self.engines[1].measure(&force, rng);
+        let (g, over) = self.engines[0].measure(&rate, &force, rng);
+        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
         let aux = if has_aux {
-            self.engines[2].measure(&force, rng).0
+            self.engines[2].measure(&force, &force, rng).0
         } else {
             [0.0; 3]
         };
