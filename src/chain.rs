@@ -247,6 +247,22 @@ impl ChainConfig {
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
     }
+
+    /// The variant the accumulator runs: the configured one, except that
+    /// **Instant with the LPF off decimates by the interval mean** (a
+    /// boxcar over the output interval). Without a low-pass filter the
+    /// internal-rate white noise would otherwise be point-sampled at the
+    /// output rate and read high by √(internal rate / output rate) — the
+    /// K201's 4 kHz at a 2 kHz output read its ARW √2 high; with the mean
+    /// it reads the profile's figure at every output rate. At an output
+    /// every tick the two are the same. With the LPF on, Instant samples
+    /// the FIR's output (ICD 5.3.6); docs/sensors.md "Decimation".
+    pub fn accumulated_variant(&self) -> OutputVariant {
+        match (self.output_variant, self.lpf) {
+            (OutputVariant::Instant, Bandwidth::Off) => OutputVariant::Average,
+            (v, _) => v,
+        }
+    }
 }
 
 /// Injectable faults (they drive [`Health`]).

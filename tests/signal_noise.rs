@@ -14,6 +14,7 @@
 use allan::{Allan, DataType, Style};
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::dsp::fir::Bandwidth;
+use imu_emu::dsp::variant::OutputVariant;
 use imu_emu::model::Product;
 use imu_emu::sensor::errors::{AxisErrors, SensorErrors, TriadEngine};
 use imu_emu::sensor::rng::Rng;
@@ -368,4 +369,91 @@ fn fixed_point_engine_tracks_the_float_engine() {
         }
     }
     println!("fixed vs float engine: worst {worst:.2} of the bound");
+}
+
+/// The white noise read at the output rate (σ of the output / √f_out,
+/// the Allan deviation's −½ slope at τ = one output interval) of gyro Z
+/// with white noise of density `n` only.
+fn output_density(model: &str, lpf: Bandwidth, variant: OutputVariant, rate: u32, n: f32) -> f64 {
+    let product = Product::parse(model).unwrap();
+    let internal = product.model.internal_rate_hz;
+    let mut chain = SignalChain::new(product, 5);
+    let mut cfg = ChainConfig::defaults(&product);
+    cfg.lpf = lpf;
+    cfg.output_variant = variant;
+    chain.configure(&cfg);
+    *chain.errors_mut() = ErrorModel::IDEAL;
+    chain.errors_mut().gyro.axes[2].noise_density = n;
+    chain.faults_mut().temperature_c = Some(25.0);
+    let every = internal / rate;
+    let period_us = 1_000_000 / u64::from(internal);
+    // Past the FIR's history, then 2000 outputs.
+    let mut t = 0u64;
+    for _ in 0..internal / 10 {
+        t += period_us;
+        chain.tick(Instant::from_micros(t));
+    }
+    chain.output();
+    let outputs = 2000;
+    let (mut s, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..outputs {
+        for _ in 0..every {
+            t += period_us;
+            chain.tick(Instant::from_micros(t));
+        }
+        let g = f64::from(chain.output().gyro[2]);
+        s += g;
+        s2 += g * g;
+    }
+    let mean = s / f64::from(outputs);
+    let sd = (s2 / f64::from(outputs) - mean * mean).sqrt();
+    sd / f64::from(rate).sqrt()
+}
+
+/// Decimation band-limits: at the highest output rate every variant and
+/// LPF setting reads at most the configured density, and at 100 Hz every
+/// variant that band-limits (average, incremental, and instant with the
+/// LPF off, which decimates by the interval mean) does too; the unfiltered
+/// ones read it (they keep the whole band). Before, a K201 with its LPF off
+/// read √2 high at 2 kHz (4 kHz point-sampled). Instant with an LPF wider
+/// than the output's Nyquist band samples the FIR's output (ICD 5.3.6) and
+/// aliases: not asserted here (docs/sensors.md "Decimation").
+#[test]
+fn no_variant_or_lpf_raises_the_white_noise_above_the_profile() {
+    use OutputVariant::*;
+    let n = 0.003f32;
+    let lpfs = [
+        Bandwidth::Hz16,
+        Bandwidth::Hz33,
+        Bandwidth::Hz66,
+        Bandwidth::Hz131,
+        Bandwidth::Hz262,
+        Bandwidth::Off,
+    ];
+    // σ of 2000 outputs: 1.6 % (1σ); 4σ above.
+    let tol = 1.065;
+    for (model, rates) in [("K201", [4000u32, 2000, 100]), ("K110", [2000, 1000, 100])] {
+        for lpf in lpfs {
+            if model == "K201" && matches!(lpf, Bandwidth::Hz16 | Bandwidth::Hz33) {
+                continue; // not a K201 setting (Table 5.24)
+            }
+            for variant in [Instant, Average, Incremental] {
+                for rate in rates {
+                    if variant == Instant && lpf != Bandwidth::Off && rate == 100 {
+                        continue; // aliases by definition (doc above)
+                    }
+                    let read = output_density(model, lpf, variant, rate, n) / f64::from(n);
+                    println!("{model} {lpf:?} {variant:?} {rate} Hz: {read:.3} of N");
+                    assert!(
+                        read < tol,
+                        "{model} {lpf:?} {variant:?} {rate} Hz: {read:.3} of N"
+                    );
+                    if lpf == Bandwidth::Off && variant != Incremental {
+                        // Unfiltered: the whole band, read at the figure.
+                        assert!(read > 2.0 - tol, "{model} {variant:?} {rate} Hz: {read:.3}");
+                    }
+                }
+            }
+        }
+    }
 }
