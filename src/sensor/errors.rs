@@ -469,18 +469,7 @@ impl TriadEngine {
                 y[i] += self.bias[i];
             }
         }
-        let mut over = 0u8;
-        for (i, v) in y.iter_mut().enumerate() {
-            if *v > self.range {
-                *v = self.range;
-                over |= 1 << i;
-            } else if *v < -self.range {
-                *v = -self.range;
-                over |= 1 << i;
-            } else if v.is_nan() {
-                *v = 0.0;
-            }
-        }
+        let over = saturate(&mut y, self.range);
         (y, over)
     }
 }
@@ -810,18 +799,31 @@ impl TriadEngineFixed {
                 y[i] = y[i].saturating_add(self.bias[i]);
             }
         }
-        let mut over = 0u8;
-        for (i, v) in y.iter_mut().enumerate() {
-            if *v > self.range {
-                *v = self.range;
-                over |= 1 << i;
-            } else if *v < -self.range {
-                *v = -self.range;
-                over |= 1 << i;
-            }
-        }
+        let over = saturate(&mut y, self.range);
         (y, over)
     }
+}
+
+/// Clips each axis of `y` to ±`range` (NaN → 0); the mask of the clipped
+/// axes (bit i = axis i).
+#[inline(always)]
+fn saturate<T>(y: &mut [T; 3], range: T) -> u8
+where
+    T: Copy + Default + PartialOrd + core::ops::Neg<Output = T>,
+{
+    let mut over = 0u8;
+    for (i, v) in y.iter_mut().enumerate() {
+        if *v > range {
+            *v = range;
+            over |= 1 << i;
+        } else if *v < -range {
+            *v = -range;
+            over |= 1 << i;
+        } else if (*v).partial_cmp(&*v).is_none() {
+            *v = T::default();
+        }
+    }
+    over
 }
 
 /// A state with `old` fraction bits at `new` fraction bits.
