@@ -37,6 +37,7 @@ pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod profile_file;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;
