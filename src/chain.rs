@@ -248,19 +248,20 @@ impl ChainConfig {
         fir::design(self.lpf, self.internal_rate_hz)
     }
 
-    /// The variant the accumulator runs: the configured one, except that
-    /// **Instant with the LPF off decimates by the interval mean** (a
-    /// boxcar over the output interval). Without a low-pass filter the
-    /// internal-rate white noise would otherwise be point-sampled at the
-    /// output rate and read high by √(internal rate / output rate) — the
-    /// K201's 4 kHz at a 2 kHz output read its ARW √2 high; with the mean
-    /// it reads the profile's figure at every output rate. At an output
-    /// every tick the two are the same. With the LPF on, Instant samples
-    /// the FIR's output (ICD 5.3.6); docs/sensors.md "Decimation".
-    pub fn accumulated_variant(&self) -> OutputVariant {
-        match (self.output_variant, self.lpf) {
-            (OutputVariant::Instant, Bandwidth::Off) => OutputVariant::Average,
-            (v, _) => v,
+    /// The longest output interval, in ticks, at which Instant samples
+    /// the FIR's output (ICD 5.3.6); at longer intervals it decimates by
+    /// the interval's mean (a boxcar over the output interval): the
+    /// **decimation's band limit**. Sampling keeps the white noise within
+    /// the profile's figure only while the FIR's bandwidth is below the
+    /// output's Nyquist frequency (2·f_c·n ≤ f_s); beyond it the noise of
+    /// the whole FIR band would alias into the output band and read high
+    /// by up to √(2·f_c/f_out) — the K201 with its LPF off (f_c = ∞: 1
+    /// tick) read its ARW √2 high at 2 kHz, a K110 at its factory 262 Hz
+    /// and 100 Hz read it 2.3× high. docs/sensors.md "Decimation".
+    pub fn instant_sample_limit(&self) -> u32 {
+        match self.lpf.hz() {
+            None => 1,
+            Some(fc) => ((self.internal_rate_hz as f32 / (2.0 * fc)) as u32).max(1),
         }
     }
 }

@@ -197,7 +197,7 @@ fn output_variants_instant_average_incremental() {
         }
     }
     // With the LPF off, Instant decimates by the interval mean (the band
-    // limit of `ChainConfig::accumulated_variant`): 1.0 over 40 ticks;
+    // limit of `ChainConfig::instant_sample_limit`): 1.0 over 40 ticks;
     // at one tick an interval it is each tick's value (below).
     for (variant, expect) in [
         (OutputVariant::Instant, 1.0),

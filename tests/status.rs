@@ -169,7 +169,7 @@ fn output_variants_instant_average_incremental() {
     // incremental = Δθ/T from the same samples = the average for a
     // rotation about one fixed axis (no coning term).
     // With the LPF off, instant decimates by the interval mean (the band
-    // limit of `ChainConfig::accumulated_variant`, docs/sensors.md
+    // limit of `ChainConfig::instant_sample_limit`, docs/sensors.md
     // "Decimation"): the same as the average.
     let mean = 0.5 / (std::f64::consts::PI / 40.0).tan();
     alternates(&vibrating_gyro_x(0, 0), mean);

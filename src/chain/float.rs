@@ -125,7 +125,8 @@ impl Core {
             motion: BuiltinMotion::new(Motion::default(), dt),
             mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
             cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantAccumulator::new(cfg.accumulated_variant(), dt, &x),
+            variant: VariantAccumulator::new(cfg.output_variant, dt, &x)
+                .with_sample_limit(cfg.instant_sample_limit()),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
         };
         // Hosts: a unit without the aux accelerometer does not filter its
@@ -235,7 +236,8 @@ impl Core {
         self.cascade
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
         self.mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
-        self.variant = VariantAccumulator::new(cfg.accumulated_variant(), dt, &last);
+        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last)
+            .with_sample_limit(cfg.instant_sample_limit());
     }
 
     /// Chooses a built-in motion.
