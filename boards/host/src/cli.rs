@@ -6,6 +6,7 @@
 //!         [--sensor-profile [K=]FILE]… …
 //! imu-emu client (--tcp HOST:PORT | --serial DEV [--baud N]) SUBCOMMAND …
 //! imu-emu sensor-profile (show NAME | check FILE)
+//! imu-emu allan [--model K110 | --input CSV] [--hours H] [--png F] [--svg F] …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -179,6 +180,10 @@ pub enum Sub {
     /// IMX-5) as a file to start from; `check FILE` reads one.
     #[command(name = "sensor-profile", subcommand)]
     SensorProfile(ProfileSub),
+    /// The Allan deviation of a unit run in process (or of a `client
+    /// record` CSV): the fitted ARW/VRW, bias instability and rate random
+    /// walk beside the profile's, and a log-log plot (PNG, SVG).
+    Allan(crate::allan::AllanArgs),
 }
 
 /// `imu-emu sensor-profile …`.
@@ -373,6 +378,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     match args.command {
         Some(Sub::Client(c)) => return crate::client::run(c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
+        Some(Sub::Allan(a)) => return crate::allan::run(&a),
         None => {}
     }
     check_addresses(&args)?;

@@ -28,6 +28,8 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod allan;
+pub mod allan_plot;
 pub mod backlog;
 pub mod cli;
 pub mod client;
