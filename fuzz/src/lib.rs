@@ -20,7 +20,8 @@ use std::collections::BTreeMap;
 compile_error!("build the fuzz targets with debug assertions (fuzz/Cargo.toml release profile)");
 
 use embedded_storage::nor_flash::NorFlash;
-use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, RX_FRAME_CAP, TX_CAP};
+use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, TX_CAP};
+use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
 use imu_emu::kernel::frame::{self, Decoder as KernelDecoder};
 use imu_emu::kernel::params::{self, PARAMS};

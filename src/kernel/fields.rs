@@ -111,7 +111,7 @@ pub fn scale_round(x: f32, k: u32) -> i64 {
 /// `|x| · k` rounded half up, exactly ([`scale_round`]'s magnitude): NaN
 /// gives 0, ∞ and products of 2^62 or more give at least 2^62.
 // Out of line in the `fixed-point` build (RP2040 flash, like the helpers
-// of `dsp::fixed`): 0.6 KiB less for a call per output value.
+// of `math::fixed`): 0.6 KiB less for a call per output value.
 #[cfg_attr(feature = "fixed-point", inline(never))]
 #[cfg_attr(not(feature = "fixed-point"), inline(always))]
 fn scaled_magnitude(x: f32, k: u32) -> u64 {
@@ -255,7 +255,7 @@ pub fn sat_u16(x: f32, k: u32) -> u16 {
 
 /// Heading in [0, 360) degrees (the f32 remainder is exact).
 pub(crate) fn heading_0_360(h: f32) -> f32 {
-    let h = crate::ahrs::rotation::small_rem(h, 360.0);
+    let h = crate::math::rotation::small_rem(h, 360.0);
     if h < 0.0 {
         h + 360.0
     } else {

@@ -57,8 +57,9 @@
 
 use super::profile::{SensorProfile, SensorSpec};
 use super::rng::Rng;
-use crate::ahrs::rotation::{Mat3, Vec3};
-use crate::dsp::fixed::{mul64, Coef, Recip};
+use crate::math::fixed::{mul64, Coef, Recip};
+use crate::math::rotation::{Mat3, Vec3};
+use crate::math::{ACC_BITS, TRUTH_LIMIT};
 use crate::model::Product;
 use libm::sqrtf;
 
@@ -298,7 +299,7 @@ impl TriadEngine {
     /// An engine with saturation at ±`range` (°/s or g).
     pub fn new(range: f32) -> Self {
         TriadEngine {
-            m: crate::ahrs::rotation::MAT3_IDENTITY,
+            m: crate::math::rotation::MAT3_IDENTITY,
             identity_m: true,
             bias: [0.0; 3],
             flicker: [[0.0; FLICKER_TERMS]; 3],
@@ -389,7 +390,7 @@ impl TriadEngine {
             self.m[i][i] = 1.0 + a.scale_factor + a.temp_scale * dtemp;
             self.bias[i] = a.bias + a.temp_bias * dtemp;
         }
-        self.identity_m = self.m == crate::ahrs::rotation::MAT3_IDENTITY;
+        self.identity_m = self.m == crate::math::rotation::MAT3_IDENTITY;
     }
 
     /// Starts the flicker terms in their stationary distribution (at
@@ -445,7 +446,7 @@ impl TriadEngine {
         let mut y = if self.identity_m {
             *truth
         } else {
-            crate::ahrs::rotation::mat_vec(&self.m, truth)
+            crate::math::rotation::mat_vec(&self.m, truth)
         };
         if self.noisy {
             if self.slow_on {
@@ -474,8 +475,6 @@ impl TriadEngine {
     }
 }
 
-pub use super::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
-
 /// An entry of M − I for the fixed-point engine: clamped to ±¼ (NaN → 0).
 fn delta(x: f32) -> f64 {
     if x.is_nan() {
@@ -487,7 +486,7 @@ fn delta(x: f32) -> f64 {
 
 /// [`TriadEngine`] in integers, for the `fixed-point` build: the same
 /// model and the same random draws, on measurements scaled by 2^`bits`
-/// ([`GYRO_BITS`], [`ACC_BITS`]).
+/// ([`GYRO_BITS`](crate::math::GYRO_BITS), [`ACC_BITS`](crate::math::ACC_BITS)).
 ///
 /// - M − I as [`Coef`]s (14-bit mantissas: a 300 ppm scale factor is kept to
 ///   0.02 ppm); the temperature terms (scale factor and bias) are set one
@@ -700,7 +699,7 @@ impl TriadEngineFixed {
         let dtemp = temp_c - REFERENCE_TEMPERATURE_C;
         self.m[i][i] = Coef::from_f32(delta(a.scale_factor + a.temp_scale * dtemp) as f32);
         self.bias[i] =
-            crate::dsp::fixed::to_fixed(a.bias + a.temp_bias * dtemp, u32::from(self.bits));
+            crate::math::fixed::to_fixed(a.bias + a.temp_bias * dtemp, u32::from(self.bits));
         self.identity_m = self.m.iter().flatten().all(|c| *c == Coef::ZERO);
     }
 

@@ -12,7 +12,6 @@ pub mod profile;
 pub mod profiles;
 pub mod rng;
 pub mod temperature;
-pub mod units;
 
 pub use errors::{AxisErrors, ErrorModel, SensorErrors};
 pub use motion::{Motion, MotionSource, Truth, TruthFrame};

@@ -17,7 +17,7 @@
 //! [`vrw_to_density`]), fractions as fractions (1e-4 = 100 ppm), angles in
 //! radians, temperatures in °C.
 
-use super::units::G;
+use crate::math::G;
 
 /// The error terms of one sensor triad, in its output unit (°/s for a
 /// gyro, g for an accelerometer). Every axis of the triad has the same

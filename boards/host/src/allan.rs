@@ -294,7 +294,9 @@ struct Source {
 fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
     let seconds = a.seconds.unwrap_or(a.hours * 3600.0);
     if seconds.is_nan() || seconds <= 0.0 {
-        return Err(crate::cli::UsageError("allan: the run must last more than 0 s".into()).into());
+        return Err(
+            crate::error::UsageError("allan: the run must last more than 0 s".into()).into(),
+        );
     }
     let profile: Option<&'static SensorProfile> = match &a.sensor_profile {
         Some(path) => Some(Box::leak(Box::new(crate::profile_file::load(path)?))),
@@ -305,12 +307,12 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         Product::imx5()
     } else {
         Product::parse(&a.model).map_err(|e| {
-            crate::cli::UsageError(format!("allan --model {}: {e} (or IMX-5)", a.model))
+            crate::error::UsageError(format!("allan --model {}: {e} (or IMX-5)", a.model))
         })?
     };
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
-        return Err(crate::cli::UsageError(format!(
+        return Err(crate::error::UsageError(format!(
             "allan --rate {}: must divide the internal rate {internal} Hz",
             a.rate
         ))

@@ -18,7 +18,7 @@
 //! `--tcp` and `--control` must be loopback addresses unless
 //! `--allow-remote` is given (then a warning says what is exposed). Errors
 //! are one line (`imu-emu: …`, [`report`]): exit status 2 for a bad
-//! argument ([`UsageError`]), 1 for a failure while running.
+//! argument ([`UsageError`], [`crate::error`]), 1 for a failure while running.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -35,6 +35,7 @@ use imu_emu::model::Product;
 use imu_emu::time::Instant;
 
 use crate::clock::Speed;
+use crate::error::UsageError;
 use crate::flash::{FileNor, MemNor};
 use crate::runner::{HostPersonality, Runner};
 use crate::transport::{PtyTransport, TcpTransport, Transport};
@@ -104,6 +105,13 @@ pub struct Args {
     /// With --trajectory: start the file over after its last sample.
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
+
+    /// The vehicle the unit rides on, from a file: a manoeuvre script
+    /// (first statement `start lat lon height heading speed`) or a
+    /// full-state CSV (header `time,lat,lon,height,vn,ve,vd,roll,pitch,yaw`
+    /// [`,wx,wy,wz,fx,fy,fz`][`,temp`]); docs/motion.md.
+    #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
+    pub motion: Option<PathBuf>,
 
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
@@ -261,36 +269,6 @@ pub enum PowerOnAt {
 
 fn parse_product(s: &str) -> Result<Product, String> {
     Product::parse(s).map_err(|e| e.to_string())
-}
-
-/// An error in what the user asked for (exit status 2, as clap's usage
-/// errors), as opposed to one met while running (exit status 1).
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl core::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
-
-/// The error of binding `addr` for `option` (`--tcp`, `--control`), with a
-/// hint where one helps: a port in use suggests port 0, an address that
-/// does not parse says `HOST:PORT` is expected.
-pub fn bind_error(e: std::io::Error, option: &str, addr: &str) -> anyhow::Error {
-    use std::io::ErrorKind;
-    match e.kind() {
-        ErrorKind::AddrInUse => anyhow::anyhow!(
-            "{option} {addr}: address already in use (another imu-emu?); \
-             hint: {option} 127.0.0.1:0 picks a free port"
-        ),
-        ErrorKind::InvalidInput => anyhow::Error::new(UsageError(format!(
-            "{option} {addr}: {e}; expected HOST:PORT, e.g. {option} 127.0.0.1:7000"
-        ))),
-        _ => anyhow::anyhow!("{option} {addr}: {e}"),
-    }
 }
 
 /// Checks that `addr` (`HOST:PORT`) given to `option` is a loopback
@@ -496,6 +474,16 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     }
 }
 
+/// `--motion FILE`, loaded (and said on stderr), if given.
+fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSource>> {
+    let Some(path) = &args.motion else {
+        return Ok(None);
+    };
+    let v = crate::vehicle::VehicleSource::load(path)?;
+    eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
+    Ok(Some(v))
+}
+
 fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     parts: Vec<(F, T)>,
     args: &Args,
@@ -508,6 +496,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -530,6 +519,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         profiles: args.profiles.clone(),
         pps: args.pps,
         trajectory,
+        vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
     };
     eprintln!(
@@ -613,6 +603,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -625,9 +616,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     out.flush()?;
     drop(out);
 
-    if args.power_on == PowerOnAt::Connect {
+    // A serial port counts as connected at once: no message then.
+    if args.power_on == PowerOnAt::Connect && !transport.poll_client()? {
         eprintln!("imu-emu: the device powers on when a client connects (--power-on now: at once)");
-        while !transport.poll_client()? {
+        loop {
             if stop.load(std::sync::atomic::Ordering::Relaxed) {
                 eprintln!("imu-emu: stopped");
                 return Ok(());
@@ -646,6 +638,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
                 })?;
             }
             transport.wait(crate::runner::IDLE_WAKE)?;
+            if transport.poll_client()? {
+                break;
+            }
         }
     }
     let epoch = std::time::Instant::now();
@@ -679,6 +674,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     if let Some(t) = trajectory {
         runner = runner.with_trajectory(t);
+    }
+    if let Some(v) = vehicle {
+        runner = runner.with_vehicle(v);
     }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");

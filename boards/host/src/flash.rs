@@ -73,7 +73,7 @@ pub struct FileNor {
 
 impl FileNor {
     /// Opens (or creates) the flash image at `path` and locks it; refuses
-    /// anything that is not a regular file ([`crate::cli::UsageError`])
+    /// anything that is not a regular file ([`crate::error::UsageError`])
     /// and a file another process holds locked.
     pub fn open(path: &Path) -> anyhow::Result<Self> {
         let shown = path.display();
@@ -92,7 +92,7 @@ impl FileNor {
             .with_context(|| format!("--flash {shown}: stat"))?
             .file_type();
         if !kind.is_file() {
-            return Err(crate::cli::UsageError(format!(
+            return Err(crate::error::UsageError(format!(
                 "--flash {shown}: not a regular file ({}); give the path of a file to keep the \
                  flash image in",
                 describe(kind)

@@ -102,7 +102,7 @@ pub fn parse(text: &str, what: &str) -> anyhow::Result<SensorProfile> {
 
 /// A bad profile is a bad argument (exit status 2).
 fn usage(msg: String) -> anyhow::Error {
-    crate::cli::UsageError(msg).into()
+    crate::error::UsageError(msg).into()
 }
 
 /// Reads and checks the profile in `path`.

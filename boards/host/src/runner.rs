@@ -53,6 +53,7 @@ use crate::link::Link;
 use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
+use crate::vehicle::VehicleSource;
 
 /// What the host runner asks of a personality beyond the core's seam.
 pub trait HostPersonality: Personality {
@@ -147,6 +148,8 @@ struct HostPort<T: Transport> {
     next_pps_ns: Option<u64>,
     /// Motion replayed from a file (`--trajectory`), if any.
     trajectory: Option<Trajectory>,
+    /// The vehicle source (`--motion`, `motion script|file`), if any.
+    vehicle: Option<VehicleSource>,
     /// Faults between the device's UART and the transport (`link …`).
     link: Link,
     /// The device's input decoded on the host side (logs, `status`).
@@ -183,6 +186,26 @@ impl<T: Transport> HostPort<T> {
         Ok(())
     }
 
+    /// `truth`: the vehicle truth in `key=value` words, each key after
+    /// `prefix` ([`crate::vehicle::truth_words`]).
+    fn truth<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>, prefix: &str) -> String {
+        let chain = dev.chain();
+        let source = if self.trajectory.is_some() {
+            "trajectory"
+        } else if let Some(v) = &self.vehicle {
+            v.kind()
+        } else {
+            match chain.core_motion() {
+                Motion::Static { .. } => "static",
+                Motion::ConstantRotation { .. } => "rotation",
+                Motion::Vibration { .. } => "vibration",
+                Motion::Coning { .. } => "coning",
+                Motion::Sample(_) => "sample",
+            }
+        };
+        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
+    }
+
     /// `status`: the device, the line and the link in `key=value` words.
     fn status<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>) -> String {
         use imu_emu::device::Mode;
@@ -214,6 +237,8 @@ impl<T: Transport> HostPort<T> {
         for (r, n) in rejected {
             s.push_str(&format!(" rejected-{}={n}", r.name()));
         }
+        s.push(' ');
+        s.push_str(&self.truth(dev, "truth-"));
         let l = self.link.stats();
         s.push_str(&format!(
             " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
@@ -301,9 +326,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 
     fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
+        let secs = deadline.as_nanos() as f64 * 1e-9;
         if let Some(t) = self.trajectory.as_mut() {
-            let truth = t.at(deadline.as_nanos() as f64 * 1e-9);
-            dev.chain_mut().set_motion(Motion::Sample(truth));
+            let (state, truth) = t.vehicle_at(secs);
+            dev.chain_mut().set_vehicle(state, truth);
+        } else if let Some(v) = self.vehicle.as_mut() {
+            let state = v.at(secs);
+            dev.chain_mut().set_vehicle(state, state.truth());
         }
         dev.on_tick(deadline);
         self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
@@ -350,7 +379,22 @@ impl<T: Transport> HostPort<T> {
                 }
             }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-            control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+            control::Command::Motion(m) => {
+                self.trajectory = None;
+                self.vehicle = None;
+                dev.chain_mut().set_motion(m);
+            }
+            control::Command::Script(s) => {
+                self.trajectory = None;
+                let v = VehicleSource::script(*s).starting_at(at.as_nanos() as f64 * 1e-9);
+                self.vehicle = Some(v);
+            }
+            control::Command::MotionFile(path) => {
+                let v = VehicleSource::load(&path).map_err(|e| format!("{e:#}"))?;
+                self.trajectory = None;
+                self.vehicle = Some(v.starting_at(at.as_nanos() as f64 * 1e-9));
+            }
+            control::Command::Truth => return Ok(self.truth(dev, "")),
             control::Command::Link(change) => {
                 let mut noise = Vec::new();
                 self.link.apply(change, self.now_ns, &mut noise);
@@ -383,6 +427,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 control: None,
                 next_pps_ns: None,
                 trajectory: None,
+                vehicle: None,
                 link: Link::new(0),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
@@ -408,6 +453,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// sample for that tick's time is handed to the signal chain.
     pub fn with_trajectory(mut self, t: Trajectory) -> Self {
         self.io.trajectory = Some(t);
+        self
+    }
+
+    /// Flies or plays `v` as the unit's vehicle (`--motion`): before each
+    /// tick its state at that tick's time is handed to the signal chain.
+    pub fn with_vehicle(mut self, v: VehicleSource) -> Self {
+        self.io.vehicle = Some(v);
         self
     }
 

@@ -406,7 +406,7 @@ impl LinkGuard {
                 // another program): refuse rather than steal it.
                 if let Ok(old) = std::fs::read_link(path) {
                     if old.starts_with("/dev/pts") && old.exists() {
-                        return Err(anyhow::Error::new(crate::cli::UsageError(format!(
+                        return Err(anyhow::Error::new(crate::error::UsageError(format!(
                             "--link {}: points at {}, a live pty (another imu-emu?); \
                              choose another path or stop that program",
                             path.display(),
