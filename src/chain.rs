@@ -61,9 +61,10 @@
 //!   heading 0, level ([`crate::sensor::motion`]). The built-in motion moves
 //!   the unit itself ([`TruthFrame::Sensor`]); Alignment_Angles rotate what it
 //!   reports.
-//! - Errors: per-model defaults in [`crate::sensor::errors::ErrorSpec`];
-//!   temperature: warm-up from 25 °C by +8 °C, τ 600 s
-//!   ([`crate::sensor::temperature`]).
+//! - Errors and temperature model: the model's built-in sensor profile
+//!   ([`crate::sensor::profiles`]) or one set with
+//!   [`SignalChain::set_profile`]; default warm-up from 25 °C by +8 °C,
+//!   τ 600 s ([`crate::sensor::temperature`]).
 //! - Alignment: averaging with the STD of 10 ms means vs the threshold, or a
 //!   Kalman filter (ZUPT); heading relative (0 after alignment)
 //!   ([`crate::ahrs::alignment`]).
@@ -82,11 +83,13 @@
 //! # Memory
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
-//! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
-//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The vehicle
-//! state a board may set ([`SignalChain::set_vehicle`]) adds 144 B to
-//! both (measured on x86-64: 10 208 → 10 352 B; `f64` fields align alike
-//! on thumbv7em). The
+//! 10 184 B `fixed-point` before the flicker bias (budget then 10 KiB;
+//! 18 792 B before this layout); the flicker's six states a sensor axis
+//! and the profile terms' coefficients add ≈ 0.75 KiB (10 920 B float on
+//! a 64-bit host), the vehicle state a board may set
+//! ([`SignalChain::set_vehicle`]) 144 B (budget now 12 KiB,
+//! `tests/signal_chain.rs`); `SignalChain<Integrals>` adds the 104 B of
+//! [`Integrals`]. The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192
@@ -183,6 +186,8 @@ use crate::math::rotation::{Quat, Vec3};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
+use crate::sensor::profile::SensorProfile;
+use crate::sensor::profiles;
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
@@ -244,6 +249,23 @@ impl ChainConfig {
     /// The FIR design this configuration selects (`None` = off).
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
+    }
+
+    /// The longest output interval, in ticks, at which Instant samples
+    /// the FIR's output (ICD 5.3.6); at longer intervals it decimates by
+    /// the interval's mean (a boxcar over the output interval): the
+    /// **decimation's band limit**. Sampling keeps the white noise within
+    /// the profile's figure only while the FIR's bandwidth is below the
+    /// output's Nyquist frequency (2·f_c·n ≤ f_s); beyond it the noise of
+    /// the whole FIR band would alias into the output band and read high
+    /// by up to √(2·f_c/f_out) — the K201 with its LPF off (f_c = ∞: 1
+    /// tick) read its ARW √2 high at 2 kHz, a K110 at its factory 262 Hz
+    /// and 100 Hz read it 2.3× high. docs/sensors.md "Decimation".
+    pub fn instant_sample_limit(&self) -> u32 {
+        match self.lpf.hz() {
+            None => 1,
+            Some(fc) => ((self.internal_rate_hz as f32 / (2.0 * fc)) as u32).max(1),
+        }
     }
 }
 
@@ -348,6 +370,8 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     rng: Rng,
     errors: ErrorModel,
     errors_dirty: bool,
+    /// A profile replacing the built-in one at each power-on.
+    profile: Option<&'static SensorProfile>,
     temp_model: TemperatureModel,
     temperature: f32,
     faults: Faults,
@@ -408,7 +432,7 @@ impl SignalChain {
     /// The unit is static, level, z up, heading 0 at
     /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
-    /// [`crate::sensor::ErrorSpec`]; the configuration is
+    /// built-in profile ([`crate::sensor::profiles::for_product`]); the configuration is
     /// [`ChainConfig::defaults`] until [`SignalChain::configure`]. The AHRS
     /// starts levelled, unaligned (bias 0), not aligning.
     pub fn new(product: Product, seed: u64) -> Self {
@@ -457,6 +481,7 @@ impl<I: Integrate> SignalChain<I> {
             rng: Rng::new(0),
             errors: ErrorModel::default(),
             errors_dirty: true,
+            profile: None,
             temp_model: TemperatureModel::default(),
             temperature: 0.0,
             faults: Faults::default(),
@@ -485,8 +510,12 @@ impl<I: Integrate> SignalChain<I> {
         let dt = 1.0 / rate_hz as f32;
         let has_aux = product.model.has(Capability::AuxAccel);
         let mut rng = Rng::new(seed);
-        let errors = ErrorModel::for_product(&product, &mut rng);
-        let temp_model = TemperatureModel::default();
+        let profile = match self.profile {
+            Some(p) => *p,
+            None => profiles::for_product(&product),
+        };
+        let errors = ErrorModel::from_profile(&profile, &mut rng);
+        let temp_model = TemperatureModel::from_spec(&profile.temperature);
         let cfg = ChainConfig::defaults(&product);
         let t0 = Truth::at_rest();
         let sensor = [
@@ -501,7 +530,7 @@ impl<I: Integrate> SignalChain<I> {
         let mut core = Core::new(&product, &cfg, &sensor, dt);
         let sensors = [&errors.gyro, &errors.acc, &errors.aux];
         for (e, s) in core.engines.iter_mut().zip(sensors) {
-            e.randomize_gm(s, &mut rng);
+            e.randomize_slow(s, &mut rng);
         }
         // Every field, by name: a field added later cannot be forgotten.
         let SignalChain {
@@ -511,6 +540,7 @@ impl<I: Integrate> SignalChain<I> {
             rng: rng_,
             errors: errors_,
             errors_dirty,
+            profile: _,
             temp_model: temp_model_,
             temperature,
             faults,
@@ -633,6 +663,20 @@ impl<I: Integrate> SignalChain<I> {
     /// carrier per [`TruthFrame`], Appendix C convention).
     pub fn truth_attitude(&self) -> Option<Quat> {
         self.core.motion.attitude()
+    }
+
+    /// Uses `profile` instead of the built-in one from the next power-on
+    /// ([`SignalChain::reset`]) on: the errors are drawn from it with the
+    /// seed and its temperature model runs (`None`: the built-in profile).
+    /// A host holds its profiles for the process's life (`&'static`), so
+    /// the chain keeps a reference, not a copy.
+    pub fn set_profile(&mut self, profile: Option<&'static SensorProfile>) {
+        self.profile = profile;
+    }
+
+    /// The profile set with [`SignalChain::set_profile`], if any.
+    pub fn profile(&self) -> Option<&'static SensorProfile> {
+        self.profile
     }
 
     /// The error model, for reading or changing (changes apply at the next

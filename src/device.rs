@@ -199,6 +199,22 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
         dev
     }
 
+    /// [`Device::new`] with the sensor profile `profile` instead of the
+    /// model's built-in one (`None`: the built-in one); it stays across
+    /// power cycles ([`SignalChain::set_profile`]). A host's
+    /// `--sensor-profile` file.
+    pub fn with_profile(
+        cfg: PowerOn,
+        profile: Option<&'static crate::sensor::profile::SensorProfile>,
+        flash: F,
+        now: Instant,
+    ) -> Self {
+        let mut dev = Self::unpowered(cfg, flash, now);
+        dev.shell.chain.set_profile(profile);
+        dev.cold_start(now);
+        dev
+    }
+
     /// [`Device::new`] straight into `slot`, for microcontrollers: the
     /// device (~12 KiB, most of it the signal chain's FIR history) is built
     /// where it will live, with a few hundred bytes of stack, instead of

@@ -196,8 +196,11 @@ fn output_variants_instant_average_incremental() {
             }
         }
     }
+    // With the LPF off, Instant decimates by the interval mean (the band
+    // limit of `ChainConfig::instant_sample_limit`): 1.0 over 40 ticks;
+    // at one tick an interval it is each tick's value (below).
     for (variant, expect) in [
-        (OutputVariant::Instant, 2.0),
+        (OutputVariant::Instant, 1.0),
         (OutputVariant::Average, 1.0),
         (OutputVariant::Incremental, 1.0),
     ] {
@@ -224,6 +227,13 @@ fn output_variants_instant_average_incremental() {
             s.acc[2]
         );
         assert!((c.output_interval() - 0.02).abs() < 1e-7);
+        if variant == OutputVariant::Instant {
+            for t in 41..=44u64 {
+                c.tick_with(Instant::from_micros(500 * t), &mut src);
+                let v = if t % 2 == 0 { 2.0 } else { 0.0 };
+                assert_eq!(c.output().gyro[2], v, "tick {t}");
+            }
+        }
         // Average_Output_Data = 1 forces the average.
         assert_eq!(config::output_variant(0, 1), OutputVariant::Average);
         assert_eq!(config::output_variant(2, 1), OutputVariant::Average);

@@ -10,6 +10,7 @@ Standard library only. Three parts:
   :class:`Uart`, with one control socket addressing each.
 * :class:`Control` -- the control socket (pins, faults, link faults,
   ``status``), with events kept apart from replies.
+* :func:`read_profile` -- a sensor profile file (``--sensor-profile``).
 
 * :class:`FeedEmulator` -- an emulator moved by a live motion feed
   (:mod:`imu_emu.feed`), in real time or in lockstep.
@@ -34,3 +35,4 @@ from .kernel import (  # noqa: F401
 )
 from .emulator import Control, Emulator, Fleet, Uart, find_binary  # noqa: F401
 from .feed import Feed, FeedEmulator, encode_sample, text_row  # noqa: F401
+from .profile import ProfileError, read_profile  # noqa: F401

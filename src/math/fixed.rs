@@ -375,7 +375,7 @@ pub fn mulu64_parts(a: u32, b: u32) -> u64 {
 /// Division by a fixed `n` through its reciprocal: one software division
 /// when made, then a few 32 × 32 products per quotient (ARMv6-M has no
 /// divide instruction; a library `i64 / u32` costs ~250 instructions).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Recip {
     n: u32,
     /// ⌊(2³² − 1)/n⌋.

@@ -434,6 +434,22 @@ impl Emu {
         Emu::start(&all)
     }
 
+    /// The TCP addresses of the first `n` devices (`listening on tcp …`
+    /// lines: the first and `n − 1` more), in order.
+    pub fn tcp_addrs(&self, n: usize) -> Vec<SocketAddr> {
+        let mut places = vec![format!("listening on {}", self.listening)];
+        places.extend(self.more_lines(n - 1));
+        places
+            .iter()
+            .map(|l| {
+                l.strip_prefix("listening on tcp ")
+                    .unwrap_or_else(|| panic!("{l:?}"))
+                    .parse()
+                    .unwrap()
+            })
+            .collect()
+    }
+
     /// The first `n` stdout lines after the first, waiting (bounded) for
     /// them.
     pub fn more_lines(&self, n: usize) -> Vec<String> {

@@ -2,8 +2,11 @@
 //!
 //! ```text
 //! imu-emu [--protocol kernel|isb] [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
-//!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
+//!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N]
+//!         [--sensor-profile [K=]FILE]… …
 //! imu-emu client (--tcp HOST:PORT | --serial DEV [--baud N]) SUBCOMMAND …
+//! imu-emu sensor-profile (show NAME | check FILE)
+//! imu-emu allan [--model K110 | --input CSV] [--hours H] [--png F] [--svg F] …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -194,6 +197,17 @@ pub struct Args {
     #[arg(short, long)]
     pub quiet: bool,
 
+    /// Use the sensor profile in FILE (TOML; `imu-emu sensor-profile show
+    /// K110` prints a built-in one to start from) instead of the model's
+    /// built-in one. With --count, `K=FILE` is for device K only (and wins
+    /// over a plain FILE, which is for every device); repeatable.
+    #[arg(long = "sensor-profile", value_name = "[K=]FILE", value_parser = crate::profile_file::parse_arg)]
+    pub sensor_profile: Vec<crate::profile_file::ProfileArg>,
+
+    /// The profiles of `--sensor-profile`, loaded at start (one a device).
+    #[arg(skip)]
+    pub profiles: Vec<Option<&'static imu_emu::sensor::SensorProfile>>,
+
     /// A subcommand instead of the emulator (`imu-emu client --help`).
     #[command(subcommand)]
     pub command: Option<Sub>,
@@ -206,6 +220,49 @@ pub enum Sub {
     /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
     /// decode, plot.
     Client(crate::client::ClientArgs),
+    /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
+    /// IMX-5) as a file to start from; `check FILE` reads one.
+    #[command(name = "sensor-profile", subcommand)]
+    SensorProfile(ProfileSub),
+    /// The Allan deviation of a unit run in process (or of a `client
+    /// record` CSV): the fitted ARW/VRW, bias instability and rate random
+    /// walk beside the profile's, and a log-log plot (PNG, SVG).
+    Allan(crate::allan::AllanArgs),
+}
+
+/// `imu-emu sensor-profile …`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum ProfileSub {
+    /// Print the built-in profile NAME (K100 K102 K108 K110 K110M K120
+    /// K201 K210 K220 IMX-5) as a TOML file.
+    Show {
+        /// Model name.
+        name: String,
+    },
+    /// Read FILE and print it back as the emulator understood it (or the
+    /// error, naming the key and its allowed range).
+    Check {
+        /// The profile file.
+        file: PathBuf,
+    },
+}
+
+/// Runs `imu-emu sensor-profile …`.
+fn sensor_profile(sub: &ProfileSub) -> anyhow::Result<()> {
+    let text = match sub {
+        ProfileSub::Show { name } => {
+            let b = crate::profile_file::builtin(name)?;
+            crate::profile_file::to_toml(b.profile, b.name, b.source)
+        }
+        ProfileSub::Check { file } => {
+            let p = crate::profile_file::load(file)?;
+            crate::profile_file::to_toml(&p, &file.display().to_string(), "this file")
+        }
+    };
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
+    Ok(())
 }
 
 /// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
@@ -374,12 +431,17 @@ pub fn one_line_panics() {
 
 /// Runs the program: sets up signals, the flash and the transport, powers
 /// the device on and serves it until SIGINT/SIGTERM.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(mut args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
-    if let Some(Sub::Client(c)) = args.command {
-        return crate::client::run(c);
+    match args.command {
+        Some(Sub::Client(c)) => return crate::client::run(c),
+        Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
+        Some(Sub::Allan(a)) => return crate::allan::run(&a),
+        None => {}
     }
     check_addresses(&args)?;
+    // A bad profile file stops the program before anything listens.
+    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -561,6 +623,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         name,
         speed: args.speed,
         seed: args.seed,
+        profiles: args.profiles.clone(),
         pps: args.pps,
         trajectory,
         vehicle,
@@ -708,7 +771,8 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         boot: None,
         seed: args.seed,
     };
-    let mut dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    let profile = args.profiles.first().copied().flatten();
+    let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
     dev.personality_mut()
         .set_gps_time(gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;

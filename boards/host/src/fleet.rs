@@ -57,6 +57,9 @@ pub struct Setup {
     pub speed: Speed,
     /// Device K's seed is `seed + K`.
     pub seed: u64,
+    /// Device K's sensor profile (`--sensor-profile`; `None` or missing:
+    /// the model's built-in one).
+    pub profiles: Vec<Option<&'static imu_emu::sensor::SensorProfile>>,
     /// A 1PPS edge every device second.
     pub pps: bool,
     /// The motion each device replays, if any (each from its start).
@@ -211,7 +214,8 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             boot: None,
             seed: self.setup.seed.wrapping_add(k as u64),
         };
-        let mut dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+        let profile = self.setup.profiles.get(k).copied().flatten();
+        let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
         dev.personality_mut()
             .set_gps_time(crate::cli::gps_s_at_power_on(self.setup.gps_time));
         transport.set_line_rate(dev.line_rate())?;

@@ -32,6 +32,8 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod allan;
+pub mod allan_plot;
 pub mod backlog;
 pub mod cli;
 pub mod client;
@@ -43,6 +45,7 @@ pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod profile_file;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;
