@@ -723,12 +723,14 @@ fn ins_phases_gps_time_and_periods() {
     let ins = of_did(&r, did::INS_2);
     assert_eq!(ins.len(), 250);
     let first = ins2_of(&ins[0]);
-    assert_eq!(ins_status::solution(first.ins_status), 1, "aligning");
-    assert_eq!((first.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
+    assert_eq!(ins_status::solution(first.header.ins_status), 1, "aligning");
+    assert_eq!((first.header.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
     // Before GPS time: time since boot.
-    assert_eq!(first.time_of_week, ins[0].tick as f64 / 2000.0);
+    assert_eq!(first.header.time_of_week, ins[0].tick as f64 / 2000.0);
     let r = b.run_ticks(10_000);
-    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap()).ins_status;
+    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap())
+        .header
+        .ins_status;
     assert_eq!(ins_status::solution(s), ins_status::SOLUTION_AHRS);
     assert_eq!(s & ins_status::NAV_MODE, 0);
     let r = b.run_ticks(50_000);
@@ -748,14 +750,18 @@ fn ins_phases_gps_time_and_periods() {
     assert_eq!((g.week, g.leap_s, g.sats_used), (2399, 18, 12));
     let ins = of_did(&r, did::INS_2);
     let last = ins2_of(ins.last().unwrap());
-    assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
-    assert_eq!(last.week, 2399);
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
+    assert_eq!(last.header.week, 2399);
     let since_boot = ins.last().unwrap().tick as f64 / 2000.0;
-    assert!((last.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
+    assert!((last.header.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
     for w in ins.windows(2) {
         let (a, c) = (ins2_of(&w[0]), ins2_of(&w[1]));
-        if a.week == c.week && a.week != 0 {
-            assert!((c.time_of_week - a.time_of_week - 0.004).abs() < 1e-6);
+        if a.header.week == c.header.week && a.header.week != 0 {
+            assert!((c.header.time_of_week - a.header.time_of_week - 0.004).abs() < 1e-6);
         }
     }
     // SYS_PARAMS carries the same words.

@@ -71,10 +71,10 @@ use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::did::{self, DataSet};
-use crate::isb::ins::{self, InsHeader, NavConfig, NavFaults, NavState};
+use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime};
-use crate::isb::nav_sets::{rmc_nav, SysSensors};
+use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{

@@ -258,8 +258,8 @@ pub fn navigation_streams_on_device_time_while_aligning(kind: Kind) {
     }
     // The first packet of each answers its GET; the streams follow.
     for w in ins[1..].windows(2) {
-        assert!((w[1].time_of_week - w[0].time_of_week - 0.1).abs() < 1e-9);
-        assert_eq!(ins_status::solution(w[1].ins_status), 1, "aligning");
+        assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-9);
+        assert_eq!(ins_status::solution(w[1].header.ins_status), 1, "aligning");
     }
     for w in gps[1..].windows(2) {
         assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);

@@ -241,21 +241,25 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         (43_248_000..43_251_000).contains(&g.time_of_week_ms),
         "{g:?}"
     );
-    let navigating: Vec<&Ins2> = ins2.iter().filter(|i| i.week == 2408).collect();
+    let navigating: Vec<&Ins2> = ins2.iter().filter(|i| i.header.week == 2408).collect();
     assert!(navigating.len() > 5);
     for w in navigating.windows(2) {
-        assert!((w[1].time_of_week - w[0].time_of_week - 0.1).abs() < 1e-6);
+        assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-6);
     }
     let last = navigating.last().unwrap();
-    assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
     // The navigation-period grid sits on GPS time: whole 4 ms steps of a
     // GPS second (the epoch is a whole second, so 1PPS edges fall on GPS
     // seconds).
-    let steps = last.time_of_week * 250.0;
+    let steps = last.header.time_of_week * 250.0;
     assert!(
         (steps - steps.round()).abs() < 1e-6,
         "{}",
-        last.time_of_week
+        last.header.time_of_week
     );
     assert!((last.lla[0] - 45.0).abs() < 1e-4);
 
@@ -265,19 +269,19 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         let p = isb_packet(&mut c);
         if p.did == did::INS_2 {
             let i = ins(p);
-            if ins_status::dead_reckoning(i.ins_status) {
+            if ins_status::dead_reckoning(i.header.ins_status) {
                 dr = Some(i);
                 break;
             }
         }
     }
     let dr = dr.expect("dead reckoning after the outage");
-    assert_eq!(dr.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+    assert_eq!(dr.header.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
     assert!(ctl.cmd("fault gps on").starts_with("ok"));
     let mut back = false;
     for _ in 0..200 {
         let p = isb_packet(&mut c);
-        if p.did == did::INS_2 && ins(p).ins_status == 0x0103_5970 {
+        if p.did == did::INS_2 && ins(p).header.ins_status == 0x0103_5970 {
             back = true;
             break;
         }
@@ -312,7 +316,7 @@ fn the_ins_preset_persists_across_a_reset() {
     };
     let check = |ins: &[Ins2], gps: &[GpsPos]| {
         for w in ins.windows(2) {
-            assert!((w[1].time_of_week - w[0].time_of_week - 0.004).abs() < 1e-9);
+            assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.004).abs() < 1e-9);
         }
         for w in gps.windows(2) {
             assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
@@ -329,7 +333,7 @@ fn the_ins_preset_persists_across_a_reset() {
         let p = isb_packet(&mut c);
         if p.did == did::INS_2 {
             let i = Ins2::decode(&p.payload.try_into().unwrap());
-            if i.time_of_week < 0.1 {
+            if i.header.time_of_week < 0.1 {
                 ins.push(i);
                 break;
             }
