@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 
-use imu_emu::isb::nav_sets::{ins_status, GpsPos, Ins2};
+use imu_emu::isb::nav_sets::{ins_status, GpsPos, Ins1, Ins2};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 use support::{free_port, hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Control, Emu};
 
@@ -187,6 +187,50 @@ fn dev_info_over_a_pty() {
     let p = isb_packet(&mut c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
     assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());
+}
+
+/// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the
+/// fix after the cold start carries GPS week 2400 (2026-01-04 is a
+/// Sunday, the first of week 2400), INS_1 navigates with its NED offset from the default `refLla`
+/// (0, 0, 0): north ≈ 45° × 111 120 m.
+#[test]
+fn navigation_over_a_pty() {
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--speed",
+        "20",
+        "--gps-time",
+        "2026-01-04",
+    ]);
+    let mut c = Conn::serial(&emu.pty_path());
+    c.send(&isb_get(did::GPS1_POS, 5));
+    let g = loop {
+        let g = GpsPos::decode(
+            &isb_packet_of(&mut c, did::GPS1_POS)
+                .payload
+                .try_into()
+                .unwrap(),
+        );
+        if g.status != 0 {
+            break g;
+        }
+    };
+    assert_eq!((g.week, g.status), (2400, 0x0001_030C));
+    // Midnight + 18 leap seconds + the 30 s cold start (within a second).
+    assert!((48_000..49_200).contains(&g.time_of_week_ms), "{g:?}");
+    c.send(&isb_get(did::INS_1, 0));
+    let i = Ins1::decode(
+        &isb_packet_of(&mut c, did::INS_1)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    assert_eq!(i.header.ins_status, 0x0103_5970);
+    assert!((f64::from(i.ned[0]) - 45f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
 }
 
 /// The INS_2 and GPS1_POS of `--gps-time` over TCP at `--speed 20`: no
