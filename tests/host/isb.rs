@@ -191,8 +191,8 @@ fn dev_info_over_a_pty() {
 
 /// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the
 /// fix after the cold start carries GPS week 2400 (2026-01-04 is a
-/// Sunday, the first of week 2400), INS_1 navigates with its NED offset from the default `refLla`
-/// (0, 0, 0): north ≈ 45° × 111 120 m.
+/// Sunday, the first of week 2400), INS_1 navigates with its NED offset
+/// from the default `refLla` (0, 0, 0): north ≈ 45° × 111 120 m.
 #[test]
 fn navigation_over_a_pty() {
     let emu = Emu::start(&[
