@@ -66,6 +66,7 @@ pub mod schedule;
 pub mod sensor;
 pub mod store;
 pub mod time;
+pub mod vehicle;
 
 pub use chain::{Faults, SignalChain};
 pub use device::{Device, PowerOn, Shell};

@@ -3,23 +3,16 @@
 //! Sense SDK 2.7.1 conventions: `docs/protocol-facts.md` "ISB navigation
 //! (SDK 2.7.1)").
 //!
-//! [`truth_of`] is the one place the truth is read: today it derives it
-//! from the chain's built-in motion (its latitude and attitude; longitude
-//! [`DEFAULT_LON_DEG`], height [`DEFAULT_HEIGHT_M`], velocity zero); a
-//! vehicle state replaces its body without touching its callers.
+//! [`truth_of`] is the one place the truth is read: the chain's vehicle
+//! state ([`crate::chain::SignalChain::vehicle`]: a board's vehicle source,
+//! or the built-in motion's site and attitude at rest), with the IMX's body
+//! axes (see [`truth_of`]).
 
 use libm::{asin, atan2, cos, sin, sqrt};
 
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
-use crate::math::rotation::dcm_from_quat;
-use crate::sensor::motion::site;
 
-/// Longitude of the built-in site, degrees east (the motions carry only a
-/// latitude; the emulator's choice, `docs/isb.md`).
-pub const DEFAULT_LON_DEG: f64 = 0.0;
-/// Height of the built-in site above the WGS84 ellipsoid, m.
-pub const DEFAULT_HEIGHT_M: f64 = 0.0;
 /// Geoid height (ellipsoid − MSL) the emulator uses everywhere: it has no
 /// geoid model (neither has the SDK), so MSL = ellipsoid height.
 pub const GEOID_SEPARATION_M: f64 = 0.0;
@@ -56,45 +49,22 @@ pub struct NavTruth {
     pub q_nb: [f64; 4],
 }
 
-/// The navigation truth of `chain` now (module doc). The IMX body frame is
-/// the chain's (x, y, z up) turned half a turn about x (`isb::device`), the
-/// chain's attitude maps it to ENU (ICD Appendix C).
+/// The navigation truth of `chain` now (module doc): the vehicle's
+/// position and velocity, and the attitude of the IMX's body axes. The ISB
+/// reports its IMU in (housing x, −y, −z) (`isb::device`), while the
+/// vehicle's body is (housing y, x, −z) (docs/motion.md): the IMX's forward
+/// is the vehicle's right, so `q_nb` here is the vehicle's turned +90°
+/// about down (a vehicle heading north reads yaw 90°).
 pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
-    let (lat, heading) = site(&chain.motion());
-    let (lat, heading) = (f64::from(lat), f64::from(heading));
-    // Object (chain) → ENU.
-    let c = match chain.truth_attitude() {
-        Some(q) => {
-            let m = dcm_from_quat(&q);
-            let mut out = [[0.0f64; 3]; 3];
-            for (o, r) in out.iter_mut().zip(m.iter()) {
-                for (x, y) in o.iter_mut().zip(r.iter()) {
-                    *x = f64::from(*y);
-                }
-            }
-            out
-        }
-        None => {
-            let (s, k) = (sin(heading.to_radians()), cos(heading.to_radians()));
-            // (C.1) with pitch = roll = 0.
-            [[k, s, 0.0], [-s, k, 0.0], [0.0, 0.0, 1.0]]
-        }
-    };
-    // C_nb = T · C · P: P = diag(1, −1, −1) (FRD → chain), T swaps E/N and
-    // negates up (ENU → NED).
-    let mut cnb = [[0.0f64; 3]; 3];
-    for j in 0..3 {
-        let sign = if j == 0 { 1.0 } else { -1.0 };
-        cnb[0][j] = c[1][j] * sign;
-        cnb[1][j] = c[0][j] * sign;
-        cnb[2][j] = -c[2][j] * sign;
-    }
+    let v = chain.vehicle();
+    // Rz(+90°): an IMX-body vector in vehicle-body axes.
+    let h = core::f64::consts::FRAC_1_SQRT_2;
     NavTruth {
-        lat_deg: lat,
-        lon_deg: DEFAULT_LON_DEG,
-        h_m: DEFAULT_HEIGHT_M,
-        v_ned: [0.0; 3],
-        q_nb: quat_from_dcm(&cnb),
+        lat_deg: v.lat_rad.to_degrees(),
+        lon_deg: v.lon_rad.to_degrees(),
+        h_m: v.height_m,
+        v_ned: v.vel_ned,
+        q_nb: quat_mul(&v.q_nb, &[h, 0.0, 0.0, h]),
     }
 }
 

@@ -277,9 +277,14 @@ pub struct BuiltinMotion {
     state: State,
 }
 
-/// Latitude and heading of a motion's site, degrees (a replayed sample:
-/// [`DEFAULT_LATITUDE_DEG`], heading 0).
-pub fn site(motion: &Motion) -> (f32, f32) {
+/// Latitude and heading of a motion's site, degrees (for a
+/// [`Motion::Sample`]: the default site, heading 0).
+pub fn site_of(motion: &Motion) -> (f32, f32) {
+    site(motion)
+}
+
+/// Latitude and heading of a motion's site, degrees.
+fn site(motion: &Motion) -> (f32, f32) {
     match *motion {
         Motion::Static {
             lat_deg,
@@ -367,6 +372,12 @@ impl BuiltinMotion {
     /// The motion this source plays.
     pub fn motion(&self) -> &Motion {
         &self.motion
+    }
+
+    /// The truth of the last tick ([`MotionSource::next`]; before the first,
+    /// of the initial state), without advancing.
+    pub fn truth_now(&self) -> Truth {
+        self.current()
     }
 
     /// Truth at the current state without advancing.
@@ -741,6 +752,18 @@ impl BuiltinMotionFixed {
     /// The motion this source plays.
     pub fn motion(&self) -> &Motion {
         &self.motion
+    }
+
+    /// The truth of the last tick ([`BuiltinMotionFixed::step`]; before the
+    /// first, of the initial state) in physical units, without advancing.
+    pub fn truth_now(&self) -> Truth {
+        let t = self.current();
+        let k = |v: i32, bits: u32| crate::math::fixed::scaled_f32(v, bits);
+        Truth {
+            rate_dps: t.rate.map(|v| k(v, GYRO_BITS)),
+            specific_force_g: t.force.map(|v| k(v, ACC_BITS)),
+            temperature_c: t.temperature_c,
+        }
     }
 
     /// Truth of the next tick (the first call gives the initial state).

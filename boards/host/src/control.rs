@@ -10,8 +10,8 @@
 //! The grammar is one table, [`COMMANDS`]: a row per form of a command
 //! (its syntax, whether `dev K` may address it, its parser). The parser,
 //! the `help` answer and the syntax an error names all read it, so a new
-//! command is a new row (what each command does: README, "The control
-//! protocol"; `runner::HostPort::apply` carries it out).
+//! command is a new row (what each command does: `docs/host-runner.md`,
+//! "The control protocol"; `runner::HostPort::apply` carries it out).
 //!
 //! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
@@ -44,7 +44,7 @@ use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;
 
 /// A parsed control command.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// A pin edge now.
     Edge(Pin, Level),
@@ -56,6 +56,12 @@ pub enum Command {
     NavFault(NavFault),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Fly a manoeuvre script from now (`motion script …`).
+    Script(Box<imu_emu::vehicle::Script>),
+    /// A manoeuvre script or full-state CSV file from now (`motion file …`).
+    MotionFile(std::path::PathBuf),
+    /// Report the vehicle truth (`ok key=value …`).
+    Truth,
     /// Change the link faults.
     Link(LinkChange),
     /// Report the device's and the line's state (`ok key=value …`).
@@ -262,6 +268,21 @@ pub const COMMANDS: &[Form] = &[
             }))
         })()),
         _ => None,
+    }),
+    form("motion script <statement>; …", true, |w| match w {
+        ["script", rest @ ..] if !rest.is_empty() => Some(
+            imu_emu::vehicle::Script::parse(&rest.join(" "))
+                .map(|s| Command::Script(Box::new(s)))
+                .map_err(|e| format!("manoeuvre script: {e}")),
+        ),
+        _ => None,
+    }),
+    form("motion file <path>", true, |w| match w {
+        ["file", path] => Some(Ok(Command::MotionFile((*path).into()))),
+        _ => None,
+    }),
+    form("truth", true, |w| {
+        w.is_empty().then_some(Ok(Command::Truth))
     }),
     form(
         "link drop|corrupt|duplicate <rate 0..1> [tx|rx]",
@@ -892,6 +913,7 @@ mod tests {
              | fault gps off|on | fault mag|baro on|off \
              | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
              | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+             | motion script <statement>; … | motion file <path> | truth \
              | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
              | link stall <ms> | link cut | link clear \
              | devices | dev <K> <command> (device K of a --count run)"
@@ -905,7 +927,10 @@ mod tests {
         );
         assert_eq!(
             usage("motion").as_deref(),
-            Some("motion static [<lat> <heading>], or motion rotate <x> <y> <z>")
+            Some(
+                "motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+                 motion script <statement>; …, or motion file <path>"
+            )
         );
         assert_eq!(usage("pps").as_deref(), Some("pps"));
         assert_eq!(usage("dev").as_deref(), Some("dev <K> <command>"));
@@ -925,7 +950,8 @@ mod tests {
         assert_eq!(
             parse("motion static 1"),
             Err("bad syntax: motion static 1; expected \
-            motion static [<lat> <heading>], or motion rotate <x> <y> <z>"
+            motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+            motion script <statement>; …, or motion file <path>"
                 .to_owned())
         );
         assert_eq!(

@@ -44,4 +44,5 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod vehicle;
 pub mod virtual_device;
