@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 
-use imu_emu::isb::nav_sets::{ins_status, GpsPos, Ins1, Ins2};
+use imu_emu::isb::nav_sets::{ins_status, GpsPos, GpsVel, Ins1, Ins2};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 use support::{free_port, hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Control, Emu};
 
@@ -386,4 +386,63 @@ fn the_ins_preset_persists_across_a_reset() {
     let (more, gps) = collect(&mut c);
     ins.extend(more);
     check(&ins, &gps);
+}
+
+/// A manoeuvre script (`--motion`): heading north at 50 m/s from 45.5° N,
+/// 7.25° E, 300 m. Once the fix is there INS_1 moves north at 50 m/s by its
+/// own time fields and positions, reads yaw 90° (the IMX's forward is the
+/// vehicle's right: docs/isb.md) and the velocity (0, −50, 0) in its body
+/// axes; GPS1_VEL's ECEF speed is 50 m/s within the receiver's error.
+#[test]
+fn a_manoeuvre_script_moves_the_ins() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("north.txt");
+    std::fs::write(&path, "start 45.5 7.25 300 0 50\nhold 1000\n").unwrap();
+    let emu = isb(&["--motion", path.to_str().unwrap(), "--speed", "20"]);
+    let mut c = emu.connect();
+    c.send(&isb_get(did::INS_1, 250));
+    c.send(&isb_get(did::GPS1_VEL, 5));
+    let mut ins = Vec::new();
+    let mut vel = None;
+    while ins.len() < 4 || vel.is_none() {
+        let p = isb_packet(&mut c);
+        match p.did {
+            did::INS_1 => {
+                let i = Ins1::decode(&p.payload.try_into().unwrap());
+                if i.header.ins_status == 0x0103_5970 {
+                    ins.push(i);
+                }
+            }
+            did::GPS1_VEL => {
+                let v = GpsVel::decode(&p.payload.try_into().unwrap());
+                if v.status != 0 {
+                    vel = Some(v);
+                }
+            }
+            d => panic!("unexpected DID {d}"),
+        }
+    }
+    for w in ins.windows(2) {
+        let dt = w[1].header.time_of_week - w[0].header.time_of_week;
+        assert!((dt - 1.0).abs() < 1e-6, "{dt}");
+        // 50 m a second north: 50 / 111 120 m a degree (within the INS's
+        // velocity error and the Earth's curvature at 45°).
+        let dlat = (w[1].lla[0] - w[0].lla[0]) * 111_132.0;
+        assert!((dlat - 50.0).abs() < 1.5, "{dlat}");
+        assert!((w[1].lla[1] - 7.25).abs() < 1e-4);
+    }
+    let i = ins.last().unwrap();
+    assert!(
+        (f64::from(i.theta[2]).to_degrees() - 90.0).abs() < 1.5,
+        "{:?}",
+        i.theta
+    );
+    assert!(
+        i.uvw[0].abs() < 0.5 && (i.uvw[1] + 50.0).abs() < 0.5,
+        "{:?}",
+        i.uvw
+    );
+    let v = vel.unwrap().vel.map(f64::from);
+    let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    assert!((speed - 50.0).abs() < 0.5, "{speed}");
 }
