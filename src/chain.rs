@@ -266,6 +266,11 @@ pub struct Faults {
     pub temperature_c: Option<f32>,
     /// Forces the reported supply voltage, V.
     pub supply_voltage: Option<f32>,
+    /// The board's live motion feed has been silent beyond its timeout
+    /// (`crate::feed`): reported as [`Health::sensor_comm_failure`] (the
+    /// feed is this unit's sensor), but the data do not freeze — the last
+    /// sample holds, with the sensor errors on it.
+    pub motion_feed_lost: bool,
 }
 
 /// The unit's health now, protocol neutral (the KERNEL encodes it as USW,
@@ -607,6 +612,12 @@ impl<I: Integrate> SignalChain<I> {
         }
     }
 
+    /// The state a board's vehicle source set ([`SignalChain::set_vehicle`]),
+    /// `None` while a built-in motion plays.
+    pub fn vehicle_source(&self) -> Option<&VehicleState> {
+        self.vehicle.as_ref()
+    }
+
     /// Which axes the motion describes (default: the unit's own).
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;
@@ -900,7 +911,7 @@ impl<I: Integrate> SignalChain<I> {
         let sat = self.sat_live | self.sat_reported;
         let (lo, hi) = OPERATING_RANGE_C;
         Health {
-            sensor_comm_failure: f.sensor_comm,
+            sensor_comm_failure: f.sensor_comm || f.motion_feed_lost,
             sensor_config_failure: f.sensor_config,
             gyro_over_range: sat & 0x07,
             accel_over_range: sat >> 3,

@@ -1105,3 +1105,67 @@ fn navigation_flash_config_fields_take_effect() {
     assert_eq!(s.week, 2399);
     assert!(s.time_of_week_ms > 4 * 86_400_000);
 }
+
+/// An IMX-5 on a scripted vehicle (`imu_emu::vehicle`, the board's source
+/// set before each tick as the host runner does): its IMU reads the
+/// forward acceleration on its x axis (the IMX body frame is the
+/// vehicle's, forward-right-down), and once navigating its INS_2 reports
+/// the vehicle's position, heading and body velocity within the INS error
+/// model's bounds.
+#[test]
+fn the_ins_reports_the_vehicle_it_rides_on() {
+    use imu_emu::vehicle::{Manoeuvres, Script};
+    let script = "start 45.5 7.25 300 90 10; hold 40; accel 2 5; hold 100";
+    let mut m = Manoeuvres::new(Script::parse(script).unwrap());
+    let mut b = Bench::new();
+    let period = b.dev.tick_period_ns();
+    let mut step = |b: &mut Bench, n: u64| {
+        let mut out = Vec::new();
+        for _ in 0..n {
+            let t = (b.ticks + 1) as f64 * period as f64 * 1e-9;
+            let s = m.at(t);
+            b.dev.chain_mut().set_vehicle(s, s.truth());
+            out.extend(b.run_ticks(1));
+        }
+        out
+    };
+    step(&mut b, 80_000); // 40 s: aligned, GPS fix, navigating
+    b.send(&get(did::IMU, 1));
+    let r = step(&mut b, 4_000); // 2 s into `accel 2 5`
+    let imu: Vec<Imu> = of_did(&r, did::IMU)
+        .iter()
+        .map(|p| Imu::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    let last = imu.last().unwrap();
+    // Forward: +2 m/s² on x; right: ~0; down: −g.
+    assert!((f64::from(last.acc[0]) - 2.0).abs() < 0.05, "{last:?}");
+    assert!(f64::from(last.acc[1]).abs() < 0.05, "{last:?}");
+    assert!((f64::from(last.acc[2]) + 9.8).abs() < 0.05, "{last:?}");
+    let i2 = Ins2::decode(&b.get_once(did::INS_2).try_into().unwrap());
+    let truth = m.at(b.ticks as f64 * period as f64 * 1e-9);
+    assert_eq!(
+        i2.header.ins_status & ins_status::NAV_MODE,
+        ins_status::NAV_MODE,
+        "{:#x}",
+        i2.header.ins_status
+    );
+    // Position within a few metres (σ 0.7 m / 1 m), body velocity along x.
+    let d = nav::ned_from_ref(
+        &i2.lla,
+        &[
+            truth.lat_rad.to_degrees(),
+            truth.lon_rad.to_degrees(),
+            truth.height_m,
+        ],
+    );
+    assert!(d[0].hypot(d[1]) < 5.0 && d[2].abs() < 5.0, "{d:?}");
+    let speed = (truth.vel_ned[0].powi(2) + truth.vel_ned[1].powi(2)).sqrt();
+    assert!(
+        (f64::from(i2.uvw[0]) - speed).abs() < 0.5,
+        "{i2:?} vs {speed}"
+    );
+    assert!(f64::from(i2.uvw[1]).abs() < 0.5, "{i2:?}");
+    // Heading east (90°) within a degree.
+    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    assert!((e[2].to_degrees() - 90.0).abs() < 1.0, "{e:?}");
+}

@@ -458,11 +458,13 @@ fn from_block_reads_the_parameter_rows() {
 
 /// The chain's share of RAM (the firmware has 64 KiB of static RAM for the
 /// whole image; the device around the chain takes ~6 KiB): the chain fits
-/// 10 KiB in either build.
+/// 12 KiB in either build (10 KiB before it carried the vehicle state a
+/// board's source sets, ≈ 200 B of `f64`, and the flicker terms of the
+/// sensor profiles).
 #[test]
-fn size_of_the_chain_fits_the_10_kib_budget() {
+fn size_of_the_chain_fits_the_12_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();
-    assert!(n <= 10 * 1024, "{n}");
+    assert!(n <= 12 * 1024, "{n}");
 }
 
 /// The neutral health reports accelerometer axes beyond their range too

@@ -438,10 +438,12 @@ fn send_ack(cx: &mut impl Context<Integrals>, info: &AckInfo, nack: bool) {
     });
 }
 
-/// `(x, y, z)` of the chain's carrier frame in the IMX body frame
-/// (forward, right, down): a half turn about x (module doc).
+/// `(x, y, z)` of the chain's carrier frame (the KERNEL's housing axes:
+/// right, forward, up; ICD Figure 2.2) in the IMX body frame (forward,
+/// right, down), the vehicle's body frame ([`crate::vehicle::housing_to_body`]),
+/// so an IMX on a vehicle reads forward motion on its x axis.
 fn frd(v: [f64; 3]) -> [f32; 3] {
-    [v[0] as f32, -(v[1] as f32), -(v[2] as f32)]
+    crate::vehicle::housing_to_body(&v).map(|x| x as f32)
 }
 
 impl State {

@@ -3,16 +3,19 @@
 //! Sense SDK 2.7.1 conventions: `docs/protocol-facts.md` "ISB navigation
 //! (SDK 2.7.1)").
 //!
-//! [`truth_of`] is the one place the truth is read: the chain's vehicle
-//! state ([`crate::chain::SignalChain::vehicle`]: a board's vehicle source,
-//! or the built-in motion's site and attitude at rest), with the IMX's body
-//! axes (see [`truth_of`]).
+//! [`truth_of`] is the one place the truth is read: the unit's vehicle
+//! ([`crate::vehicle`]), whatever its source.
 
 use libm::{asin, atan2, cos, sin, sqrt};
 
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
 
+/// Longitude of the built-in site, degrees east (the motions carry only a
+/// latitude; the emulator's choice, `docs/isb.md`).
+pub const DEFAULT_LON_DEG: f64 = 0.0;
+/// Height of the built-in site above the WGS84 ellipsoid, m.
+pub const DEFAULT_HEIGHT_M: f64 = 0.0;
 /// Geoid height (ellipsoid − MSL) the emulator uses everywhere: it has no
 /// geoid model (neither has the SDK), so MSL = ellipsoid height.
 pub const GEOID_SEPARATION_M: f64 = 0.0;
@@ -49,22 +52,33 @@ pub struct NavTruth {
     pub q_nb: [f64; 4],
 }
 
-/// The navigation truth of `chain` now (module doc): the vehicle's
-/// position and velocity, and the attitude of the IMX's body axes. The ISB
-/// reports its IMU in (housing x, −y, −z) (`isb::device`), while the
-/// vehicle's body is (housing y, x, −z) (docs/motion.md): the IMX's forward
-/// is the vehicle's right, so `q_nb` here is the vehicle's turned +90°
-/// about down (a vehicle heading north reads yaw 90°).
+/// The navigation truth of `chain` now: the unit's vehicle
+/// ([`SignalChain::vehicle`]: a board's vehicle source — manoeuvre script,
+/// full-state rows, live feed — or the built-in motion's site and
+/// attitude). Its body frame (forward, right, down) is the IMX's. A
+/// built-in motion's site is placed at longitude [`DEFAULT_LON_DEG`] and
+/// height [`DEFAULT_HEIGHT_M`]: the vehicle puts it where normal gravity is
+/// the ICD's 1 g (≈ 1.4 km below the ellipsoid at 45° N, so the KERNEL at
+/// rest reads exactly 1 g), which is no place to report an INS at.
 pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
-    let v = chain.vehicle();
-    // Rz(+90°): an IMX-body vector in vehicle-body axes.
-    let h = core::f64::consts::FRAC_1_SQRT_2;
+    let (v, builtin) = match chain.vehicle_source() {
+        Some(v) => (*v, false),
+        None => (chain.vehicle(), true),
+    };
     NavTruth {
         lat_deg: v.lat_rad.to_degrees(),
-        lon_deg: v.lon_rad.to_degrees(),
-        h_m: v.height_m,
+        lon_deg: if builtin {
+            DEFAULT_LON_DEG
+        } else {
+            v.lon_rad.to_degrees()
+        },
+        h_m: if builtin {
+            DEFAULT_HEIGHT_M
+        } else {
+            v.height_m
+        },
         v_ned: v.vel_ned,
-        q_nb: quat_mul(&v.q_nb, &[h, 0.0, 0.0, h]),
+        q_nb: v.q_nb,
     }
 }
 

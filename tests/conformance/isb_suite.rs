@@ -54,4 +54,5 @@ both!(
     get_of_did_132_is_nacked,
     bad_checksum_then_a_good_packet_is_answered,
     navigation_streams_on_device_time_while_aligning,
+    a_fed_rotation_shows_in_the_imu_packets,
 );

@@ -722,6 +722,23 @@ fn gcd(a: u64, b: u64) -> u64 {
     }
 }
 
+/// A live motion feed sample in the binary form (docs/feed.md, kind 1):
+/// rates in °/s for `device`, specific force +1 g up.
+pub fn feed_sample(device: u16, time_s: f64, rate_dps: [f32; 3]) -> Vec<u8> {
+    let s = imu_emu::feed::RateSample {
+        device,
+        time_ns: (time_s * 1e9) as u64,
+        truth: imu_emu::sensor::Truth {
+            rate_dps,
+            specific_force_g: [0.0, 0.0, 1.0],
+            temperature_c: None,
+        },
+    };
+    let mut f = [0u8; imu_emu::feed::MAX_FRAME];
+    let n = imu_emu::feed::encode(&s, &mut f);
+    f[..n].to_vec()
+}
+
 /// The master of a pty pair as the far end of a serial line (the test's
 /// side of the cable): reads time out after 20 ms.
 pub struct Master(pub std::fs::File);

@@ -110,6 +110,34 @@ pub struct Args {
     #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
     pub motion: Option<PathBuf>,
 
+    /// Take the motion live from a simulator or HIL rig: TCP `HOST:PORT`
+    /// or UDP `udp:HOST:PORT` (port 0 picks a free port; loopback only
+    /// without --allow-remote). Text rows in the --trajectory format or
+    /// binary samples (docs/feed.md). The address is a stdout line `feed
+    /// on tcp ADDR`; with --count, device K's feed is on port + K.
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["trajectory", "motion"])]
+    pub motion_feed: Option<String>,
+
+    /// With --motion-feed: device time advances only as samples arrive,
+    /// to each sample's time (interpolated between samples); with
+    /// `--speed max` as fast as the feed, otherwise no faster than
+    /// --speed either.
+    #[arg(long, requires = "motion_feed")]
+    pub lockstep: bool,
+
+    /// With --motion-feed (real time): after this many seconds without a
+    /// sample the unit reports a sensor fault (KERNEL USW bit 1, IMX IMU
+    /// status), the last sample holding; cleared by the next sample.
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::feed::DEFAULT_TIMEOUT_S,
+          requires = "motion_feed", value_parser = parse_timeout)]
+    pub feed_timeout: f64,
+
+    /// With --count and --motion-feed: one feed for every device (at ADDR
+    /// itself), each binary sample naming its device (text rows, which
+    /// name none, are rejected).
+    #[arg(long, requires = "motion_feed")]
+    pub feed_shared: bool,
+
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
     /// power-cycle the device and inject faults: the program says so on
@@ -247,6 +275,39 @@ pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Resu
     Ok(remote)
 }
 
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 && t <= 3600.0 => Ok(t),
+        _ => Err(format!("a feed timeout is seconds in (0, 3600], not {s:?}")),
+    }
+}
+
+/// The feed's clock and timeout from the arguments, if there is a feed.
+fn feed_config(args: &Args) -> Option<crate::feed::FeedConfig> {
+    args.motion_feed.as_ref()?;
+    Some(crate::feed::FeedConfig {
+        lockstep: args.lockstep,
+        timeout_ns: (args.feed_timeout * 1e9) as u64,
+    })
+}
+
+/// `addr` with its port moved on by `k` (port 0 stays 0: a free port
+/// each), for device K of a `--count` run.
+fn port_plus(option: &str, addr: &str, k: usize, count: u16) -> anyhow::Result<String> {
+    let sock: std::net::SocketAddr = addr
+        .parse()
+        .map_err(|_| UsageError(format!("{option} {addr}: expected IP:PORT with --count")))?;
+    let port = match sock.port() {
+        0 => 0,
+        p => u16::try_from(usize::from(p) + k).map_err(|_| {
+            UsageError(format!(
+                "{option} {addr} --count {count}: ports beyond 65535"
+            ))
+        })?,
+    };
+    Ok(std::net::SocketAddr::new(sock.ip(), port).to_string())
+}
+
 /// Checks the listening addresses before anything is opened; warns loudly
 /// on stderr about each remote one `--allow-remote` lets through.
 fn check_addresses(args: &Args) -> anyhow::Result<()> {
@@ -256,6 +317,17 @@ fn check_addresses(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(c) = &args.control {
         wanted.push(("--control", c.as_str()));
+    }
+    if let Some(f) = &args.motion_feed {
+        wanted.push((
+            "--motion-feed",
+            f.strip_prefix("udp:")
+                .or(f.strip_prefix("tcp:"))
+                .unwrap_or(f),
+        ));
+    }
+    if args.feed_shared && args.count < 2 {
+        return Err(UsageError("--feed-shared goes with --count N (N > 1)".into()).into());
     }
     for (option, addr) in wanted {
         if check_local(option, addr, args.allow_remote)? {
@@ -425,21 +497,9 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
         serve_many::<F, _, P>(parts, args, stop, started)
     } else {
         let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
-        let sock: std::net::SocketAddr = addr
-            .parse()
-            .map_err(|_| UsageError(format!("--tcp {addr}: expected IP:PORT with --count")))?;
         let mut parts = Vec::with_capacity(flashes.len());
         for (k, f) in flashes.into_iter().enumerate() {
-            let port = match sock.port() {
-                0 => 0,
-                p => u16::try_from(usize::from(p) + k).map_err(|_| {
-                    UsageError(format!(
-                        "--tcp {addr} --count {}: ports beyond 65535",
-                        args.count
-                    ))
-                })?,
-            };
-            let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
+            let a = port_plus("--tcp", addr, k, args.count)?;
             parts.push((f, TcpTransport::bind(&a)?));
         }
         serve_many::<F, _, P>(parts, args, stop, started)
@@ -474,12 +534,24 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let mut feeds = Vec::new();
+    if let Some(f) = &args.motion_feed {
+        let addr = crate::feed::FeedAddr::parse(f);
+        let n = if args.feed_shared { 1 } else { parts.len() };
+        for k in 0..n {
+            let a = addr.with(port_plus("--motion-feed", addr.host_port(), k, args.count)?);
+            feeds.push(crate::feed::FeedSocket::bind(&a)?);
+        }
+    }
     let mut out = std::io::stdout().lock();
     for (_, t) in &parts {
         writeln!(out, "listening on {}", t.describe())?;
     }
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    for f in &feeds {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -494,6 +566,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
         gps_time: args.gps_time,
+        feed: feed_config(args),
     };
     eprintln!(
         "imu-emu: {} devices ({}), flash {}; each powers on {}",
@@ -509,7 +582,9 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
             "when its first client connects"
         }
     );
-    let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    let shared = args.feed_shared;
+    let mut fleet =
+        crate::fleet::Fleet::<F, T, P>::new(parts, setup, control).with_feeds(feeds, shared);
     started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
@@ -582,10 +657,19 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let feed = match &args.motion_feed {
+        Some(a) => Some(crate::feed::FeedSocket::bind(
+            &crate::feed::FeedAddr::parse(a),
+        )?),
+        None => None,
+    };
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    if let Some(f) = &feed {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -652,6 +736,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     if let Some(v) = vehicle {
         runner = runner.with_vehicle(v);
+    }
+    if let (Some(cfg), Some(sock)) = (feed_config(args), feed) {
+        let state = crate::feed::FeedState::new(cfg, 0, true, "");
+        runner = runner.with_feed(state, Some(sock));
     }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");
