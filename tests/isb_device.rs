@@ -4,7 +4,7 @@
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
 use imu_emu::isb::did;
-use imu_emu::isb::ins::NavFaults;
+use imu_emu::isb::ins::{self, NavFaults};
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::nav;
 use imu_emu::isb::nav_sets::{
@@ -725,12 +725,14 @@ fn ins_phases_gps_time_and_periods() {
     let ins = of_did(&r, did::INS_2);
     assert_eq!(ins.len(), 250);
     let first = ins2_of(&ins[0]);
-    assert_eq!(ins_status::solution(first.ins_status), 1, "aligning");
-    assert_eq!((first.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
+    assert_eq!(ins_status::solution(first.header.ins_status), 1, "aligning");
+    assert_eq!((first.header.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
     // Before GPS time: time since boot.
-    assert_eq!(first.time_of_week, ins[0].tick as f64 / 2000.0);
+    assert_eq!(first.header.time_of_week, ins[0].tick as f64 / 2000.0);
     let r = b.run_ticks(10_000);
-    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap()).ins_status;
+    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap())
+        .header
+        .ins_status;
     assert_eq!(ins_status::solution(s), ins_status::SOLUTION_AHRS);
     assert_eq!(s & ins_status::NAV_MODE, 0);
     let r = b.run_ticks(50_000);
@@ -750,14 +752,18 @@ fn ins_phases_gps_time_and_periods() {
     assert_eq!((g.week, g.leap_s, g.sats_used), (2399, 18, 12));
     let ins = of_did(&r, did::INS_2);
     let last = ins2_of(ins.last().unwrap());
-    assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
-    assert_eq!(last.week, 2399);
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
+    assert_eq!(last.header.week, 2399);
     let since_boot = ins.last().unwrap().tick as f64 / 2000.0;
-    assert!((last.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
+    assert!((last.header.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
     for w in ins.windows(2) {
         let (a, c) = (ins2_of(&w[0]), ins2_of(&w[1]));
-        if a.week == c.week && a.week != 0 {
-            assert!((c.time_of_week - a.time_of_week - 0.004).abs() < 1e-6);
+        if a.header.week == c.header.week && a.header.week != 0 {
+            assert!((c.header.time_of_week - a.header.time_of_week - 0.004).abs() < 1e-6);
         }
     }
     // SYS_PARAMS carries the same words.
@@ -882,11 +888,17 @@ fn magnetometer_and_barometer() {
     // Body down = −(chain z): at rest the vertical component is m[2].
     let incl = (m[2] / n).asin().to_degrees();
     assert!((incl - 2f64.atan().to_degrees()).abs() < 0.5, "{incl}");
+    // The built-in site's height (where normal gravity is the ICD's g).
+    let h = nav::truth_of(b.dev.chain()).h_m;
     let p = baros.last().unwrap();
     assert!(
-        (p.bar - 101.325).abs() < 0.01 && p.msl_bar.abs() < 1.0,
-        "{p:?}"
+        (f64::from(p.bar) - ins::isa_kpa(h)).abs() < 0.01,
+        "{p:?} at {h} m"
     );
+    // mslBar is the SDK's baro2msl of the pressure (an exponential
+    // atmosphere: 22 m from the ISA at this height).
+    let sdk = -8434.668 * (f64::from(p.bar) / 101.325).ln();
+    assert!((f64::from(p.msl_bar) - sdk).abs() < 0.01, "{p:?}");
     b.dev.personality_mut().set_nav_faults(NavFaults {
         mag_disturbed: true,
         baro_failed: true,
@@ -1036,7 +1048,9 @@ fn imu_mag_pimu_mag_and_sys_sensors() {
     }
     let s = SysSensors::decode(&b.get_once(did::SYS_SENSORS).try_into().unwrap());
     assert!((s.acc[2] + 9.81).abs() < 0.1, "{s:?}");
-    assert!((s.bar - 101.325).abs() < 0.01 && s.msl_bar.abs() < 1.0);
+    let h = nav::truth_of(b.dev.chain()).h_m;
+    assert!((f64::from(s.bar) - ins::isa_kpa(h)).abs() < 0.01);
+    assert!((f64::from(s.msl_bar) + 8434.668 * (f64::from(s.bar) / 101.325).ln()).abs() < 0.01);
     let m = s.mag.map(f64::from);
     assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);
     let r = b.send(&set(
@@ -1132,10 +1146,10 @@ fn the_ins_reports_the_vehicle_it_rides_on() {
     let i2 = Ins2::decode(&b.get_once(did::INS_2).try_into().unwrap());
     let truth = m.at(b.ticks as f64 * period as f64 * 1e-9);
     assert_eq!(
-        i2.ins_status & ins_status::NAV_MODE,
+        i2.header.ins_status & ins_status::NAV_MODE,
         ins_status::NAV_MODE,
         "{:#x}",
-        i2.ins_status
+        i2.header.ins_status
     );
     // Position within a few metres (σ 0.7 m / 1 m), body velocity along x.
     let d = nav::ned_from_ref(

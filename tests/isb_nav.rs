@@ -14,23 +14,28 @@ fn layouts_are_the_sdk_structs() {
     );
     assert_eq!(
         [
-            ins1::WEEK,
-            ins1::TIME_OF_WEEK,
-            ins1::INS_STATUS,
-            ins1::HDW_STATUS
+            ins_header::SIZE,
+            ins_header::WEEK,
+            ins_header::TIME_OF_WEEK,
+            ins_header::INS_STATUS,
+            ins_header::HDW_STATUS
         ],
-        [0, 4, 12, 16]
+        [20, 0, 4, 12, 16]
     );
     assert_eq!(
-        [ins1::THETA, ins1::UVW, ins1::LLA, ins1::NED],
-        [20, 32, 44, 68]
+        [ins1::HEADER, ins1::THETA, ins1::UVW, ins1::LLA, ins1::NED],
+        [0, 20, 32, 44, 68]
     );
-    assert_eq!([ins2::QN2B, ins2::UVW, ins2::LLA], [20, 36, 48]);
     assert_eq!(
-        [ins3::QN2B, ins3::UVW, ins3::LLA, ins3::MSL],
-        [20, 36, 48, 72]
+        [ins2::HEADER, ins2::QN2B, ins2::UVW, ins2::LLA],
+        [0, 20, 36, 48]
     );
-    assert_eq!([ins4::QE2B, ins4::VE, ins4::ECEF], [20, 36, 48]);
+    // ins_3_t is ins_2_t's bytes then msl.
+    assert_eq!([ins3::INS2, ins3::MSL], [0, 72]);
+    assert_eq!(
+        [ins4::HEADER, ins4::QE2B, ins4::VE, ins4::ECEF],
+        [0, 20, 36, 48]
+    );
     assert_eq!(gps_pos::SIZE, 92);
     assert_eq!(
         [
@@ -98,10 +103,12 @@ fn layouts_are_the_sdk_structs() {
 #[test]
 fn golden_bytes_and_round_trips() {
     let i1 = Ins1 {
-        week: 2400,
-        time_of_week: 345_600.25,
-        ins_status: 0x0103_5970,
-        hdw_status: 0x0208_0050,
+        header: InsHeader {
+            week: 2400,
+            time_of_week: 345_600.25,
+            ins_status: 0x0103_5970,
+            hdw_status: 0x0208_0050,
+        },
         theta: [0.1, -0.2, 3.0],
         uvw: [1.0, 2.0, 3.0],
         lla: [45.0, 7.5, 250.0],

@@ -65,16 +65,18 @@
 //!   (a packet dropped because the line was too slow) and the parse-error
 //!   count.
 
+use core::cell::Cell;
+
 use heapless::Vec;
 
 use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::did::{self, DataSet};
-use crate::isb::ins::{self, InsHeader, NavConfig, NavFaults, NavState};
+use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
-use crate::isb::nav::{self, GpsTime};
-use crate::isb::nav_sets::{rmc_nav, SysSensors};
+use crate::isb::nav::{self, GpsTime, NavTruth};
+use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
@@ -167,6 +169,9 @@ struct State {
     /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
     /// board: `Isb::set_gps_time`).
     gps_ns_at_zero: u64,
+    /// The navigation truth of a tick (read once a tick however many
+    /// navigation packets go out: deriving it is `f64` work).
+    truth: Cell<Option<(u64, NavTruth)>>,
 }
 
 /// The ISB personality (module doc): an IMX-5 in IMU mode.
@@ -204,6 +209,7 @@ impl Personality for Isb {
                 gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
                 nav: NavState::new(0),
                 gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
+                truth: Cell::new(None),
             },
         }
     }
@@ -249,6 +255,7 @@ impl Personality for Isb {
         let faults = st.nav.faults();
         st.nav = NavState::new(cx.seed());
         st.nav.set_faults(faults);
+        st.truth.set(None);
         let product = cx.product();
         cx.chain_mut().configure(&ChainConfig::defaults(&product));
         cx.set_line_rate(st.baud);
@@ -313,7 +320,7 @@ impl Personality for Isb {
             st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
         }
         if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
-            let truth = nav::truth_of(cx.chain());
+            let truth = st.truth(cx);
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
         }
         if st.save_pending {
@@ -798,6 +805,20 @@ impl State {
         }
     }
 
+    /// The navigation truth at the last tick ([`nav::truth_of`], once a
+    /// tick).
+    fn truth(&self, cx: &impl Context<Integrals>) -> NavTruth {
+        let tick = cx.time().ticks();
+        match self.truth.get() {
+            Some((t, truth)) if t == tick => truth,
+            _ => {
+                let truth = nav::truth_of(cx.chain());
+                self.truth.set(Some((tick, truth)));
+                truth
+            }
+        }
+    }
+
     /// `(since boot, GPS time)` at the last tick (on the sample grid).
     fn gps_time(&self, cx: &impl Context<Integrals>) -> (u64, GpsTime) {
         let since_boot = cx.time().ticks() * (1_000_000_000 / u64::from(rate(cx)));
@@ -831,7 +852,7 @@ impl State {
             out[..b.len()].copy_from_slice(b);
             b.len()
         };
-        let truth = nav::truth_of(cx.chain());
+        let truth = self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
         let since_s = since_ns as f64 / 1e9;
@@ -930,7 +951,7 @@ impl State {
         if !matches!(did, did::IMU_MAG | did::PIMU_MAG) {
             return base;
         }
-        let truth = nav::truth_of(cx.chain());
+        let truth = self.truth(cx);
         let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
         image[base..base + m.len()].copy_from_slice(&m);
         base + m.len()
@@ -941,7 +962,7 @@ impl State {
     fn sys_sensors(&self, cx: &impl Context<Integrals>) -> SysSensors {
         let tick = cx.time().ticks();
         let time = tick as f64 / f64::from(rate(cx));
-        let truth = nav::truth_of(cx.chain());
+        let truth = self.truth(cx);
         let [g, a, _] = cx.chain().last_sensor();
         let g = frd(g.map(|x| f64::from(x).to_radians()));
         let a = frd(a.map(|x| f64::from(x) * f64::from(crate::math::G)));

@@ -17,7 +17,7 @@ use super::nav::{
     rotate, rotate_inv, GpsTime, NavTruth, GEOID_SEPARATION_M, LEAP_SECONDS,
 };
 use super::nav_sets::{
-    gps_status, hdw_nav, ins_status, Barometer, GpsPos, GpsVel, Ins1, Ins2, Ins3, Ins4,
+    gps_status, hdw_nav, ins_status, Barometer, GpsPos, GpsVel, Ins1, Ins2, Ins3, Ins4, InsHeader,
     Magnetometer,
 };
 use crate::sensor::rng::Rng;
@@ -458,19 +458,6 @@ fn normalize(q: &[f64; 4]) -> [f64; 4] {
     q.map(|x| x * s)
 }
 
-/// The common first 20 bytes of INS_1..4.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct InsHeader {
-    /// GPS week (0 before GPS time is known).
-    pub week: u32,
-    /// GPS time of week, s (time since boot before GPS time is known).
-    pub time_of_week: f64,
-    /// `insStatus`.
-    pub ins_status: u32,
-    /// `hdwStatus`.
-    pub hdw_status: u32,
-}
-
 fn f32s<const N: usize>(v: [f64; N]) -> [f32; N] {
     v.map(|x| x as f32)
 }
@@ -479,10 +466,7 @@ fn f32s<const N: usize>(v: [f64; N]) -> [f32; N] {
 pub fn ins1(h: &InsHeader, s: &Solution, cfg: &NavConfig) -> Ins1 {
     let uvw = rotate_inv(&dcm_of(&s.q_nb), &s.v_ned);
     Ins1 {
-        week: h.week,
-        time_of_week: h.time_of_week,
-        ins_status: h.ins_status,
-        hdw_status: h.hdw_status,
+        header: *h,
         theta: f32s(euler_of(&s.q_nb)),
         uvw: f32s(uvw),
         lla: s.lla,
@@ -493,10 +477,7 @@ pub fn ins1(h: &InsHeader, s: &Solution, cfg: &NavConfig) -> Ins1 {
 /// INS_2 of `s`.
 pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
     Ins2 {
-        week: h.week,
-        time_of_week: h.time_of_week,
-        ins_status: h.ins_status,
-        hdw_status: h.hdw_status,
+        header: *h,
         qn2b: f32s(s.q_nb),
         uvw: f32s(rotate_inv(&dcm_of(&s.q_nb), &s.v_ned)),
         lla: s.lla,
@@ -505,15 +486,8 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
 
 /// INS_3 of `s`: INS_2 plus the MSL height.
 pub fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
-    let i = ins2(h, s);
     Ins3 {
-        week: i.week,
-        time_of_week: i.time_of_week,
-        ins_status: i.ins_status,
-        hdw_status: i.hdw_status,
-        qn2b: i.qn2b,
-        uvw: i.uvw,
-        lla: i.lla,
+        ins2: ins2(h, s),
         msl: (s.lla[2] - GEOID_SEPARATION_M) as f32,
     }
 }
@@ -522,10 +496,7 @@ pub fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
 pub fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
     let qe2n = quat_e2n(s.lla[0], s.lla[1]);
     Ins4 {
-        week: h.week,
-        time_of_week: h.time_of_week,
-        ins_status: h.ins_status,
-        hdw_status: h.hdw_status,
+        header: *h,
         qe2b: f32s(quat_mul(&qe2n, &s.q_nb)),
         ve: f32s(rotate(&dcm_of(&qe2n), &s.v_ned)),
         ecef: ecef_of(&s.lla),

@@ -7,17 +7,28 @@
 use super::sets::{Imu, Pimu};
 
 crate::data_set! {
-    /// `ins_1_t`, 80 bytes: Euler attitude and NED offset from `refLla`.
+    /// The first 20 bytes of `ins_1_t` … `ins_4_t`: GPS time and the
+    /// status words.
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
-    pub struct Ins1 in mod ins1, 80 bytes {
-        /// GPS weeks since 1980-01-06.
+    pub struct InsHeader in mod ins_header, 20 bytes {
+        /// GPS weeks since 1980-01-06 (0 before GPS time is known).
         week: u32 = WEEK @ 0,
-        /// GPS seconds since the start of the week.
+        /// GPS seconds since the start of the week (time since boot before
+        /// GPS time is known).
         time_of_week: f64 = TIME_OF_WEEK @ 4,
         /// [`ins_status`] bits.
         ins_status: u32 = INS_STATUS @ 12,
-        /// `hdwStatus` bits ([`super::sets::hdw_status`]).
+        /// `hdwStatus` bits ([`super::sets::hdw_status`], [`hdw_nav`]).
         hdw_status: u32 = HDW_STATUS @ 16,
+    }
+}
+
+crate::data_set! {
+    /// `ins_1_t`, 80 bytes: Euler attitude and NED offset from `refLla`.
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Ins1 in mod ins1, 80 bytes {
+        /// GPS time and status words.
+        header: InsHeader = HEADER @ 0,
         /// Roll, pitch, yaw, rad, body relative to NED.
         theta: [f32; 3] = THETA @ 20,
         /// Body-frame velocity, m/s.
@@ -33,14 +44,8 @@ crate::data_set! {
     /// `ins_2_t`, 72 bytes: quaternion attitude.
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins2 in mod ins2, 72 bytes {
-        /// GPS week.
-        week: u32 = WEEK @ 0,
-        /// GPS time of week, s.
-        time_of_week: f64 = TIME_OF_WEEK @ 4,
-        /// [`ins_status`] bits.
-        ins_status: u32 = INS_STATUS @ 12,
-        /// `hdwStatus` bits.
-        hdw_status: u32 = HDW_STATUS @ 16,
+        /// GPS time and status words.
+        header: InsHeader = HEADER @ 0,
         /// W, X, Y, Z: body attitude relative to NED (Hamilton).
         qn2b: [f32; 4] = QN2B @ 20,
         /// Body-frame velocity, m/s.
@@ -51,23 +56,12 @@ crate::data_set! {
 }
 
 crate::data_set! {
-    /// `ins_3_t`, 76 bytes: `ins_2_t` plus the height above mean sea level.
+    /// `ins_3_t`, 76 bytes: the fields of `ins_2_t` (same offsets) plus
+    /// the height above mean sea level.
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins3 in mod ins3, 76 bytes {
-        /// GPS week.
-        week: u32 = WEEK @ 0,
-        /// GPS time of week, s.
-        time_of_week: f64 = TIME_OF_WEEK @ 4,
-        /// [`ins_status`] bits.
-        ins_status: u32 = INS_STATUS @ 12,
-        /// `hdwStatus` bits.
-        hdw_status: u32 = HDW_STATUS @ 16,
-        /// W, X, Y, Z: body attitude relative to NED.
-        qn2b: [f32; 4] = QN2B @ 20,
-        /// Body-frame velocity, m/s.
-        uvw: [f32; 3] = UVW @ 36,
-        /// Latitude °, longitude °, height above the ellipsoid, m.
-        lla: [f64; 3] = LLA @ 48,
+        /// The `ins_2_t` part.
+        ins2: Ins2 = INS2 @ 0,
         /// Height above mean sea level, m.
         msl: f32 = MSL @ 72,
     }
@@ -77,14 +71,8 @@ crate::data_set! {
     /// `ins_4_t`, 72 bytes: ECEF attitude, velocity and position.
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins4 in mod ins4, 72 bytes {
-        /// GPS week.
-        week: u32 = WEEK @ 0,
-        /// GPS time of week, s.
-        time_of_week: f64 = TIME_OF_WEEK @ 4,
-        /// [`ins_status`] bits.
-        ins_status: u32 = INS_STATUS @ 12,
-        /// `hdwStatus` bits.
-        hdw_status: u32 = HDW_STATUS @ 16,
+        /// GPS time and status words.
+        header: InsHeader = HEADER @ 0,
         /// W, X, Y, Z: body attitude relative to ECEF.
         qe2b: [f32; 4] = QE2B @ 20,
         /// ECEF velocity, m/s.

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 
-use imu_emu::isb::nav_sets::{ins_status, GpsPos, Ins2};
+use imu_emu::isb::nav_sets::{ins_status, GpsPos, GpsVel, Ins1, Ins2};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 use support::{free_port, hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Control, Emu};
 
@@ -189,6 +189,50 @@ fn dev_info_over_a_pty() {
     assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());
 }
 
+/// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the
+/// fix after the cold start carries GPS week 2400 (2026-01-04 is a
+/// Sunday, the first of week 2400), INS_1 navigates with its NED offset
+/// from the default `refLla` (0, 0, 0): north ≈ 45° × 111 120 m.
+#[test]
+fn navigation_over_a_pty() {
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--speed",
+        "20",
+        "--gps-time",
+        "2026-01-04",
+    ]);
+    let mut c = Conn::serial(&emu.pty_path());
+    c.send(&isb_get(did::GPS1_POS, 5));
+    let g = loop {
+        let g = GpsPos::decode(
+            &isb_packet_of(&mut c, did::GPS1_POS)
+                .payload
+                .try_into()
+                .unwrap(),
+        );
+        if g.status != 0 {
+            break g;
+        }
+    };
+    assert_eq!((g.week, g.status), (2400, 0x0001_030C));
+    // Midnight + 18 leap seconds + the 30 s cold start (within a second).
+    assert!((48_000..49_200).contains(&g.time_of_week_ms), "{g:?}");
+    c.send(&isb_get(did::INS_1, 0));
+    let i = Ins1::decode(
+        &isb_packet_of(&mut c, did::INS_1)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    assert_eq!(i.header.ins_status, 0x0103_5970);
+    assert!((f64::from(i.ned[0]) - 45f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
+}
+
 /// The INS_2 and GPS1_POS of `--gps-time` over TCP at `--speed 20`: no
 /// fix for the 30 s cold start, then GPS1_POS every 200 ms of GPS time
 /// (week 2408 for 2026-03-01), INS_2 every 100 ms by its own time fields
@@ -241,21 +285,25 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         (43_248_000..43_251_000).contains(&g.time_of_week_ms),
         "{g:?}"
     );
-    let navigating: Vec<&Ins2> = ins2.iter().filter(|i| i.week == 2408).collect();
+    let navigating: Vec<&Ins2> = ins2.iter().filter(|i| i.header.week == 2408).collect();
     assert!(navigating.len() > 5);
     for w in navigating.windows(2) {
-        assert!((w[1].time_of_week - w[0].time_of_week - 0.1).abs() < 1e-6);
+        assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-6);
     }
     let last = navigating.last().unwrap();
-    assert_eq!(last.ins_status, 0x0103_5970, "{:#x}", last.ins_status);
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
     // The navigation-period grid sits on GPS time: whole 4 ms steps of a
     // GPS second (the epoch is a whole second, so 1PPS edges fall on GPS
     // seconds).
-    let steps = last.time_of_week * 250.0;
+    let steps = last.header.time_of_week * 250.0;
     assert!(
         (steps - steps.round()).abs() < 1e-6,
         "{}",
-        last.time_of_week
+        last.header.time_of_week
     );
     assert!((last.lla[0] - 45.0).abs() < 1e-4);
 
@@ -265,19 +313,19 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         let p = isb_packet(&mut c);
         if p.did == did::INS_2 {
             let i = ins(p);
-            if ins_status::dead_reckoning(i.ins_status) {
+            if ins_status::dead_reckoning(i.header.ins_status) {
                 dr = Some(i);
                 break;
             }
         }
     }
     let dr = dr.expect("dead reckoning after the outage");
-    assert_eq!(dr.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+    assert_eq!(dr.header.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
     assert!(ctl.cmd("fault gps on").starts_with("ok"));
     let mut back = false;
     for _ in 0..200 {
         let p = isb_packet(&mut c);
-        if p.did == did::INS_2 && ins(p).ins_status == 0x0103_5970 {
+        if p.did == did::INS_2 && ins(p).header.ins_status == 0x0103_5970 {
             back = true;
             break;
         }
@@ -312,7 +360,7 @@ fn the_ins_preset_persists_across_a_reset() {
     };
     let check = |ins: &[Ins2], gps: &[GpsPos]| {
         for w in ins.windows(2) {
-            assert!((w[1].time_of_week - w[0].time_of_week - 0.004).abs() < 1e-9);
+            assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.004).abs() < 1e-9);
         }
         for w in gps.windows(2) {
             assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
@@ -329,7 +377,7 @@ fn the_ins_preset_persists_across_a_reset() {
         let p = isb_packet(&mut c);
         if p.did == did::INS_2 {
             let i = Ins2::decode(&p.payload.try_into().unwrap());
-            if i.time_of_week < 0.1 {
+            if i.header.time_of_week < 0.1 {
                 ins.push(i);
                 break;
             }
@@ -338,4 +386,60 @@ fn the_ins_preset_persists_across_a_reset() {
     let (more, gps) = collect(&mut c);
     ins.extend(more);
     check(&ins, &gps);
+}
+
+/// A manoeuvre script (`--motion`): heading north at 50 m/s from 45.5° N,
+/// 7.25° E, 300 m. Once the fix is there INS_1 moves north at 50 m/s by its
+/// own time fields and positions, reads yaw 0° (the IMX's body is the
+/// vehicle's: docs/isb.md) and the velocity (50, 0, 0) in its body axes;
+/// GPS1_VEL's ECEF speed is 50 m/s within the receiver's error.
+#[test]
+fn a_manoeuvre_script_moves_the_ins() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("north.txt");
+    std::fs::write(&path, "start 45.5 7.25 300 0 50\nhold 1000\n").unwrap();
+    let emu = isb(&["--motion", path.to_str().unwrap(), "--speed", "20"]);
+    let mut c = emu.connect();
+    c.send(&isb_get(did::INS_1, 250));
+    c.send(&isb_get(did::GPS1_VEL, 5));
+    let mut ins = Vec::new();
+    let mut vel = None;
+    while ins.len() < 4 || vel.is_none() {
+        let p = isb_packet(&mut c);
+        match p.did {
+            did::INS_1 => {
+                let i = Ins1::decode(&p.payload.try_into().unwrap());
+                if i.header.ins_status == 0x0103_5970 {
+                    ins.push(i);
+                }
+            }
+            did::GPS1_VEL => {
+                let v = GpsVel::decode(&p.payload.try_into().unwrap());
+                if v.status != 0 {
+                    vel = Some(v);
+                }
+            }
+            d => panic!("unexpected DID {d}"),
+        }
+    }
+    for w in ins.windows(2) {
+        let dt = w[1].header.time_of_week - w[0].header.time_of_week;
+        assert!((dt - 1.0).abs() < 1e-6, "{dt}");
+        // 50 m a second north: 50 / 111 120 m a degree (within the INS's
+        // velocity error and the Earth's curvature at 45°).
+        let dlat = (w[1].lla[0] - w[0].lla[0]) * 111_132.0;
+        assert!((dlat - 50.0).abs() < 1.5, "{dlat}");
+        assert!((w[1].lla[1] - 7.25).abs() < 1e-4);
+    }
+    let i = ins.last().unwrap();
+    let yaw = f64::from(i.theta[2]).to_degrees();
+    assert!(yaw.abs() < 1.5, "{:?}", i.theta);
+    assert!(
+        (i.uvw[0] - 50.0).abs() < 0.5 && i.uvw[1].abs() < 0.5,
+        "{:?}",
+        i.uvw
+    );
+    let v = vel.unwrap().vel.map(f64::from);
+    let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    assert!((speed - 50.0).abs() < 0.5, "{speed}");
 }
