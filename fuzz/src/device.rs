@@ -3,7 +3,8 @@
 
 use std::collections::BTreeMap;
 
-use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, RX_FRAME_CAP, TX_CAP};
+use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, TX_CAP};
+use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
 use imu_emu::kernel::frame;
 use imu_emu::kernel::params::{self, PARAMS};

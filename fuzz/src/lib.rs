@@ -11,9 +11,11 @@
 //!   a script decoded from the input.
 //! * [`store`] — the parameter store with power cuts at arbitrary
 //!   program/erase steps.
+//! * [`feed`] — the live motion feed decoder (text rows and binary
+//!   samples) and the per-device track.
 //!
 //! One module per target (`kernel_frame.rs`, `isb_packet.rs`,
-//! `device.rs`, `isb_device.rs`, `store.rs`); `script.rs` holds what they
+//! `device.rs`, `isb_device.rs`, `store.rs`, `feed.rs`); `script.rs` holds what they
 //! share (the script reader, the scanners' chunking invariance).
 
 // The invariants lean on the core's debug assertions and overflow checks
@@ -22,6 +24,7 @@
 compile_error!("build the fuzz targets with debug assertions (fuzz/Cargo.toml release profile)");
 
 mod device;
+mod feed;
 mod isb_device;
 mod isb_packet;
 mod kernel_frame;
@@ -29,6 +32,7 @@ mod script;
 mod store;
 
 pub use device::device;
+pub use feed::feed;
 pub use isb_device::isb_device;
 pub use isb_packet::isb_packet;
 pub use kernel_frame::kernel_frame;

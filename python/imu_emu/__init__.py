@@ -11,6 +11,9 @@ Standard library only. Three parts:
 * :class:`Control` -- the control socket (pins, faults, link faults,
   ``status``), with events kept apart from replies.
 
+* :class:`FeedEmulator` -- an emulator moved by a live motion feed
+  (:mod:`imu_emu.feed`), in real time or in lockstep.
+
 A pytest fixture is in :mod:`imu_emu.pytest_plugin`.
 """
 
@@ -30,3 +33,4 @@ from .kernel import (  # noqa: F401
     stop,
 )
 from .emulator import Control, Emulator, Fleet, Uart, find_binary  # noqa: F401
+from .feed import Feed, FeedEmulator, encode_sample, text_row  # noqa: F401

@@ -1,10 +1,9 @@
 //! The ISB personality: an emulated Inertial Sense IMX-5 in IMU mode on
-//! the device shell ([`crate::device::Shell`]) — the same sensor model,
+//! the device shell (through its [`Context`]) — the same sensor model,
 //! filters, pins, line and flash store as the KERNEL, speaking the ISB
 //! protocol (`docs/isb-data-sets.md`, `docs/protocol-facts.md` "ISB").
 //!
-//! What it does with each input (decisions marked; README "ISB
-//! personality"):
+//! What it does with each input (decisions marked; `docs/isb.md`):
 //!
 //! - **GET_DATA** ([`message::resolve_get`]): NACK for DID ≥ 132 and 95,
 //!   silence for an in-range DID it does not serve, else one DATA packet
@@ -20,7 +19,10 @@
 //!   exactly the ticks since its previous packet (PIMU: coning- and
 //!   sculling-corrected Δθ, Δv, with `dt` that window; IMU and IMU_RAW: the
 //!   window's mean rate and specific force). The packet a GET sends at
-//!   once covers the last tick. Axes: the IMX's body frame is forward,
+//!   once covers the last whole source period (on the grid of periods
+//!   counted from power-on), a stream starts where it ended and sends on
+//!   that grid, so `time` is a multiple of the period and PIMU `dt` is
+//!   always `n ×` the period. Axes: the IMX's body frame is forward,
 //!   right, down; the chain's carrier frame is the KERNEL's (x, y, z up),
 //!   so the IMX reports `(x, −y, −z)` — at rest `acc = (0, 0, −g)`.
 //! - **SET_DATA** ([`message::apply_set`]): FLASH_CONFIG (checksum
@@ -29,15 +31,23 @@
 //!   apply after a reset: "system reset required" while they differ from
 //!   the running values), RMC (below), SYS_CMD (1 save persistent
 //!   messages, 97 save flash, 99 software reset, 5 zero motion: accepted,
-//!   no effect; ignored unless `invCommand == !command`), SYS_PARAMS
+//!   no effect; 1122334455 then 1357924680: factory reset of FLASH_CONFIG,
+//!   saved, then a reset; ignored unless `invCommand == !command`), SYS_PARAMS
 //!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
 //!   done, the result from the chain's BIT faults).
 //! - **RMC**: its bits stand for the streams of the data sets that have an
-//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW); a SET starts those whose
+//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW and the navigation sets;
+//!   with `RMC_BITS_PRESET` the device picks the multiples, `docs/isb.md`); a SET starts those whose
 //!   bit is set (period multiple 1) and, without `OPTIONS_PRESERVE_CTRL`,
 //!   stops those whose bit is clear; `OPTIONS_PERSISTENT` then saves the
 //!   streams as persistent. The port mask is ignored (one port). A GET of
 //!   RMC reads the bits of the running streams.
+//! - **Navigation** (INS_1..4, GPS1_POS, GPS1_VEL, MAGNETOMETER,
+//!   BAROMETER, SYS_SENSORS, IMU_MAG, PIMU_MAG): built by
+//!   [`crate::isb::ins`] from [`crate::isb::nav::truth_of`], the INS and
+//!   GNSS models stepped every [`ins::STEP_MS`]; GPS time from
+//!   [`Isb::set_gps_time`]; faults from [`Isb::set_nav_faults`]
+//!   (`docs/isb.md` "Navigation").
 //! - **STROBE_IN_TIME** is sent on every rising EXTRIG edge while its
 //!   stream is on (a GET with `n > 0`, or its RMC bit), counting edges
 //!   since power-on, time of week = ms since power-on (no GPS).
@@ -55,26 +65,31 @@
 //!   (a packet dropped because the line was too slow) and the parse-error
 //!   count.
 
-use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
 use crate::chain::{ChainConfig, Health};
-use crate::device::{Level, Mode, Pin, Shell};
 use crate::dsp::integrals::{self, Increment, Integrals};
+use crate::io::{Level, Mode, Pin};
 use crate::isb::did::{self, DataSet};
+use crate::isb::ins::{self, InsHeader, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
+use crate::isb::nav::{self, GpsTime};
+use crate::isb::nav_sets::{rmc_nav, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
     FlashConfig, Imu, Pimu, Rmc, StrobeInTime, SysParams, SystemCommand,
 };
-use crate::personality::Personality;
+use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
 
-/// Streams the device runs at once (one per DID; there are 10 data sets).
+/// Persistent streams the image holds (the first ten running streams are
+/// saved; the image layout is unchanged since the IMU-mode device).
 pub const MAX_STREAMS: usize = 10;
+/// Streams the device runs at once (one per served data set).
+pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// Bytes of one persistent-stream entry in the image: `u8 did, u8 0,
 /// u16 size, u16 offset, u16 period`.
 const ENTRY: usize = 8;
@@ -126,11 +141,17 @@ struct State {
     nav_dt_ms: u32,
     baud: u32,
     save_pending: bool,
-    streams: Vec<Stream, MAX_STREAMS>,
+    streams: Vec<Stream, MAX_RUNNING>,
     rmc_options: u32,
-    /// The integrals before the last tick (the window of a one-shot
-    /// IMU/PIMU: that tick).
-    prev: Integrals,
+    /// The integrals at the last two boundaries of the navigation period
+    /// and of the IMU sample period (ticks since power-on a multiple of
+    /// it): a one-shot IMU/PIMU covers the last whole period, a stream
+    /// starts at the last boundary (module doc).
+    nav_grid: [Integrals; 2],
+    imu_grid: [Integrals; 2],
+    /// The manufacturing unlock (SYS_CMD 1122334455) was the last command:
+    /// a factory reset may follow.
+    unlocked: bool,
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
@@ -139,6 +160,13 @@ struct State {
     tx_limited: bool,
     /// ISB candidates dropped (bad checksum, size) since power-on.
     parse_errors: u32,
+    /// `startupGPSDtMs` at boot.
+    gps_dt_ms: u32,
+    /// The navigation side: INS, GNSS, magnetometer, barometer.
+    nav: NavState,
+    /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
+    /// board: `Isb::set_gps_time`).
+    gps_ns_at_zero: u64,
 }
 
 /// The ISB personality (module doc): an IMX-5 in IMU mode.
@@ -164,13 +192,18 @@ impl Personality for Isb {
                 save_pending: false,
                 streams: Vec::new(),
                 rmc_options: 0,
-                prev: Integrals::default(),
+                nav_grid: [Integrals::default(); 2],
+                imu_grid: [Integrals::default(); 2],
+                unlocked: false,
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
+                gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
+                nav: NavState::new(0),
+                gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
             },
         }
     }
@@ -179,11 +212,11 @@ impl Personality for Isb {
     /// defaults and none if it holds no valid ISB image, or one whose
     /// `key` is not the factory key); the startup
     /// periods and `ser0BaudRate` are latched; persistent streams start.
-    fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, _now: Instant) {
+    fn boot(&mut self, cx: &mut impl Context<Integrals>, _now: Instant) {
         self.input = Input::new();
         let st = &mut self.st;
         let mut image = [0u8; IMAGE_LEN];
-        let loaded = matches!(sh.load_image(&mut image), Ok(true));
+        let loaded = matches!(cx.load_image(&mut image), Ok(true));
         let mut cfg = FlashConfig([0; flash::SIZE]);
         cfg.0.copy_from_slice(&image[..PERSIST]);
         // A FLASH_CONFIG whose `key` is not the firmware's is replaced by
@@ -201,17 +234,25 @@ impl Personality for Isb {
         st.save_pending = false;
         st.streams.clear();
         st.rmc_options = 0;
-        st.prev = sh.chain().integrals();
+        let at_boot = cx.chain().integrals();
+        st.nav_grid = [at_boot; 2];
+        st.imu_grid = [at_boot; 2];
+        st.unlocked = false;
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
-        st.dropped_seen = sh.line().dropped();
+        st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
-        let product = sh.product();
-        sh.chain_mut().configure(&ChainConfig::defaults(&product));
-        sh.set_line_rate(st.baud);
-        if sh.firmware_update() {
+        st.gps_dt_ms = st.cfg.u32_at(flash::STARTUP_GPS_DT_MS).clamp(200, 60_000);
+        // Injected faults outlast a reset (the antenna is still cut).
+        let faults = st.nav.faults();
+        st.nav = NavState::new(cx.seed());
+        st.nav.set_faults(faults);
+        let product = cx.product();
+        cx.chain_mut().configure(&ChainConfig::defaults(&product));
+        cx.set_line_rate(st.baud);
+        if cx.firmware_update() {
             return;
         }
         let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
@@ -231,38 +272,52 @@ impl Personality for Isb {
             } = message::resolve_get(&req)
             {
                 if period > 0 {
-                    st.start_stream(sh, set, offset, size, period);
+                    st.start_stream(cx, set, offset, size, period);
                 }
             }
         }
     }
 
-    fn on_rx<F: NorFlash>(&mut self, bytes: &[u8], sh: &mut Shell<F, Isb>, now: Instant) {
+    fn on_rx(&mut self, bytes: &[u8], cx: &mut impl Context<Integrals>, now: Instant) {
         let st = &mut self.st;
         self.input.feed(bytes, |ev| match ev {
-            Input_::Packet(p) => st.packet(sh, &p, now),
-            Input_::Nmea(c) => st.nmea(sh, c, now),
+            Input_::Packet(p) => st.packet(cx, &p, now),
+            Input_::Nmea(c) => st.nmea(cx, c, now),
         });
         st.parse_errors = self.input.isb_errors();
     }
 
-    /// The integrals before this tick are kept (a one-shot IMU covers the
-    /// last tick); a packet or sentence cut short ([`RX_IDLE_ABANDON_NS`]
-    /// without a byte) is dropped.
-    fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
-        self.st.prev = sh.chain().integrals();
-        if self.input.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
+    /// A packet or sentence cut short ([`RX_IDLE_ABANDON_NS`] without a
+    /// byte) is dropped.
+    fn before_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
+        if self.input.has_partial() && now.since(cx.time().last_rx()) > RX_IDLE_ABANDON_NS {
             self.input.abandon();
-            sh.touch_rx(now);
+            cx.time_mut().touch_rx(now);
             self.st.parse_errors = self.input.isb_errors();
         }
     }
 
-    /// Pending flash writes happen; every periodic stream due sends.
-    fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
+    /// The period grids advance; pending flash writes happen; every
+    /// periodic stream due sends.
+    fn on_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
         let st = &mut self.st;
+        let (nav, imu) = (
+            st.grid_ticks(cx, st.nav_dt_ms),
+            st.grid_ticks(cx, st.imu_dt_ms),
+        );
+        let ticks = cx.time().ticks();
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+            let truth = nav::truth_of(cx.chain());
+            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
         if st.save_pending {
-            st.save(sh);
+            st.save(cx);
         }
         let mut sent = false;
         for i in 0..st.streams.len() {
@@ -273,26 +328,26 @@ impl Personality for Isb {
             s.countdown = s.countdown.saturating_sub(1);
             if s.countdown == 0 {
                 s.countdown = s.every;
-                st.send_stream(sh, i, now);
+                st.send_stream(cx, i, now);
                 sent = true;
             }
         }
         if sent {
             // Saturation is reported since the previous packet.
-            sh.chain_mut().restart_health_interval();
+            cx.chain_mut().restart_health_interval();
         }
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
     /// STROBE_IN_TIME while that stream is on.
-    fn on_pin<F: NorFlash>(&mut self, pin: Pin, level: Level, sh: &mut Shell<F, Isb>, at: Instant) {
+    fn on_pin(&mut self, pin: Pin, level: Level, cx: &mut impl Context<Integrals>, at: Instant) {
         if (pin, level) != (Pin::Extrig, Level::High) {
             return;
         }
         let st = &mut self.st;
         st.strobe_count = st.strobe_count.wrapping_add(1);
         if let Some(i) = st.find(did::STROBE_IN_TIME) {
-            st.send_stream(sh, i, at);
+            st.send_stream(cx, i, at);
         }
     }
 
@@ -305,7 +360,7 @@ impl Personality for Isb {
     }
 
     /// The rate of the fastest periodic stream.
-    fn output_rate<F: NorFlash>(&self, sh: &Shell<F, Isb>) -> Option<u32> {
+    fn output_rate(&self, cx: &impl Context<Integrals>) -> Option<u32> {
         let every = self
             .st
             .streams
@@ -313,7 +368,7 @@ impl Personality for Isb {
             .filter(|s| s.every > 0)
             .map(|s| s.every)
             .min()?;
-        Some(sh.product().model.internal_rate_hz / every)
+        Some(cx.product().model.internal_rate_hz / every)
     }
 
     fn ticks_to_next_output(&self) -> Option<u64> {
@@ -332,6 +387,24 @@ impl Isb {
         &self.st.cfg
     }
 
+    /// The navigation state (INS phases, errors, faults).
+    pub fn nav(&self) -> &NavState {
+        &self.st.nav
+    }
+
+    /// Injects or clears navigation faults (GPS outage, magnetic
+    /// disturbance, barometer failure); they outlast resets.
+    pub fn set_nav_faults(&mut self, f: NavFaults) {
+        self.st.nav.set_faults(f);
+    }
+
+    /// Sets the GPS time: `gps_ns_at_zero` GPS nanoseconds since
+    /// 1980-01-06 at device instant 0 (a host passes its clock or
+    /// `--gps-time`; firmware keeps [`nav::DEFAULT_GPS_S_AT_ZERO`]).
+    pub fn set_gps_time(&mut self, gps_ns_at_zero: u64) {
+        self.st.gps_ns_at_zero = gps_ns_at_zero;
+    }
+
     /// DIDs streaming now, in the order they were started.
     pub fn streams(&self) -> impl Iterator<Item = u8> + '_ {
         self.st.streams.iter().map(|s| s.did)
@@ -340,16 +413,16 @@ impl Isb {
 
 /// Queues an ISB packet of `n` bytes written by `encode` (which returns
 /// the length it wrote).
-fn push<F: NorFlash>(
-    sh: &mut Shell<F, Isb>,
+fn push(
+    cx: &mut impl Context<Integrals>,
     n: usize,
     encode: impl FnOnce(&mut [u8]) -> Option<usize>,
 ) -> bool {
-    sh.push_frame(n, |f| encode(f) == Some(n)).is_some()
+    cx.push_frame(n, |f| encode(f) == Some(n)).is_some()
 }
 
-fn send_ack<F: NorFlash>(sh: &mut Shell<F, Isb>, info: &AckInfo, nack: bool) {
-    push(sh, OVERHEAD + message::ACK_PAYLOAD_LEN, |f| {
+fn send_ack(cx: &mut impl Context<Integrals>, info: &AckInfo, nack: bool) {
+    push(cx, OVERHEAD + message::ACK_PAYLOAD_LEN, |f| {
         if nack {
             message::encode_nack(info, f)
         } else {
@@ -358,10 +431,12 @@ fn send_ack<F: NorFlash>(sh: &mut Shell<F, Isb>, info: &AckInfo, nack: bool) {
     });
 }
 
-/// `(x, y, z)` of the chain's carrier frame in the IMX body frame
-/// (forward, right, down): a half turn about x (module doc).
+/// `(x, y, z)` of the chain's carrier frame (the KERNEL's housing axes:
+/// right, forward, up; ICD Figure 2.2) in the IMX body frame (forward,
+/// right, down), the vehicle's body frame ([`crate::vehicle::housing_to_body`]),
+/// so an IMX on a vehicle reads forward motion on its x axis.
 fn frd(v: [f64; 3]) -> [f32; 3] {
-    [v[0] as f32, -(v[1] as f32), -(v[2] as f32)]
+    crate::vehicle::housing_to_body(&v).map(|x| x as f32)
 }
 
 impl State {
@@ -371,14 +446,41 @@ impl State {
 
     /// Ticks per source period of `set` (at least 1).
     fn source_ticks(&self, rate_hz: u32, set: &DataSet) -> u32 {
-        let ms = set.source.period_ms(self.imu_dt_ms, self.nav_dt_ms);
+        let ms = set
+            .source
+            .period_ms(self.imu_dt_ms, self.nav_dt_ms, self.gps_dt_ms);
         (ms.saturating_mul(rate_hz) / 1000).max(1)
     }
 
+    /// Ticks in `ms` (at least 1).
+    fn grid_ticks(&self, cx: &impl Context<Integrals>, ms: u32) -> u32 {
+        (ms.saturating_mul(rate(cx)) / 1000).max(1)
+    }
+
+    /// The period grid a windowed data set lives on: IMU_RAW the IMU
+    /// sample period's, the others the navigation period's.
+    fn grid(&self, did: u8) -> [Integrals; 2] {
+        if did == did::IMU_RAW {
+            self.imu_grid
+        } else {
+            self.nav_grid
+        }
+    }
+
+    /// Ticks of the period of [`Self::grid`]`(did)`.
+    fn window_ticks(&self, cx: &impl Context<Integrals>, did: u8) -> u32 {
+        let ms = if did == did::IMU_RAW {
+            self.imu_dt_ms
+        } else {
+            self.nav_dt_ms
+        };
+        self.grid_ticks(cx, ms)
+    }
+
     /// Starts (or replaces) the stream of `set`.
-    fn start_stream<F: NorFlash>(
+    fn start_stream(
         &mut self,
-        sh: &Shell<F, Isb>,
+        cx: &impl Context<Integrals>,
         set: &DataSet,
         offset: u16,
         size: u16,
@@ -387,17 +489,22 @@ impl State {
         let every = if set.did == did::STROBE_IN_TIME {
             0
         } else {
-            self.source_ticks(sh.product().model.internal_rate_hz, set)
+            self.source_ticks(cx.product().model.internal_rate_hz, set)
                 .saturating_mul(u32::from(period))
         };
+        // The first packet falls on the source period's grid (ticks since
+        // power-on a multiple of it) and a windowed one covers `period`
+        // whole source periods from the last boundary (module doc).
+        let src = self.source_ticks(rate(cx), set);
+        let phase = (cx.time().ticks() % u64::from(src)) as u32;
         let s = Stream {
             did: set.did,
             offset,
             size,
             period,
             every,
-            countdown: every,
-            start: sh.chain().integrals(),
+            countdown: every.saturating_sub(phase).max(1),
+            start: self.grid(set.did)[1],
         };
         match self.find(set.did) {
             Some(i) => self.streams[i] = s,
@@ -415,25 +522,25 @@ impl State {
 
     // ----- input -----
 
-    fn packet<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, p: &Packet<'_>, now: Instant) {
+    fn packet(&mut self, cx: &mut impl Context<Integrals>, p: &Packet<'_>, now: Instant) {
         match Request::of(p) {
-            Request::Get(g) => self.get(sh, &g, now),
+            Request::Get(g) => self.get(cx, &g, now),
             Request::BadGet { rx_flags, rx_did } => {
-                send_ack(sh, &AckInfo::of(rx_flags, rx_did), true)
+                send_ack(cx, &AckInfo::of(rx_flags, rx_did), true)
             }
-            Request::Set(req) => self.set(sh, &req, now),
+            Request::Set(req) => self.set(cx, &req, now),
             Request::StopAllPorts | Request::StopCurrentPort => {
                 self.streams.clear();
-                send_ack(sh, &AckInfo::of(p.flags, p.did), false);
+                send_ack(cx, &AckInfo::of(p.flags, p.did), false);
             }
             Request::StopDid(did) => self.stop_stream(did),
             Request::Ignored => {}
         }
     }
 
-    fn get<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, g: &GetRequest, now: Instant) {
+    fn get(&mut self, cx: &mut impl Context<Integrals>, g: &GetRequest, now: Instant) {
         match message::resolve_get(g) {
-            GetReply::Nack => send_ack(sh, &AckInfo::of(PacketType::GetData as u8, 0), true),
+            GetReply::Nack => send_ack(cx, &AckInfo::of(PacketType::GetData as u8, 0), true),
             GetReply::Silent => {}
             GetReply::Serve {
                 set,
@@ -448,40 +555,45 @@ impl State {
                 {
                     return;
                 }
-                self.send_once(sh, set, offset, size, now);
+                self.send_once(cx, set, offset, size, now);
                 if period == 0 {
                     self.stop_stream(set.did);
                 } else {
-                    self.start_stream(sh, set, offset, size, period);
+                    self.start_stream(cx, set, offset, size, period);
                 }
             }
         }
     }
 
-    fn set<F: NorFlash>(
+    fn set(
         &mut self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         req: &message::SetRequest<'_>,
         now: Instant,
     ) {
         let mut image = [0u8; flash::SIZE];
-        let n = self.image_of(sh, req.did, &mut image, now);
+        let n = self.image_of(cx, req.did, &mut image, now);
         let outcome = message::apply_set(req, &mut image[..n]);
         match outcome {
-            SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(sh, &info, true),
+            SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(cx, &info, true),
             SetOutcome::Silent => {}
-            SetOutcome::AckOnly(info) => send_ack(sh, &info, false),
+            SetOutcome::AckOnly(info) => send_ack(cx, &info, false),
+            SetOutcome::Written { ack, .. }
+                if req.did == did::FLASH_CONFIG && !ins::flash_nav_valid(&image[..n]) =>
+            {
+                send_ack(cx, &ack, true)
+            }
             SetOutcome::Written { ack, .. } => {
                 // The ACK goes first: a software reset clears the queue
                 // only after it has been handed out.
-                send_ack(sh, &ack, false);
-                self.written(sh, req.did, &image[..n]);
+                send_ack(cx, &ack, false);
+                self.written(cx, req.did, &image[..n]);
             }
         }
     }
 
     /// Acts on a data set written by a SET_DATA (module doc).
-    fn written<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, did: u8, image: &[u8]) {
+    fn written(&mut self, cx: &mut impl Context<Integrals>, did: u8, image: &[u8]) {
         match did {
             did::FLASH_CONFIG => {
                 self.cfg.0.copy_from_slice(&image[..flash::SIZE]);
@@ -491,15 +603,25 @@ impl State {
             did::RMC => {
                 let mut b = [0u8; rmc::SIZE];
                 b.copy_from_slice(&image[..rmc::SIZE]);
-                self.rmc(sh, &Rmc::decode(&b));
+                self.rmc(cx, &Rmc::decode(&b));
             }
             did::SYS_CMD => {
                 let mut b = [0u8; sys_cmd::SIZE];
                 b.copy_from_slice(&image[..sys_cmd::SIZE]);
-                match SystemCommand::decode(&b).valid() {
-                    Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(sh),
-                    Some(sys_cmd::SAVE_FLASH) => self.save(sh),
-                    Some(sys_cmd::SOFTWARE_RESET) => sh.request_reset(),
+                let cmd = SystemCommand::decode(&b).valid();
+                let unlocked = core::mem::replace(&mut self.unlocked, false);
+                match cmd {
+                    Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(cx),
+                    Some(sys_cmd::SAVE_FLASH) => self.save(cx),
+                    Some(sys_cmd::SOFTWARE_RESET) => cx.request_reset(),
+                    Some(sys_cmd::MANF_UNLOCK) => self.unlocked = true,
+                    // FLASH_CONFIG back to the factory defaults, saved, then
+                    // a reset (docs/isb.md); only right after the unlock.
+                    Some(sys_cmd::MANF_FACTORY_RESET) if unlocked => {
+                        self.cfg = FlashConfig::factory();
+                        self.save(cx);
+                        cx.request_reset();
+                    }
                     _ => {}
                 }
             }
@@ -507,19 +629,30 @@ impl State {
                 self.gen_fault_code = le::u32(image, sets::sys_params::GEN_FAULT_CODE);
             }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
-                self.run_bit(sh, image[bit::COMMAND]);
+                self.run_bit(cx, image[bit::COMMAND]);
             }
             _ => {}
         }
     }
 
     /// An RMC write (module doc).
-    fn rmc<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, r: &Rmc) {
+    fn rmc(&mut self, cx: &mut impl Context<Integrals>, r: &Rmc) {
         let preserve = r.options & rmc::OPTIONS_PRESERVE_CTRL != 0;
+        let preset = r.bits & rmc::BITS_PRESET != 0;
         for set in did::DATA_SETS.iter().filter(|s| s.rmc_bit != 0) {
             if r.bits & set.rmc_bit != 0 {
-                if self.find(set.did).is_none() {
-                    self.start_stream(sh, set, 0, set.size, 1);
+                // A preset chooses the period multiples (docs/isb.md): in
+                // a PPD preset INS_2 every 100 ms, everything else at its
+                // source period.
+                let ppd = preset && r.bits & rmc_nav::BITS_INTERNAL_PPD != 0;
+                let n = if ppd && set.did == did::INS_2 {
+                    (rmc_nav::PPD_NAV_PERIOD_MS / self.nav_dt_ms).max(1) as u16
+                } else {
+                    1
+                };
+                let same = self.find(set.did).map(|i| self.streams[i].period);
+                if same.is_none() || (preset && same != Some(n)) {
+                    self.start_stream(cx, set, 0, set.size, n);
                 }
             } else if !preserve {
                 self.stop_stream(set.did);
@@ -527,31 +660,31 @@ impl State {
         }
         self.rmc_options = r.options;
         if r.options & rmc::OPTIONS_PERSISTENT != 0 {
-            self.save_persistent(sh);
+            self.save_persistent(cx);
         }
     }
 
-    fn nmea<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, c: Nmea, _now: Instant) {
+    fn nmea(&mut self, cx: &mut impl Context<Integrals>, c: Nmea, _now: Instant) {
         match c {
             Nmea::Info => {
                 let mut out = [0u8; INFO_MAX];
-                if let Some(n) = nmea::info_sentence(&dev_info_of(sh), &mut out) {
-                    sh.push_frame(n, |f| {
+                if let Some(n) = nmea::info_sentence(&dev_info_of(cx), &mut out) {
+                    cx.push_frame(n, |f| {
                         f.copy_from_slice(&out[..n]);
                         true
                     });
                 }
             }
             Nmea::StopAllPorts | Nmea::StopCurrentPort => self.streams.clear(),
-            Nmea::SavePersistent => self.save_persistent(sh),
-            Nmea::SoftwareReset => sh.request_reset(),
+            Nmea::SavePersistent => self.save_persistent(cx),
+            Nmea::SoftwareReset => cx.request_reset(),
         }
     }
 
     // ----- flash -----
 
     /// The running streams become the persistent ones, saved at once.
-    fn save_persistent<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+    fn save_persistent(&mut self, cx: &mut impl Context<Integrals>) {
         self.persist = [0; 4 + MAX_STREAMS * ENTRY];
         le::put(
             &mut self.persist,
@@ -565,20 +698,20 @@ impl State {
             le::put(e, 4, &s.offset.to_le_bytes());
             le::put(e, 6, &s.period.max(1).to_le_bytes());
         }
-        self.save(sh);
+        self.save(cx);
     }
 
     /// Writes FLASH_CONFIG and the persistent streams (power-fail safe); a
     /// flash failure leaves the write pending.
-    fn save<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+    fn save(&mut self, cx: &mut impl Context<Integrals>) {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
         image[PERSIST..].copy_from_slice(&self.persist);
-        self.save_pending = sh.save_image(&image).is_err();
+        self.save_pending = cx.save_image(&image).is_err();
     }
 
-    fn run_bit<F: NorFlash>(&mut self, sh: &Shell<F, Isb>, command: u8) {
-        let h = sh.chain().health();
+    fn run_bit(&mut self, cx: &impl Context<Integrals>, command: u8) {
+        let h = cx.chain().health();
         let mut hdw = bit::HDW_PASSED_NO_GPS;
         if h.gyro_bit_failed {
             hdw = bit::HDW_FAULT_NOISE_PQR;
@@ -603,9 +736,9 @@ impl State {
     // ----- output -----
 
     /// The current bytes of data set `did` into `out`; its size.
-    fn image_of<F: NorFlash>(
+    fn image_of(
         &self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         did: u8,
         out: &mut [u8; flash::SIZE],
         now: Instant,
@@ -615,9 +748,9 @@ impl State {
             b.len()
         };
         match did {
-            did::DEV_INFO => put(&dev_info_of(sh).encode()),
+            did::DEV_INFO => put(&dev_info_of(cx).encode()),
             did::FLASH_CONFIG => put(&self.cfg.0),
-            did::SYS_PARAMS => put(&self.sys_params(sh, now).encode()),
+            did::SYS_PARAMS => put(&self.sys_params(cx, now).encode()),
             did::RMC => put(&Rmc {
                 bits: self.rmc_bits(),
                 options: self.rmc_options,
@@ -625,17 +758,119 @@ impl State {
             .encode()),
             did::SYS_CMD => put(&SystemCommand::default().encode()),
             did::BIT => put(&self.bit.encode()),
-            did::STROBE_IN_TIME => put(&StrobeInTime {
-                week: 0,
-                time_of_week_ms: ms_since(sh, now),
-                pin: 0,
-                count: self.strobe_count,
+            did::STROBE_IN_TIME => {
+                // GPS time of the edge once GPS time is known.
+                let (week, time_of_week_ms) = if self.nav.gps_time_valid() {
+                    let since = now.since(cx.time().powered_at());
+                    let t = GpsTime::of_ns(self.gps_ns_at_zero + cx.time().powered_at().0 + since);
+                    (t.week, t.tow_ms())
+                } else {
+                    (0, ms_since(cx, now))
+                };
+                put(&StrobeInTime {
+                    week,
+                    time_of_week_ms,
+                    pin: 0,
+                    count: self.strobe_count,
+                }
+                .encode())
             }
-            .encode()),
-            did::IMU | did::IMU_RAW | did::PIMU => {
-                let w = integrals::window(&self.prev, &sh.chain().integrals(), rate(sh));
-                let n = windowed_len(did);
-                put(&self.windowed(sh, did, &w, now)[..n])
+            did::INS_1
+            | did::INS_2
+            | did::INS_3
+            | did::INS_4
+            | did::GPS1_POS
+            | did::GPS1_VEL
+            | did::MAGNETOMETER
+            | did::BAROMETER => {
+                let hdw = self.sys_params(cx, now).hdw_status;
+                self.nav_image(cx, did, hdw, out)
+            }
+            did::SYS_SENSORS => put(&self.sys_sensors(cx).encode()),
+            d if is_windowed(d) => {
+                let [a, b] = self.grid(did);
+                let w = integrals::window(&a, &b, rate(cx));
+                let end =
+                    cx.time().ticks() - cx.time().ticks() % u64::from(self.window_ticks(cx, did));
+                self.windowed(cx, did, &w, end, out)
+            }
+            _ => 0,
+        }
+    }
+
+    /// `(since boot, GPS time)` at the last tick (on the sample grid).
+    fn gps_time(&self, cx: &impl Context<Integrals>) -> (u64, GpsTime) {
+        let since_boot = cx.time().ticks() * (1_000_000_000 / u64::from(rate(cx)));
+        let gps = self.gps_ns_at_zero + cx.time().powered_at().0 + since_boot;
+        (since_boot, GpsTime::of_ns(gps))
+    }
+
+    /// The FLASH_CONFIG fields the navigation uses.
+    fn nav_config(&self) -> NavConfig {
+        let b = &self.cfg.0;
+        let f64x3 = |off: usize| [0, 8, 16].map(|k| le::f64(b, off + k));
+        NavConfig {
+            ref_lla: f64x3(flash::REF_LLA),
+            last_lla: f64x3(flash::LAST_LLA),
+            ins_rotation: le::f32x3(b, flash::INS_ROTATION),
+            ins_offset: le::f32x3(b, flash::INS_OFFSET),
+            gps1_ant_offset: le::f32x3(b, flash::GPS1_ANT_OFFSET),
+        }
+    }
+
+    /// The bytes of a navigation data set now (`docs/isb.md`
+    /// "Navigation").
+    fn nav_image(
+        &self,
+        cx: &impl Context<Integrals>,
+        did: u8,
+        hdw: u32,
+        out: &mut [u8; flash::SIZE],
+    ) -> usize {
+        let mut put = |b: &[u8]| {
+            out[..b.len()].copy_from_slice(b);
+            b.len()
+        };
+        let truth = nav::truth_of(cx.chain());
+        let cfg = self.nav_config();
+        let (since_ns, gps) = self.gps_time(cx);
+        let since_s = since_ns as f64 / 1e9;
+        let valid = self.nav.gps_time_valid();
+        let h = InsHeader {
+            week: if valid { gps.week } else { 0 },
+            time_of_week: if valid { gps.tow_s() } else { since_s },
+            ins_status: self.nav.ins_status(),
+            hdw_status: hdw,
+        };
+        // The receiver's last epoch (GPS time a multiple of its period).
+        let gps_dt_ns = u64::from(self.gps_dt_ms) * 1_000_000;
+        let epoch = if valid {
+            GpsTime {
+                week: gps.week,
+                tow_ns: gps.tow_ns - gps.tow_ns % gps_dt_ns,
+            }
+        } else {
+            GpsTime {
+                week: 0,
+                tow_ns: since_ns - since_ns % gps_dt_ns,
+            }
+        };
+        let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
+        let fix = self.nav.gnss(&truth, &cfg);
+        let tick = cx.time().ticks();
+        match did {
+            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
+            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
+            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::MAGNETOMETER => {
+                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
+            }
+            did::BAROMETER => {
+                let p = self.nav.pressure_kpa(&truth, tick);
+                put(&ins::barometer(since_s, p, cx.chain().temperature()).encode())
             }
             _ => 0,
         }
@@ -648,21 +883,24 @@ impl State {
             .fold(0, |b, set| b | set.rmc_bit)
     }
 
-    /// IMU / IMU_RAW / PIMU of the window `w` (module doc); 40 bytes used
-    /// at most.
-    fn windowed<F: NorFlash>(
+    /// IMU / IMU_RAW / PIMU (and IMU_MAG / PIMU_MAG: the same then the
+    /// magnetometer at the window's end) of the window `w` into `image`
+    /// (module doc); its size.
+    fn windowed(
         &self,
-        sh: &Shell<F, Isb>,
+        cx: &impl Context<Integrals>,
         did: u8,
         w: &Increment,
-        now: Instant,
-    ) -> [u8; sets::pimu::SIZE] {
-        let h = sh.chain().health();
+        end_tick: u64,
+        image: &mut [u8; flash::SIZE],
+    ) -> usize {
+        let h = cx.chain().health();
         let status = imu_status_of(&h);
-        let time = now.since(sh.powered_at()) as f64 / 1e9;
-        let dt = w.samples as f64 / f64::from(rate(sh));
+        // On the sample grid: the tick that ends the window.
+        let time = end_tick as f64 / f64::from(rate(cx));
+        let dt = w.samples as f64 / f64::from(rate(cx));
         let mut out = [0u8; sets::pimu::SIZE];
-        if did == did::PIMU {
+        let base = if matches!(did, did::PIMU | did::PIMU_MAG) {
             out.copy_from_slice(
                 &Pimu {
                     time,
@@ -673,6 +911,7 @@ impl State {
                 }
                 .encode(),
             );
+            sets::pimu::SIZE
         } else {
             let inv = if dt > 0.0 { 1.0 / dt } else { 0.0 };
             let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
@@ -685,45 +924,77 @@ impl State {
                 }
                 .encode(),
             );
+            sets::imu::SIZE
+        };
+        image[..base].copy_from_slice(&out[..base]);
+        if !matches!(did, did::IMU_MAG | did::PIMU_MAG) {
+            return base;
         }
-        out
+        let truth = nav::truth_of(cx.chain());
+        let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
+        image[base..base + m.len()].copy_from_slice(&m);
+        base + m.len()
+    }
+
+    /// SYS_SENSORS now: the last measurement (body axes), the magnetometer
+    /// and barometer, the temperatures; supply 5 V, analog inputs 0.
+    fn sys_sensors(&self, cx: &impl Context<Integrals>) -> SysSensors {
+        let tick = cx.time().ticks();
+        let time = tick as f64 / f64::from(rate(cx));
+        let truth = nav::truth_of(cx.chain());
+        let [g, a, _] = cx.chain().last_sensor();
+        let g = frd(g.map(|x| f64::from(x).to_radians()));
+        let a = frd(a.map(|x| f64::from(x) * f64::from(crate::math::G)));
+        let temp = cx.chain().temperature();
+        let bar = self.nav.pressure_kpa(&truth, tick);
+        let b = ins::barometer(time, bar, temp);
+        SysSensors {
+            time,
+            temp,
+            pqr: g,
+            acc: a,
+            mag: self.nav.magnetometer(&truth, tick),
+            bar,
+            bar_temp: temp,
+            msl_bar: b.msl_bar,
+            humidity: b.humidity,
+            vin: 5.0,
+            ana: [0.0; 3],
+        }
     }
 
     /// One DATA packet of `set` now (the GET's reply).
-    fn send_once<F: NorFlash>(
+    fn send_once(
         &mut self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         set: &DataSet,
         offset: u16,
         size: u16,
         now: Instant,
     ) {
         let mut image = [0u8; flash::SIZE];
-        let n = self.image_of(sh, set.did, &mut image, now);
-        send_data(sh, set.did, &image[..n], offset, size);
+        let n = self.image_of(cx, set.did, &mut image, now);
+        send_data(cx, set.did, &image[..n], offset, size);
     }
 
     /// The packet of stream `i` at `now`; its window restarts.
-    fn send_stream<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, i: usize, now: Instant) {
+    fn send_stream(&mut self, cx: &mut impl Context<Integrals>, i: usize, now: Instant) {
         let s = self.streams[i];
         let mut image = [0u8; flash::SIZE];
         let n = match s.did {
-            did::IMU | did::IMU_RAW | did::PIMU => {
-                let end = sh.chain().integrals();
-                let w = integrals::window(&s.start, &end, rate(sh));
+            d if is_windowed(d) => {
+                let end = cx.chain().integrals();
+                let w = integrals::window(&s.start, &end, rate(cx));
                 self.streams[i].start = end;
-                let b = self.windowed(sh, s.did, &w, now);
-                let n = windowed_len(s.did);
-                image[..n].copy_from_slice(&b[..n]);
-                n
+                self.windowed(cx, s.did, &w, cx.time().ticks(), &mut image)
             }
-            _ => self.image_of(sh, s.did, &mut image, now),
+            _ => self.image_of(cx, s.did, &mut image, now),
         };
-        send_data(sh, s.did, &image[..n], s.offset, s.size);
+        send_data(cx, s.did, &image[..n], s.offset, s.size);
     }
 
-    fn sys_params<F: NorFlash>(&self, sh: &mut Shell<F, Isb>, now: Instant) -> SysParams {
-        let h = sh.chain().health();
+    fn sys_params(&self, cx: &mut impl Context<Integrals>, now: Instant) -> SysParams {
+        let h = cx.chain().health();
         let mut hdw = 0u32;
         if h.gyro_over_range != 0 {
             hdw |= hdw_status::SATURATION_GYR;
@@ -752,15 +1023,21 @@ impl State {
         if self.save_pending {
             hdw |= hdw_status::FLASH_WRITE_PENDING;
         }
-        if sh.line().dropped() != self.dropped_seen {
+        if cx.tx_dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;
         }
+        hdw |= self.nav.hdw_bits();
         hdw = hdw_status::with_parse_errors(hdw, self.parse_errors);
-        let t = sh.chain().temperature();
-        let up = now.since(sh.powered_at()) as f64 / 1e9;
+        let t = cx.chain().temperature();
+        let up = now.since(cx.time().powered_at()) as f64 / 1e9;
+        let time_of_week_ms = if self.nav.gps_time_valid() {
+            self.gps_time(cx).1.tow_ms()
+        } else {
+            ms_since(cx, now)
+        };
         SysParams {
-            time_of_week_ms: ms_since(sh, now),
-            ins_status: 0,
+            time_of_week_ms,
+            ins_status: self.nav.ins_status(),
             hdw_status: hdw,
             imu_temp: t,
             baro_temp: t,
@@ -778,27 +1055,27 @@ impl State {
 }
 
 /// A DATA packet of `image[offset..offset + size]`.
-fn send_data<F: NorFlash>(sh: &mut Shell<F, Isb>, did: u8, image: &[u8], offset: u16, size: u16) {
+fn send_data(cx: &mut impl Context<Integrals>, did: u8, image: &[u8], offset: u16, size: u16) {
     let whole = offset == 0 && usize::from(size) == image.len();
     let n = OVERHEAD + usize::from(size) + if whole { 0 } else { 2 };
-    push(sh, n, |f| message::encode_data(did, image, offset, size, f));
+    push(cx, n, |f| message::encode_data(did, image, offset, size, f));
 }
 
-/// Bytes of a windowed data set: `pimu_t` or `imu_t`.
-fn windowed_len(did: u8) -> usize {
-    if did == did::PIMU {
-        sets::pimu::SIZE
-    } else {
-        sets::imu::SIZE
-    }
+/// Whether `did` is a window of the integrals (IMU, IMU_RAW, PIMU and
+/// their `_MAG` forms).
+fn is_windowed(did: u8) -> bool {
+    matches!(
+        did,
+        did::IMU | did::IMU_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
+    )
 }
 
-fn rate<F: NorFlash>(sh: &Shell<F, Isb>) -> u32 {
-    sh.product().model.internal_rate_hz
+fn rate(cx: &impl Context<Integrals>) -> u32 {
+    cx.product().model.internal_rate_hz
 }
 
-fn ms_since<F: NorFlash>(sh: &Shell<F, Isb>, now: Instant) -> u32 {
-    (now.since(sh.powered_at()) / 1_000_000) as u32
+fn ms_since(cx: &impl Context<Integrals>, now: Instant) -> u32 {
+    (now.since(cx.time().powered_at()) / 1_000_000) as u32
 }
 
 /// IMU `status` from the chain's health (module doc).
@@ -819,14 +1096,14 @@ fn imu_status_of(h: &Health) -> u32 {
 
 /// DEV_INFO of this unit: an IMX-5 (hardware 5.0), protocol 2.1.0.0, the
 /// serial number from the seed (never 0).
-fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
+fn dev_info_of(cx: &impl Context<Integrals>) -> DevInfo {
     DevInfo {
         hardware_type: dev_info::HARDWARE_TYPE_IMX,
         hdw_run_state: dev_info::RUN_STATE_APP,
-        serial_number: 10_000_000 + (sh.seed() % 90_000_000) as u32,
+        serial_number: 10_000_000 + (cx.seed() % 90_000_000) as u32,
         hardware_ver: [5, 0, 0, 0],
-        firmware_ver: [2, 1, 0, 0],
-        build_number: 1,
+        firmware_ver: dev_info::FIRMWARE_2_7_1,
+        build_number: dev_info::BUILD_NUMBER_2_7_1,
         protocol_ver: dev_info::PROTOCOL_2_1,
         repo_revision: 0,
         manufacturer: sets::str24("Inertial Sense Inc"),
@@ -834,5 +1111,113 @@ fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
         build_date: [26, 12, 1],
         build_time: [0, 0, 0, 0],
         add_info: sets::str24(concat!("imu-emu ", env!("CARGO_PKG_VERSION"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::io::Event;
+    use crate::isb::packet::Decoder;
+    use crate::model::Product;
+    use crate::personality::fake::FakeContext;
+
+    type Cx = FakeContext<Integrals>;
+
+    fn booted() -> (Isb, Cx) {
+        let mut cx = Cx::new(Product::imx5());
+        let mut d = Isb::unpowered();
+        d.boot(&mut cx, Instant::ZERO);
+        (d, cx)
+    }
+
+    fn get(did: u8, period: u16) -> Vec<u8> {
+        let req = GetRequest {
+            did: u16::from(did),
+            size: 0,
+            offset: 0,
+            period,
+        };
+        let mut out = [0u8; 64];
+        let n = message::encode_get(&req, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    /// The DIDs of the packets pushed, each checked whole.
+    fn dids(cx: &Cx) -> Vec<u8> {
+        let mut d = Decoder::<MAX_PACKET>::new();
+        cx.frames
+            .iter()
+            .map(|f| {
+                let mut input = &f[..];
+                let did = d.next_packet(&mut input).expect("a whole packet").did;
+                assert!(input.is_empty());
+                did
+            })
+            .collect()
+    }
+
+    /// Ticks the context and the personality for `n` ticks from `*t`.
+    fn run(d: &mut Isb, cx: &mut Cx, t: &mut u64, n: u64) {
+        let period = 1_000_000_000 / u64::from(cx.product.model.internal_rate_hz);
+        for _ in 0..n {
+            *t += 1;
+            let now = Instant(*t * period);
+            d.before_tick(cx, now);
+            cx.tick(now);
+            d.on_tick(cx, now);
+        }
+    }
+
+    #[test]
+    fn boot_from_an_empty_flash_sets_the_factory_rate_and_stays_idle() {
+        let (d, cx) = booted();
+        let bps = FlashConfig::factory().u32_at(flash::SER0_BAUD_RATE);
+        assert_eq!(cx.events, [Event::LineRate(bps)]);
+        assert!(cx.frames.is_empty());
+        assert_eq!(d.mode(), Mode::Idle);
+        assert_eq!(d.output_rate(&cx), None);
+    }
+
+    #[test]
+    fn a_get_with_period_zero_sends_one_packet_and_starts_nothing() {
+        let (mut d, mut cx) = booted();
+        d.on_rx(&get(did::DEV_INFO, 0), &mut cx, Instant::ZERO);
+        assert_eq!(dids(&cx), [did::DEV_INFO]);
+        assert_eq!(d.mode(), Mode::Idle);
+    }
+
+    #[test]
+    fn an_imu_stream_sends_at_its_rate_and_stops_on_period_zero() {
+        let (mut d, mut cx) = booted();
+        let mut t = 0;
+        d.on_rx(&get(did::IMU, 1), &mut cx, Instant::ZERO);
+        assert_eq!(d.mode(), Mode::Continuous);
+        let rate = d.output_rate(&cx).unwrap();
+        let second = u64::from(cx.product.model.internal_rate_hz);
+        cx.frames.clear();
+        run(&mut d, &mut cx, &mut t, second);
+        assert_eq!(cx.frames.len() as u32, rate);
+        assert!(dids(&cx).iter().all(|&x| x == did::IMU));
+        d.on_rx(&get(did::IMU, 0), &mut cx, Instant(t));
+        assert_eq!(d.mode(), Mode::Idle);
+        cx.frames.clear();
+        run(&mut d, &mut cx, &mut t, 100);
+        assert!(cx.frames.is_empty());
+    }
+
+    #[test]
+    fn a_rising_extrig_edge_sends_strobe_in_time_while_its_stream_is_on() {
+        let (mut d, mut cx) = booted();
+        d.on_pin(Pin::Extrig, Level::High, &mut cx, Instant::ZERO);
+        assert!(cx.frames.is_empty(), "no stream: counted only");
+        d.on_rx(&get(did::STROBE_IN_TIME, 1), &mut cx, Instant::ZERO);
+        cx.frames.clear();
+        d.on_pin(Pin::Extrig, Level::Low, &mut cx, Instant(1_000));
+        assert!(cx.frames.is_empty(), "falling edges are not strobes");
+        d.on_pin(Pin::Extrig, Level::High, &mut cx, Instant(2_000));
+        assert_eq!(dids(&cx), [did::STROBE_IN_TIME]);
     }
 }

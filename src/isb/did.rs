@@ -1,6 +1,6 @@
 //! Data set identifiers (DIDs) and the table of the data sets the emulated
-//! IMX-5 in IMU mode serves (NOTES.md "ISB"; the SDK's `data_sets.h`,
-//! protocol 2.1; `docs/isb-data-sets.md` has every layout with offsets).
+//! IMX-5 in IMU mode serves (`docs/protocol-facts.md` "ISB"; the SDK's
+//! `data_sets.h`, protocol 2.1; `docs/isb-data-sets.md` has every layout with offsets).
 //!
 //! One [`DataSet`] row per supported DID says how big the set is, which
 //! source period its streams count in ([`Source`]), which bytes a SET_DATA
@@ -8,37 +8,53 @@
 //! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
 //! DID 95, silence for any other DID the table does not hold.
 
+use super::nav_sets::{
+    barometer, gps_pos, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag, rmc_nav,
+    sys_sensors,
+};
 use super::sets;
 
 /// Count of DIDs (including the null DID 0): `DID_COUNT` in `data_sets.h`.
-/// A GET or SET of a DID at or above it is NACKed (NOTES.md "ISB").
+/// A GET or SET of a DID at or above it is NACKed (protocol-facts.md "ISB").
 pub const DID_COUNT: u16 = 132;
 
 /// Null (invalid) DID.
 pub const NULL: u8 = 0;
-/// `dev_info_t`: device information (NOTES.md "ISB").
+/// `dev_info_t`: device information (protocol-facts.md "ISB").
 pub const DEV_INFO: u8 = 1;
 /// `system_fault_t`: system fault information (not served).
 pub const SYS_FAULT: u8 = 2;
 /// `pimu_t`: preintegrated IMU (coning and sculling integrals).
 pub const PIMU: u8 = 3;
-/// `ins_1_t`: INS output, Euler (not served in IMU mode).
+/// `ins_1_t`: INS output, Euler attitude and NED offset.
 pub const INS_1: u8 = 4;
-/// `ins_2_t`: INS output, quaternion (not served in IMU mode).
+/// `ins_2_t`: INS output, quaternion attitude.
 pub const INS_2: u8 = 5;
+/// `ins_3_t`: INS output, quaternion attitude and MSL height.
+pub const INS_3: u8 = 65;
+/// `ins_4_t`: INS output, ECEF.
+pub const INS_4: u8 = 66;
+/// `gps_pos_t`: GNSS position (the better of GPS1_RCVR_POS / RTK).
+pub const GPS1_POS: u8 = 13;
+/// `gps_vel_t`: GNSS velocity.
+pub const GPS1_VEL: u8 = 30;
+/// `imu_mag_t`: IMU and magnetometer.
+pub const IMU_MAG: u8 = 85;
+/// `pimu_mag_t`: PIMU and magnetometer.
+pub const PIMU_MAG: u8 = 86;
 /// `system_command_t`: system commands.
 pub const SYS_CMD: u8 = 7;
 /// `rmc_t`: realtime message controller.
 pub const RMC: u8 = 9;
 /// `sys_params_t`: system parameters.
 pub const SYS_PARAMS: u8 = 10;
-/// `sys_sensors_t`: system sensors (not served).
+/// `sys_sensors_t`: system sensors.
 pub const SYS_SENSORS: u8 = 11;
 /// `nvm_flash_cfg_t`: flash configuration.
 pub const FLASH_CONFIG: u8 = 12;
-/// `magnetometer_t` (not served: no magnetometer in the model).
+/// `magnetometer_t`: magnetometer.
 pub const MAGNETOMETER: u8 = 52;
-/// `barometer_t` (not served: no barometer in the model).
+/// `barometer_t`: barometer.
 pub const BAROMETER: u8 = 53;
 /// `imu3_t` uncalibrated triple IMU (not served).
 pub const IMU3_UNCAL: u8 = 57;
@@ -48,7 +64,7 @@ pub const IMU: u8 = 58;
 pub const BIT: u8 = 64;
 /// `strobe_in_time_t`: time stamp of a strobe input (EXTRIG) edge.
 pub const STROBE_IN_TIME: u8 = 68;
-/// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (NOTES.md: the
+/// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (protocol-facts.md: the
 /// IMX firmware counts DIDs only to 100 and answers 95 with a NACK).
 pub const REFERENCE_IMU: u8 = 95;
 /// `imu3_t` triple IMU (not served).
@@ -62,29 +78,42 @@ pub const GPX_FLASH_CFG: u8 = 121;
 pub const GPX_STATUS: u8 = 123;
 
 /// The period a stream of a data set counts in: a GET_DATA `period` is a
-/// multiple of it (ISB page "Data Source Update Rates"; NOTES.md).
+/// multiple of it (ISB page "Data Source Update Rates"; protocol-facts.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Source {
     /// `FLASH_CONFIG.startupNavDtMs` (default 4 ms): IMU and PIMU. The
-    /// page's table says `startupImuDtMs`; the SDK and NOTES.md say
-    /// `startupNavDtMs` — the SDK is followed (NOTES.md "ISB").
+    /// page's table says `startupImuDtMs`; the SDK and protocol-facts.md say
+    /// `startupNavDtMs` — the SDK is followed (protocol-facts.md "ISB").
     NavDt,
     /// `FLASH_CONFIG.startupImuDtMs` (default 1 ms): IMU_RAW, which
     /// `data_sets.h` describes as the IMU data for periods faster than the
     /// navigation period.
     ImuDt,
+    /// `FLASH_CONFIG.startupGPSDtMs` (default 200 ms): GPS1_POS, GPS1_VEL
+    /// (SDK 2.7.1 `RMC_BITS_GPS1_*` comments).
+    GpsDt,
+    /// A fixed sensor period, ms: MAGNETOMETER 10, BAROMETER 8 (SDK 2.7.1
+    /// `RMC_BITS_*` comments: "~10 ms", "~8 ms").
+    Fixed(u32),
     /// 1 ms: every other DID (ISB page, "All other DIDs 1ms").
     Millisecond,
 }
 
 impl Source {
     /// The source period in ms for these FLASH_CONFIG values
-    /// (`startupImuDtMs`, `startupNavDtMs`); a stream with period multiple
-    /// `n` sends every `n ×` this.
-    pub const fn period_ms(self, startup_imu_dt_ms: u32, startup_nav_dt_ms: u32) -> u32 {
+    /// (`startupImuDtMs`, `startupNavDtMs`, `startupGPSDtMs`); a stream
+    /// with period multiple `n` sends every `n ×` this.
+    pub const fn period_ms(
+        self,
+        startup_imu_dt_ms: u32,
+        startup_nav_dt_ms: u32,
+        startup_gps_dt_ms: u32,
+    ) -> u32 {
         match self {
             Source::NavDt => startup_nav_dt_ms,
             Source::ImuDt => startup_imu_dt_ms,
+            Source::GpsDt => startup_gps_dt_ms,
+            Source::Fixed(ms) => ms,
             Source::Millisecond => 1,
         }
     }
@@ -148,7 +177,7 @@ const SYS_PARAMS_W: &[Range] = &[Range::new(
 )];
 /// FLASH_CONFIG: everything but `size`. The `checksum` word is accepted
 /// (the vendor tool's `-flashCfg=` path uploads the checksum it computed
-/// itself, NOTES.md) but the device recomputes it after every write, so
+/// itself, protocol-facts.md) but the device recomputes it after every write, so
 /// what stays is always the XOR of bytes 8..287.
 const FLASH_W: &[Range] = &[Range::new(
     sets::flash::CHECKSUM as u16,
@@ -157,8 +186,21 @@ const FLASH_W: &[Range] = &[Range::new(
 /// BIT: the `command` byte starts a test; the rest is the result.
 const BIT_W: &[Range] = &[Range::new(0, 1)];
 
-/// The data sets of the emulated IMX-5 in IMU mode, by DID.
-pub const DATA_SETS: [DataSet; 10] = [
+/// A read-only navigation data set (`docs/isb-data-sets.md` "Navigation
+/// data sets").
+const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: u64) -> DataSet {
+    DataSet {
+        did,
+        name,
+        size: size as u16,
+        source,
+        writable: NONE,
+        rmc_bit,
+    }
+}
+
+/// The data sets of the emulated IMX-5, by DID.
+pub const DATA_SETS: [DataSet; 21] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -239,6 +281,83 @@ pub const DATA_SETS: [DataSet; 10] = [
         writable: NONE,
         rmc_bit: sets::rmc::BITS_IMU_RAW,
     },
+    nav(
+        INS_1,
+        "ins_1_t",
+        ins1::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS1,
+    ),
+    nav(
+        INS_2,
+        "ins_2_t",
+        ins2::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS2,
+    ),
+    nav(
+        INS_3,
+        "ins_3_t",
+        ins3::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS3,
+    ),
+    nav(
+        INS_4,
+        "ins_4_t",
+        ins4::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS4,
+    ),
+    nav(
+        GPS1_POS,
+        "gps_pos_t",
+        gps_pos::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_POS,
+    ),
+    nav(
+        GPS1_VEL,
+        "gps_vel_t",
+        gps_vel::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_VEL,
+    ),
+    nav(
+        MAGNETOMETER,
+        "magnetometer_t",
+        magnetometer::SIZE,
+        Source::Fixed(10),
+        rmc_nav::BITS_MAGNETOMETER,
+    ),
+    nav(
+        BAROMETER,
+        "barometer_t",
+        barometer::SIZE,
+        Source::Fixed(8),
+        rmc_nav::BITS_BAROMETER,
+    ),
+    nav(
+        SYS_SENSORS,
+        "sys_sensors_t",
+        sys_sensors::SIZE,
+        Source::Millisecond,
+        0,
+    ),
+    nav(
+        IMU_MAG,
+        "imu_mag_t",
+        imu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_IMU_MAG,
+    ),
+    nav(
+        PIMU_MAG,
+        "pimu_mag_t",
+        pimu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_PIMU_MAG,
+    ),
 ];
 
 /// The table row of `did`, if the emulated IMX serves it.
@@ -247,7 +366,7 @@ pub fn lookup(did: u16) -> Option<&'static DataSet> {
 }
 
 /// Whether a GET_DATA or SET_DATA of `did` is answered with a NACK: DID ≥
-/// [`DID_COUNT`] (NOTES.md "ISB") and DID 95 (NOTES.md "what the vendor's
+/// [`DID_COUNT`] (protocol-facts.md "ISB") and DID 95 (protocol-facts.md "what the vendor's
 /// command-line tool needs").
 pub const fn is_nacked(did: u16) -> bool {
     did >= DID_COUNT || did == REFERENCE_IMU as u16
@@ -258,7 +377,7 @@ pub const fn is_nacked(did: u16) -> bool {
 pub enum Class {
     /// Answer with a NACK ([`is_nacked`]).
     Nack,
-    /// In range but not served: no reply at all (NOTES.md "ISB").
+    /// In range but not served: no reply at all (protocol-facts.md "ISB").
     Unsupported,
     /// Served: its table row.
     Supported(&'static DataSet),

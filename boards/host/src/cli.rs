@@ -103,6 +103,41 @@ pub struct Args {
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
 
+    /// The vehicle the unit rides on, from a file: a manoeuvre script
+    /// (first statement `start lat lon height heading speed`) or a
+    /// full-state CSV (header `time,lat,lon,height,vn,ve,vd,roll,pitch,yaw`
+    /// [`,wx,wy,wz,fx,fy,fz`][`,temp`]); docs/motion.md.
+    #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
+    pub motion: Option<PathBuf>,
+
+    /// Take the motion live from a simulator or HIL rig: TCP `HOST:PORT`
+    /// or UDP `udp:HOST:PORT` (port 0 picks a free port; loopback only
+    /// without --allow-remote). Text rows in the --trajectory format or
+    /// binary samples (docs/feed.md). The address is a stdout line `feed
+    /// on tcp ADDR`; with --count, device K's feed is on port + K.
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["trajectory", "motion"])]
+    pub motion_feed: Option<String>,
+
+    /// With --motion-feed: device time advances only as samples arrive,
+    /// to each sample's time (interpolated between samples); with
+    /// `--speed max` as fast as the feed, otherwise no faster than
+    /// --speed either.
+    #[arg(long, requires = "motion_feed")]
+    pub lockstep: bool,
+
+    /// With --motion-feed (real time): after this many seconds without a
+    /// sample the unit reports a sensor fault (KERNEL USW bit 1, IMX IMU
+    /// status), the last sample holding; cleared by the next sample.
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::feed::DEFAULT_TIMEOUT_S,
+          requires = "motion_feed", value_parser = parse_timeout)]
+    pub feed_timeout: f64,
+
+    /// With --count and --motion-feed: one feed for every device (at ADDR
+    /// itself), each binary sample naming its device (text rows, which
+    /// name none, are rejected).
+    #[arg(long, requires = "motion_feed")]
+    pub feed_shared: bool,
+
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
     /// power-cycle the device and inject faults: the program says so on
@@ -116,6 +151,14 @@ pub struct Args {
     /// client connects is lost, as on a real line).
     #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
     pub power_on: PowerOnAt,
+
+    /// GPS time at power-on (ISB): an RFC 3339 date and time
+    /// (`2026-03-01T12:00:00Z`) or a date (`2026-03-01`, midnight UTC),
+    /// truncated to the second so that 1PPS edges (`--pps`) fall on GPS
+    /// seconds; default: the host clock at power-on. It then advances with
+    /// device time (`--speed`).
+    #[arg(long, value_name = "DATE", value_parser = parse_gps_time)]
+    pub gps_time: Option<u64>,
 
     /// Seed of the device's random processes (sensor noise, …); with
     /// --count, device K's seed is N + K.
@@ -232,6 +275,39 @@ pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Resu
     Ok(remote)
 }
 
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 && t <= 3600.0 => Ok(t),
+        _ => Err(format!("a feed timeout is seconds in (0, 3600], not {s:?}")),
+    }
+}
+
+/// The feed's clock and timeout from the arguments, if there is a feed.
+fn feed_config(args: &Args) -> Option<crate::feed::FeedConfig> {
+    args.motion_feed.as_ref()?;
+    Some(crate::feed::FeedConfig {
+        lockstep: args.lockstep,
+        timeout_ns: (args.feed_timeout * 1e9) as u64,
+    })
+}
+
+/// `addr` with its port moved on by `k` (port 0 stays 0: a free port
+/// each), for device K of a `--count` run.
+fn port_plus(option: &str, addr: &str, k: usize, count: u16) -> anyhow::Result<String> {
+    let sock: std::net::SocketAddr = addr
+        .parse()
+        .map_err(|_| UsageError(format!("{option} {addr}: expected IP:PORT with --count")))?;
+    let port = match sock.port() {
+        0 => 0,
+        p => u16::try_from(usize::from(p) + k).map_err(|_| {
+            UsageError(format!(
+                "{option} {addr} --count {count}: ports beyond 65535"
+            ))
+        })?,
+    };
+    Ok(std::net::SocketAddr::new(sock.ip(), port).to_string())
+}
+
 /// Checks the listening addresses before anything is opened; warns loudly
 /// on stderr about each remote one `--allow-remote` lets through.
 fn check_addresses(args: &Args) -> anyhow::Result<()> {
@@ -241,6 +317,17 @@ fn check_addresses(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(c) = &args.control {
         wanted.push(("--control", c.as_str()));
+    }
+    if let Some(f) = &args.motion_feed {
+        wanted.push((
+            "--motion-feed",
+            f.strip_prefix("udp:")
+                .or(f.strip_prefix("tcp:"))
+                .unwrap_or(f),
+        ));
+    }
+    if args.feed_shared && args.count < 2 {
+        return Err(UsageError("--feed-shared goes with --count N (N > 1)".into()).into());
     }
     for (option, addr) in wanted {
         if check_local(option, addr, args.allow_remote)? {
@@ -410,25 +497,23 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
         serve_many::<F, _, P>(parts, args, stop, started)
     } else {
         let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
-        let sock: std::net::SocketAddr = addr
-            .parse()
-            .map_err(|_| UsageError(format!("--tcp {addr}: expected IP:PORT with --count")))?;
         let mut parts = Vec::with_capacity(flashes.len());
         for (k, f) in flashes.into_iter().enumerate() {
-            let port = match sock.port() {
-                0 => 0,
-                p => u16::try_from(usize::from(p) + k).map_err(|_| {
-                    UsageError(format!(
-                        "--tcp {addr} --count {}: ports beyond 65535",
-                        args.count
-                    ))
-                })?,
-            };
-            let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
+            let a = port_plus("--tcp", addr, k, args.count)?;
             parts.push((f, TcpTransport::bind(&a)?));
         }
         serve_many::<F, _, P>(parts, args, stop, started)
     }
+}
+
+/// `--motion FILE`, loaded (and said on stderr), if given.
+fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSource>> {
+    let Some(path) = &args.motion else {
+        return Ok(None);
+    };
+    let v = crate::vehicle::VehicleSource::load(path)?;
+    eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
+    Ok(Some(v))
 }
 
 fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
@@ -444,16 +529,29 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let mut feeds = Vec::new();
+    if let Some(f) = &args.motion_feed {
+        let addr = crate::feed::FeedAddr::parse(f);
+        let n = if args.feed_shared { 1 } else { parts.len() };
+        for k in 0..n {
+            let a = addr.with(port_plus("--motion-feed", addr.host_port(), k, args.count)?);
+            feeds.push(crate::feed::FeedSocket::bind(&a)?);
+        }
+    }
     let mut out = std::io::stdout().lock();
     for (_, t) in &parts {
         writeln!(out, "listening on {}", t.describe())?;
     }
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    for f in &feeds {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -465,7 +563,10 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         seed: args.seed,
         pps: args.pps,
         trajectory,
+        vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
+        gps_time: args.gps_time,
+        feed: feed_config(args),
     };
     eprintln!(
         "imu-emu: {} devices ({}), flash {}; each powers on {}",
@@ -481,7 +582,9 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
             "when its first client connects"
         }
     );
-    let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    let shared = args.feed_shared;
+    let mut fleet =
+        crate::fleet::Fleet::<F, T, P>::new(parts, setup, control).with_feeds(feeds, shared);
     started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
@@ -549,14 +652,24 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
+        None => None,
+    };
+    let feed = match &args.motion_feed {
+        Some(a) => Some(crate::feed::FeedSocket::bind(
+            &crate::feed::FeedAddr::parse(a),
+        )?),
         None => None,
     };
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    if let Some(f) = &feed {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -595,7 +708,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         boot: None,
         seed: args.seed,
     };
-    let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    let mut dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    dev.personality_mut()
+        .set_gps_time(gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
@@ -619,9 +734,46 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     if let Some(t) = trajectory {
         runner = runner.with_trajectory(t);
     }
+    if let Some(v) = vehicle {
+        runner = runner.with_vehicle(v);
+    }
+    if let (Some(cfg), Some(sock)) = (feed_config(args), feed) {
+        let state = crate::feed::FeedState::new(cfg, 0, true, "");
+        runner = runner.with_feed(state, Some(sock));
+    }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
+}
+
+/// `--gps-time`: Unix seconds (UTC) of an RFC 3339 date and time or a
+/// date (midnight UTC), truncated to the second.
+fn parse_gps_time(s: &str) -> Result<u64, String> {
+    let full = if s.len() == 10 {
+        format!("{s}T00:00:00Z")
+    } else {
+        s.to_owned()
+    };
+    let t = humantime::parse_rfc3339_weak(&full).map_err(|e| format!("{s}: {e}"))?;
+    let unix = t
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_err(|_| format!("{s}: before 1970"))?
+        .as_secs();
+    if unix < imu_emu::isb::nav::GPS_EPOCH_UNIX_S {
+        return Err(format!("{s}: before the GPS epoch 1980-01-06"));
+    }
+    Ok(unix)
+}
+
+/// GPS seconds at device instant 0: `--gps-time` (Unix seconds, UTC) or the
+/// host clock now, as GPS time (+18 leap seconds).
+pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
+    let unix = gps_time.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs())
+    });
+    imu_emu::isb::nav::gps_s_of_unix(unix)
 }
 
 #[cfg(test)]

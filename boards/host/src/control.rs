@@ -10,8 +10,8 @@
 //! The grammar is one table, [`COMMANDS`]: a row per form of a command
 //! (its syntax, whether `dev K` may address it, its parser). The parser,
 //! the `help` answer and the syntax an error names all read it, so a new
-//! command is a new row (what each command does: README, "The control
-//! protocol"; `runner::HostPort::apply` carries it out).
+//! command is a new row (what each command does: `docs/host-runner.md`,
+//! "The control protocol"; `runner::HostPort::apply` carries it out).
 //!
 //! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
@@ -44,7 +44,7 @@ use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;
 
 /// A parsed control command.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// A pin edge now.
     Edge(Pin, Level),
@@ -52,8 +52,16 @@ pub enum Command {
     PowerCycle(Option<Level>),
     /// Change the injected faults.
     Fault(FaultChange),
+    /// A navigation fault (ISB): `fault gps off|on`, `fault mag|baro on|off`.
+    NavFault(NavFault),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Fly a manoeuvre script from now (`motion script …`).
+    Script(Box<imu_emu::vehicle::Script>),
+    /// A manoeuvre script or full-state CSV file from now (`motion file …`).
+    MotionFile(std::path::PathBuf),
+    /// Report the vehicle truth (`ok key=value …`).
+    Truth,
     /// Change the link faults.
     Link(LinkChange),
     /// Report the device's and the line's state (`ok key=value …`).
@@ -62,6 +70,17 @@ pub enum Command {
     Help,
     /// List the devices and where each listens (`ok count=N dev0=…`).
     Devices,
+}
+
+/// A navigation fault of the ISB personality (`docs/isb.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NavFault {
+    /// GPS fix available (`fault gps on`) or lost (`fault gps off`).
+    Gps(bool),
+    /// Magnetic disturbance on/off.
+    Mag(bool),
+    /// Barometer failure on/off.
+    Baro(bool),
 }
 
 /// One change to [`Faults`].
@@ -192,6 +211,17 @@ pub const COMMANDS: &[Form] = &[
         ["boot=low"] => Some(Ok(Command::PowerCycle(Some(Level::Low)))),
         _ => None,
     }),
+    // Before the sensor faults' row, whose parser takes any `fault <word>
+    // <state>`.
+    form("fault gps off|on", true, |w| match w {
+        ["gps", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Gps(on)))),
+        _ => None,
+    }),
+    form("fault mag|baro on|off", true, |w| match w {
+        ["mag", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Mag(on)))),
+        ["baro", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Baro(on)))),
+        _ => None,
+    }),
     form(
         "fault comm|config|gyro-bit|accel-bit|flash on|off",
         true,
@@ -238,6 +268,21 @@ pub const COMMANDS: &[Form] = &[
             }))
         })()),
         _ => None,
+    }),
+    form("motion script <statement>; …", true, |w| match w {
+        ["script", rest @ ..] if !rest.is_empty() => Some(
+            imu_emu::vehicle::Script::parse(&rest.join(" "))
+                .map(|s| Command::Script(Box::new(s)))
+                .map_err(|e| format!("manoeuvre script: {e}")),
+        ),
+        _ => None,
+    }),
+    form("motion file <path>", true, |w| match w {
+        ["file", path] => Some(Ok(Command::MotionFile((*path).into()))),
+        _ => None,
+    }),
+    form("truth", true, |w| {
+        w.is_empty().then_some(Ok(Command::Truth))
     }),
     form(
         "link drop|corrupt|duplicate <rate 0..1> [tx|rx]",
@@ -795,6 +840,15 @@ mod tests {
             Ok(Command::Fault(FaultChange::Temperature(None)))
         );
         assert!(parse("fault comm maybe").is_err());
+        assert_eq!(
+            parse("fault gps off"),
+            Ok(Command::NavFault(NavFault::Gps(false)))
+        );
+        assert_eq!(
+            parse("fault baro on"),
+            Ok(Command::NavFault(NavFault::Baro(true)))
+        );
+        assert!(parse("fault gps maybe").is_err());
         assert!(parse("fault temperature NaN").is_err());
         assert!(matches!(
             parse("motion rotate 0 600 0"),
@@ -856,19 +910,27 @@ mod tests {
         assert_eq!(
             help(),
             "commands: help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
+             | fault gps off|on | fault mag|baro on|off \
              | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
              | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+             | motion script <statement>; … | motion file <path> | truth \
              | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
              | link stall <ms> | link cut | link clear \
              | devices | dev <K> <command> (device K of a --count run)"
         );
         assert_eq!(
             usage("fault").as_deref(),
-            Some("fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off")
+            Some(
+                "fault gps off|on, fault mag|baro on|off, fault comm|config|gyro-bit|accel-bit|flash \
+                 on|off, or fault temperature <degC>|off"
+            )
         );
         assert_eq!(
             usage("motion").as_deref(),
-            Some("motion static [<lat> <heading>], or motion rotate <x> <y> <z>")
+            Some(
+                "motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+                 motion script <statement>; …, or motion file <path>"
+            )
         );
         assert_eq!(usage("pps").as_deref(), Some("pps"));
         assert_eq!(usage("dev").as_deref(), Some("dev <K> <command>"));
@@ -880,15 +942,16 @@ mod tests {
         assert_eq!(
             parse("fault comm"),
             Err(
-                "bad syntax: fault comm; expected fault comm|config|gyro-bit|accel-bit|flash \
-                 on|off, or fault temperature <degC>|off"
+                "bad syntax: fault comm; expected fault gps off|on, fault mag|baro on|off, \
+                 fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
                     .to_owned()
             )
         );
         assert_eq!(
             parse("motion static 1"),
             Err("bad syntax: motion static 1; expected \
-            motion static [<lat> <heading>], or motion rotate <x> <y> <z>"
+            motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+            motion script <statement>; …, or motion file <path>"
                 .to_owned())
         );
         assert_eq!(

@@ -19,6 +19,8 @@
 //! * [`monitor`] — the device's input decoded on the host side: logs and
 //!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
+//! * [`feed`] — `--motion-feed ADDR`: live motion samples (real time or
+//!   lockstep);
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
@@ -36,6 +38,7 @@ pub mod client;
 pub mod clock;
 pub mod control;
 pub mod error;
+pub mod feed;
 pub mod flash;
 pub mod fleet;
 pub mod link;
@@ -44,4 +47,5 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod vehicle;
 pub mod virtual_device;

@@ -53,6 +53,7 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
+use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
 use imu_emu::line::Pacer;
 use imu_emu::personality::Personality;
@@ -62,10 +63,12 @@ use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
+use crate::feed::{FeedSocket, FeedState};
 use crate::link::Link;
 use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
+use crate::vehicle::VehicleSource;
 
 /// What the host runner asks of a personality beyond the core's seam.
 pub trait HostPersonality: Personality {
@@ -73,6 +76,17 @@ pub trait HostPersonality: Personality {
     /// monitor's reasons (`-v`); `None` where the protocol has no such
     /// parameters.
     fn param(&self, id: u16) -> Option<&[u8]>;
+
+    /// Sets GPS time: `gps_s` GPS seconds since 1980-01-06 at device
+    /// instant 0 (`--gps-time`, or the host clock at power-on); nothing
+    /// where the protocol has no GPS.
+    fn set_gps_time(&mut self, _gps_s: u64) {}
+
+    /// A navigation fault (`fault gps|mag|baro on|off`); an error where the
+    /// protocol has no navigation side.
+    fn nav_fault(&mut self, _change: control::NavFault) -> Result<(), String> {
+        Err("no GPS, magnetometer or barometer on this protocol (--protocol isb has them)".into())
+    }
 }
 
 impl HostPersonality for Kernel {
@@ -84,6 +98,21 @@ impl HostPersonality for Kernel {
 impl HostPersonality for imu_emu::isb::Isb {
     fn param(&self, _id: u16) -> Option<&[u8]> {
         None
+    }
+
+    fn set_gps_time(&mut self, gps_s: u64) {
+        Isb::set_gps_time(self, gps_s.saturating_mul(1_000_000_000));
+    }
+
+    fn nav_fault(&mut self, change: control::NavFault) -> Result<(), String> {
+        let mut f = self.nav().faults();
+        match change {
+            control::NavFault::Gps(on) => f.gps_off = !on,
+            control::NavFault::Mag(on) => f.mag_disturbed = on,
+            control::NavFault::Baro(on) => f.baro_failed = on,
+        }
+        self.set_nav_faults(f);
+        Ok(())
     }
 }
 
@@ -158,6 +187,9 @@ pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
     /// When the terminal status line was last drawn (`None`: stdout is
     /// not a terminal, no status line).
     status_at: Option<std::time::Instant>,
+    /// Lockstep at a `--speed` factor: device time does not run ahead of
+    /// this clock either.
+    pace: Option<Clock>,
 }
 
 /// What the schedule drives on this board: the transport, the control
@@ -170,6 +202,12 @@ struct HostPort<T: Transport> {
     next_pps_ns: Option<u64>,
     /// Motion replayed from a file (`--trajectory`), if any.
     trajectory: Option<Trajectory>,
+    /// The vehicle source (`--motion`, `motion script|file`), if any.
+    vehicle: Option<VehicleSource>,
+    /// The live motion feed's state (`--motion-feed`), if any.
+    feed: Option<FeedState>,
+    /// The feed's socket, unless the feed is shared by a fleet.
+    feed_socket: Option<FeedSocket>,
     /// Faults between the device's UART and the transport (`link …`).
     link: Link,
     /// The device's input decoded on the host side (logs, `status`).
@@ -224,6 +262,26 @@ impl<T: Transport> HostPort<T> {
         Ok(())
     }
 
+    /// `truth`: the vehicle truth in `key=value` words, each key after
+    /// `prefix` ([`crate::vehicle::truth_words`]).
+    fn truth<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>, prefix: &str) -> String {
+        let chain = dev.chain();
+        let source = if self.trajectory.is_some() {
+            "trajectory"
+        } else if let Some(v) = &self.vehicle {
+            v.kind()
+        } else {
+            match chain.core_motion() {
+                Motion::Static { .. } => "static",
+                Motion::ConstantRotation { .. } => "rotation",
+                Motion::Vibration { .. } => "vibration",
+                Motion::Coning { .. } => "coning",
+                Motion::Sample(_) => "sample",
+            }
+        };
+        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
+    }
+
     /// `status`: the device, the line and the link in `key=value` words.
     fn status<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>) -> String {
         use imu_emu::device::Mode;
@@ -255,6 +313,8 @@ impl<T: Transport> HostPort<T> {
         for (r, n) in rejected {
             s.push_str(&format!(" rejected-{}={n}", r.name()));
         }
+        s.push(' ');
+        s.push_str(&self.truth(dev, "truth-"));
         let l = self.link.stats();
         s.push_str(&format!(
             " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
@@ -267,6 +327,9 @@ impl<T: Transport> HostPort<T> {
             l.cut,
             l.stall_dropped
         ));
+        if let Some(f) = &self.feed {
+            s.push_str(&f.status(self.now_ns));
+        }
         s
     }
 }
@@ -352,9 +415,20 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 
     fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
+        let secs = deadline.as_nanos() as f64 * 1e-9;
         if let Some(t) = self.trajectory.as_mut() {
-            let truth = t.at(deadline.as_nanos() as f64 * 1e-9);
-            dev.chain_mut().set_motion(Motion::Sample(truth));
+            let (state, truth) = t.vehicle_at(secs);
+            dev.chain_mut().set_vehicle(state, truth);
+        } else if let Some(v) = self.vehicle.as_mut() {
+            let state = v.at(secs);
+            dev.chain_mut().set_vehicle(state, state.truth());
+        }
+        if let Some(f) = self.feed.as_mut() {
+            let (truth, lost) = f.at(deadline.as_nanos());
+            if let Some(truth) = truth {
+                dev.chain_mut().set_motion(Motion::Sample(truth));
+            }
+            dev.chain_mut().faults_mut().motion_feed_lost = lost;
         }
         dev.on_tick(deadline);
         self.tick_ns = deadline.as_nanos();
@@ -382,7 +456,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 impl<T: Transport> HostPort<T> {
     /// Carries out one control command at device time `at`; the answer
     /// for the control client (`Ok` text after `ok`, `Err` after `error`).
-    fn apply<F: NorFlash, P: Personality>(
+    fn apply<F: NorFlash, P: HostPersonality>(
         &mut self,
         dev: &mut Device<F, P>,
         cmd: control::Command,
@@ -402,7 +476,23 @@ impl<T: Transport> HostPort<T> {
                 }
             }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-            control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+            control::Command::NavFault(change) => dev.personality_mut().nav_fault(change)?,
+            control::Command::Motion(m) => {
+                self.trajectory = None;
+                self.vehicle = None;
+                dev.chain_mut().set_motion(m);
+            }
+            control::Command::Script(s) => {
+                self.trajectory = None;
+                let v = VehicleSource::script(*s).starting_at(at.as_nanos() as f64 * 1e-9);
+                self.vehicle = Some(v);
+            }
+            control::Command::MotionFile(path) => {
+                let v = VehicleSource::load(&path).map_err(|e| format!("{e:#}"))?;
+                self.trajectory = None;
+                self.vehicle = Some(v.starting_at(at.as_nanos() as f64 * 1e-9));
+            }
+            control::Command::Truth => return Ok(self.truth(dev, "")),
             control::Command::Link(change) => {
                 let mut noise = Vec::new();
                 self.link.apply(change, self.now_ns, &mut noise);
@@ -437,6 +527,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 control: None,
                 next_pps_ns: None,
                 trajectory: None,
+                vehicle: None,
+                feed: None,
+                feed_socket: None,
                 link: Link::new(0),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
@@ -459,13 +552,137 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             reported_at: None,
             status_at: std::io::IsTerminal::is_terminal(&std::io::stdout())
                 .then(std::time::Instant::now),
+            pace: None,
         }
+    }
+
+    /// Drives the motion from a live feed ([`crate::feed`]): `socket` is
+    /// its own (`None`: samples come through [`Runner::feed_offer`], a
+    /// fleet's shared feed). In lockstep, device time then moves only
+    /// with the samples (at a `--speed` factor, no faster than that
+    /// either): call after [`Runner::with_speed`].
+    pub fn with_feed(mut self, state: FeedState, socket: Option<FeedSocket>) -> Self {
+        if state.lockstep() {
+            let epoch = self.clock.epoch();
+            self.pace = match self.clock.speed() {
+                Speed::Factor(_) => Some(self.clock.clone()),
+                Speed::Max => None,
+            };
+            self.clock = Clock::new(epoch, Speed::Max);
+        }
+        self.io.feed = Some(state);
+        self.io.feed_socket = socket;
+        self
+    }
+
+    /// Hands the device a sample of a shared feed (or its rejection).
+    pub fn feed_offer(&mut self, r: Result<imu_emu::feed::Sample, imu_emu::feed::Reject>) {
+        let now = self.clock.now_ns();
+        if let Some(f) = self.io.feed.as_mut() {
+            f.offer(r, now);
+        }
+    }
+
+    /// Whether the device's feed takes more samples now.
+    pub fn feed_wants_more(&self) -> bool {
+        self.io.feed.as_ref().is_some_and(FeedState::wants_more)
+    }
+
+    /// Appends the feed socket's descriptors to wait on (none while the
+    /// lockstep queue is full: the socket is not read then).
+    pub fn feed_interest<'a>(&'a self, fds: &mut Vec<nix::poll::PollFd<'a>>) {
+        if let Some(s) = &self.io.feed_socket {
+            if self.feed_wants_more() {
+                s.interest(fds);
+            }
+        }
+    }
+
+    /// Reads the device's own feed socket (real time: stamped `now`).
+    fn read_feed(&mut self, now: u64) -> anyhow::Result<()> {
+        let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
+        else {
+            return Ok(());
+        };
+        if !state.wants_more() {
+            return Ok(());
+        }
+        sock.read(&mut |r| state.offer(r, now))
+    }
+
+    /// A lockstep turn: device time moves on to each queued sample's
+    /// time in order (bounded work a turn), waiting for the client when
+    /// [`MAX_BACKLOG`] bytes wait for it; input and control are served
+    /// every turn.
+    fn lockstep_turn(&mut self) -> anyhow::Result<Duration> {
+        self.read_feed(self.clock.now_ns())?;
+        let mut ticks = 0u64;
+        let mut wait = IDLE_WAKE;
+        loop {
+            if self.io.transport.backlog_len() >= MAX_BACKLOG {
+                wait = BUSY_WAKE;
+                break;
+            }
+            if self.sched.next_deadline() > self.clock.now_ns() {
+                let Some(feed) = self.io.feed.as_mut() else {
+                    break;
+                };
+                let Some(t) = feed.next_time() else {
+                    break;
+                };
+                if let Some(p) = &self.pace {
+                    let host = p.now_ns();
+                    if t > host {
+                        wait = p.host_wait(t - host);
+                        break;
+                    }
+                }
+                feed.advance();
+                self.clock.advance_to(t);
+            }
+            let pass = self.step()?;
+            ticks += u64::from(pass.ticks);
+            if ticks >= MAX_ROUND_TICKS {
+                wait = Duration::ZERO;
+                break;
+            }
+        }
+        if ticks == 0 {
+            // No sample moved time: still serve input and control.
+            self.step()?;
+        }
+        Ok(wait)
+    }
+
+    /// Waits on the transport and the feed socket together.
+    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+        if self.io.feed_socket.is_none() {
+            return self.io.transport.wait(timeout);
+        }
+        self.io.transport.prepare_wait()?;
+        let (revents, n) = {
+            let mut fds = Vec::with_capacity(4);
+            self.io.transport.interest(&mut fds);
+            let n = fds.len();
+            self.feed_interest(&mut fds);
+            crate::transport::poll_fds(&mut fds, timeout)?;
+            (crate::transport::revents(&fds), n)
+        };
+        self.io.transport.polled(&revents[..n]);
+        Ok(())
     }
 
     /// Replays `t` as the motion the device measures: before each tick the
     /// sample for that tick's time is handed to the signal chain.
     pub fn with_trajectory(mut self, t: Trajectory) -> Self {
         self.io.trajectory = Some(t);
+        self
+    }
+
+    /// Flies or plays `v` as the unit's vehicle (`--motion`): before each
+    /// tick its state at that tick's time is handed to the signal chain.
+    pub fn with_vehicle(mut self, v: VehicleSource) -> Self {
+        self.io.vehicle = Some(v);
         self
     }
 
@@ -569,7 +786,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
             let timeout = self.turn()?;
-            self.io.transport.wait(timeout)?;
+            self.wait(timeout)?;
         }
         if self.status_at.is_some() {
             // End the status line before the last messages.
@@ -582,6 +799,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// round), the reports; how long the transport may then be waited on
     /// (host time) before the next turn.
     pub fn turn(&mut self) -> anyhow::Result<Duration> {
+        if self.io.feed.as_ref().is_some_and(FeedState::lockstep) {
+            let wait = self.lockstep_turn()?;
+            self.report();
+            self.status_line();
+            return Ok(wait);
+        }
         let max = self.clock.speed() == Speed::Max;
         // Nobody to read (output would be dropped): time waits.
         let client_keeps_up =
@@ -749,6 +972,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.io.release()?;
         let limits = if self.io.rx_held { &HELD } else { &LIMITS };
         let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
+        if !self.io.feed.as_ref().is_some_and(FeedState::lockstep) {
+            // Applies from the next pass's ticks (deadlines after `now`).
+            self.read_feed(now)?;
+        }
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;
         self.stats.tx_bytes += pass.tx as u64;
