@@ -4,10 +4,10 @@
 use std::collections::BTreeMap;
 
 use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, TX_CAP};
-use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
 use imu_emu::kernel::frame;
 use imu_emu::kernel::params::{self, PARAMS};
+use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;

@@ -1,8 +1,8 @@
 //! Target `kernel_frame`: the KERNEL frame decoder (ICD Table 5.2).
 
-use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::{self, Decoder as KernelDecoder};
+use imu_emu::kernel::RX_FRAME_CAP;
 
 use crate::script::chunking_invariant;
 

@@ -295,8 +295,11 @@ fn a_hung_up_serial_port_is_waited_on_and_opened_again() {
     let mut emu = Emu::start(&["--serial", link.to_str().unwrap()]);
     let mut c = support::Conn::new(Box::new(support::Master(master)));
     assert!(dev_info_answered(&mut c));
+    // Unplugged: the port hangs up and its node goes (so that the
+    // emulator does not open a pty of another test that got its number).
     drop(c);
     drop(slave);
+    std::fs::remove_file(&link).unwrap();
     std::thread::sleep(Duration::from_millis(500));
     let before = cpu_ticks(emu.pid());
     std::thread::sleep(Duration::from_secs(1));
@@ -320,9 +323,7 @@ fn a_hung_up_serial_port_is_waited_on_and_opened_again() {
     // The port comes back (an adapter re-enumerated): a new pty behind
     // the same path.
     let (master, _slave, path) = pty_pair();
-    let tmp = dir.path().join("next");
-    std::os::unix::fs::symlink(&path, &tmp).unwrap();
-    std::fs::rename(&tmp, &link).unwrap();
+    std::os::unix::fs::symlink(&path, &link).unwrap();
     let mut c = support::Conn::new(Box::new(support::Master(master)));
     assert!(dev_info_answered(&mut c), "{}", emu.stderr());
     let err = emu.stderr();
@@ -400,8 +401,14 @@ fn line_to(
             } else {
                 nix::sys::termios::BaudRate::B115200
             };
-            // (Raw already, reads timing out: `Conn::serial`.)
+            // Again once the device is on: its power-on writes its line
+            // rate into the port's termios (a read-modify-write that may
+            // undo `Conn::serial`'s reads that time out).
+            std::thread::sleep(Duration::from_millis(300));
+            use nix::sys::termios::SpecialCharacterIndices as Cc;
             let mut t = nix::sys::termios::tcgetattr(&f).unwrap();
+            t.control_chars[Cc::VMIN as usize] = 0;
+            t.control_chars[Cc::VTIME as usize] = 1;
             nix::sys::termios::cfsetspeed(&mut t, rate).unwrap();
             nix::sys::termios::tcsetattr(&f, nix::sys::termios::SetArg::TCSANOW, &t).unwrap();
             (emu, c, Box::new(f), None)

@@ -774,7 +774,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     let profile = args.profiles.first().copied().flatten();
     let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
     dev.personality_mut()
-        .set_gps_time(gps_s_at_power_on(args.gps_time));
+        .set_gps_time(crate::clock::gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
@@ -827,17 +827,6 @@ fn parse_gps_time(s: &str) -> Result<u64, String> {
         return Err(format!("{s}: before the GPS epoch 1980-01-06"));
     }
     Ok(unix)
-}
-
-/// GPS seconds at device instant 0: `--gps-time` (Unix seconds, UTC) or the
-/// host clock now, as GPS time (+18 leap seconds).
-pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
-    let unix = gps_time.unwrap_or_else(|| {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_secs())
-    });
-    imu_emu::isb::nav::gps_s_of_unix(unix)
 }
 
 #[cfg(test)]

@@ -147,6 +147,17 @@ impl Clock {
     }
 }
 
+/// GPS seconds at device instant 0: `--gps-time` (Unix seconds, UTC) or the
+/// host clock now, as GPS time (+18 leap seconds).
+pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
+    let unix = gps_time.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs())
+    });
+    imu_emu::isb::nav::gps_s_of_unix(unix)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

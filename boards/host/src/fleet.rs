@@ -217,7 +217,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         let profile = self.setup.profiles.get(k).copied().flatten();
         let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
         dev.personality_mut()
-            .set_gps_time(crate::cli::gps_s_at_power_on(self.setup.gps_time));
+            .set_gps_time(crate::clock::gps_s_at_power_on(self.setup.gps_time));
         transport.set_line_rate(dev.line_rate())?;
         eprintln!(
             "imu-emu: dev {k}: {} powered on at {} bit/s, seed {}",
