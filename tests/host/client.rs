@@ -38,6 +38,17 @@ fn run(args: &[&str]) -> Output {
     }
 }
 
+/// Runs `imu-emu client plot CSV -o OUT`.
+fn plot(csv: &std::path::Path, out: &std::path::Path) -> Output {
+    run(&[
+        "client",
+        "plot",
+        csv.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ])
+}
+
 fn stdout(o: &Output) -> String {
     assert!(
         o.status.success(),
@@ -185,11 +196,16 @@ fn record_decode_and_plot() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "frame,format,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+        "frame,format,device_time_s,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,\
+         counter,usw,temp_c"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 200);
-    let counters: Vec<u16> = rows.iter().map(|r| r[9].parse().unwrap()).collect();
+    // Device time from the frames' counter: 10 ms a row from 0.
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.01), "row {i}");
+    }
+    let counters: Vec<u16> = rows.iter().map(|r| r[10].parse().unwrap()).collect();
     for (i, w) in counters.windows(2).enumerate() {
         assert_eq!(w[1], w[0].wrapping_add(20), "gap after row {i}");
     }
@@ -197,7 +213,7 @@ fn record_decode_and_plot() {
         assert_eq!(r[0], i.to_string());
         assert_eq!(r[1], "GA");
         // At rest, level: about 1 g on Z.
-        let az: f64 = r[8].parse().unwrap();
+        let az: f64 = r[9].parse().unwrap();
         assert!((az - 1.0).abs() < 0.05, "{az}");
     }
 
@@ -208,23 +224,17 @@ fn record_decode_and_plot() {
     let mut dl = decoded.lines();
     assert_eq!(
         dl.next().unwrap(),
-        "frame,format,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+        "frame,format,device_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
     );
     let drows: Vec<Vec<&str>> = dl.map(|l| l.split(',').collect()).collect();
     assert!(drows.len() >= 200, "{}", drows.len());
-    let first = drows.iter().position(|r| r[8] == rows[0][9]).unwrap();
+    let first = drows.iter().position(|r| r[9] == rows[0][10]).unwrap();
     for (r, d) in rows.iter().zip(&drows[first..]) {
-        assert_eq!(r[3..], d[2..]);
+        assert_eq!(r[4..], d[3..]);
     }
 
     let png = dir.path().join("ga.png");
-    let o = run(&[
-        "client",
-        "plot",
-        csv.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-    ]);
+    let o = plot(&csv, &png);
     assert_eq!(stdout(&o), format!("{}: 200 rows plotted\n", png.display()));
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
@@ -233,6 +243,87 @@ fn record_decode_and_plot() {
     assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 1200);
     assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 900);
     assert!(bytes.len() > 10_000, "{}", bytes.len());
+
+    // SVG by extension: titled, labelled axes with units, a legend, ticks.
+    let svg = dir.path().join("ga.svg");
+    let o = plot(&csv, &svg);
+    assert_eq!(stdout(&o), format!("{}: 200 rows plotted\n", svg.display()));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"), "{}", &text[..80]);
+    for label in [
+        "ga.csv: GA, 200 rows",
+        "Angular rate",
+        "Acceleration",
+        "device time (s)",
+        "angular rate (deg/s)",
+        "specific force (g)",
+        "X",
+        "Z",
+        "1.0",
+        "1.8",
+    ] {
+        // plotters writes each text on a line of its own.
+        assert!(
+            text.contains(&format!(">\n{label}\n<")),
+            "no {label} in the SVG"
+        );
+    }
+    // A missing folder and an unknown extension: one clear line each.
+    let o = run(&[
+        "client",
+        "plot",
+        csv.to_str().unwrap(),
+        "-o",
+        "/nonexistent/ga.png",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: plot: /nonexistent/ga.png: the folder /nonexistent does not exist\n"
+    );
+    let o = plot(&csv, std::path::Path::new("ga.jpg"));
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: plot: ga.jpg: name a .png or .svg file\n"
+    );
+}
+
+/// A `--speed max` recording spans the whole device-time axis: its rows
+/// are 10 ms apart in device time however fast the host received them.
+#[test]
+fn a_speed_max_recording_is_plotted_against_device_time() {
+    let e = Emu::tcp(&["--power-on", "now", "--speed", "max"]);
+    let a = e.addr().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("fast.csv");
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GA",
+            "--frames",
+            "500",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 500);
+    assert_eq!(rows[499][2], "4.990000");
+    let svg = dir.path().join("fast.svg");
+    let o = plot(&csv, &svg);
+    stdout(&o);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // Ticks up to the last device second.
+    assert!(text.contains(">\n4.5\n<"), "no 4.5 s tick");
 }
 
 /// One clear line for each failure: a port nobody listens on, a unit that

@@ -24,7 +24,9 @@
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
-//!   (commands, record, decode, plot).
+//!   (commands, record, decode, plot);
+//! * [`plot`] — the one plot style (titled panels, labelled axes with
+//!   units, legend; PNG or SVG; embedded font).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
@@ -37,6 +39,7 @@ pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod plot;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;

@@ -13,7 +13,7 @@
 //! | `udd TYPE,…` | User_Def_Data_config (5.3.5) with the type codes, prints the device's check |
 //! | `record` | decoded frames to CSV or JSON lines, with a progress line on a terminal |
 //! | `decode FILE` | a raw capture decoded the same way |
-//! | `plot CSV` | a recording to PNG: rates, accelerations, attitude against time |
+//! | `plot CSV` | a recording to PNG or SVG: rates, accelerations, attitude against device time |
 //!
 //! Errors are one line: the port cannot be opened, no answer within
 //! `--timeout`, answers that fail their checksum.
@@ -141,11 +141,12 @@ pub enum ClientCmd {
         #[arg(long, value_enum, default_value_t = OutFormat::Csv)]
         to: OutFormat,
     },
-    /// Plot a CSV recording to PNG (rates, accelerations, attitude).
+    /// Plot a CSV recording (rates, accelerations, attitude against device
+    /// time) to PNG or SVG, by the output's extension.
     Plot {
-        /// The CSV recording (from `record`).
+        /// The CSV recording (from `record` or `decode`).
         file: PathBuf,
-        /// The PNG to write.
+        /// The .png or .svg to write (its folder must exist).
         #[arg(long, short, value_name = "FILE")]
         out: PathBuf,
     },
@@ -153,6 +154,10 @@ pub enum ClientCmd {
 
 trait Port: Read + Write + Send {}
 impl<T: Read + Write + Send> Port for T {}
+
+/// The rate of the KERNEL frame counter, whatever the model's internal
+/// rate (ICD Tables 5.7, 5.10 note 3).
+const COUNTER_HZ: u16 = 2000;
 
 /// Largest frame decoded.
 const CAP: usize = 4096;
@@ -622,6 +627,12 @@ pub struct Recorder {
     pub gaps: u64,
     last_counter: Option<u16>,
     step: Option<u16>,
+    /// Whether rows carry `device_time_s` (the first frame had a clock).
+    timed: bool,
+    /// The first frame's `imu_time_ns`, and the 2 kHz ticks counted since
+    /// the first frame (the counter unwrapped).
+    t0_ns: Option<f64>,
+    ticks: u64,
 }
 
 impl Recorder {
@@ -636,7 +647,27 @@ impl Recorder {
             gaps: 0,
             last_counter: None,
             step: None,
+            timed: false,
+            t0_ns: None,
+            ticks: 0,
         }
+    }
+
+    /// Seconds of device time since the first row: from `imu_time_ns`
+    /// (ns since power-on) when the frame has it, else from the counter
+    /// (2 kHz ticks, Tables 5.7, 5.10 note 3) unwrapped, which holds
+    /// while rows are less than 32.768 s apart. Call before the counter
+    /// bookkeeping of the row.
+    fn device_time(&mut self, d: &decode::Decoded) -> Option<f64> {
+        if let Some(ns) = d.get("imu_time_ns") {
+            let t0 = *self.t0_ns.get_or_insert(ns);
+            return Some((ns - t0) / 1e9);
+        }
+        let c = d.get("counter")? as u16;
+        if let Some(last) = self.last_counter {
+            self.ticks += u64::from(c.wrapping_sub(last));
+        }
+        Some(self.ticks as f64 / f64::from(COUNTER_HZ))
     }
 
     /// Writes the frame as a row (with the host time `t`, seconds since
@@ -655,8 +686,12 @@ impl Recorder {
         let cols: Vec<&'static str> = d.values.iter().map(|v| v.0).collect();
         match &self.columns {
             None => {
+                self.timed = d.get("imu_time_ns").is_some() || d.get("counter").is_some();
                 if self.to == OutFormat::Csv {
                     let mut h = vec!["frame", "format"];
+                    if self.timed {
+                        h.push("device_time_s");
+                    }
                     if t.is_some() {
                         h.push("host_time_s");
                     }
@@ -671,6 +706,11 @@ impl Recorder {
             }
             Some(_) => {}
         }
+        let device_t = if self.timed {
+            self.device_time(&d)
+        } else {
+            None
+        };
         if let Some(c) = d.get("counter") {
             let c = c as u16;
             if let Some(last) = self.last_counter {
@@ -687,6 +727,9 @@ impl Recorder {
         match self.to {
             OutFormat::Csv => {
                 let mut line = format!("{},{fmt}", self.rows);
+                if let Some(t) = device_t {
+                    line.push_str(&format!(",{t:.6}"));
+                }
                 if let Some(t) = t {
                     line.push_str(&format!(",{t:.6}"));
                 }
@@ -697,6 +740,9 @@ impl Recorder {
             }
             OutFormat::Json => {
                 let mut line = format!("{{\"frame\":{},\"format\":\"{fmt}\"", self.rows);
+                if let Some(t) = device_t {
+                    line.push_str(&format!(",\"device_time_s\":{t:.6}"));
+                }
                 if let Some(t) = t {
                     line.push_str(&format!(",\"host_time_s\":{t:.6}"));
                 }
