@@ -80,8 +80,12 @@ fn info_bit_get_set_and_their_errors() {
         lines[1].starts_with("firmware: KERNEL-110-G2000-A40 imu-emu "),
         "{info}"
     );
-    assert_eq!(lines[2], "imu_type: 0x6e");
-    assert_eq!(stdout(&client(&a, &["bit"])), "bit: 00 00 00 00 (pass)\n");
+    // IMU_type as the README and Table 4.3 write it.
+    assert_eq!(lines[2], "imu_type: 110");
+    assert_eq!(
+        stdout(&client(&a, &["bit"])),
+        "bit: 00 00 00 00 (pass: accelerometer 0 ok, gyroscope 0 ok, flash 0 ok)\n"
+    );
     assert_eq!(
         stdout(&client(&a, &["get", "Data_Rate"])),
         "Data_Rate = 100\n"
@@ -150,9 +154,19 @@ fn start_stop_udd_and_commit_baud_act_on_the_device() {
     );
     // Baud_Rate 230400 (code 8) saved, committed: the device switches; a
     // TCP client does not notice the rate, it still gets answers.
+    // Typed in bit/s; the hint says the line changes on CommitBaudRate.
     assert_eq!(
-        stdout(&client(&a, &["set", "Baud_Rate", "8"])),
-        "Baud_Rate saved = 8\n"
+        stdout(&client(&a, &["set", "Baud_Rate", "230400"])),
+        "Baud_Rate saved = 230400 bit/s (code 8) (the line changes after `imu-emu client \
+         commit-baud`, CommitBaudRate, ICD 5.3.9, or at the next power-on; `get` reads the \
+         running rate until then)\n"
+    );
+    let o = client(&a, &["set", "Baud_Rate", "12345"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("imu-emu: Baud_Rate: 12345 is not a line rate; bit/s: 115200 4800"),
+        "{}",
+        stderr(&o)
     );
     assert_eq!(
         stdout(&client(&a, &["commit-baud"])),
@@ -160,7 +174,28 @@ fn start_stop_udd_and_commit_baud_act_on_the_device() {
     );
     assert_eq!(
         stdout(&client(&a, &["get", "Baud_Rate"])),
-        "Baud_Rate = 8\n"
+        "Baud_Rate = 230400 bit/s (code 8)\n"
+    );
+}
+
+/// A BIT that fails: exit status 1, the failing result named on stdout and
+/// stderr (a script can test `$?`).
+#[test]
+fn a_failing_bit_exits_non_zero_and_names_the_bits() {
+    let ctl = format!("127.0.0.1:{}", support::free_port());
+    let e = Emu::tcp(&["--power-on", "now", "--control", &ctl]);
+    let a = e.addr().to_string();
+    let mut c = support::Control::connect(&ctl);
+    assert_eq!(c.cmd("fault gyro-bit on"), "ok");
+    let o = client(&a, &["bit"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        "bit: 04 00 00 00 (FAIL: accelerometer 0 ok, gyroscope 1 FAIL, flash 0 ok)\n"
+    );
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: BIT failed: accelerometer 0 ok, gyroscope 1 FAIL, flash 0 ok\n"
     );
 }
 
@@ -408,4 +443,229 @@ fn the_client_talks_over_a_serial_port() {
         "{}",
         stderr(&o)
     );
+}
+
+/// Ctrl-C during `record`: the stream the client started is stopped, the
+/// summary printed, the exit status 0; the unit then sends nothing.
+#[test]
+fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
+    let (_e, a) = emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
+        .arg(&csv)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until rows arrive (the header and some rows are flushed by 8 KiB
+    // blocks: wait for the file to grow).
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no rows");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        assert!(std::time::Instant::now() < deadline, "record did not stop");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("imu-emu: ")
+            && err.ends_with(
+                " frames recorded, 0 failed their checksum, 0 counter gaps (interrupted; \
+                 stream stopped)\n"
+            ),
+        "{err}"
+    );
+    let rows: u64 = err["imu-emu: ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count() as u64, rows + 1);
+    // The stream is off: a new client hears no data frame.
+    let o = client(&a, &["--timeout", "0.5", "record", "--frames", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("no data frame within 500ms after 0 rows"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The ISB emulator (`--protocol isb`) on TCP, and `client --protocol isb`.
+fn isb_emu() -> (Emu, String) {
+    let e = Emu::tcp(&["--protocol", "isb", "--power-on", "now"]);
+    let a = e.addr().to_string();
+    (e, a)
+}
+
+fn isb(addr: &str, args: &[&str]) -> Output {
+    let mut all = vec!["--protocol", "isb"];
+    all.extend_from_slice(args);
+    client(addr, &all)
+}
+
+/// `--protocol isb`: info, BIT, get and set of data-set fields by name,
+/// the unit's NACK of a read-only field as exit status 1, names refused.
+#[test]
+fn isb_client_info_bit_get_and_set() {
+    let (_e, a) = isb_emu();
+    let info = stdout(&isb(&a, &["info"]));
+    for line in [
+        "hardwareType = 3",
+        "serialNumber = 10000000 (0x989680)",
+        "protocolVer = 2.1.0.0",
+        "manufacturer = Inertial Sense Inc",
+    ] {
+        assert!(info.lines().any(|l| l == line), "no {line} in\n{info}");
+    }
+    assert_eq!(
+        stdout(&isb(&a, &["bit"])),
+        "hdwBitStatus: 0x00000002 (pass: passed without GPS)\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 4 ms\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["set", "flash_config.startupNavDtMs", "8"])),
+        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `set \
+         SYS_CMD.command 99` with SYS_CMD.invCommand, or a power cycle)\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 8 ms\n"
+    );
+    let rmc = stdout(&isb(&a, &["get", "RMC"]));
+    assert_eq!(rmc, "bits = 0\noptions = 0\n");
+    // The unit refuses a change of a read-only byte (NACK): exit 1.
+    let o = isb(&a, &["set", "SYS_PARAMS.imuTemp", "99"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {a}: SET_DATA SYS_PARAMS.imuTemp 99: the unit refused the value \
+             (NACK)\n"
+        )
+    );
+    // Ambiguous or unknown names, KERNEL-only commands: usage errors.
+    let o = isb(&a, &["get", "time"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("imu-emu: no field time; name it SET.field"));
+    let o = isb(&a, &["commit-baud"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("imu-emu: commit-baud is a KERNEL command;"));
+    // A KERNEL client against the ISB unit: no answer, exit 1.
+    let o = client(&a, &["--timeout", "0.3", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+/// `--protocol isb record`: IMU packets to CSV with the set's own time as
+/// device time (4 ms apart), one second of device time; the raw capture
+/// decodes to the same rows; the plot is in the IMU's units; two sets to
+/// JSON lines.
+#[test]
+fn isb_client_record_decode_and_plot() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("imu.csv");
+    let raw = dir.path().join("imu.bin");
+    let o = isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "IMU",
+            "--duration",
+            "1",
+            "-o",
+            csv.to_str().unwrap(),
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "frame,did,device_time_s,host_time_s,time,status,pqr_x,pqr_y,pqr_z,acc_x,acc_y,acc_z"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let times: Vec<f64> = rows.iter().map(|r| r[4].parse().unwrap()).collect();
+    // After the packet the GET answers with at once, a stream on the 4 ms
+    // navigation period, up to one second after the first.
+    for w in times[1..].windows(2) {
+        assert!((w[1] - w[0] - 0.004).abs() < 1e-9, "{w:?}");
+    }
+    assert!(times[times.len() - 1] - times[0] < 1.0);
+    assert!(times[times.len() - 1] + 0.004 - times[0] >= 1.0 - 1e-9);
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: {} packets recorded, {:.3} s of device time, 0 failed their checksum\n",
+            rows.len(),
+            times[times.len() - 1] - times[0]
+        )
+    );
+    for r in &rows {
+        assert_eq!(r[1], "IMU");
+        // At rest, level, the IMX's z axis down: acc z about −g.
+        let az: f64 = r[11].parse().unwrap();
+        assert!((az + 9.81).abs() < 0.1, "{az}");
+    }
+    let o = run(&[
+        "client",
+        "--protocol",
+        "isb",
+        "decode",
+        "--did",
+        "IMU",
+        raw.to_str().unwrap(),
+    ]);
+    let decoded = stdout(&o);
+    let drows: Vec<Vec<&str>> = decoded
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    for (r, d) in rows.iter().zip(&drows) {
+        assert_eq!(r[4..], d[3..]);
+    }
+    let svg = dir.path().join("imu.svg");
+    stdout(&plot(&csv, &svg));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for label in [
+        "angular rate (rad/s)",
+        "specific force (m/s²)",
+        "device time (s)",
+    ] {
+        assert!(text.contains(&format!(">\n{label}\n<")), "no {label}");
+    }
+    // Two sets: JSON lines (a CSV holds one set's columns).
+    let o = isb(
+        &a,
+        &[
+            "record", "--did", "IMU,PIMU", "--frames", "4", "--to", "json",
+        ],
+    );
+    let rows = stdout(&o);
+    assert_eq!(rows.lines().count(), 4);
+    assert!(rows.contains("\"did\":\"IMU\"") && rows.contains("\"did\":\"PIMU\""));
+    assert!(rows.contains("\"theta_x\":") && rows.contains("\"pqr_x\":"));
+    let o = isb(&a, &["record", "--did", "IMU,PIMU", "--frames", "4"]);
+    assert_eq!(o.status.code(), Some(2));
 }

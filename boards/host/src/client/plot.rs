@@ -19,8 +19,8 @@ type Group = (
     &'static [(&'static str, &'static str)],
 );
 
-/// The panels a recording may have, in order.
-const GROUPS: &[Group] = &[
+/// The panels a KERNEL recording may have, in order.
+const KERNEL_GROUPS: &[Group] = &[
     (
         "Angular rate",
         "angular rate (deg/s)",
@@ -36,6 +36,10 @@ const GROUPS: &[Group] = &[
         "angle (deg)",
         &[("heading", "heading"), ("pitch", "pitch"), ("roll", "roll")],
     ),
+];
+
+/// The panels of an ISB recording (`did` column), in the sets' own units.
+const ISB_GROUPS: &[Group] = &[
     (
         "Angular rate",
         "angular rate (rad/s)",
@@ -43,17 +47,18 @@ const GROUPS: &[Group] = &[
     ),
     (
         "Acceleration",
-        "acceleration (m/s²)",
-        &[("accel_x", "X"), ("accel_y", "Y"), ("accel_z", "Z")],
+        "specific force (m/s²)",
+        &[("acc_x", "X"), ("acc_y", "Y"), ("acc_z", "Z")],
     ),
     (
-        "Attitude",
-        "angle (rad)",
-        &[
-            ("roll_rad", "roll"),
-            ("pitch_rad", "pitch"),
-            ("yaw_rad", "yaw"),
-        ],
+        "Delta angle",
+        "Δθ per packet (rad)",
+        &[("theta_x", "X"), ("theta_y", "Y"), ("theta_z", "Z")],
+    ),
+    (
+        "Delta velocity",
+        "Δv per packet (m/s)",
+        &[("vel_x", "X"), ("vel_y", "Y"), ("vel_z", "Z")],
     ),
 ];
 
@@ -92,12 +97,14 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
             csv.display()
         );
     };
+    let isb = col("did").is_some();
     let format = header
         .iter()
-        .position(|h| *h == "format")
+        .position(|h| *h == if isb { "did" } else { "format" })
         .and_then(|i| text.lines().nth(1)?.split(',').nth(i))
         .unwrap_or("recording");
-    let panels: Vec<Panel> = GROUPS
+    let groups = if isb { ISB_GROUPS } else { KERNEL_GROUPS };
+    let panels: Vec<Panel> = groups
         .iter()
         .filter_map(|(title, y_label, cols)| {
             let series: Vec<Series> = cols
