@@ -51,9 +51,9 @@ pub struct Args {
 
     /// Model name or product code: K100 K102 K108 K110 K110M K120 K201 K210
     /// K220, or e.g. KERNEL-110-G2000-A8 (a bare name takes the model's
-    /// first product code).
-    #[arg(long, value_name = "MODEL", default_value = "K110", value_parser = parse_product)]
-    pub model: Product,
+    /// first product code) [default: K110]. KERNEL only.
+    #[arg(long, value_name = "MODEL", value_parser = parse_product)]
+    pub model: Option<Product>,
 
     /// Serve the UART on this TCP address (one client at a time; port 0
     /// picks a free port; loopback only without --allow-remote)
@@ -83,13 +83,15 @@ pub struct Args {
     pub flash: Option<PathBuf>,
 
     /// Serve the control socket on this TCP address: inject 1PPS/EXTRIG
-    /// edges, power-cycle with BOOT, read TOV edges (see the `control`
-    /// module). Its address is the second stdout line:
+    /// edges, faults, motion and link faults, power-cycle with BOOT, read
+    /// the status and TOV edges (send `help` on it for every command;
+    /// docs/tools.md). Its address is the second stdout line:
     /// `control on tcp ADDR`. Loopback only without --allow-remote.
     #[arg(long, value_name = "ADDR")]
     pub control: Option<String>,
 
-    /// Generate a 1PPS rising edge every second from the host clock.
+    /// Generate a 1PPS rising edge every second of device time (so it
+    /// follows --speed).
     #[arg(long)]
     pub pps: bool,
 
@@ -121,8 +123,8 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
-    /// Run N independent devices in this one process, driven by one loop
-    /// (see the `fleet` module): device K listens on the --tcp port + K (a
+    /// Run N independent devices in this one process, driven by one loop:
+    /// device K listens on the --tcp port + K (a
     /// free port each with port 0) or on a pty of its own (--link PATH:
     /// PATH.K), keeps its flash in FILE.K (--flash FILE), has the seed
     /// --seed + K and powers on at its own first client. One stdout line
@@ -155,12 +157,25 @@ pub struct Args {
     pub command: Option<Sub>,
 }
 
+impl Args {
+    /// The KERNEL product emulated: `--model`, else K110's first product
+    /// code.
+    pub fn product(&self) -> Product {
+        self.model
+            .or_else(|| Product::parse(DEFAULT_MODEL).ok())
+            .unwrap_or_else(Product::imx5)
+    }
+}
+
+/// The model emulated without `--model`.
+pub const DEFAULT_MODEL: &str = "K110";
+
 /// Subcommands of `imu-emu`.
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum Sub {
-    /// Talk to a KERNEL (the emulator or a real unit) over TCP or a serial
-    /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
-    /// decode, plot.
+    /// Talk to a unit (the emulator or a real one; a KERNEL, or an IMX-5
+    /// with --protocol isb) over TCP or a serial port: info, bit, start,
+    /// stop, get, set, commit-baud, udd, record, decode, plot.
     Client(crate::client::ClientArgs),
 }
 
@@ -322,6 +337,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return crate::client::run(c);
     }
     check_addresses(&args)?;
+    check_combinations(&args)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -337,6 +353,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
     }
+}
+
+/// Options that parse but make no sense together: refused rather than
+/// ignored.
+fn check_combinations(args: &Args) -> anyhow::Result<()> {
+    if args.protocol == Protocol::Isb {
+        if let Some(m) = &args.model {
+            return Err(UsageError(format!(
+                "--model {} is a KERNEL model; --protocol isb emulates an IMX-5 (drop --model)",
+                m.model.short
+            ))
+            .into());
+        }
+    }
+    if args.link.is_some() && !args.pty {
+        return Err(UsageError(
+            "--link names the pty's slave: it goes with --pty, not with --tcp or --serial".into(),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 /// Device K's file for a --flash or --link PATH of a many-device run.
@@ -502,7 +539,10 @@ fn factory_rate(protocol: Protocol) -> u32 {
 /// The product a run emulates and its name in messages.
 fn product_of(args: &Args) -> (Product, String) {
     match args.protocol {
-        Protocol::Kernel => (args.model, args.model.code().to_string()),
+        Protocol::Kernel => {
+            let m = args.product();
+            (m, m.code().to_string())
+        }
         Protocol::Isb => (Product::imx5(), "IMX-5 (ISB)".to_owned()),
     }
 }
@@ -628,7 +668,7 @@ mod tests {
     #[test]
     fn defaults() {
         let a = Args::try_parse_from(["imu-emu"]).unwrap();
-        assert_eq!(a.model.code(), "KERNEL-110-G2000-A40");
+        assert_eq!(a.product().code(), "KERNEL-110-G2000-A40");
         assert_eq!(a.tcp, None);
         assert!(!a.pty);
         assert_eq!(a.seed, 0);
@@ -652,9 +692,9 @@ mod tests {
     #[test]
     fn model_takes_names_and_product_codes() {
         let a = Args::try_parse_from(["imu-emu", "--model", "K120"]).unwrap();
-        assert_eq!(a.model.code(), "KERNEL-120-G2000-A40A90");
+        assert_eq!(a.product().code(), "KERNEL-120-G2000-A40A90");
         let a = Args::try_parse_from(["imu-emu", "--model", "KERNEL-110-G2000-A8"]).unwrap();
-        assert_eq!(a.model.measurement_range(), 0x93);
+        assert_eq!(a.product().measurement_range(), 0x93);
         assert!(Args::try_parse_from(["imu-emu", "--model", "K999"]).is_err());
     }
 
