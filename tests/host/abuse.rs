@@ -599,3 +599,41 @@ fn a_client_that_leaves_is_logged_as_gone() {
     assert!(!log.contains("closed its sending side"), "{log}");
     assert!(!log.contains("replaced by"), "{log}");
 }
+
+/// Shell completions and the man page come from the command-line
+/// definition: every option is there; bash accepts the script.
+#[test]
+fn completions_and_man_page_come_from_the_cli_definition() {
+    let out = run(&["completions", "bash"], &[]);
+    assert!(out.status.success());
+    let script = String::from_utf8(out.stdout).unwrap();
+    for word in [
+        "_imu__emu()",
+        "--protocol",
+        "--allow-remote",
+        "client",
+        "record",
+        "--did",
+    ] {
+        assert!(script.contains(word), "no {word} in the bash completions");
+    }
+    let mut bash = Command::new("bash")
+        .arg("-n")
+        .stdin(Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write as _;
+    bash.stdin
+        .take()
+        .unwrap()
+        .write_all(script.as_bytes())
+        .unwrap();
+    assert!(bash.wait().unwrap().success(), "bash -n refused the script");
+    let out = run(&["man"], &[]);
+    assert!(out.status.success());
+    let man = String::from_utf8(out.stdout).unwrap();
+    assert!(man.contains(".TH imu-emu 1"), "{}", &man[..200]);
+    for word in ["\\-\\-protocol", "\\-\\-pps", "device time", "client"] {
+        assert!(man.contains(word), "no {word} in the man page");
+    }
+}

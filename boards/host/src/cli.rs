@@ -176,7 +176,17 @@ pub enum Sub {
     /// Talk to a unit (the emulator or a real one; a KERNEL, or an IMX-5
     /// with --protocol isb) over TCP or a serial port: info, bit, start,
     /// stop, get, set, commit-baud, udd, record, decode, plot.
-    Client(crate::client::ClientArgs),
+    Client(Box<crate::client::ClientArgs>),
+    /// Print a shell completion script (from this command-line
+    /// definition): `imu-emu completions bash > ~/.local/share/bash-completion/completions/imu-emu`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff, from this command-line definition):
+    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`.
+    Man,
 }
 
 /// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
@@ -333,8 +343,21 @@ pub fn one_line_panics() {
 /// the device on and serves it until SIGINT/SIGTERM.
 pub fn run(args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
-    if let Some(Sub::Client(c)) = args.command {
-        return crate::client::run(c);
+    match args.command {
+        Some(Sub::Client(c)) => return crate::client::run(*c),
+        Some(Sub::Completions { shell }) => {
+            let mut cmd = <Args as clap::CommandFactory>::command();
+            let mut text = Vec::new();
+            clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
+            return print_all(&text);
+        }
+        Some(Sub::Man) => {
+            let cmd = <Args as clap::CommandFactory>::command();
+            let mut text = Vec::new();
+            clap_mangen::Man::new(cmd).render(&mut text)?;
+            return print_all(&text);
+        }
+        None => {}
     }
     check_addresses(&args)?;
     check_combinations(&args)?;
@@ -352,6 +375,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     match &args.flash {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
+    }
+}
+
+/// Writes `text` to stdout; a reader that stops early (`| head`) is fine.
+fn print_all(text: &[u8]) -> anyhow::Result<()> {
+    match std::io::stdout().write_all(text) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
     }
 }
 
