@@ -90,6 +90,14 @@ pub struct Args {
     #[arg(long, value_name = "ADDR")]
     pub control: Option<String>,
 
+    /// Serve a live web view on this TCP address (`127.0.0.1:8080`; port 0
+    /// picks a free one): identity, status, rejections, link faults, live
+    /// plots of the output and the truth, buttons for the control socket's
+    /// commands. Its address is a stdout line: `web on http://ADDR/`.
+    /// Loopback only without --allow-remote.
+    #[arg(long, value_name = "ADDR")]
+    pub web: Option<String>,
+
     /// Generate a 1PPS rising edge every second of device time (so it
     /// follows --speed).
     #[arg(long)]
@@ -296,6 +304,9 @@ fn check_addresses(args: &Args) -> anyhow::Result<()> {
     if let Some(c) = &args.control {
         wanted.push(("--control", c.as_str()));
     }
+    if let Some(w) = &args.web {
+        wanted.push(("--web", w.as_str()));
+    }
     for (option, addr) in wanted {
         if check_local(option, addr, args.allow_remote)? {
             eprintln!(
@@ -376,6 +387,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
     }
+}
+
+/// The web view of `--web`, if asked for: its hub and its running server
+/// (which stops when dropped).
+fn web_view(
+    args: &Args,
+    product: Product,
+    name: &str,
+    places: &[String],
+) -> anyhow::Result<Option<(Arc<crate::web::Hub>, crate::web::Server)>> {
+    let Some(addr) = &args.web else {
+        return Ok(None);
+    };
+    let hub = crate::web::Hub::new(args.protocol, product, name, places);
+    let server = crate::web::Server::start(addr, Arc::clone(&hub))?;
+    Ok(Some((hub, server)))
 }
 
 /// Writes `text` to stdout; a reader that stops early (`| head`) is fine.
@@ -518,16 +545,21 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let (product, name) = product_of(args);
+    let places: Vec<String> = parts.iter().map(|(_, t)| t.describe()).collect();
+    let web = web_view(args, product, &name, &places)?;
     let mut out = std::io::stdout().lock();
-    for (_, t) in &parts {
-        writeln!(out, "listening on {}", t.describe())?;
+    for p in &places {
+        writeln!(out, "listening on {p}")?;
     }
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
     }
+    if let Some((_, server)) = &web {
+        writeln!(out, "web on http://{}/", server.addr)?;
+    }
     out.flush()?;
     drop(out);
-    let (product, name) = product_of(args);
     let setup = crate::fleet::Setup {
         product,
         name,
@@ -536,6 +568,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         pps: args.pps,
         trajectory,
         power_on_now: args.power_on == PowerOnAt::Now,
+        web: web.as_ref().map(|(hub, _)| Arc::clone(hub)),
     };
     eprintln!(
         "imu-emu: {} devices ({}), flash {}; each powers on {}",
@@ -625,10 +658,15 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let (product, name) = product_of(args);
+    let web = web_view(args, product, &name, &[transport.describe()])?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    if let Some((_, server)) = &web {
+        writeln!(out, "web on http://{}/", server.addr)?;
     }
     out.flush()?;
     drop(out);
@@ -657,7 +695,6 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     }
     let epoch = std::time::Instant::now();
-    let (product, name) = product_of(args);
     let cfg = PowerOn {
         product,
         boot: None,
@@ -680,6 +717,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         .with_seed(args.seed);
     if let Some(c) = control {
         runner = runner.with_control(c);
+    }
+    if let Some(tap) = web.as_ref().and_then(|(hub, _)| hub.tap(0)) {
+        runner = runner.with_web(tap);
     }
     if args.pps {
         runner = runner.with_pps();

@@ -25,6 +25,8 @@
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
 //!   (commands, record, decode, plot);
+//! * [`web`] — `--web ADDR`: the live web view (its own thread, fed by
+//!   the runners without blocking them);
 //! * [`plot`] — the one plot style (titled panels, labelled axes with
 //!   units, legend; PNG or SVG; embedded font).
 #![forbid(unsafe_code)]
@@ -45,3 +47,4 @@ pub mod trajectory;
 pub mod transport;
 pub mod uart;
 pub mod virtual_device;
+pub mod web;

@@ -231,6 +231,24 @@ fn cells(spec: &FieldSpec, b: &[u8]) -> Vec<Cell> {
     }
 }
 
+/// The numeric columns of set `did` read from `b` (vectors as
+/// `name_x`…; versions and text left out): what the web view plots.
+pub fn numbers(did: u8, b: &[u8]) -> Vec<(String, f64)> {
+    let Some((_, fs)) = fields::set(did) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for f in fs {
+        match fields::read(f, b) {
+            Value::Unsigned(u) => out.push((f.name.to_owned(), u as f64)),
+            Value::Float(x) => out.push((f.name.to_owned(), x)),
+            Value::Vec3(v) => out.extend(columns(f).into_iter().zip(v)),
+            Value::Version(_) | Value::Text(..) => {}
+        }
+    }
+    out
+}
+
 /// `field = value unit` lines of set `did` (`info`, `get SET`).
 pub fn show_set(did: u8, b: &[u8]) -> anyhow::Result<String> {
     let (_, fs) = set_of(did)?;

@@ -791,10 +791,34 @@ pub struct Recorder {
     step: Option<u16>,
     /// Whether rows carry `device_time_s` (the first frame had a clock).
     timed: bool,
-    /// The first frame's `imu_time_ns`, and the 2 kHz ticks counted since
-    /// the first frame (the counter unwrapped).
+    clock: DeviceClock,
+}
+
+/// Device time from the frames themselves: seconds since the first frame,
+/// from `imu_time_ns` (ns since power-on) when a frame has it, else from
+/// the counter (2 kHz ticks, ICD Tables 5.7, 5.10 note 3) unwrapped, which
+/// holds while frames are less than 32.768 s apart.
+#[derive(Debug, Clone, Default)]
+pub struct DeviceClock {
     t0_ns: Option<f64>,
+    last_counter: Option<u16>,
     ticks: u64,
+}
+
+impl DeviceClock {
+    /// The device time of frame `d`, s, or `None` if it carries no clock.
+    pub fn time(&mut self, d: &decode::Decoded) -> Option<f64> {
+        if let Some(ns) = d.get("imu_time_ns") {
+            let t0 = *self.t0_ns.get_or_insert(ns);
+            return Some((ns - t0) / 1e9);
+        }
+        let c = d.get("counter")? as u16;
+        if let Some(last) = self.last_counter {
+            self.ticks += u64::from(c.wrapping_sub(last));
+        }
+        self.last_counter = Some(c);
+        Some(self.ticks as f64 / f64::from(COUNTER_HZ))
+    }
 }
 
 impl Recorder {
@@ -810,26 +834,8 @@ impl Recorder {
             last_counter: None,
             step: None,
             timed: false,
-            t0_ns: None,
-            ticks: 0,
+            clock: DeviceClock::default(),
         }
-    }
-
-    /// Seconds of device time since the first row: from `imu_time_ns`
-    /// (ns since power-on) when the frame has it, else from the counter
-    /// (2 kHz ticks, Tables 5.7, 5.10 note 3) unwrapped, which holds
-    /// while rows are less than 32.768 s apart. Call before the counter
-    /// bookkeeping of the row.
-    fn device_time(&mut self, d: &decode::Decoded) -> Option<f64> {
-        if let Some(ns) = d.get("imu_time_ns") {
-            let t0 = *self.t0_ns.get_or_insert(ns);
-            return Some((ns - t0) / 1e9);
-        }
-        let c = d.get("counter")? as u16;
-        if let Some(last) = self.last_counter {
-            self.ticks += u64::from(c.wrapping_sub(last));
-        }
-        Some(self.ticks as f64 / f64::from(COUNTER_HZ))
     }
 
     /// Writes the frame as a row (with the host time `t`, seconds since
@@ -869,7 +875,7 @@ impl Recorder {
             Some(_) => {}
         }
         let device_t = if self.timed {
-            self.device_time(&d)
+            self.clock.time(&d)
         } else {
             None
         };
