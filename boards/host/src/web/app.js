@@ -1,9 +1,9 @@
-// The imu-emu web view: polls /api/state at 10 Hz, plots the decoded
+// The imu-emu web view: polls /api/state at about 12 Hz, plots the decoded
 // output against device time, sends control-socket lines. No library, no
 // network beyond this server.
 "use strict";
 
-const POLL_MS = 100;
+const POLL_MS = 80; // after each answer: about 12 polls a second
 const WINDOW_S = 10;
 const COLORS = ["#d62728", "#2ca02c", "#1f77b4"];
 
