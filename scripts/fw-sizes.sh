@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
-# Firmware image sizes against the budgets (README "Image sizes"): flash is
+# Firmware image sizes against the budgets (docs/firmware.md "Image sizes"): flash is
 # .vector_table (+ .boot2) + .text + .rodata + .data, static RAM is
 # .data + .bss + .uninit, as `llvm-size -A` reports them.
 #
 #   scripts/fw-sizes.sh NAME=ELF[:ram] ...   # ":ram" also checks static RAM
 #
-# Prints one line per image and exits 1 if any is over 64 KiB of flash (or,
-# where checked, 20 KiB of static RAM). The QEMU image's RAM holds an 8 KiB
-# RAM model of the flash, so CI checks its flash only.
+# Prints one line per image and exits 1 if any is over 256 KiB of flash (or,
+# where checked, 64 KiB of static RAM): the developers' guide's budgets.
+# The QEMU image's RAM includes an 8 KiB RAM model of the flash, which
+# counts against its RAM budget like any other static.
 set -euo pipefail
-FLASH_BUDGET=$((64 * 1024))
-RAM_BUDGET=$((20 * 1024))
+FLASH_BUDGET=$((256 * 1024))
+RAM_BUDGET=$((64 * 1024))
 status=0
 for arg in "$@"; do
   name=${arg%%=*}

@@ -45,7 +45,7 @@
 //! imports `kernel` or `isb`; [`ChainConfig`] and [`Health`] are neutral and
 //! each personality maps its parameters and status words onto them.
 //!
-//! # Decisions (README "Protocol notes")
+//! # Decisions (docs/kernel.md "Protocol notes")
 //!
 //! - FIR: Blackman-windowed sinc, −3 dB exactly at the Table 5.29 bandwidth,
 //!   order 192…12 at 2 kHz (doubled on the K201 at 4 kHz), coefficients in
@@ -83,7 +83,10 @@
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
 //! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
-//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The
+//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The vehicle
+//! state a board may set ([`SignalChain::set_vehicle`]) adds 144 B to
+//! both (measured on x86-64: 10 208 → 10 352 B; `f64` fields align alike
+//! on thumbv7em). The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192
@@ -109,7 +112,7 @@
 //! | stage | representation |
 //! |---|---|
 //! | truth ([`crate::sensor::motion::BuiltinMotionFixed`]) | °/s·2¹⁹, g·2²³; attitude Q62, phasors Q30, static truth cached |
-//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::dsp::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
+//! | error model ([`crate::sensor::errors::TriadEngineFixed`]) | same scale; M − I and noise levels as 14-bit-mantissa [`crate::math::fixed::Coef`]s, integer Irwin–Hall Gaussian and Gauss–Markov |
 //! | mounting ([`crate::ahrs::mounting::MountingFixed`]) | Q30 matrix |
 //! | attitude ([`crate::ahrs::attitude::AttitudeFixed`]) | rates in Q36 rad a tick, quaternion Q62, Euler angles by CORDIC |
 //! | FIR ([`crate::dsp::fir::FirBankFixed`]) | °/s·2¹⁷, g·2²⁰ (the sensor scale rounded), Q15 taps |
@@ -119,7 +122,7 @@
 //! The attitude runs every tick at full rate (no decimation): its stated
 //! bounds hold unchanged (coning 5° at 2 Hz, 10 s: 2e-4° against 1e-2°; a
 //! static unit stays within 1e-3° over 120 s). Products are exact
-//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::dsp::fixed::mul64`]),
+//! 32 × 32 → 64 from four 16-bit `MULS` ([`crate::math::fixed::mul64`]),
 //! since a plain `i64` product is a library call on ARMv6-M.
 //!
 //! # Cost
@@ -166,17 +169,17 @@
 //! tests): 3 800 with a GA frame at 2 kHz, 5 640–5 840 with the largest UDD
 //! frame. With `fixed-point` on thumbv6m (`scripts/v6m-tick.sh`, worst of
 //! 40 ticks, ±40): 11 920 a tick without output, 15 600 GA at 2 kHz,
-//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. README
-//! "Performance", docs/firmware-budget.md.
+//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. `docs/performance.md`,
+//! `docs/firmware-budget.md`.
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 
 use crate::ahrs::alignment::{AlignConfig, Alignment};
-use crate::ahrs::rotation::{Quat, Vec3};
 use crate::dsp::cascade::CascadeConfig;
 use crate::dsp::fir::{self, Bandwidth, FirDesign, CHANNELS};
 use crate::dsp::integrals::{Integrals, Integrate, NoIntegrals};
 use crate::dsp::variant::OutputVariant;
+use crate::math::rotation::{Quat, Vec3};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
@@ -184,6 +187,7 @@ use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
 use crate::time::Instant;
+use crate::vehicle::VehicleState;
 
 // Float or fixed point: chosen here, once. Both files define the same items
 // (`Core` with the same methods, `Fir`, `Attitude`, `Truth`, `Sensor`,
@@ -356,6 +360,9 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     ticks: u64,
     interval: f32,
     integrals: I,
+    /// The vehicle a board's source set for this tick
+    /// ([`SignalChain::set_vehicle`]); `None`: the built-in motion's.
+    vehicle: Option<VehicleState>,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -460,6 +467,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks: 0,
             interval: dt,
             integrals: I::default(),
+            vehicle: None,
         }
     }
 
@@ -513,6 +521,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks,
             interval,
             integrals,
+            vehicle,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -527,9 +536,8 @@ impl<I: Integrate> SignalChain<I> {
         *cfg_ = cfg;
         *core_ = core;
         fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
-        // Hosts: a unit without the aux accelerometer does not filter its
-        // (zero) channels; no output reads them (`Core::take`).
-        #[cfg(not(target_os = "none"))]
+        // A unit without the aux accelerometer does not filter its (zero)
+        // channels; no output reads them (`Core::take`).
         fir.set_aux_live(has_aux);
         *ahrs = Ahrs::Running;
         *bias = [0.0; 3];
@@ -539,6 +547,7 @@ impl<I: Integrate> SignalChain<I> {
         *ticks = 0;
         *interval = dt;
         *integrals = I::default();
+        *vehicle = None;
         self.refresh_errors();
     }
 
@@ -566,12 +575,47 @@ impl<I: Integrate> SignalChain<I> {
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
+        self.vehicle = None;
         self.core.set_motion(m, self.dt);
+    }
+
+    /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
+    /// the chain measures `truth` (for the script and full-state sources
+    /// `state.truth()`; for rate/force rows the row's own values, so their
+    /// bytes stay as they were) and reports `state` as the unit's vehicle
+    /// ([`SignalChain::vehicle`]) until the next call or
+    /// [`SignalChain::set_motion`].
+    pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
+        self.core.set_motion(Motion::Sample(truth), self.dt);
+        self.vehicle = Some(state);
+    }
+
+    /// The unit's vehicle now: the state a board's source set
+    /// ([`SignalChain::set_vehicle`]), or the built-in motion's
+    /// ([`crate::vehicle::builtin_state`]: its site, at rest, its attitude
+    /// and its last truth; time = ticks × tick period). Derived when read:
+    /// the tick does no `f64` work for it.
+    pub fn vehicle(&self) -> VehicleState {
+        match &self.vehicle {
+            Some(v) => *v,
+            None => crate::vehicle::builtin_state(
+                self.core.motion.motion(),
+                self.core.motion.attitude(),
+                &self.core.motion.truth_now(),
+                self.ticks as f64 * f64::from(self.dt),
+            ),
+        }
     }
 
     /// Which axes the motion describes (default: the unit's own).
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;
+    }
+
+    /// The built-in motion in force (a board's vehicle source plays as a
+    /// [`Motion::Sample`]).
+    pub fn core_motion(&self) -> &Motion {
+        self.core.motion.motion()
     }
 
     /// The true attitude of the built-in motion at the last tick (housing or
@@ -681,8 +725,7 @@ impl<I: Integrate> SignalChain<I> {
     /// attitude. `now` is the tick's time (handed to the motion source).
     pub fn tick(&mut self, now: Instant) {
         let truth = self.core.builtin_truth(now, self.dt);
-        // Hosts: a truth already within the bounds skips the bounding.
-        #[cfg(not(target_os = "none"))]
+        // A truth already within the bounds skips the bounding.
         if self.core.builtin_truth_bounded() {
             return self.process_bounded(&truth);
         }
@@ -715,11 +758,10 @@ impl<I: Integrate> SignalChain<I> {
             arith::frozen(&self.fir.last_input())
         };
 
-        // Hosts: the filters first (they do not depend on the AHRS, nor it
+        // The filters first (they do not depend on the AHRS, nor it
         // on them), so that the AHRS's long chain of dependent products
         // overlaps the encoder's work after the tick instead of the
         // filters' independent ones.
-        #[cfg(not(target_os = "none"))]
         self.filters(&sensor);
         let c = &mut self.core;
 
@@ -736,8 +778,6 @@ impl<I: Integrate> SignalChain<I> {
             }
             Ahrs::Running => c.run_attitude(&gc, &ac, &self.bias),
         }
-        #[cfg(target_os = "none")]
-        self.filters(&sensor);
     }
 
     /// The filters of a tick (sensor axes): FIR → cascade → accumulator.

@@ -25,72 +25,21 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
 use crate::chain::SignalChain;
+// The default personality, and only that: its convenience constructors
+// live beside it (`kernel/device.rs`).
 use crate::kernel::Kernel;
 use crate::line::Line;
 use crate::model::Product;
-use crate::personality::Personality;
+use crate::personality::{Context, Personality};
 use crate::store::{ParamStore, StoreError};
-use crate::time::Instant;
+use crate::time::{Instant, TimeBase};
 
-pub use crate::kernel::device::{RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+pub use crate::io::{Event, Level, Mode, Pin};
 pub use crate::line::TX_CAP;
-
-/// Nanoseconds per second.
-const NS_PER_S: u64 = 1_000_000_000;
 /// Where the parameter store lives in the device's flash.
 pub const STORE_BASE: u32 = 0;
 /// Board events the device can hold before the board takes them.
 const EVENTS: usize = 16;
-
-/// Logic level of an input pin.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Level {
-    /// Low.
-    Low,
-    /// High.
-    High,
-}
-
-/// Input pins of the connector (KERNEL ICD Table 4.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Pin {
-    /// 1PPS input (pin 3); a rising edge marks the second.
-    Pps,
-    /// External trigger input (pin 8).
-    Extrig,
-}
-
-/// Operating mode (KERNEL ICD 5.1, 5.3.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    /// Waiting for commands.
-    Idle,
-    /// Initial alignment before a stream with orientation (5.3.1).
-    Aligning,
-    /// Streaming.
-    Continuous,
-    /// Entered by BOOT at power-on; answers nothing until power cycle.
-    FirmwareUpdate,
-}
-
-/// Something the board must act on, from [`Device::poll_event`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Event {
-    /// Set the UART to this line rate (bit/s) now. Every byte queued before
-    /// the switch has already been handed out by [`Device::poll_tx`]; bytes
-    /// after it are held back until this event is taken. Raised at power-on
-    /// and on a rate change (KERNEL CommitBaudRate, 5.3.9).
-    LineRate(u32),
-    /// Drive the TOV output (ICD 4.1.4) to `level` at time `at` (which may
-    /// lie in the future: the falling edge comes when the frame's last bit
-    /// has left the line).
-    Tov {
-        /// New pin level.
-        level: Level,
-        /// When.
-        at: Instant,
-    },
-}
 
 /// Board-side facts fixed at power-on.
 #[derive(Debug, Clone, Copy)]
@@ -104,39 +53,9 @@ pub struct PowerOn {
     pub seed: u64,
 }
 
-/// The time base of the shell: power-on, ticks, the latest time the board
-/// told, the last RX byte, and 1PPS (KERNEL 5.2.3.1).
-#[derive(Debug, Clone, Copy)]
-struct TimeBase {
-    powered_at: Instant,
-    ticks: u64,
-    /// Latest time the board told us (every entry point carries one).
-    clock: Instant,
-    last_rx: Instant,
-    /// Start of the current second: the last 1PPS edge, or power-on,
-    /// advanced by whole seconds.
-    second_start: Instant,
-    last_pps: Option<Instant>,
-    pps_since_frame: bool,
-}
-
-impl TimeBase {
-    const fn new(now: Instant) -> Self {
-        TimeBase {
-            powered_at: now,
-            ticks: 0,
-            clock: now,
-            last_rx: now,
-            second_start: now,
-            last_pps: None,
-            pps_since_frame: false,
-        }
-    }
-}
-
 /// What every personality shares: power, BOOT, flash and store, the line,
-/// events, the time base, and the signal chain. A personality gets it at
-/// every call ([`crate::personality::Personality`]).
+/// events, the time base, and the signal chain. A personality sees it
+/// through [`Context`] at every call ([`crate::personality::Personality`]).
 pub struct Shell<F: NorFlash, P: Personality> {
     flash: F,
     store: ParamStore<P::Image>,
@@ -184,140 +103,72 @@ impl<F: NorFlash, P: Personality> Shell<F, P> {
         };
         self.firmware_update = self.cfg.boot == Some(active);
     }
+}
 
-    /// The emulated product.
-    pub fn product(&self) -> Product {
+impl<F: NorFlash, P: Personality> Context<P::Integrate> for Shell<F, P> {
+    fn product(&self) -> Product {
         self.cfg.product
     }
 
-    /// The seed of every random process (and of the serial number).
-    pub fn seed(&self) -> u64 {
+    fn seed(&self) -> u64 {
         self.cfg.seed
     }
 
-    /// Whether BOOT put the device in firmware-update mode at power-on.
-    pub fn firmware_update(&self) -> bool {
+    fn firmware_update(&self) -> bool {
         self.firmware_update
     }
 
-    /// The signal chain.
-    pub fn chain(&self) -> &SignalChain<P::Integrate> {
+    fn chain(&self) -> &SignalChain<P::Integrate> {
         &self.chain
     }
 
-    /// The signal chain, mutably (configuration, output).
-    pub fn chain_mut(&mut self) -> &mut SignalChain<P::Integrate> {
+    fn chain_mut(&mut self) -> &mut SignalChain<P::Integrate> {
         &mut self.chain
     }
 
-    /// Asks for a software reset (a personality's reset command): the
-    /// device powers on again — BOOT floating, the image reloaded — at the
-    /// first tick after the bytes already queued (the command's reply)
-    /// have been handed to the board.
-    pub fn request_reset(&mut self) {
-        self.reset_pending = true;
+    fn push_frame(&mut self, n: usize, fill: impl FnOnce(&mut [u8]) -> bool) -> Option<Instant> {
+        self.line.push_frame(n, self.time.clock(), fill).end()
     }
 
-    /// The serial line (read-only).
-    pub fn line(&self) -> &Line {
-        &self.line
+    fn line_rate(&self) -> u32 {
+        self.line.rate()
     }
 
-    /// Queues an `n`-byte frame that `fill` writes in place at the device's
-    /// latest time ([`Line::push_frame`]).
-    pub fn push_frame(
-        &mut self,
-        n: usize,
-        fill: impl FnOnce(&mut [u8]) -> bool,
-    ) -> Option<Instant> {
-        self.line.push_frame(n, self.time.clock, fill).end()
+    fn tx_dropped(&self) -> u32 {
+        self.line.dropped()
     }
 
-    /// Sets the line rate at once and tells the board ([`Event::LineRate`]),
-    /// as at power-on.
-    pub fn set_line_rate(&mut self, bps: u32) {
+    fn set_line_rate(&mut self, bps: u32) {
         self.line.set_rate(bps);
         self.push_event(Event::LineRate(self.line.rate()));
     }
 
-    /// Switches the line rate after the bytes already queued have left at
-    /// the old rate (the board is told when it has taken them).
-    pub fn switch_line_rate(&mut self, bps: u32) {
+    fn switch_line_rate(&mut self, bps: u32) {
         self.line.switch_rate_after_queued(bps);
     }
 
-    /// Queues a board event (dropped if 16 are already waiting).
-    pub fn push_event(&mut self, ev: Event) {
+    fn push_event(&mut self, ev: Event) {
         let _ = self.events.push_back(ev);
     }
 
-    /// Loads the personality's image from flash into `image`: `Ok(true)` if
-    /// a valid one was found.
-    pub fn load_image(&mut self, image: &mut [u8]) -> Result<bool, StoreError> {
+    fn load_image(&mut self, image: &mut [u8]) -> Result<bool, StoreError> {
         self.store.load(&mut self.flash, image)
     }
 
-    /// Saves the personality's image, power-fail safe ([`ParamStore::save`]).
-    pub fn save_image(&mut self, image: &[u8]) -> Result<(), StoreError> {
+    fn save_image(&mut self, image: &[u8]) -> Result<(), StoreError> {
         self.store.save(&mut self.flash, image)
     }
 
-    /// When the device powered on.
-    pub fn powered_at(&self) -> Instant {
-        self.time.powered_at
+    fn request_reset(&mut self) {
+        self.reset_pending = true;
     }
 
-    /// Internal-rate ticks since power-on.
-    pub fn ticks(&self) -> u64 {
-        self.time.ticks
+    fn time(&self) -> &TimeBase {
+        &self.time
     }
 
-    /// The latest time the board told the device.
-    pub fn clock(&self) -> Instant {
-        self.time.clock
-    }
-
-    /// When the last host → device byte arrived (power-on if none).
-    pub fn last_rx(&self) -> Instant {
-        self.time.last_rx
-    }
-
-    /// Restarts the RX idle time from `now` (a personality that abandoned a
-    /// frame cut short).
-    pub fn touch_rx(&mut self, now: Instant) {
-        self.time.last_rx = now;
-    }
-
-    /// Nanoseconds since the current second began at `now` (KERNEL
-    /// 5.2.3.1): the second starts at the last 1PPS edge, or at power-on,
-    /// advanced by whole seconds (a division only when a second boundary
-    /// has passed).
-    pub fn second_fraction_ns(&mut self, now: Instant) -> u64 {
-        let t = &mut self.time;
-        let mut into_second = now.since(t.second_start);
-        if into_second >= NS_PER_S {
-            let whole = into_second - into_second % NS_PER_S;
-            t.second_start = t.second_start.plus_nanos(whole);
-            into_second -= whole;
-        }
-        into_second
-    }
-
-    /// Whether a 1PPS rising edge came since the last
-    /// [`Shell::clear_pps_flag`].
-    pub fn pps_since_frame(&self) -> bool {
-        self.time.pps_since_frame
-    }
-
-    /// Clears the "1PPS since the last frame" flag (a frame carried it).
-    pub fn clear_pps_flag(&mut self) {
-        self.time.pps_since_frame = false;
-    }
-
-    /// Whether more than a second has passed at `now` without a 1PPS edge
-    /// (counted from power-on when none came).
-    pub fn pps_lost(&self, now: Instant) -> bool {
-        now.since(self.time.last_pps.unwrap_or(self.time.powered_at)) > NS_PER_S
+    fn time_mut(&mut self) -> &mut TimeBase {
+        &mut self.time
     }
 }
 
@@ -336,43 +187,6 @@ impl<F: NorFlash, P: Personality> core::fmt::Debug for Device<F, P> {
             .field("line_rate", &self.shell.line.rate())
             .field("tx_len", &self.shell.line.len())
             .finish()
-    }
-}
-
-impl<F: NorFlash> Device<F> {
-    /// Powers a KERNEL on with BOOT floating and seed 0.
-    pub fn power_on(product: Product, flash: F, now: Instant) -> Self {
-        Self::power_on_with(
-            PowerOn {
-                product,
-                boot: None,
-                seed: 0,
-            },
-            flash,
-            now,
-        )
-    }
-
-    /// Powers a KERNEL on: parameters load from flash (factory defaults if
-    /// it holds none), BOOT is checked, AutoStart runs (section 6).
-    pub fn power_on_with(cfg: PowerOn, flash: F, now: Instant) -> Self {
-        Self::new(cfg, flash, now)
-    }
-
-    /// [`Device::power_on_with`] straight into `slot` ([`Device::new_into`]).
-    pub fn power_on_into(
-        slot: &mut MaybeUninit<Self>,
-        cfg: PowerOn,
-        flash: F,
-        now: Instant,
-    ) -> &mut Self {
-        Self::new_into(slot, cfg, flash, now)
-    }
-
-    /// The live value of a KERNEL parameter (what ReadRAM answers), if the
-    /// ID is one of Table 5.24.
-    pub fn param_ram(&self, id: u16) -> Option<&[u8]> {
-        self.personality.param_ram(id)
     }
 }
 
@@ -432,9 +246,9 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
             return;
         }
         let t = &mut self.shell.time;
-        t.clock = t.clock.max(now);
+        t.tell(now);
         if !bytes.is_empty() {
-            t.last_rx = now;
+            t.touch_rx(now);
         }
         self.personality.on_rx(bytes, &mut self.shell, now);
     }
@@ -450,8 +264,8 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
             self.cold_start(now);
         }
         let t = &mut self.shell.time;
-        t.clock = t.clock.max(now);
-        t.ticks = t.ticks.wrapping_add(1);
+        t.tell(now);
+        t.tick();
         self.personality.before_tick(&mut self.shell, now);
         self.shell.chain.tick(now);
         self.personality.on_tick(&mut self.shell, now);
@@ -465,11 +279,9 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
             return;
         }
         let t = &mut self.shell.time;
-        t.clock = t.clock.max(at);
+        t.tell(at);
         if (pin, level) == (Pin::Pps, Level::High) {
-            t.last_pps = Some(at);
-            t.second_start = at;
-            t.pps_since_frame = true;
+            t.pps(at);
         }
         self.personality.on_pin(pin, level, &mut self.shell, at);
     }

@@ -1,9 +1,10 @@
 //! # imu-emu — the emulator core
 //!
 //! A sans-IO, `no_std`, allocation-free emulator of the Inertial Labs KERNEL
-//! IMU family, implementing the KERNEL Interface Control Document rev 1.42
-//! ("the ICD"), built so that a second protocol (the Inertial Sense IMX
-//! over ISB) sits beside it. Boards hand the core bytes, ticks, pin edges
+//! IMU family (the KERNEL Interface Control Document rev 1.42, "the ICD")
+//! and of an Inertial Sense IMX-5 speaking the ISB protocol (protocol
+//! 2.1.0.0, as the vendor's SDK 2.7.1 speaks it): one device shell, two
+//! protocol personalities. Boards hand the core bytes, ticks, pin edges
 //! and time; the core hands back bytes and events. It never reads a clock
 //! or a port. `ARCHITECTURE.md` in the repository explains the layers.
 //!
@@ -39,7 +40,8 @@
 //! insides, documented but not a stable interface. Protocol-free: [`chain`],
 //! [`sensor`], [`dsp`], [`ahrs`], [`math`], [`store`], [`nor`], [`line`](mod@line),
 //! [`framing`], [`time`]; the shell: [`device`], [`personality`]; the
-//! personalities: [`kernel`], [`isb`] (its packet layer so far).
+//! personalities: [`kernel`], [`isb`] (packets, messages, NMEA,
+//! data sets, the IMX-5 personality).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -52,6 +54,7 @@ pub mod chain;
 pub mod device;
 pub mod dsp;
 pub mod framing;
+pub mod io;
 pub mod isb;
 pub mod kernel;
 pub mod line;
@@ -63,9 +66,11 @@ pub mod schedule;
 pub mod sensor;
 pub mod store;
 pub mod time;
+pub mod vehicle;
 
 pub use chain::{Faults, SignalChain};
-pub use device::{Device, Event, Level, Mode, Pin, PowerOn, Shell};
+pub use device::{Device, PowerOn, Shell};
+pub use io::{Event, Level, Mode, Pin};
 pub use kernel::Kernel;
 pub use model::Product;
 pub use nor::RamNor;

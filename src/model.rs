@@ -364,7 +364,7 @@ impl core::fmt::Display for ProductError {
 /// The Inertial Sense IMX-5 the ISB personality emulates (IMU mode): not
 /// a KERNEL model (it is not in [`MODELS`], so `--model` never takes it);
 /// only its sensor half is used — the chain at 2 kHz, EXTRIG as the strobe
-/// input, gyro ±2000 °/s. Decision (README "ISB personality"): the IMX-5's
+/// input, gyro ±2000 °/s. Decision (docs/isb.md): the IMX-5's
 /// ±16 g accelerometer is modelled with the nearest range the sensor
 /// model has, ±15 g; the grade is the mid one. The KERNEL columns
 /// (formats, LPF codes, IMU_type) are empty or zero.

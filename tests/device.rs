@@ -617,7 +617,7 @@ fn power_on_in_place_by_value_and_power_cycle_agree() {
 /// Time flag 0x0001 ("1PPS received between the last and current frame",
 /// Table 5.8 note 2) of a stream's first frame covers the time since the
 /// data command: an edge while idle, or during an earlier stream after its
-/// last frame, is not reported (README "Protocol notes").
+/// last frame, is not reported (docs/kernel.md "Protocol notes").
 #[test]
 fn a_pps_edge_before_the_data_command_is_not_flagged_in_the_first_frame() {
     let mut b = Bench::new("K110");

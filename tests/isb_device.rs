@@ -1,7 +1,6 @@
 //! The ISB personality through the core: the emulated IMX-5 driven with
 //! bytes, ticks and pin edges exactly as a board drives it, answers read
-//! back with the ISB packet decoder (`src/isb/device.rs`; README "ISB
-//! personality").
+//! back with the ISB packet decoder (`src/isb/device.rs`; `docs/isb.md`).
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
 use imu_emu::isb::did;

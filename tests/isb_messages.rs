@@ -1,6 +1,6 @@
-//! The ISB message layer (NOTES.md "ISB" and "what the vendor's
+//! The ISB message layer (`docs/protocol-facts.md` "ISB" and "what the vendor's
 //! command-line tool needs"; the ISB protocol page): every hex example of
-//! the page and of NOTES.md decoded and answered byte for byte, the
+//! the page and of protocol-facts.md decoded and answered byte for byte, the
 //! FLASH_CONFIG checksum against a hand computation, the NMEA commands and
 //! the junk the vendor tool sends, and properties of the one input
 //! classifier (any chunking, resync).
@@ -110,7 +110,7 @@ fn get_imu_period_1_streams_every_nav_period() {
 #[test]
 fn nack_to_a_bad_get() {
     // GET of DID 132 (>= DID_COUNT), of DID 95, and a GET with a short
-    // payload: each answered by the NOTES.md NACK.
+    // payload: each answered by the protocol-facts.md NACK.
     let golden = hex("ef 49 02 00 09 00 03 00 00 00 00 00 00 00 00 46 97");
     for d in [132u16, 95, 200, 0xFFFF] {
         let g = GetRequest {
@@ -232,7 +232,7 @@ fn the_ppd_preset_packet_sets_rmc_and_gets_the_notes_ack() {
     let r = Rmc::decode(&rmc);
     assert_eq!(r.bits, 0xC000_0090_0135_3CE2);
     assert_eq!(r.options, sets::rmc::OPTIONS_PRESERVE_CTRL);
-    // NOTES.md: the 2.7 preset differs from the page's in two bits.
+    // protocol-facts.md: the 2.7 preset differs from the page's in two bits.
     assert_eq!(sets::rmc::PRESET_PPD_2_7 ^ r.bits, 0x0000_6000_0000_0000);
     assert_ne!(r.bits & sets::rmc::BITS_PIMU, 0);
     assert_ne!(r.bits & sets::rmc::BITS_PRESET, 0);
@@ -484,7 +484,7 @@ fn flash_checksum_matches_a_hand_computation() {
 
 #[test]
 fn the_tools_own_checksum_upload_comes_out_identical() {
-    // NOTES.md: `-flashCfg=` uploads the changed words plus the checksum it
+    // protocol-facts.md: `-flashCfg=` uploads the changed words plus the checksum it
     // computed itself.
     let mut dev = FlashConfig::factory();
     let mut host = dev.clone();

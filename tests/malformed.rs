@@ -2,7 +2,7 @@
 //! host → device input, each asserting
 //!
 //! 1. the documented reaction — the exact reply bytes, or exact silence
-//!    (README "Protocol notes", "Malformed input");
+//!    (docs/kernel.md "Protocol notes", "Malformed input");
 //! 2. that the device resyncs on the next good frame: a GetBIT (ICD 5.3.4)
 //!    sent right behind the bad bytes — in the same chunk, in a chunk of its
 //!    own, and byte by byte — is answered exactly once;
@@ -19,11 +19,12 @@ mod common;
 use common::xorshift::XorShift;
 use common::*;
 
-use imu_emu::device::{Device, Event, Mode, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+use imu_emu::device::{Device, Event, Mode};
 use imu_emu::kernel::command::Command;
 use imu_emu::kernel::frame::encode;
 use imu_emu::kernel::params::PARAMS;
 use imu_emu::kernel::rate::max_rate;
+use imu_emu::kernel::{RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
 use imu_emu::time::Instant;
 
 /// GetBIT, the good frame every case ends with (ICD 5.3.4 example).
@@ -162,7 +163,7 @@ fn silent(model: &str, bad: &[u8]) {
     case(model, bad, &[]);
 }
 
-/// The UDD config reply (Table 5.20 as corrected in NOTES.md).
+/// The UDD config reply (Table 5.20 as corrected in protocol-facts.md).
 fn udd_reply(checksum: u16, errors: u8, wrong: u16, max: u32) -> Vec<u8> {
     let c = checksum.to_le_bytes();
     let w = wrong.to_le_bytes();
@@ -196,7 +197,7 @@ fn wrong_header_is_skipped_silently() {
 
 #[test]
 fn wrong_type_byte_or_id_is_ignored() {
-    // Only `type 0, id 0` frames are commands (Table 5.2, NOTES.md): a
+    // Only `type 0, id 0` frames are commands (Table 5.2, protocol-facts.md): a
     // well-formed GetBIT as a device frame (type 1), an unknown type, or
     // with a non-zero id gets no answer.
     for (t, id) in [
@@ -303,7 +304,7 @@ fn unknown_command_gets_no_answer() {
         &[0x13],
         &[0xFF],
         &[0x12, 0x00],       // a known code with a trailing byte
-        &[0xB1, 0x6C],       // the vendor SDK's 2-byte request (NOTES.md)
+        &[0xB1, 0x6C],       // the vendor SDK's 2-byte request (protocol-facts.md)
         &[0xB3, 0xFF, 0x12], // neither SaveFlash nor ReadRAM
     ] {
         silent("K110", &frame(payload));

@@ -4,10 +4,10 @@
 //! (issue 13, "The host runner under abuse": a trajectory value of 3.5e38,
 //! `motion rotate 1e6 0 0`).
 
-use imu_emu::ahrs::rotation::QuatIntegrator;
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::kernel::status::{self, usw};
+use imu_emu::math::rotation::QuatIntegrator;
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion, Truth};
 use imu_emu::time::Instant;

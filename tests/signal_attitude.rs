@@ -11,9 +11,9 @@
 //! tilt the accelerometer errors imply (bias/g, ≈ 0.06° for 1 mg); rotation
 //! 90°/s × 4 s — 0.5° (scale factor and misalignment dominate).
 
-use imu_emu::ahrs::rotation::*;
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::kernel::status::Status;
+use imu_emu::math::rotation::*;
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion};
 use imu_emu::time::Instant;

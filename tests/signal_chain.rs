@@ -2,12 +2,12 @@
 //! output variants (5.3.6), status words (5.4) and GetBIT (Table 5.18),
 //! faults, temperature, the K201's 4 kHz rate.
 
-use imu_emu::ahrs::rotation::{quat_conj, quat_mul, Quat};
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::dsp::fir::Bandwidth;
 use imu_emu::dsp::OutputVariant;
 use imu_emu::kernel::config::{self, lpf_bandwidth};
 use imu_emu::kernel::status::{usw, Status};
+use imu_emu::math::rotation::{quat_conj, quat_mul, Quat};
 use imu_emu::model::Product;
 use imu_emu::sensor::{ErrorModel, Motion, Sample};
 use imu_emu::time::Instant;
@@ -456,8 +456,9 @@ fn from_block_reads_the_parameter_rows() {
     );
 }
 
-/// The RAM budget (the firmware has 20 KiB for the whole image; the device
-/// around the chain takes ~6 KiB): the chain fits 10 KiB in either build.
+/// The chain's share of RAM (the firmware has 64 KiB of static RAM for the
+/// whole image; the device around the chain takes ~6 KiB): the chain fits
+/// 10 KiB in either build.
 #[test]
 fn size_of_the_chain_fits_the_10_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();

@@ -10,8 +10,8 @@
 
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::dsp::integrals::{window, Increment, Integrals};
+use imu_emu::math::G;
 use imu_emu::model::Product;
-use imu_emu::sensor::motion::G;
 use imu_emu::sensor::{ErrorModel, MotionSource, Truth};
 use imu_emu::time::Instant;
 

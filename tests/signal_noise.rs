@@ -207,7 +207,8 @@ fn chain_output_noise_and_mean_match_the_model() {
 /// `run` for the fixed-point engine (the `fixed-point` build's chain uses
 /// it): the same parameters, measurements in °/s·2¹⁹.
 fn run_fixed(noise: f32, bi: f32, tc: f32, seconds: f64, seed: u64) -> Allan {
-    use imu_emu::sensor::errors::{TriadEngineFixed, GYRO_BITS};
+    use imu_emu::math::GYRO_BITS;
+    use imu_emu::sensor::errors::TriadEngineFixed;
     let errors = white_and_gm(noise, bi, tc);
     let mut e = TriadEngineFixed::new(1e9, GYRO_BITS);
     e.configure(&errors, 25.0, (1.0 / FS) as f32);
@@ -251,7 +252,8 @@ fn fixed_point_engine_recovers_arw_and_bias_instability_within_10_percent() {
 /// output's 2⁻¹⁹ °/s, whatever the truth.
 #[test]
 fn fixed_point_engine_tracks_the_float_engine() {
-    use imu_emu::sensor::errors::{TriadEngineFixed, GYRO_BITS};
+    use imu_emu::math::GYRO_BITS;
+    use imu_emu::sensor::errors::TriadEngineFixed;
     let product = Product::parse("K120").unwrap();
     let mut draw = Rng::new(5);
     let errors = ErrorModel::for_product(&product, &mut draw).gyro;

@@ -37,7 +37,7 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use super::rotation::{quat_from_euler, quat_rotate_inv, Quat, Vec3};
+use crate::math::rotation::{quat_from_euler, quat_rotate_inv, Quat, Vec3};
 use crate::math::{asinf, atan2f};
 use libm::sqrtf;
 
@@ -255,9 +255,56 @@ impl Alignment {
 pub fn level_from(f: &Vec3) -> Quat {
     let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
     if n < 1e-6 {
-        return super::rotation::QUAT_IDENTITY;
+        return crate::math::rotation::QUAT_IDENTITY;
     }
     let pitch = asinf((f[1] / n).clamp(-1.0, 1.0));
     let roll = atan2f(-f[0], f[2]);
     quat_from_euler(0.0, pitch, roll)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rotation::level_q30;
+
+    /// Levelling in integers agrees with the float levelling.
+    #[test]
+    fn fixed_point_levelling_matches_float() {
+        for f in [
+            [0.0f32, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.1, -0.2, 0.97],
+            [-0.5, 0.5, -0.7],
+            [0.01, 0.999, 0.01],
+        ] {
+            // f64 reference: pitch asin(f_y/|f|), roll atan2(−f_x, f_z).
+            let g = f.map(f64::from);
+            let n = libm::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            let (p, r) = (libm::asin(g[1] / n) / 2.0, libm::atan2(-g[0], g[2]) / 2.0);
+            let (cp, sp, cr, sr) = (libm::cos(p), libm::sin(p), libm::cos(r), libm::sin(r));
+            let reference = [cp * cr, sp * cr, cp * sr, sp * sr];
+            let angle = |q: [f64; 4]| {
+                let d = [
+                    reference[0] * q[1] - reference[1] * q[0] - reference[2] * q[3]
+                        + reference[3] * q[2],
+                    reference[0] * q[2] + reference[1] * q[3]
+                        - reference[2] * q[0]
+                        - reference[3] * q[1],
+                    reference[0] * q[3] - reference[1] * q[2] + reference[2] * q[1]
+                        - reference[3] * q[0],
+                ];
+                2.0 * libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            };
+            let q = level_q30(&f.map(|x| (x * (1u32 << 23) as f32) as i32));
+            let qf = level_from(&f);
+            let e = angle(q.map(|x| f64::from(x) / f64::from(1u32 << 30)));
+            assert!(e < 1e-6, "{f:?}: fixed {e} rad");
+            // The float levelling (asin near ±90°) is the coarser one.
+            assert!(angle(qf.map(f64::from)) < 1e-4, "{f:?}");
+        }
+        assert_eq!(level_q30(&[0, 0, 0]), [1 << 30, 0, 0, 0]);
+    }
 }

@@ -35,7 +35,7 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use super::rotation::{
+use crate::math::rotation::{
     canonical, cross, euler_from_quat, quat_rotate_inv, Quat, QuatIntegrator, Vec3, QUAT_IDENTITY,
 };
 
@@ -153,9 +153,9 @@ impl Attitude {
 
 // ----- fixed point (the `fixed-point` build) -----
 
-use super::rotation::{euler_deg_q30, quat_rotate_inv_q30, up_in_body_q30, QuatFixed};
-use crate::dsp::fixed::{mul64, mul_q30, mul_shr, Coef};
-use crate::sensor::errors::{ACC_BITS, GYRO_BITS};
+use crate::math::fixed::{mul64, mul_q30, mul_shr, Coef};
+use crate::math::rotation::{euler_deg_q30, quat_rotate_inv_q30, up_in_body_q30, QuatFixed};
+use crate::math::units::{ACC_BITS, GYRO_BITS};
 
 /// [`Attitude`] in integers, for the `fixed-point` build: the same
 /// algorithm (trapezoid + two-sample coning rotation vector, Earth rate
@@ -211,7 +211,7 @@ impl AttitudeFixed {
     }
 
     /// [`AttitudeFixed::set`] from a Q30 quaternion (no float arithmetic).
-    pub fn set_q30(&mut self, q: super::rotation::QuatQ30) {
+    pub fn set_q30(&mut self, q: crate::math::rotation::QuatQ30) {
         self.q = QuatFixed::from_q30(q);
     }
 
@@ -220,7 +220,7 @@ impl AttitudeFixed {
     pub fn set_bias(&mut self, bias_dps: &Vec3, dt: f32) {
         // π/180 · 2³⁶ · dt: Q36 radians per tick per °/s.
         let k = 1.199_381_1e9_f32 * dt;
-        self.bias_tick = bias_dps.map(|b| crate::dsp::fixed::to_fixed(b * k, 0));
+        self.bias_tick = bias_dps.map(|b| crate::math::fixed::to_fixed(b * k, 0));
     }
 
     /// [`Attitude::note_rate`] (gyro scaled).

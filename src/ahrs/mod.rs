@@ -1,11 +1,10 @@
-//! Attitude and heading reference: orientation forms and conversions
-//! (ICD Appendix C), the mounting rotation (Appendix B), initial alignment
-//! (5.3.1, 5.7) and attitude propagation.
+//! Attitude and heading reference: the mounting rotation (ICD Appendix B),
+//! initial alignment (5.3.1, 5.7) and attitude propagation. The orientation
+//! forms and conversions they use (Appendix C) are [`crate::math::rotation`].
 
 pub mod alignment;
 pub mod attitude;
 pub mod mounting;
-pub mod rotation;
 
 pub use alignment::{AlignConfig, AlignResult, Alignment};
 pub use attitude::Attitude;

@@ -21,7 +21,7 @@
 //! | −90 0 0 | turned 90° counter-clockwise seen from above | +Y | −X | +Z |
 //! | 0 0 90 | rolled 90° right side down | −Z | +Y | +X |
 
-use super::rotation::{dcm_from_euler, mat_t_vec, mat_vec, Mat3, Vec3, MAT3_IDENTITY};
+use crate::math::rotation::{dcm_from_euler, mat_t_vec, mat_vec, Mat3, Vec3, MAT3_IDENTITY};
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
@@ -110,7 +110,7 @@ impl MountingFixed {
     /// The Q30 matrix of `m`.
     pub fn new(m: &Mounting) -> Self {
         MountingFixed {
-            m: m.matrix().map(|row| row.map(super::rotation::q30)),
+            m: m.matrix().map(|row| row.map(crate::math::rotation::q30)),
             identity: m.is_identity(),
         }
     }
@@ -122,7 +122,7 @@ impl MountingFixed {
             return *v;
         }
         let m = &self.m;
-        let p = crate::dsp::fixed::mul_q30;
+        let p = crate::math::fixed::mul_q30;
         [
             p(m[0][0], v[0]) + p(m[0][1], v[1]) + p(m[0][2], v[2]),
             p(m[1][0], v[0]) + p(m[1][1], v[1]) + p(m[1][2], v[2]),
@@ -137,7 +137,7 @@ impl MountingFixed {
             return *v;
         }
         let m = &self.m;
-        let p = crate::dsp::fixed::mul_q30;
+        let p = crate::math::fixed::mul_q30;
         [
             p(m[0][0], v[0]) + p(m[1][0], v[1]) + p(m[2][0], v[2]),
             p(m[0][1], v[0]) + p(m[1][1], v[1]) + p(m[2][1], v[2]),

@@ -7,14 +7,15 @@ use super::{triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
 use crate::ahrs::alignment::{level_from, AlignConfig, AlignResult, Alignment};
 use crate::ahrs::attitude::AttitudeFixed;
 use crate::ahrs::mounting::{Mounting, MountingFixed};
-use crate::ahrs::rotation::{euler_deg_q30, level_q30, quat_rotate_inv_q30, Quat, Vec3};
 use crate::dsp::cascade::CascadeFixed;
 use crate::dsp::fir::{FirBankFixed, CHANNELS};
-use crate::dsp::fixed::{scaled_f32, to_fixed};
 use crate::dsp::integrals::{FORCE_BITS, RATE_BITS};
 use crate::dsp::variant::VariantFixed;
+use crate::math::fixed::{scaled_f32, to_fixed};
+use crate::math::rotation::{euler_deg_q30, level_q30, quat_rotate_inv_q30, Quat, Vec3};
+use crate::math::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
 use crate::model::Product;
-use crate::sensor::errors::{ErrorModel, TriadEngineFixed, ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+use crate::sensor::errors::{ErrorModel, TriadEngineFixed};
 use crate::sensor::motion::{
     BuiltinMotionFixed, Motion, Truth as TruthF32, TruthFixed, TruthFrame,
 };
@@ -144,7 +145,7 @@ pub fn acc_g(a: &Triad) -> Vec3 {
 }
 
 /// The levelled attitude (Q30) of an alignment's mean force, in integers.
-fn aligning_level(al: &Alignment) -> crate::ahrs::rotation::QuatQ30 {
+fn aligning_level(al: &Alignment) -> crate::math::rotation::QuatQ30 {
     let f = al
         .mean_force()
         .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
@@ -212,10 +213,8 @@ impl Core {
         self.motion.step()
     }
 
-    /// Host builds: whether the built-in truth needs no [`bounded`] (which
-    /// is the identity here: the fixed-point truth is clamped as it is
-    /// made).
-    #[cfg(not(target_os = "none"))]
+    /// Whether the built-in truth needs no [`bounded`] (which is the
+    /// identity here: the fixed-point truth is clamped as it is made).
     #[inline(always)]
     pub fn builtin_truth_bounded(&self) -> bool {
         true

@@ -7,11 +7,11 @@ use super::{triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
 use crate::ahrs::alignment::{level_from, AlignConfig, AlignResult, Alignment};
 use crate::ahrs::attitude::Attitude as AttitudeFilter;
 use crate::ahrs::mounting::Mounting;
-use crate::ahrs::rotation::{canonical, euler_from_quat, Quat, Vec3};
 use crate::dsp::cascade::Cascade;
 use crate::dsp::fir::{FirBank, CHANNELS};
 use crate::dsp::integrals;
 use crate::dsp::variant::VariantAccumulator;
+use crate::math::rotation::{canonical, euler_from_quat, Quat, Vec3};
 use crate::model::Product;
 use crate::sensor::errors::{ErrorModel, TriadEngine};
 use crate::sensor::motion::{BuiltinMotion, Motion, MotionSource, Truth as TruthF32, TruthFrame};
@@ -128,9 +128,8 @@ impl Core {
             variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
         };
-        // Hosts: a unit without the aux accelerometer does not filter its
-        // (zero) channels; no output reads them (`Core::take`).
-        #[cfg(not(target_os = "none"))]
+        // A unit without the aux accelerometer does not filter its (zero)
+        // channels; no output reads them (`Core::take`).
         core.cascade
             .set_aux_live(product.model.has(crate::model::Capability::AuxAccel));
         core
@@ -159,9 +158,8 @@ impl Core {
         self.motion.next(now, dt)
     }
 
-    /// Host builds: the built-in motion's truth needs no [`bounded`]
-    /// (static, within the bounds).
-    #[cfg(not(target_os = "none"))]
+    /// The built-in motion's truth needs no [`bounded`] (static, within
+    /// the bounds).
     #[inline(always)]
     pub fn builtin_truth_bounded(&self) -> bool {
         self.motion.static_and_bounded()

@@ -53,10 +53,10 @@ use super::fir::CHANNELS;
 
 /// The channels run section by section (not on ARM): the first eight, two
 /// whole four-lane vectors; the ninth (aux Z) runs on its own, or not at
-/// all for a unit without the aux accelerometer (hosts, see
+/// all for a unit without the aux accelerometer (see
 /// [`Cascade::set_aux_live`]).
 const AUX_FIRST: usize = 8;
-use super::fixed::{mul64, mul_q};
+use crate::math::fixed::{mul64, mul_q};
 use crate::math::tanf;
 use libm::{cos, sin};
 
@@ -214,15 +214,14 @@ pub struct Cascade {
     mask: u8,
     /// Slot (see [`STATE`]) × channel, laid out by [`at`].
     state: [f32; STATE * CHANNELS],
-    /// Host builds: whether the aux channels are filtered
-    /// ([`Cascade::set_aux_live`]).
-    #[cfg(not(target_os = "none"))]
+    /// Whether the aux channels are filtered ([`Cascade::set_aux_live`]).
     aux_live: bool,
 }
 
 /// Slot-major (each slot's nine channels contiguous: the section-by-section
 /// loop vectorises) except on ARM, where the channel-by-channel loop reads a
 /// channel's slots at small fixed offsets.
+// Fork by architecture: SIMD lanes on hosts, registers on ARM; bit-identical results.
 const SLOT_MAJOR: bool = !cfg!(target_arch = "arm");
 
 /// Index of slot `k`, channel `c` in [`Cascade`]'s state.
@@ -295,18 +294,16 @@ impl Cascade {
             n: 0,
             mask: 0,
             state: [0.0; STATE * CHANNELS],
-            #[cfg(not(target_os = "none"))]
             aux_live: true,
         };
         c.configure(cfg, rate_hz, x);
         c
     }
 
-    /// Host builds: whether the aux accelerometer's channels (the last
-    /// three) are live; off (a unit without one), [`Cascade::process`]
+    /// Whether the aux accelerometer's channels (the last three) are live;
+    /// off (a unit without one), [`Cascade::process`]
     /// leaves the last channel as it is (the chain reports zeros for the
     /// aux channels).
-    #[cfg(not(target_os = "none"))]
     pub fn set_aux_live(&mut self, live: bool) {
         self.aux_live = live;
     }
@@ -372,6 +369,7 @@ impl Cascade {
     /// operations on the same operands: bit-identical (a unit test pins it).
     #[inline(always)]
     fn run<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        // Fork by architecture, as `SLOT_MAJOR`.
         if cfg!(target_arch = "arm") {
             self.run_by_channel::<M>(x)
         } else {
@@ -379,7 +377,6 @@ impl Cascade {
             // four-lane vectors), the ninth on its own: its arithmetic is
             // the same in either order (`both_loop_orders_are_bit_identical`).
             self.run_by_section::<M, AUX_FIRST>(x);
-            #[cfg(not(target_os = "none"))]
             if !self.aux_live {
                 return;
             }

@@ -32,11 +32,11 @@
 //! delay N/2 — built from 32 (30) pre-added multiply-adds per channel instead
 //! of 97 (49). P is the same for both, so it runs on every tick whatever the
 //! design and its output history is always ready: switching designs never
-//! needs a refill. (Host builds skip P while the design reads none of it —
-//! one stage, or off — keeping the input rows that leave the input ring in
-//! P's ring instead, and compute the skipped outputs from them, by the same
-//! function on the same rows, when a two-stage design starts: the output is
-//! bit for bit the same, a factory tick ~10 ns cheaper.)
+//! needs a refill. (P is skipped while the design reads none of it — one
+//! stage, or off — keeping the input rows that leave the input ring in P's
+//! ring instead, and the skipped outputs are computed from them, by the
+//! same function on the same rows, when a two-stage design starts: the
+//! output is bit for bit the same, a factory tick ~10 ns cheaper on a host.)
 //!
 //! **Structure.** Nine channels (gyro, acc, aux acc × 3) are filtered in one
 //! pass over channel-interleaved histories; symmetric taps are pre-added
@@ -463,25 +463,14 @@ impl Window {
             };
             let coefs = &coefs[k0..k1];
             if l == 1 {
-                // Hosts: by index over three slices of the run's length
-                // (the bounds checks fold; the zipped iterators, one of
-                // them reversed, stepped each one). Same pairs, same order.
-                #[cfg(not(target_os = "none"))]
-                {
-                    let n = coefs.len();
-                    let a = &ring[a0..a0 + n];
-                    let b = &ring[b0 + 1 - n..=b0];
-                    for j in 0..n {
-                        f(&a[j], &b[n - 1 - j], &coefs[j]);
-                    }
-                }
-                #[cfg(target_os = "none")]
-                {
-                    let a = ring[a0..].iter();
-                    let b = ring[..=b0].iter().rev();
-                    for ((a, b), h) in a.zip(b).zip(coefs) {
-                        f(a, b, h);
-                    }
+                // By index over three slices of the run's length (the
+                // bounds checks fold; zipped iterators, one of them
+                // reversed, stepped each one).
+                let n = coefs.len();
+                let a = &ring[a0..a0 + n];
+                let b = &ring[b0 + 1 - n..=b0];
+                for j in 0..n {
+                    f(&a[j], &b[n - 1 - j], &coefs[j]);
                 }
             } else {
                 // All but the last pair as whole chunks of L rows: rows
@@ -559,8 +548,9 @@ macro_rules! each_channel {
 /// the VLDR range: one extra instruction per load).
 ///
 /// Channels `N` and beyond are not filtered (they read 0): `N` <
-/// [`CHANNELS`] only for a unit without the aux accelerometer on hosts
+/// [`CHANNELS`] only for a unit without the aux accelerometer
 /// (`FirBank::set_aux_live`).
+// Fork by architecture: inlined on ARM, a row load takes one more instruction.
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn run_f32<const L: usize, const N: usize>(
@@ -583,23 +573,19 @@ fn run_f32<const L: usize, const N: usize>(
     acc
 }
 
-/// The channels a unit without the aux accelerometer filters (hosts): the
+/// The channels a unit without the aux accelerometer filters: the
 /// first eight, two whole four-lane vectors (the aux X and Y channels
 /// among them, on zeros); the last, aux Z, is left out.
-#[cfg(not(target_os = "none"))]
 const AUX_FIRST: usize = 8;
 
 /// [`run_f32`] with taps one row apart (the pre-filter, the one-stage
-/// designs), every channel or (`live` false, hosts) those before the aux
+/// designs), every channel or (`live` false) those before the aux
 /// accelerometer's.
 #[inline(always)]
 fn run_f32_1(ring: &[[f32; CHANNELS]], end: usize, st: &Stage, live: bool) -> [f32; CHANNELS] {
-    #[cfg(not(target_os = "none"))]
     if !live {
         return run_f32::<1, AUX_FIRST>(ring, end, st);
     }
-    #[cfg(target_os = "none")]
-    let _ = live;
     run_f32::<1, CHANNELS>(ring, end, st)
 }
 
@@ -613,7 +599,6 @@ fn run_f32_strided(
     stride: usize,
     live: bool,
 ) -> [f32; CHANNELS] {
-    #[cfg(not(target_os = "none"))]
     if !live {
         return if stride == 2 {
             run_f32::<2, AUX_FIRST>(ring, end, st)
@@ -621,8 +606,6 @@ fn run_f32_strided(
             run_f32::<4, AUX_FIRST>(ring, end, st)
         };
     }
-    #[cfg(target_os = "none")]
-    let _ = live;
     if stride == 2 {
         run_f32::<2, CHANNELS>(ring, end, st)
     } else {
@@ -716,13 +699,11 @@ macro_rules! bank {
             mid: [[$t; CHANNELS]; MID_RING],
             mid_pos: usize,
             design: Option<&'static FirDesign>,
-            /// Host builds: ticks (at most [`MID_RING`]) since the
-            /// pre-filter last ran (see [`Self::push`]).
-            #[cfg(not(target_os = "none"))]
+            /// Ticks (at most [`MID_RING`]) since the pre-filter last ran
+            /// (see [`Self::push`]).
             lag: usize,
-            /// Host builds: whether the aux channels are filtered
+            /// Whether the aux channels are filtered
             /// ([`Self::set_aux_live`]).
-            #[cfg(not(target_os = "none"))]
             aux_live: bool,
         }
 
@@ -735,21 +716,17 @@ macro_rules! bank {
                     mid: [*x; MID_RING],
                     mid_pos: 0,
                     design,
-                    #[cfg(not(target_os = "none"))]
                     lag: 0,
-                    #[cfg(not(target_os = "none"))]
                     aux_live: true,
                 }
             }
 
-            /// Host builds: whether the aux accelerometer's channels (the
-            /// last three) are live. A unit without one turns them off
-            /// after [`Self::reset`]: the last channel is then not filtered
-            /// and reads 0 (the first eight make two whole four-lane
-            /// vectors; the chain reports zeros for the aux channels
-            /// anyway). The float bank only: the fixed-point bank, and
-            /// firmware, filter every channel.
-            #[cfg(not(target_os = "none"))]
+            /// Whether the aux accelerometer's channels (the last three)
+            /// are live. A unit without one turns them off after
+            /// [`Self::reset`]: the last channel is then not filtered and
+            /// reads 0 (the first eight make two whole four-lane vectors;
+            /// the chain reports zeros for the aux channels anyway). The
+            /// float bank only: the fixed-point bank filters every channel.
             pub fn set_aux_live(&mut self, live: bool) {
                 self.aux_live = live;
             }
@@ -757,10 +734,7 @@ macro_rules! bank {
             /// Whether every channel is filtered.
             #[inline(always)]
             fn live(&self) -> bool {
-                #[cfg(not(target_os = "none"))]
-                return self.aux_live;
-                #[cfg(target_os = "none")]
-                true
+                self.aux_live
             }
 
             /// [`Self::new`] in place (no second bank on the stack).
@@ -774,7 +748,6 @@ macro_rules! bank {
             /// Switches to `design`, keeping the histories.
             pub fn set_design(&mut self, design: Option<&'static FirDesign>) {
                 self.design = design;
-                #[cfg(not(target_os = "none"))]
                 if !Self::pre_unused(design) {
                     self.catch_up();
                 }
@@ -798,21 +771,17 @@ macro_rules! bank {
             pub fn fill(&mut self, x: &[$t; CHANNELS]) {
                 self.raw.fill(*x);
                 self.mid.fill(*x);
-                #[cfg(not(target_os = "none"))]
-                {
-                    self.lag = 0;
-                }
+                self.lag = 0;
             }
 
             /// Whether `design` reads no pre-filter output (one stage, or
             /// off).
-            #[cfg(not(target_os = "none"))]
             #[inline(always)]
             fn pre_unused(design: Option<&'static FirDesign>) -> bool {
                 design.is_none_or(|d| d.stride == 1)
             }
 
-            /// Host builds: the pre-filter outputs of the last
+            /// The pre-filter outputs of the last
             /// [`Self::push`]es that skipped it (`lag` of them), computed
             /// now by the same function on the same input rows, so the
             /// history of its output is bit for bit the one of a
@@ -825,43 +794,48 @@ macro_rules! bank {
             /// [`PRE`]`.order` before it (`lag` ≤ [`MID_RING`] = 177,
             /// so at most 193 rows, of up to 226). Slots older than `lag`
             /// hold outputs of the pre-filter (or of [`Self::fill`]).
-            #[cfg(not(target_os = "none"))]
             #[cold]
             #[inline(never)]
             fn catch_up(&mut self) {
                 const SPAN: usize = PRE.order;
+                const W: usize = SPAN + 1;
                 let n = self.lag;
                 if n == 0 {
                     return;
                 }
                 let len = n + SPAN;
-                // The input row `age` pushes before the newest, oldest
-                // first in `hist`.
-                let mut hist = [[<$t>::default(); CHANNELS]; MID_RING + SPAN];
-                for (i, row) in hist[..len].iter_mut().enumerate() {
-                    let age = len - 1 - i;
-                    *row = if age < RING {
-                        self.raw[(self.raw_pos + RING - 1 - age) % RING]
+                // The input row `age` pushes before the newest.
+                let row = |s: &Self, age: usize| {
+                    if age < RING {
+                        s.raw[(s.raw_pos + RING - 1 - age) % RING]
                     } else {
-                        self.mid[(self.mid_pos + MID_RING - 1 - (age - RING)) % MID_RING]
-                    };
+                        s.mid[(s.mid_pos + MID_RING - 1 - (age - RING)) % MID_RING]
+                    }
+                };
+                // A window of the W rows one output reads, as a ring: the
+                // oldest SPAN first, then one row in per output. The outputs
+                // go oldest first into the slots whose input rows (RING
+                // older than the output's own, SPAN < RING) no later output
+                // reads: in place, with 0.6 KiB of stack.
+                let mut win = [[<$t>::default(); CHANNELS]; W];
+                for (i, slot) in win[..SPAN].iter_mut().enumerate() {
+                    *slot = row(self, len - 1 - i);
                 }
-                // The output of the tick `age` pushes before the newest,
-                // oldest first (its window ends at its own row).
                 for j in 0..n {
                     let age = n - 1 - j;
-                    let m = $run1(&hist[..len], SPAN + j, &PRE, self.live());
+                    let end = (SPAN + j) % W;
+                    win[end] = row(self, age);
+                    let m = $run1(&win, end, &PRE, self.live());
                     self.mid[(self.mid_pos + MID_RING - 1 - age) % MID_RING] = m;
                 }
                 self.lag = 0;
             }
 
-            /// [`Self::push`] without the pre-filter (host builds, a design
-            /// that reads none of it): the input row leaving the ring is
+            /// [`Self::push`] without the pre-filter (a design that reads
+            /// none of it): the input row leaving the ring is
             /// kept in the pre-filter's slot of this tick instead, and
             /// [`Self::catch_up`] computes the skipped outputs when a
             /// two-stage design needs them.
-            #[cfg(not(target_os = "none"))]
             #[inline(always)]
             fn push_skipping_pre(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
                 let p = self.raw_pos;
@@ -880,11 +854,8 @@ macro_rules! bank {
             /// Pushes one sample per channel and returns the filtered output.
             #[inline]
             pub fn push(&mut self, x: &[$t; CHANNELS]) -> [$t; CHANNELS] {
-                // Host builds: a design that reads no pre-filter output
-                // skips it ([`Self::push_skipping_pre`]). Firmware runs
-                // the pre-filter on every tick (its output history is
-                // always ready, no catch-up).
-                #[cfg(not(target_os = "none"))]
+                // A design that reads no pre-filter output skips it
+                // ([`Self::push_skipping_pre`]).
                 if Self::pre_unused(self.design) {
                     return self.push_skipping_pre(x);
                 } else if self.lag > 0 {
@@ -944,8 +915,8 @@ mod tests {
     /// A bank that ran a one-stage design (or none) for `n` ticks and then
     /// switches to a two-stage one gives, tick for tick and bit for bit,
     /// what a bank that ran the two-stage design all along gives on the
-    /// same input (the skipped pre-filter outputs are caught up, host
-    /// builds): every count around the rings' lengths, float and fixed,
+    /// same input (the skipped pre-filter outputs are caught up): every
+    /// count around the rings' lengths, float and fixed,
     /// both two-stage designs, several switches.
     #[test]
     fn a_two_stage_design_after_a_one_stage_one_sees_the_whole_history() {

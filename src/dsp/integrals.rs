@@ -56,8 +56,8 @@
 //! `SignalChain<NoIntegrals>`, the KERNEL's, has no storage and no code for
 //! them).
 
-use crate::ahrs::rotation::Vec3;
-use crate::sensor::motion::G;
+use crate::math::rotation::Vec3;
+use crate::math::G;
 
 /// Fraction bits of the integrated gyro samples: 2¹⁹ per °/s.
 pub const RATE_BITS: u32 = 19;

@@ -35,7 +35,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::fir::CHANNELS;
-use crate::ahrs::rotation::{cross, Vec3};
+use crate::math::rotation::{cross, Vec3};
 
 /// What an output carries over its interval (ICD 5.3.6; the KERNEL's
 /// Output_Variant and Average_Output_Data map onto it in
@@ -210,7 +210,7 @@ impl VariantAccumulator {
 
 // ----- fixed point (the `fixed-point` build) -----
 
-use super::fixed::{cross_i64, mul64, norm3, scale_i64, Recip};
+use crate::math::fixed::{cross_i64, mul64, norm3, scale_i64, Recip};
 
 /// What [`VariantFixed::take`] returns, in the FIR's fixed-point units
 /// (gyro °/s·2¹⁷, accelerometers g·2²⁰).

@@ -1,10 +1,9 @@
 //! The ISB personality: an emulated Inertial Sense IMX-5 in IMU mode on
-//! the device shell ([`crate::device::Shell`]) — the same sensor model,
+//! the device shell (through its [`Context`]) — the same sensor model,
 //! filters, pins, line and flash store as the KERNEL, speaking the ISB
 //! protocol (`docs/isb-data-sets.md`, `docs/protocol-facts.md` "ISB").
 //!
-//! What it does with each input (decisions marked; README "ISB
-//! personality"):
+//! What it does with each input (decisions marked; `docs/isb.md`):
 //!
 //! - **GET_DATA** ([`message::resolve_get`]): NACK for DID ≥ 132 and 95,
 //!   silence for an in-range DID it does not serve, else one DATA packet
@@ -55,12 +54,11 @@
 //!   (a packet dropped because the line was too slow) and the parse-error
 //!   count.
 
-use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
 use crate::chain::{ChainConfig, Health};
-use crate::device::{Level, Mode, Pin, Shell};
 use crate::dsp::integrals::{self, Increment, Integrals};
+use crate::io::{Level, Mode, Pin};
 use crate::isb::did::{self, DataSet};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
@@ -69,7 +67,7 @@ use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
     FlashConfig, Imu, Pimu, Rmc, StrobeInTime, SysParams, SystemCommand,
 };
-use crate::personality::Personality;
+use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
 
@@ -179,11 +177,11 @@ impl Personality for Isb {
     /// defaults and none if it holds no valid ISB image, or one whose
     /// `key` is not the factory key); the startup
     /// periods and `ser0BaudRate` are latched; persistent streams start.
-    fn boot<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, _now: Instant) {
+    fn boot(&mut self, cx: &mut impl Context<Integrals>, _now: Instant) {
         self.input = Input::new();
         let st = &mut self.st;
         let mut image = [0u8; IMAGE_LEN];
-        let loaded = matches!(sh.load_image(&mut image), Ok(true));
+        let loaded = matches!(cx.load_image(&mut image), Ok(true));
         let mut cfg = FlashConfig([0; flash::SIZE]);
         cfg.0.copy_from_slice(&image[..PERSIST]);
         // A FLASH_CONFIG whose `key` is not the firmware's is replaced by
@@ -201,17 +199,17 @@ impl Personality for Isb {
         st.save_pending = false;
         st.streams.clear();
         st.rmc_options = 0;
-        st.prev = sh.chain().integrals();
+        st.prev = cx.chain().integrals();
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
-        st.dropped_seen = sh.line().dropped();
+        st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
-        let product = sh.product();
-        sh.chain_mut().configure(&ChainConfig::defaults(&product));
-        sh.set_line_rate(st.baud);
-        if sh.firmware_update() {
+        let product = cx.product();
+        cx.chain_mut().configure(&ChainConfig::defaults(&product));
+        cx.set_line_rate(st.baud);
+        if cx.firmware_update() {
             return;
         }
         let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
@@ -231,17 +229,17 @@ impl Personality for Isb {
             } = message::resolve_get(&req)
             {
                 if period > 0 {
-                    st.start_stream(sh, set, offset, size, period);
+                    st.start_stream(cx, set, offset, size, period);
                 }
             }
         }
     }
 
-    fn on_rx<F: NorFlash>(&mut self, bytes: &[u8], sh: &mut Shell<F, Isb>, now: Instant) {
+    fn on_rx(&mut self, bytes: &[u8], cx: &mut impl Context<Integrals>, now: Instant) {
         let st = &mut self.st;
         self.input.feed(bytes, |ev| match ev {
-            Input_::Packet(p) => st.packet(sh, &p, now),
-            Input_::Nmea(c) => st.nmea(sh, c, now),
+            Input_::Packet(p) => st.packet(cx, &p, now),
+            Input_::Nmea(c) => st.nmea(cx, c, now),
         });
         st.parse_errors = self.input.isb_errors();
     }
@@ -249,20 +247,20 @@ impl Personality for Isb {
     /// The integrals before this tick are kept (a one-shot IMU covers the
     /// last tick); a packet or sentence cut short ([`RX_IDLE_ABANDON_NS`]
     /// without a byte) is dropped.
-    fn before_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
-        self.st.prev = sh.chain().integrals();
-        if self.input.has_partial() && now.since(sh.last_rx()) > RX_IDLE_ABANDON_NS {
+    fn before_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
+        self.st.prev = cx.chain().integrals();
+        if self.input.has_partial() && now.since(cx.time().last_rx()) > RX_IDLE_ABANDON_NS {
             self.input.abandon();
-            sh.touch_rx(now);
+            cx.time_mut().touch_rx(now);
             self.st.parse_errors = self.input.isb_errors();
         }
     }
 
     /// Pending flash writes happen; every periodic stream due sends.
-    fn on_tick<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, now: Instant) {
+    fn on_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
         let st = &mut self.st;
         if st.save_pending {
-            st.save(sh);
+            st.save(cx);
         }
         let mut sent = false;
         for i in 0..st.streams.len() {
@@ -273,26 +271,26 @@ impl Personality for Isb {
             s.countdown = s.countdown.saturating_sub(1);
             if s.countdown == 0 {
                 s.countdown = s.every;
-                st.send_stream(sh, i, now);
+                st.send_stream(cx, i, now);
                 sent = true;
             }
         }
         if sent {
             // Saturation is reported since the previous packet.
-            sh.chain_mut().restart_health_interval();
+            cx.chain_mut().restart_health_interval();
         }
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
     /// STROBE_IN_TIME while that stream is on.
-    fn on_pin<F: NorFlash>(&mut self, pin: Pin, level: Level, sh: &mut Shell<F, Isb>, at: Instant) {
+    fn on_pin(&mut self, pin: Pin, level: Level, cx: &mut impl Context<Integrals>, at: Instant) {
         if (pin, level) != (Pin::Extrig, Level::High) {
             return;
         }
         let st = &mut self.st;
         st.strobe_count = st.strobe_count.wrapping_add(1);
         if let Some(i) = st.find(did::STROBE_IN_TIME) {
-            st.send_stream(sh, i, at);
+            st.send_stream(cx, i, at);
         }
     }
 
@@ -305,7 +303,7 @@ impl Personality for Isb {
     }
 
     /// The rate of the fastest periodic stream.
-    fn output_rate<F: NorFlash>(&self, sh: &Shell<F, Isb>) -> Option<u32> {
+    fn output_rate(&self, cx: &impl Context<Integrals>) -> Option<u32> {
         let every = self
             .st
             .streams
@@ -313,7 +311,7 @@ impl Personality for Isb {
             .filter(|s| s.every > 0)
             .map(|s| s.every)
             .min()?;
-        Some(sh.product().model.internal_rate_hz / every)
+        Some(cx.product().model.internal_rate_hz / every)
     }
 
     fn ticks_to_next_output(&self) -> Option<u64> {
@@ -340,16 +338,16 @@ impl Isb {
 
 /// Queues an ISB packet of `n` bytes written by `encode` (which returns
 /// the length it wrote).
-fn push<F: NorFlash>(
-    sh: &mut Shell<F, Isb>,
+fn push(
+    cx: &mut impl Context<Integrals>,
     n: usize,
     encode: impl FnOnce(&mut [u8]) -> Option<usize>,
 ) -> bool {
-    sh.push_frame(n, |f| encode(f) == Some(n)).is_some()
+    cx.push_frame(n, |f| encode(f) == Some(n)).is_some()
 }
 
-fn send_ack<F: NorFlash>(sh: &mut Shell<F, Isb>, info: &AckInfo, nack: bool) {
-    push(sh, OVERHEAD + message::ACK_PAYLOAD_LEN, |f| {
+fn send_ack(cx: &mut impl Context<Integrals>, info: &AckInfo, nack: bool) {
+    push(cx, OVERHEAD + message::ACK_PAYLOAD_LEN, |f| {
         if nack {
             message::encode_nack(info, f)
         } else {
@@ -376,9 +374,9 @@ impl State {
     }
 
     /// Starts (or replaces) the stream of `set`.
-    fn start_stream<F: NorFlash>(
+    fn start_stream(
         &mut self,
-        sh: &Shell<F, Isb>,
+        cx: &impl Context<Integrals>,
         set: &DataSet,
         offset: u16,
         size: u16,
@@ -387,7 +385,7 @@ impl State {
         let every = if set.did == did::STROBE_IN_TIME {
             0
         } else {
-            self.source_ticks(sh.product().model.internal_rate_hz, set)
+            self.source_ticks(cx.product().model.internal_rate_hz, set)
                 .saturating_mul(u32::from(period))
         };
         let s = Stream {
@@ -397,7 +395,7 @@ impl State {
             period,
             every,
             countdown: every,
-            start: sh.chain().integrals(),
+            start: cx.chain().integrals(),
         };
         match self.find(set.did) {
             Some(i) => self.streams[i] = s,
@@ -415,25 +413,25 @@ impl State {
 
     // ----- input -----
 
-    fn packet<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, p: &Packet<'_>, now: Instant) {
+    fn packet(&mut self, cx: &mut impl Context<Integrals>, p: &Packet<'_>, now: Instant) {
         match Request::of(p) {
-            Request::Get(g) => self.get(sh, &g, now),
+            Request::Get(g) => self.get(cx, &g, now),
             Request::BadGet { rx_flags, rx_did } => {
-                send_ack(sh, &AckInfo::of(rx_flags, rx_did), true)
+                send_ack(cx, &AckInfo::of(rx_flags, rx_did), true)
             }
-            Request::Set(req) => self.set(sh, &req, now),
+            Request::Set(req) => self.set(cx, &req, now),
             Request::StopAllPorts | Request::StopCurrentPort => {
                 self.streams.clear();
-                send_ack(sh, &AckInfo::of(p.flags, p.did), false);
+                send_ack(cx, &AckInfo::of(p.flags, p.did), false);
             }
             Request::StopDid(did) => self.stop_stream(did),
             Request::Ignored => {}
         }
     }
 
-    fn get<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, g: &GetRequest, now: Instant) {
+    fn get(&mut self, cx: &mut impl Context<Integrals>, g: &GetRequest, now: Instant) {
         match message::resolve_get(g) {
-            GetReply::Nack => send_ack(sh, &AckInfo::of(PacketType::GetData as u8, 0), true),
+            GetReply::Nack => send_ack(cx, &AckInfo::of(PacketType::GetData as u8, 0), true),
             GetReply::Silent => {}
             GetReply::Serve {
                 set,
@@ -448,40 +446,40 @@ impl State {
                 {
                     return;
                 }
-                self.send_once(sh, set, offset, size, now);
+                self.send_once(cx, set, offset, size, now);
                 if period == 0 {
                     self.stop_stream(set.did);
                 } else {
-                    self.start_stream(sh, set, offset, size, period);
+                    self.start_stream(cx, set, offset, size, period);
                 }
             }
         }
     }
 
-    fn set<F: NorFlash>(
+    fn set(
         &mut self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         req: &message::SetRequest<'_>,
         now: Instant,
     ) {
         let mut image = [0u8; flash::SIZE];
-        let n = self.image_of(sh, req.did, &mut image, now);
+        let n = self.image_of(cx, req.did, &mut image, now);
         let outcome = message::apply_set(req, &mut image[..n]);
         match outcome {
-            SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(sh, &info, true),
+            SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(cx, &info, true),
             SetOutcome::Silent => {}
-            SetOutcome::AckOnly(info) => send_ack(sh, &info, false),
+            SetOutcome::AckOnly(info) => send_ack(cx, &info, false),
             SetOutcome::Written { ack, .. } => {
                 // The ACK goes first: a software reset clears the queue
                 // only after it has been handed out.
-                send_ack(sh, &ack, false);
-                self.written(sh, req.did, &image[..n]);
+                send_ack(cx, &ack, false);
+                self.written(cx, req.did, &image[..n]);
             }
         }
     }
 
     /// Acts on a data set written by a SET_DATA (module doc).
-    fn written<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, did: u8, image: &[u8]) {
+    fn written(&mut self, cx: &mut impl Context<Integrals>, did: u8, image: &[u8]) {
         match did {
             did::FLASH_CONFIG => {
                 self.cfg.0.copy_from_slice(&image[..flash::SIZE]);
@@ -491,15 +489,15 @@ impl State {
             did::RMC => {
                 let mut b = [0u8; rmc::SIZE];
                 b.copy_from_slice(&image[..rmc::SIZE]);
-                self.rmc(sh, &Rmc::decode(&b));
+                self.rmc(cx, &Rmc::decode(&b));
             }
             did::SYS_CMD => {
                 let mut b = [0u8; sys_cmd::SIZE];
                 b.copy_from_slice(&image[..sys_cmd::SIZE]);
                 match SystemCommand::decode(&b).valid() {
-                    Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(sh),
-                    Some(sys_cmd::SAVE_FLASH) => self.save(sh),
-                    Some(sys_cmd::SOFTWARE_RESET) => sh.request_reset(),
+                    Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(cx),
+                    Some(sys_cmd::SAVE_FLASH) => self.save(cx),
+                    Some(sys_cmd::SOFTWARE_RESET) => cx.request_reset(),
                     _ => {}
                 }
             }
@@ -507,19 +505,19 @@ impl State {
                 self.gen_fault_code = le::u32(image, sets::sys_params::GEN_FAULT_CODE);
             }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
-                self.run_bit(sh, image[bit::COMMAND]);
+                self.run_bit(cx, image[bit::COMMAND]);
             }
             _ => {}
         }
     }
 
     /// An RMC write (module doc).
-    fn rmc<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, r: &Rmc) {
+    fn rmc(&mut self, cx: &mut impl Context<Integrals>, r: &Rmc) {
         let preserve = r.options & rmc::OPTIONS_PRESERVE_CTRL != 0;
         for set in did::DATA_SETS.iter().filter(|s| s.rmc_bit != 0) {
             if r.bits & set.rmc_bit != 0 {
                 if self.find(set.did).is_none() {
-                    self.start_stream(sh, set, 0, set.size, 1);
+                    self.start_stream(cx, set, 0, set.size, 1);
                 }
             } else if !preserve {
                 self.stop_stream(set.did);
@@ -527,31 +525,31 @@ impl State {
         }
         self.rmc_options = r.options;
         if r.options & rmc::OPTIONS_PERSISTENT != 0 {
-            self.save_persistent(sh);
+            self.save_persistent(cx);
         }
     }
 
-    fn nmea<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, c: Nmea, _now: Instant) {
+    fn nmea(&mut self, cx: &mut impl Context<Integrals>, c: Nmea, _now: Instant) {
         match c {
             Nmea::Info => {
                 let mut out = [0u8; INFO_MAX];
-                if let Some(n) = nmea::info_sentence(&dev_info_of(sh), &mut out) {
-                    sh.push_frame(n, |f| {
+                if let Some(n) = nmea::info_sentence(&dev_info_of(cx), &mut out) {
+                    cx.push_frame(n, |f| {
                         f.copy_from_slice(&out[..n]);
                         true
                     });
                 }
             }
             Nmea::StopAllPorts | Nmea::StopCurrentPort => self.streams.clear(),
-            Nmea::SavePersistent => self.save_persistent(sh),
-            Nmea::SoftwareReset => sh.request_reset(),
+            Nmea::SavePersistent => self.save_persistent(cx),
+            Nmea::SoftwareReset => cx.request_reset(),
         }
     }
 
     // ----- flash -----
 
     /// The running streams become the persistent ones, saved at once.
-    fn save_persistent<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+    fn save_persistent(&mut self, cx: &mut impl Context<Integrals>) {
         self.persist = [0; 4 + MAX_STREAMS * ENTRY];
         le::put(
             &mut self.persist,
@@ -565,20 +563,20 @@ impl State {
             le::put(e, 4, &s.offset.to_le_bytes());
             le::put(e, 6, &s.period.max(1).to_le_bytes());
         }
-        self.save(sh);
+        self.save(cx);
     }
 
     /// Writes FLASH_CONFIG and the persistent streams (power-fail safe); a
     /// flash failure leaves the write pending.
-    fn save<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>) {
+    fn save(&mut self, cx: &mut impl Context<Integrals>) {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
         image[PERSIST..].copy_from_slice(&self.persist);
-        self.save_pending = sh.save_image(&image).is_err();
+        self.save_pending = cx.save_image(&image).is_err();
     }
 
-    fn run_bit<F: NorFlash>(&mut self, sh: &Shell<F, Isb>, command: u8) {
-        let h = sh.chain().health();
+    fn run_bit(&mut self, cx: &impl Context<Integrals>, command: u8) {
+        let h = cx.chain().health();
         let mut hdw = bit::HDW_PASSED_NO_GPS;
         if h.gyro_bit_failed {
             hdw = bit::HDW_FAULT_NOISE_PQR;
@@ -603,9 +601,9 @@ impl State {
     // ----- output -----
 
     /// The current bytes of data set `did` into `out`; its size.
-    fn image_of<F: NorFlash>(
+    fn image_of(
         &self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         did: u8,
         out: &mut [u8; flash::SIZE],
         now: Instant,
@@ -615,9 +613,9 @@ impl State {
             b.len()
         };
         match did {
-            did::DEV_INFO => put(&dev_info_of(sh).encode()),
+            did::DEV_INFO => put(&dev_info_of(cx).encode()),
             did::FLASH_CONFIG => put(&self.cfg.0),
-            did::SYS_PARAMS => put(&self.sys_params(sh, now).encode()),
+            did::SYS_PARAMS => put(&self.sys_params(cx, now).encode()),
             did::RMC => put(&Rmc {
                 bits: self.rmc_bits(),
                 options: self.rmc_options,
@@ -627,15 +625,15 @@ impl State {
             did::BIT => put(&self.bit.encode()),
             did::STROBE_IN_TIME => put(&StrobeInTime {
                 week: 0,
-                time_of_week_ms: ms_since(sh, now),
+                time_of_week_ms: ms_since(cx, now),
                 pin: 0,
                 count: self.strobe_count,
             }
             .encode()),
             did::IMU | did::IMU_RAW | did::PIMU => {
-                let w = integrals::window(&self.prev, &sh.chain().integrals(), rate(sh));
+                let w = integrals::window(&self.prev, &cx.chain().integrals(), rate(cx));
                 let n = windowed_len(did);
-                put(&self.windowed(sh, did, &w, now)[..n])
+                put(&self.windowed(cx, did, &w, now)[..n])
             }
             _ => 0,
         }
@@ -650,17 +648,17 @@ impl State {
 
     /// IMU / IMU_RAW / PIMU of the window `w` (module doc); 40 bytes used
     /// at most.
-    fn windowed<F: NorFlash>(
+    fn windowed(
         &self,
-        sh: &Shell<F, Isb>,
+        cx: &impl Context<Integrals>,
         did: u8,
         w: &Increment,
         now: Instant,
     ) -> [u8; sets::pimu::SIZE] {
-        let h = sh.chain().health();
+        let h = cx.chain().health();
         let status = imu_status_of(&h);
-        let time = now.since(sh.powered_at()) as f64 / 1e9;
-        let dt = w.samples as f64 / f64::from(rate(sh));
+        let time = now.since(cx.time().powered_at()) as f64 / 1e9;
+        let dt = w.samples as f64 / f64::from(rate(cx));
         let mut out = [0u8; sets::pimu::SIZE];
         if did == did::PIMU {
             out.copy_from_slice(
@@ -690,40 +688,40 @@ impl State {
     }
 
     /// One DATA packet of `set` now (the GET's reply).
-    fn send_once<F: NorFlash>(
+    fn send_once(
         &mut self,
-        sh: &mut Shell<F, Isb>,
+        cx: &mut impl Context<Integrals>,
         set: &DataSet,
         offset: u16,
         size: u16,
         now: Instant,
     ) {
         let mut image = [0u8; flash::SIZE];
-        let n = self.image_of(sh, set.did, &mut image, now);
-        send_data(sh, set.did, &image[..n], offset, size);
+        let n = self.image_of(cx, set.did, &mut image, now);
+        send_data(cx, set.did, &image[..n], offset, size);
     }
 
     /// The packet of stream `i` at `now`; its window restarts.
-    fn send_stream<F: NorFlash>(&mut self, sh: &mut Shell<F, Isb>, i: usize, now: Instant) {
+    fn send_stream(&mut self, cx: &mut impl Context<Integrals>, i: usize, now: Instant) {
         let s = self.streams[i];
         let mut image = [0u8; flash::SIZE];
         let n = match s.did {
             did::IMU | did::IMU_RAW | did::PIMU => {
-                let end = sh.chain().integrals();
-                let w = integrals::window(&s.start, &end, rate(sh));
+                let end = cx.chain().integrals();
+                let w = integrals::window(&s.start, &end, rate(cx));
                 self.streams[i].start = end;
-                let b = self.windowed(sh, s.did, &w, now);
+                let b = self.windowed(cx, s.did, &w, now);
                 let n = windowed_len(s.did);
                 image[..n].copy_from_slice(&b[..n]);
                 n
             }
-            _ => self.image_of(sh, s.did, &mut image, now),
+            _ => self.image_of(cx, s.did, &mut image, now),
         };
-        send_data(sh, s.did, &image[..n], s.offset, s.size);
+        send_data(cx, s.did, &image[..n], s.offset, s.size);
     }
 
-    fn sys_params<F: NorFlash>(&self, sh: &mut Shell<F, Isb>, now: Instant) -> SysParams {
-        let h = sh.chain().health();
+    fn sys_params(&self, cx: &mut impl Context<Integrals>, now: Instant) -> SysParams {
+        let h = cx.chain().health();
         let mut hdw = 0u32;
         if h.gyro_over_range != 0 {
             hdw |= hdw_status::SATURATION_GYR;
@@ -752,14 +750,14 @@ impl State {
         if self.save_pending {
             hdw |= hdw_status::FLASH_WRITE_PENDING;
         }
-        if sh.line().dropped() != self.dropped_seen {
+        if cx.tx_dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;
         }
         hdw = hdw_status::with_parse_errors(hdw, self.parse_errors);
-        let t = sh.chain().temperature();
-        let up = now.since(sh.powered_at()) as f64 / 1e9;
+        let t = cx.chain().temperature();
+        let up = now.since(cx.time().powered_at()) as f64 / 1e9;
         SysParams {
-            time_of_week_ms: ms_since(sh, now),
+            time_of_week_ms: ms_since(cx, now),
             ins_status: 0,
             hdw_status: hdw,
             imu_temp: t,
@@ -778,10 +776,10 @@ impl State {
 }
 
 /// A DATA packet of `image[offset..offset + size]`.
-fn send_data<F: NorFlash>(sh: &mut Shell<F, Isb>, did: u8, image: &[u8], offset: u16, size: u16) {
+fn send_data(cx: &mut impl Context<Integrals>, did: u8, image: &[u8], offset: u16, size: u16) {
     let whole = offset == 0 && usize::from(size) == image.len();
     let n = OVERHEAD + usize::from(size) + if whole { 0 } else { 2 };
-    push(sh, n, |f| message::encode_data(did, image, offset, size, f));
+    push(cx, n, |f| message::encode_data(did, image, offset, size, f));
 }
 
 /// Bytes of a windowed data set: `pimu_t` or `imu_t`.
@@ -793,12 +791,12 @@ fn windowed_len(did: u8) -> usize {
     }
 }
 
-fn rate<F: NorFlash>(sh: &Shell<F, Isb>) -> u32 {
-    sh.product().model.internal_rate_hz
+fn rate(cx: &impl Context<Integrals>) -> u32 {
+    cx.product().model.internal_rate_hz
 }
 
-fn ms_since<F: NorFlash>(sh: &Shell<F, Isb>, now: Instant) -> u32 {
-    (now.since(sh.powered_at()) / 1_000_000) as u32
+fn ms_since(cx: &impl Context<Integrals>, now: Instant) -> u32 {
+    (now.since(cx.time().powered_at()) / 1_000_000) as u32
 }
 
 /// IMU `status` from the chain's health (module doc).
@@ -819,11 +817,11 @@ fn imu_status_of(h: &Health) -> u32 {
 
 /// DEV_INFO of this unit: an IMX-5 (hardware 5.0), protocol 2.1.0.0, the
 /// serial number from the seed (never 0).
-fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
+fn dev_info_of(cx: &impl Context<Integrals>) -> DevInfo {
     DevInfo {
         hardware_type: dev_info::HARDWARE_TYPE_IMX,
         hdw_run_state: dev_info::RUN_STATE_APP,
-        serial_number: 10_000_000 + (sh.seed() % 90_000_000) as u32,
+        serial_number: 10_000_000 + (cx.seed() % 90_000_000) as u32,
         hardware_ver: [5, 0, 0, 0],
         firmware_ver: [2, 1, 0, 0],
         build_number: 1,
@@ -834,5 +832,115 @@ fn dev_info_of<F: NorFlash>(sh: &Shell<F, Isb>) -> DevInfo {
         build_date: [26, 12, 1],
         build_time: [0, 0, 0, 0],
         add_info: sets::str24(concat!("imu-emu ", env!("CARGO_PKG_VERSION"))),
+    }
+}
+
+/// The ISB personality against a fake context: what it asks of the shell,
+/// with no shell (ARCHITECTURE.md "Shell and personalities").
+#[cfg(test)]
+mod tests {
+    use std::vec::Vec;
+
+    use super::*;
+    use crate::io::Event;
+    use crate::isb::packet::Decoder;
+    use crate::model::Product;
+    use crate::personality::fake::FakeContext;
+
+    type Cx = FakeContext<Integrals>;
+
+    fn booted() -> (Isb, Cx) {
+        let mut cx = Cx::new(Product::imx5());
+        let mut d = Isb::unpowered();
+        d.boot(&mut cx, Instant::ZERO);
+        (d, cx)
+    }
+
+    fn get(did: u8, period: u16) -> Vec<u8> {
+        let req = GetRequest {
+            did: u16::from(did),
+            size: 0,
+            offset: 0,
+            period,
+        };
+        let mut out = [0u8; 64];
+        let n = message::encode_get(&req, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    /// The DIDs of the packets pushed, each checked whole.
+    fn dids(cx: &Cx) -> Vec<u8> {
+        let mut d = Decoder::<MAX_PACKET>::new();
+        cx.frames
+            .iter()
+            .map(|f| {
+                let mut input = &f[..];
+                let did = d.next_packet(&mut input).expect("a whole packet").did;
+                assert!(input.is_empty());
+                did
+            })
+            .collect()
+    }
+
+    /// Ticks the context and the personality for `n` ticks from `*t`.
+    fn run(d: &mut Isb, cx: &mut Cx, t: &mut u64, n: u64) {
+        let period = 1_000_000_000 / u64::from(cx.product.model.internal_rate_hz);
+        for _ in 0..n {
+            *t += 1;
+            let now = Instant(*t * period);
+            d.before_tick(cx, now);
+            cx.tick(now);
+            d.on_tick(cx, now);
+        }
+    }
+
+    #[test]
+    fn boot_from_an_empty_flash_sets_the_factory_rate_and_stays_idle() {
+        let (d, cx) = booted();
+        let bps = FlashConfig::factory().u32_at(flash::SER0_BAUD_RATE);
+        assert_eq!(cx.events, [Event::LineRate(bps)]);
+        assert!(cx.frames.is_empty());
+        assert_eq!(d.mode(), Mode::Idle);
+        assert_eq!(d.output_rate(&cx), None);
+    }
+
+    #[test]
+    fn a_get_with_period_zero_sends_one_packet_and_starts_nothing() {
+        let (mut d, mut cx) = booted();
+        d.on_rx(&get(did::DEV_INFO, 0), &mut cx, Instant::ZERO);
+        assert_eq!(dids(&cx), [did::DEV_INFO]);
+        assert_eq!(d.mode(), Mode::Idle);
+    }
+
+    #[test]
+    fn an_imu_stream_sends_at_its_rate_and_stops_on_period_zero() {
+        let (mut d, mut cx) = booted();
+        let mut t = 0;
+        d.on_rx(&get(did::IMU, 1), &mut cx, Instant::ZERO);
+        assert_eq!(d.mode(), Mode::Continuous);
+        let rate = d.output_rate(&cx).unwrap();
+        let second = u64::from(cx.product.model.internal_rate_hz);
+        cx.frames.clear();
+        run(&mut d, &mut cx, &mut t, second);
+        assert_eq!(cx.frames.len() as u32, rate);
+        assert!(dids(&cx).iter().all(|&x| x == did::IMU));
+        d.on_rx(&get(did::IMU, 0), &mut cx, Instant(t));
+        assert_eq!(d.mode(), Mode::Idle);
+        cx.frames.clear();
+        run(&mut d, &mut cx, &mut t, 100);
+        assert!(cx.frames.is_empty());
+    }
+
+    #[test]
+    fn a_rising_extrig_edge_sends_strobe_in_time_while_its_stream_is_on() {
+        let (mut d, mut cx) = booted();
+        d.on_pin(Pin::Extrig, Level::High, &mut cx, Instant::ZERO);
+        assert!(cx.frames.is_empty(), "no stream: counted only");
+        d.on_rx(&get(did::STROBE_IN_TIME, 1), &mut cx, Instant::ZERO);
+        cx.frames.clear();
+        d.on_pin(Pin::Extrig, Level::Low, &mut cx, Instant(1_000));
+        assert!(cx.frames.is_empty(), "falling edges are not strobes");
+        d.on_pin(Pin::Extrig, Level::High, &mut cx, Instant(2_000));
+        assert_eq!(dids(&cx), [did::STROBE_IN_TIME]);
     }
 }

@@ -1,6 +1,6 @@
 //! Data set identifiers (DIDs) and the table of the data sets the emulated
-//! IMX-5 in IMU mode serves (NOTES.md "ISB"; the SDK's `data_sets.h`,
-//! protocol 2.1; `docs/isb-data-sets.md` has every layout with offsets).
+//! IMX-5 in IMU mode serves (`docs/protocol-facts.md` "ISB"; the SDK's
+//! `data_sets.h`, protocol 2.1; `docs/isb-data-sets.md` has every layout with offsets).
 //!
 //! One [`DataSet`] row per supported DID says how big the set is, which
 //! source period its streams count in ([`Source`]), which bytes a SET_DATA
@@ -11,12 +11,12 @@
 use super::sets;
 
 /// Count of DIDs (including the null DID 0): `DID_COUNT` in `data_sets.h`.
-/// A GET or SET of a DID at or above it is NACKed (NOTES.md "ISB").
+/// A GET or SET of a DID at or above it is NACKed (protocol-facts.md "ISB").
 pub const DID_COUNT: u16 = 132;
 
 /// Null (invalid) DID.
 pub const NULL: u8 = 0;
-/// `dev_info_t`: device information (NOTES.md "ISB").
+/// `dev_info_t`: device information (protocol-facts.md "ISB").
 pub const DEV_INFO: u8 = 1;
 /// `system_fault_t`: system fault information (not served).
 pub const SYS_FAULT: u8 = 2;
@@ -48,7 +48,7 @@ pub const IMU: u8 = 58;
 pub const BIT: u8 = 64;
 /// `strobe_in_time_t`: time stamp of a strobe input (EXTRIG) edge.
 pub const STROBE_IN_TIME: u8 = 68;
-/// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (NOTES.md: the
+/// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (protocol-facts.md: the
 /// IMX firmware counts DIDs only to 100 and answers 95 with a NACK).
 pub const REFERENCE_IMU: u8 = 95;
 /// `imu3_t` triple IMU (not served).
@@ -62,12 +62,12 @@ pub const GPX_FLASH_CFG: u8 = 121;
 pub const GPX_STATUS: u8 = 123;
 
 /// The period a stream of a data set counts in: a GET_DATA `period` is a
-/// multiple of it (ISB page "Data Source Update Rates"; NOTES.md).
+/// multiple of it (ISB page "Data Source Update Rates"; protocol-facts.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Source {
     /// `FLASH_CONFIG.startupNavDtMs` (default 4 ms): IMU and PIMU. The
-    /// page's table says `startupImuDtMs`; the SDK and NOTES.md say
-    /// `startupNavDtMs` — the SDK is followed (NOTES.md "ISB").
+    /// page's table says `startupImuDtMs`; the SDK and protocol-facts.md say
+    /// `startupNavDtMs` — the SDK is followed (protocol-facts.md "ISB").
     NavDt,
     /// `FLASH_CONFIG.startupImuDtMs` (default 1 ms): IMU_RAW, which
     /// `data_sets.h` describes as the IMU data for periods faster than the
@@ -148,7 +148,7 @@ const SYS_PARAMS_W: &[Range] = &[Range::new(
 )];
 /// FLASH_CONFIG: everything but `size`. The `checksum` word is accepted
 /// (the vendor tool's `-flashCfg=` path uploads the checksum it computed
-/// itself, NOTES.md) but the device recomputes it after every write, so
+/// itself, protocol-facts.md) but the device recomputes it after every write, so
 /// what stays is always the XOR of bytes 8..287.
 const FLASH_W: &[Range] = &[Range::new(
     sets::flash::CHECKSUM as u16,
@@ -247,7 +247,7 @@ pub fn lookup(did: u16) -> Option<&'static DataSet> {
 }
 
 /// Whether a GET_DATA or SET_DATA of `did` is answered with a NACK: DID ≥
-/// [`DID_COUNT`] (NOTES.md "ISB") and DID 95 (NOTES.md "what the vendor's
+/// [`DID_COUNT`] (protocol-facts.md "ISB") and DID 95 (protocol-facts.md "what the vendor's
 /// command-line tool needs").
 pub const fn is_nacked(did: u16) -> bool {
     did >= DID_COUNT || did == REFERENCE_IMU as u16
@@ -258,7 +258,7 @@ pub const fn is_nacked(did: u16) -> bool {
 pub enum Class {
     /// Answer with a NACK ([`is_nacked`]).
     Nack,
-    /// In range but not served: no reply at all (NOTES.md "ISB").
+    /// In range but not served: no reply at all (protocol-facts.md "ISB").
     Unsupported,
     /// Served: its table row.
     Supported(&'static DataSet),

@@ -3,8 +3,8 @@
 //! NACKs, SET_DATA trimming, read-only bytes), and the encoders of the
 //! answers (ACK / NACK, DATA) into a caller's buffer. Pure: the device keeps
 //! the data set images and the streams; these functions only read and
-//! write the bytes they are handed. Facts from NOTES.md "ISB" and "what the
-//! vendor's command-line tool needs"; decisions are marked as such.
+//! write the bytes they are handed. Facts from `docs/protocol-facts.md`
+//! "ISB" and "what the vendor's command-line tool needs"; decisions are marked as such.
 
 use super::did::{self, Class, DataSet};
 use super::packet::{self, Packet, PacketType, FLAG_OFFSET};
@@ -15,9 +15,9 @@ pub const GET_PAYLOAD_LEN: usize = 8;
 /// u8 id, u16 size, u16 offset`.
 pub const ACK_PAYLOAD_LEN: usize = 9;
 /// A SET_DATA leaving fewer bytes than this between its offset and the end
-/// of the struct is dropped without an ACK (the SDK's rule, NOTES.md).
+/// of the struct is dropped without an ACK (the SDK's rule, protocol-facts.md).
 pub const MIN_SET_ROOM: u16 = 4;
-/// Largest DATA payload a client accepts (NOTES.md: data payloads over
+/// Largest DATA payload a client accepts (protocol-facts.md: data payloads over
 /// 1024 bytes are dropped).
 pub const MAX_DATA_PAYLOAD: usize = 1024;
 
@@ -85,7 +85,7 @@ pub fn encode_set(did: u8, offset: u16, data: &[u8], out: &mut [u8]) -> Option<u
 }
 
 /// The part `(offset, size)` of a `struct_size`-byte set a GET of `size`
-/// bytes at `offset` gets (NOTES.md "ISB"): size 0 and offset 0 → the whole
+/// bytes at `offset` gets (protocol-facts.md "ISB"): size 0 and offset 0 → the whole
 /// struct; a request running past the struct → the whole struct. Decision:
 /// size 0 with an offset inside the struct → from the offset to the end;
 /// with an offset at or past the end → the whole struct.
@@ -108,7 +108,7 @@ pub const fn window(struct_size: u16, size: u16, offset: u16) -> (u16, u16) {
 pub enum GetReply {
     /// NACK ([`did::is_nacked`], or a malformed GET payload).
     Nack,
-    /// An in-range DID the device does not serve: no reply (NOTES.md).
+    /// An in-range DID the device does not serve: no reply (protocol-facts.md).
     Silent,
     /// Send this part of the set now; then stream it if `period > 0`, stop
     /// its stream if `period == 0`.
@@ -141,7 +141,7 @@ pub fn resolve_get(req: &GetRequest) -> GetReply {
     }
 }
 
-/// The fields of an ACK / NACK payload (NOTES.md "ISB"): the received
+/// The fields of an ACK / NACK payload (protocol-facts.md "ISB"): the received
 /// packet's flags and DID, then for a SET_DATA the DID, size (without the
 /// two offset bytes) and offset it wrote; zeros otherwise. The packet
 /// counter is always 0.
@@ -236,7 +236,7 @@ pub enum SetOutcome {
     /// No reply: empty data, or under [`MIN_SET_ROOM`] bytes of room.
     Silent,
     /// An in-range DID the device does not serve: ACKed as the SDK does
-    /// (NOTES.md: ACK when DID < 132 and the payload is non-empty), nothing
+    /// (protocol-facts.md: ACK when DID < 132 and the payload is non-empty), nothing
     /// written.
     AckOnly(AckInfo),
     /// Written: `image[offset..offset + len]` changed (possibly to the same
@@ -258,7 +258,7 @@ pub enum SetOutcome {
 /// Applies a SET_DATA to `image`, the current bytes of its data set (the
 /// [`DataSet::size`] bytes of the set; ignored for DIDs not served).
 ///
-/// Rules (NOTES.md "ISB" and "what the vendor's command-line tool needs"):
+/// Rules (protocol-facts.md "ISB" and "what the vendor's command-line tool needs"):
 /// DID ≥ 132 or 95 → NACK; empty data → no reply; an offset leaving under
 /// [`MIN_SET_ROOM`] bytes before the end → no reply (the SDK drops it); the
 /// data is trimmed to the struct. Decision: a read-only byte
@@ -318,7 +318,7 @@ pub fn apply_set(req: &SetRequest<'_>, image: &mut [u8]) -> SetOutcome {
 
 /// Encodes a DATA packet of `image[offset..offset + size]` for `did` into
 /// `out`. The whole set (offset 0, all of `image`) goes without the offset
-/// flag — the vendor tool takes DEV_INFO only that way (NOTES.md) — a part
+/// flag — the vendor tool takes DEV_INFO only that way (protocol-facts.md) — a part
 /// with [`FLAG_OFFSET`] and the `u16` offset first. `None` if the window is
 /// not inside `image`, the payload is over [`MAX_DATA_PAYLOAD`], or `out`
 /// is too small.

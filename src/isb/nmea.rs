@@ -1,7 +1,8 @@
 //! NMEA on the ISB port, and the one input classifier every received byte
 //! goes through ([`Input`]).
 //!
-//! The vendor's command-line tool sends five NMEA commands (NOTES.md "ISB"):
+//! The vendor's command-line tool sends five NMEA commands
+//! (`docs/protocol-facts.md` "ISB"):
 //! `$INFO*0E`, `$STPB*15`, `$STPC*14`, `$PERS*14`, `$SRST*06` ([`Command`]),
 //! each ended by `\r\n`, and around them bytes that mean nothing to an IMX
 //! application: a stray second footer `*56\r\n`, bootloader probes (`U`

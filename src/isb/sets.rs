@@ -1,14 +1,15 @@
 //! Byte layouts of the ISB data sets the emulated IMX-5 serves, with the
 //! status bits and option words that go in them.
 //!
-//! Every struct is packed little-endian (NOTES.md "ISB"). Each module below
-//! gives the byte offset of every field and `SIZE`; the typed structs
+//! Every struct is packed little-endian (`docs/protocol-facts.md` "ISB").
+//! Each module below gives the byte offset of every field and `SIZE`; the
+//! typed structs
 //! ([`DevInfo`], [`Imu`], [`Pimu`], [`Rmc`], [`SystemCommand`],
 //! [`StrobeInTime`], [`SysParams`], [`Bit`]) encode to and decode from a
 //! `[u8; SIZE]`; FLASH_CONFIG stays a byte image ([`FlashConfig`]) with
 //! accessors, because a SET_DATA writes into it at any offset. Sources:
-//! NOTES.md "ISB" first; fields NOTES.md does not list (FLASH_CONFIG past
-//! `ser2BaudRate`, `bit_t`) from the SDK's `data_sets.h` of protocol 2.1
+//! protocol-facts.md "ISB" first; fields it does not list (FLASH_CONFIG
+//! past `ser2BaudRate`, `bit_t`) from the SDK's `data_sets.h` of protocol 2.1
 //! (`PROTOCOL_VERSION_CHAR1 1`). `docs/isb-data-sets.md` lists every
 //! layout and where the two sources differ.
 
@@ -60,7 +61,7 @@ pub mod le {
     }
 }
 
-/// `dev_info_t`, 84 bytes (NOTES.md "ISB"; `data_sets.h` of protocol 2.1
+/// `dev_info_t`, 84 bytes (protocol-facts.md "ISB"; `data_sets.h` of protocol 2.1
 /// agrees: `reserved` u16, `hardwareType`, `hdwRunState`).
 pub mod dev_info {
     /// Struct size.
@@ -99,7 +100,7 @@ pub mod dev_info {
     pub const HARDWARE_TYPE_IMX: u8 = 3;
     /// `eHdwRunStates` application.
     pub const RUN_STATE_APP: u8 = 2;
-    /// Protocol version 2.1.0.0 (NOTES.md: the SDK 2.7.1 speaks it and
+    /// Protocol version 2.1.0.0 (protocol-facts.md: the SDK 2.7.1 speaks it and
     /// accepts a device only with `protocolVer[0] == 2`).
     pub const PROTOCOL_2_1: [u8; 4] = [2, 1, 0, 0];
 }
@@ -178,7 +179,7 @@ impl DevInfo {
 
     /// The product hardware id the SDK derives from `hardwareType` and
     /// `hardwareVer[0..2]` (6:4:6 bits, `data_sets.h`); the vendor tool
-    /// refuses a device where it is 0xFFFF (NOTES.md).
+    /// refuses a device where it is 0xFFFF (protocol-facts.md).
     pub fn hardware_id(&self) -> u16 {
         let t = u16::from(self.hardware_type) << 10 & 0xFC00;
         let major = u16::from(self.hardware_ver[0]) << 6 & 0x03C0;
@@ -187,7 +188,7 @@ impl DevInfo {
     }
 
     /// Whether the SDK 2.7.1 accepts this as an IMX it can talk to
-    /// (NOTES.md: type ≠ 0, serial ≠ 0, protocol major 2, run state ≠ 0,
+    /// (protocol-facts.md: type ≠ 0, serial ≠ 0, protocol major 2, run state ≠ 0,
     /// hardware id ≠ 0xFFFF).
     pub fn accepted_by_sdk(&self) -> bool {
         self.hardware_type != 0
@@ -207,7 +208,7 @@ pub fn str24(s: &str) -> [u8; 24] {
     out
 }
 
-/// `imu_t`, 36 bytes (NOTES.md "ISB"): DID_IMU and DID_IMU_RAW.
+/// `imu_t`, 36 bytes (protocol-facts.md "ISB"): DID_IMU and DID_IMU_RAW.
 pub mod imu {
     /// Struct size.
     pub const SIZE: usize = 36;
@@ -255,7 +256,7 @@ impl Imu {
     }
 }
 
-/// `pimu_t`, 40 bytes (NOTES.md "ISB").
+/// `pimu_t`, 40 bytes (protocol-facts.md "ISB").
 pub mod pimu {
     /// Struct size.
     pub const SIZE: usize = 40;
@@ -309,9 +310,9 @@ impl Pimu {
     }
 }
 
-/// `imu_t.status` / `pimu_t.status` bits (NOTES.md "ISB"; the 2.1
+/// `imu_t.status` / `pimu_t.status` bits (protocol-facts.md "ISB"; the 2.1
 /// `data_sets.h` numbers these differently — per-IMU saturation in the low
-/// bits, OK bits from 0x10000 — and NOTES.md, checked against SDK 2.7.1,
+/// bits, OK bits from 0x10000 — and protocol-facts.md, checked against SDK 2.7.1,
 /// is followed: `docs/isb-data-sets.md`).
 pub mod imu_status {
     /// Gyro X sensor OK.
@@ -338,7 +339,7 @@ pub mod imu_status {
     pub const SATURATION_ACC: u32 = 0x8000_0000;
 }
 
-/// `sys_params_t.hdwStatus` bits (NOTES.md "ISB"; `data_sets.h`
+/// `sys_params_t.hdwStatus` bits (protocol-facts.md "ISB"; `data_sets.h`
 /// `eHdwStatusFlags`).
 pub mod hdw_status {
     /// Gyro motion detected.
@@ -391,7 +392,7 @@ pub mod hdw_status {
     }
 }
 
-/// `rmc_t`, 12 bytes, and its bits and options (NOTES.md "ISB";
+/// `rmc_t`, 12 bytes, and its bits and options (protocol-facts.md "ISB";
 /// `data_sets.h` `RMC_BITS_*`, `RMC_OPTIONS_*`).
 pub mod rmc {
     /// Struct size.
@@ -410,7 +411,7 @@ pub mod rmc {
     pub const BITS_IMU_RAW: u64 = 0x200_0000_0000;
     /// `bits` is a preset.
     pub const BITS_PRESET: u64 = 0x8000_0000_0000_0000;
-    /// The PPD preset bits of SDK 2.7 (NOTES.md; the protocol page's
+    /// The PPD preset bits of SDK 2.7 (protocol-facts.md; the protocol page's
     /// example packet carries pre-2.7 bits).
     pub const PRESET_PPD_2_7: u64 = 0xC000_6090_0135_3CE2;
     /// `options`: port mask (0 = the port the request came in on).
@@ -457,7 +458,7 @@ impl Rmc {
     }
 }
 
-/// `system_command_t`, 8 bytes, and its command codes (NOTES.md "ISB";
+/// `system_command_t`, 8 bytes, and its command codes (protocol-facts.md "ISB";
 /// `data_sets.h` `eSystemCommand`).
 pub mod sys_cmd {
     /// Struct size.
@@ -522,7 +523,7 @@ impl SystemCommand {
     }
 }
 
-/// `strobe_in_time_t`, 12 bytes (NOTES.md "ISB").
+/// `strobe_in_time_t`, 12 bytes (protocol-facts.md "ISB").
 pub mod strobe {
     /// Struct size.
     pub const SIZE: usize = 12;
@@ -574,7 +575,7 @@ impl StrobeInTime {
     }
 }
 
-/// `sys_params_t`, 64 bytes (NOTES.md "ISB").
+/// `sys_params_t`, 64 bytes (protocol-facts.md "ISB").
 pub mod sys_params {
     /// Struct size.
     pub const SIZE: usize = 64;
@@ -705,8 +706,8 @@ impl SysParams {
 }
 
 /// `nvm_flash_cfg_t`, 288 bytes. Offsets up to `ser2BaudRate` from
-/// NOTES.md "ISB"; the others from `data_sets.h` of protocol 2.1 (its
-/// `ser2BaudRate` lands at 204 and its size at 288, as NOTES.md says).
+/// protocol-facts.md "ISB"; the others from `data_sets.h` of protocol 2.1 (its
+/// `ser2BaudRate` lands at 204 and its size at 288, as protocol-facts.md says).
 pub mod flash {
     /// Struct size.
     pub const SIZE: usize = 288;
@@ -812,11 +813,11 @@ pub mod flash {
     /// value is not in the SDK; the emulator's is its own choice
     /// (`docs/isb-data-sets.md`): a change of it restores the defaults.
     pub const FACTORY_KEY: u32 = 1;
-    /// Default `startupImuDtMs`, ms (NOTES.md).
+    /// Default `startupImuDtMs`, ms (protocol-facts.md).
     pub const DEFAULT_IMU_DT_MS: u32 = 1;
-    /// Default `startupNavDtMs`, ms (NOTES.md).
+    /// Default `startupNavDtMs`, ms (protocol-facts.md).
     pub const DEFAULT_NAV_DT_MS: u32 = 4;
-    /// Default serial rate of every port, bit/s (NOTES.md: `ser0BaudRate`
+    /// Default serial rate of every port, bit/s (protocol-facts.md: `ser0BaudRate`
     /// 921600).
     pub const DEFAULT_BAUD_RATE: u32 = 921_600;
     /// Default `dynamicModel`: airborne 4 g (`DEFAULT_DYNAMIC_MODEL`).
@@ -845,7 +846,7 @@ pub mod flash {
     pub const DEFAULT_GNSS_CN0_DYN_MIN_OFFSET: u8 = 20;
 
     /// The checksum of an image: XOR of the little-endian `u32` words of
-    /// bytes 8..287 (NOTES.md "ISB"); bytes past the end of a short image
+    /// bytes 8..287 (protocol-facts.md "ISB"); bytes past the end of a short image
     /// count as 0.
     pub fn checksum(image: &[u8]) -> u32 {
         let mut x = 0u32;
@@ -951,7 +952,7 @@ impl FlashConfig {
     }
 }
 
-/// `bit_t`, 56 bytes, not in NOTES.md: from `data_sets.h` of protocol 2.1.
+/// `bit_t`, 56 bytes, not in protocol-facts.md: from `data_sets.h` of protocol 2.1.
 pub mod bit {
     /// Struct size.
     pub const SIZE: usize = 56;

@@ -82,7 +82,7 @@ pub enum Rule {
 ///
 /// The ICD asks for a power cycle after SaveFlash "to ensure all modified
 /// parameters are correctly applied" but leaves the rest open; the emulator
-/// decides (README "Protocol notes"):
+/// decides (docs/kernel.md "Protocol notes"):
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Apply {
     /// At once if the device is idle; while it streams or aligns, at the

@@ -36,8 +36,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::rng::Rng;
-use crate::ahrs::rotation::{Mat3, Vec3};
-use crate::dsp::fixed::Coef;
+use crate::math::fixed::Coef;
+use crate::math::rotation::{Mat3, Vec3};
 use crate::model::{Product, SensorGrade};
 use libm::{expf, sqrtf};
 
@@ -130,7 +130,7 @@ pub const fn arw_to_density(arw_deg_per_rt_h: f32) -> f32 {
 
 /// VRW in m/s/√h → noise density in g/√Hz.
 pub const fn vrw_to_density(vrw_m_s_per_rt_h: f32) -> f32 {
-    vrw_m_s_per_rt_h / 60.0 / super::units::G
+    vrw_m_s_per_rt_h / 60.0 / crate::math::G
 }
 
 /// ICD 2.2: "non-orthogonality between axes … in the order of 0.01°".
@@ -297,7 +297,7 @@ impl TriadEngine {
     /// An engine with saturation at ±`range` (°/s or g).
     pub fn new(range: f32) -> Self {
         TriadEngine {
-            m: crate::ahrs::rotation::MAT3_IDENTITY,
+            m: crate::math::rotation::MAT3_IDENTITY,
             identity_m: true,
             bias: [0.0; 3],
             gm: [0.0; 3],
@@ -345,7 +345,7 @@ impl TriadEngine {
             self.m[i][i] = 1.0 + a.scale_factor + a.temp_scale * dtemp;
             self.bias[i] = a.bias + a.temp_bias * dtemp;
         }
-        self.identity_m = self.m == crate::ahrs::rotation::MAT3_IDENTITY;
+        self.identity_m = self.m == crate::math::rotation::MAT3_IDENTITY;
     }
 
     /// Starts the Gauss–Markov biases in their stationary distribution (at
@@ -378,7 +378,7 @@ impl TriadEngine {
         let mut y = if self.identity_m {
             *truth
         } else {
-            crate::ahrs::rotation::mat_vec(&self.m, truth)
+            crate::math::rotation::mat_vec(&self.m, truth)
         };
         if self.noisy {
             let u = rng.next_u32();
@@ -413,8 +413,6 @@ impl TriadEngine {
     }
 }
 
-pub use super::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
-
 /// An entry of M − I for the fixed-point engine: clamped to ±¼ (NaN → 0).
 fn delta(x: f32) -> f64 {
     if x.is_nan() {
@@ -426,7 +424,7 @@ fn delta(x: f32) -> f64 {
 
 /// [`TriadEngine`] in integers, for the `fixed-point` build: the same
 /// model and the same random draws, on measurements scaled by 2^`bits`
-/// ([`GYRO_BITS`], [`ACC_BITS`]).
+/// ([`GYRO_BITS`](crate::math::GYRO_BITS), [`ACC_BITS`](crate::math::ACC_BITS)).
 ///
 /// - M − I as [`Coef`]s (14-bit mantissas: a 300 ppm scale factor is kept to
 ///   0.02 ppm); the temperature terms (scale factor and bias) are set one
@@ -560,7 +558,7 @@ impl TriadEngineFixed {
         let dtemp = temp_c - REFERENCE_TEMPERATURE_C;
         self.m[i][i] = Coef::from_f32(delta(a.scale_factor + a.temp_scale * dtemp) as f32);
         self.bias[i] =
-            crate::dsp::fixed::to_fixed(a.bias + a.temp_bias * dtemp, u32::from(self.bits));
+            crate::math::fixed::to_fixed(a.bias + a.temp_bias * dtemp, u32::from(self.bits));
         self.identity_m = self.m.iter().flatten().all(|c| *c == Coef::ZERO);
     }
     /// [`TriadEngine::randomize_gm`]: the Gauss–Markov biases drawn from
@@ -595,7 +593,7 @@ impl TriadEngineFixed {
         self.range
     }
 
-    /// One tick: measures `truth` (scaled, |·| ≤ [`TRUTH_LIMIT`]); returns
+    /// One tick: measures `truth` (scaled, |·| ≤ [`TRUTH_LIMIT`](crate::math::TRUTH_LIMIT)); returns
     /// the measurement and a mask of the axes beyond the range (bit i =
     /// axis i), which are clipped.
     #[inline]

@@ -10,7 +10,6 @@ pub mod errors;
 pub mod motion;
 pub mod rng;
 pub mod temperature;
-pub mod units;
 
 pub use errors::{AxisErrors, ErrorModel, ErrorSpec, SensorErrors, SensorSpec};
 pub use motion::{Motion, MotionSource, Truth, TruthFrame};

@@ -25,14 +25,13 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use crate::ahrs::rotation::{
+use crate::math::rotation::{
     canonical, quat_from_euler, quat_mul, quat_rotate_inv, Quat, QuatIntegrator, Vec3,
     QUAT_IDENTITY,
 };
 use crate::math::{cosf, sinf};
 use crate::time::Instant;
 
-pub use super::units::G;
 /// Earth rotation rate, °/h (sidereal, 15.041 °/h).
 pub const EARTH_RATE_DEG_PER_H: f32 = 15.041;
 /// Earth rotation rate, rad/s.
@@ -273,10 +272,15 @@ pub struct BuiltinMotion {
     earth: Vec3,
     dt: f32,
     started: bool,
-    /// Host builds: [`BuiltinMotion::static_and_bounded`].
-    #[cfg(not(target_os = "none"))]
+    /// [`BuiltinMotion::static_and_bounded`].
     static_bounded: bool,
     state: State,
+}
+
+/// Latitude and heading of a motion's site, degrees (for a
+/// [`Motion::Sample`]: the default site, heading 0).
+pub fn site_of(motion: &Motion) -> (f32, f32) {
+    site(motion)
 }
 
 /// Latitude and heading of a motion's site, degrees.
@@ -360,7 +364,6 @@ impl BuiltinMotion {
             earth,
             dt,
             started: false,
-            #[cfg(not(target_os = "none"))]
             static_bounded: static_bounded(&state),
             state,
         }
@@ -369,6 +372,12 @@ impl BuiltinMotion {
     /// The motion this source plays.
     pub fn motion(&self) -> &Motion {
         &self.motion
+    }
+
+    /// The truth of the last tick ([`MotionSource::next`]; before the first,
+    /// of the initial state), without advancing.
+    pub fn truth_now(&self) -> Truth {
+        self.current()
     }
 
     /// Truth at the current state without advancing.
@@ -468,10 +477,9 @@ impl BuiltinMotion {
 }
 
 impl BuiltinMotion {
-    /// Host builds: the motion is static and its (constant) truth is
-    /// already what [`Truth::bounded`] makes of it, bit for bit, so a
-    /// chain may skip the bounding.
-    #[cfg(not(target_os = "none"))]
+    /// The motion is static and its (constant) truth is already what
+    /// [`Truth::bounded`] makes of it, bit for bit, so a chain may skip the
+    /// bounding.
     #[inline(always)]
     pub fn static_and_bounded(&self) -> bool {
         self.static_bounded
@@ -480,7 +488,6 @@ impl BuiltinMotion {
 
 /// Whether `state` is static with a truth [`Truth::bounded`] leaves the
 /// same, bit for bit.
-#[cfg(not(target_os = "none"))]
 fn static_bounded(state: &State) -> bool {
     let bits = |t: &Truth| {
         (
@@ -497,9 +504,8 @@ fn static_bounded(state: &State) -> bool {
 
 impl MotionSource for BuiltinMotion {
     fn next(&mut self, _now: Instant, _dt: f32) -> Truth {
-        // Hosts: a static motion has nothing to advance and its truth in
-        // place (without the matches on a copy of the motion below).
-        #[cfg(not(target_os = "none"))]
+        // A static motion has nothing to advance and its truth in place
+        // (without the matches on a copy of the motion below).
         if let State::Static { truth, .. } = &self.state {
             self.started = true;
             return *truth;
@@ -532,9 +538,9 @@ impl MotionSource for BuiltinMotion {
 
 // ----- fixed point (the `fixed-point` build) -----
 
-use super::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
-use crate::ahrs::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
-use crate::dsp::fixed::{mul_q30, mul_shr, to_fixed};
+use crate::math::fixed::{mul_q30, mul_shr, to_fixed};
+use crate::math::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
+use crate::math::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
 
 /// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`], specific
 /// force in g·2^[`ACC_BITS`], each clamped to ±[`TRUTH_LIMIT`].
@@ -668,7 +674,7 @@ impl BuiltinMotionFixed {
         let earth_f = earth_enu(lat);
         let base_f = quat_from_euler(heading * DEG, 0.0, 0.0);
         let earth = earth_f.map(|w| to_fixed(w * RAD, GYRO_BITS + 8).clamp(-(1 << 29), 1 << 29));
-        let base = base_f.map(crate::ahrs::rotation::q30);
+        let base = base_f.map(crate::math::rotation::q30);
         let tick_rad = |v: f32| {
             let x = f64::from(v) * core::f64::consts::PI / 180.0 * f64::from(dt);
             libm::round(x * 68_719_476_736.0).clamp(-2e9, 2e9) as i32 // 2³⁶
@@ -748,6 +754,18 @@ impl BuiltinMotionFixed {
         &self.motion
     }
 
+    /// The truth of the last tick ([`BuiltinMotionFixed::step`]; before the
+    /// first, of the initial state) in physical units, without advancing.
+    pub fn truth_now(&self) -> Truth {
+        let t = self.current();
+        let k = |v: i32, bits: u32| crate::math::fixed::scaled_f32(v, bits);
+        Truth {
+            rate_dps: t.rate.map(|v| k(v, GYRO_BITS)),
+            specific_force_g: t.force.map(|v| k(v, ACC_BITS)),
+            temperature_c: t.temperature_c,
+        }
+    }
+
     /// Truth of the next tick (the first call gives the initial state).
     #[inline]
     pub fn step(&mut self) -> TruthFixed {
@@ -824,7 +842,7 @@ impl BuiltinMotionFixed {
 
     /// The true attitude at the last tick (Appendix C convention, q0 ≥ 0).
     pub fn attitude(&self) -> Option<Quat> {
-        let f = |q: QuatQ30| canonical(&q.map(|v| crate::dsp::fixed::scaled_f32(v, 30)));
+        let f = |q: QuatQ30| canonical(&q.map(|v| crate::math::fixed::scaled_f32(v, 30)));
         match &self.kind {
             FixedKind::Constant { .. } if matches!(self.motion, Motion::Sample(_)) => None,
             FixedKind::Constant { base, .. } => Some(f(*base)),

@@ -656,7 +656,7 @@ fn measure(d: &mut Dut, id: u8, what: &str) -> Vec<(String, u64)> {
 /// The tick's cost bounds, in instructions: the whole tick interrupt
 /// (`service_max_ns`: one tick with its TX pump, RX drain and events) and
 /// `Device::on_tick` alone. Each is ≈ 20 % above the figure measured when
-/// it was set (the worst over 1 s, five runs; figures in the README), so a
+/// it was set (the worst over 1 s, five runs; figures in docs/firmware.md), so a
 /// change that makes the tick markedly dearer fails here and has to say so.
 fn assert_cost(stats: &[(String, u64)], interrupt: u64, on_tick: u64) {
     let get = |k: &str| stats.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();

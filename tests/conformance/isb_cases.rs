@@ -1,6 +1,6 @@
 //! The ISB conformance cases: an emulated IMX-5 as the Inertial Sense SDK
-//! and its command-line tool see it (`docs/protocol-facts.md` "ISB", README
-//! "ISB personality"), one function per case, each run against every
+//! and its command-line tool see it (`docs/protocol-facts.md` "ISB",
+//! `docs/isb.md`), one function per case, each run against every
 //! target ([`Kind`]). Times are the packets' own `time` fields (device
 //! time), never the wall clock; the wall clock only bounds the waits.
 

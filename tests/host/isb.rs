@@ -1,6 +1,6 @@
 //! `imu-emu --protocol isb` end to end: the emulated IMX-5 over TCP and a
 //! pty, driven as the Inertial Sense command-line tool drives a real one
-//! (`docs/protocol-facts.md` "ISB"; README "ISB personality").
+//! (`docs/protocol-facts.md` "ISB"; docs/isb.md).
 
 // Shared with the other host suites; not every helper is used here.
 #[allow(dead_code)]

@@ -532,7 +532,7 @@ fn speed_max_streams_losslessly_faster_than_real_time() {
         assert_eq!(counter, last.wrapping_add(20), "frame lost or repeated");
         last = counter;
     }
-    // Reported, not asserted (README, Performance).
+    // Reported, not asserted (docs/performance.md).
     let wall = t0.elapsed().as_secs_f64();
     eprintln!("--speed max: 300 s of GA at 100 Hz in {wall:.3} s");
 }

@@ -7,46 +7,10 @@
 mod support;
 
 use std::fs::File;
-use std::io::{Read, Write};
-use std::os::fd::{AsFd, OwnedFd};
 use std::time::Duration;
 
-use nix::poll::{PollFd, PollFlags, PollTimeout};
 use nix::sys::termios::{self, BaudRate};
-use support::{command, read_ram, save, Conn, Emu};
-
-/// The pty master as the far end of the line: reads time out after 20 ms.
-struct Master(File);
-
-impl Read for Master {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let mut fds = [PollFd::new(self.0.as_fd(), PollFlags::POLLIN)];
-        nix::poll::poll(&mut fds, PollTimeout::from(20u8)).map_err(std::io::Error::from)?;
-        if fds[0]
-            .revents()
-            .is_some_and(|r| r.intersects(PollFlags::POLLIN))
-        {
-            self.0.read(buf)
-        } else {
-            Err(std::io::ErrorKind::WouldBlock.into())
-        }
-    }
-}
-
-impl Write for Master {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.write(buf)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
-
-fn pair() -> (OwnedFd, OwnedFd, String) {
-    let pty = nix::pty::openpty(None, None).unwrap();
-    let path = nix::unistd::ttyname(&pty.slave).unwrap();
-    (pty.master, pty.slave, path.to_str().unwrap().to_owned())
-}
+use support::{command, pty_pair as pair, read_ram, save, Conn, Emu, Master};
 
 #[test]
 fn the_device_on_a_serial_port_answers_and_its_rate_follows_commit_baud_rate() {

@@ -721,3 +721,46 @@ fn gcd(a: u64, b: u64) -> u64 {
         gcd(b, a % b)
     }
 }
+
+/// The master of a pty pair as the far end of a serial line (the test's
+/// side of the cable): reads time out after 20 ms.
+pub struct Master(pub std::fs::File);
+
+impl Read for Master {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        use nix::poll::{PollFd, PollFlags, PollTimeout};
+        use std::os::fd::AsFd as _;
+        let mut fds = [PollFd::new(self.0.as_fd(), PollFlags::POLLIN)];
+        nix::poll::poll(&mut fds, PollTimeout::from(20u8)).map_err(std::io::Error::from)?;
+        if fds[0]
+            .revents()
+            .is_some_and(|r| r.intersects(PollFlags::POLLIN))
+        {
+            self.0.read(buf)
+        } else {
+            Err(std::io::ErrorKind::WouldBlock.into())
+        }
+    }
+}
+
+impl Write for Master {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A pty pair for `--serial`: master, slave and the slave's path. Neither
+/// descriptor is inherited by the emulator (or its port would never hang
+/// up when the test closes the master).
+pub fn pty_pair() -> (std::os::fd::OwnedFd, std::os::fd::OwnedFd, String) {
+    use nix::fcntl::{fcntl, FcntlArg, FdFlag};
+    let pty = nix::pty::openpty(None, None).unwrap();
+    for fd in [&pty.master, &pty.slave] {
+        fcntl(fd, FcntlArg::F_SETFD(FdFlag::FD_CLOEXEC)).unwrap();
+    }
+    let path = nix::unistd::ttyname(&pty.slave).unwrap();
+    (pty.master, pty.slave, path.to_str().unwrap().to_owned())
+}

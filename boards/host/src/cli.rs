@@ -15,7 +15,7 @@
 //! `--tcp` and `--control` must be loopback addresses unless
 //! `--allow-remote` is given (then a warning says what is exposed). Errors
 //! are one line (`imu-emu: …`, [`report`]): exit status 2 for a bad
-//! argument ([`UsageError`]), 1 for a failure while running.
+//! argument ([`UsageError`], [`crate::error`]), 1 for a failure while running.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -32,6 +32,7 @@ use imu_emu::model::Product;
 use imu_emu::time::Instant;
 
 use crate::clock::Speed;
+use crate::error::UsageError;
 use crate::flash::{FileNor, MemNor};
 use crate::runner::{HostPersonality, Runner};
 use crate::transport::{PtyTransport, TcpTransport, Transport};
@@ -111,6 +112,13 @@ pub struct Args {
     /// With --trajectory: start the file over after its last sample.
     #[arg(long, requires = "trajectory")]
     pub trajectory_loop: bool,
+
+    /// The vehicle the unit rides on, from a file: a manoeuvre script
+    /// (first statement `start lat lon height heading speed`) or a
+    /// full-state CSV (header `time,lat,lon,height,vn,ve,vd,roll,pitch,yaw`
+    /// [`,wx,wy,wz,fx,fy,fz`][`,temp`]); docs/motion.md.
+    #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
+    pub motion: Option<PathBuf>,
 
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
@@ -237,36 +245,6 @@ pub enum PowerOnAt {
 
 fn parse_product(s: &str) -> Result<Product, String> {
     Product::parse(s).map_err(|e| e.to_string())
-}
-
-/// An error in what the user asked for (exit status 2, as clap's usage
-/// errors), as opposed to one met while running (exit status 1).
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl core::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
-
-/// The error of binding `addr` for `option` (`--tcp`, `--control`), with a
-/// hint where one helps: a port in use suggests port 0, an address that
-/// does not parse says `HOST:PORT` is expected.
-pub fn bind_error(e: std::io::Error, option: &str, addr: &str) -> anyhow::Error {
-    use std::io::ErrorKind;
-    match e.kind() {
-        ErrorKind::AddrInUse => anyhow::anyhow!(
-            "{option} {addr}: address already in use (another imu-emu?); \
-             hint: {option} 127.0.0.1:0 picks a free port"
-        ),
-        ErrorKind::InvalidInput => anyhow::Error::new(UsageError(format!(
-            "{option} {addr}: {e}; expected HOST:PORT, e.g. {option} 127.0.0.1:7000"
-        ))),
-        _ => anyhow::anyhow!("{option} {addr}: {e}"),
-    }
 }
 
 /// Checks that `addr` (`HOST:PORT`) given to `option` is a loopback
@@ -450,14 +428,33 @@ fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
     }
     let n = usize::from(args.count);
     open_files_for(n);
+    let started = std::cell::Cell::new(false);
     match &args.flash {
         Some(path) => {
-            let flashes = (0..n)
-                .map(|k| FileNor::open(&numbered(path, k)))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            many_with(flashes, args, stop)
+            let files: Vec<PathBuf> = (0..n).map(|k| numbered(path, k)).collect();
+            let new: Vec<&PathBuf> = files
+                .iter()
+                .filter(|p| std::fs::symlink_metadata(p).is_err())
+                .collect();
+            let r = files
+                .iter()
+                .map(|p| FileNor::open(p))
+                .collect::<anyhow::Result<Vec<_>>>()
+                .and_then(|flashes| many_with(flashes, args, stop, &started));
+            if r.is_err() && !started.get() {
+                // A start that failed leaves no FILE.K it created.
+                for p in new {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            r
         }
-        None => many_with((0..n).map(|_| MemNor::new()).collect(), args, stop),
+        None => many_with(
+            (0..n).map(|_| MemNor::new()).collect(),
+            args,
+            stop,
+            &started,
+        ),
     }
 }
 
@@ -486,10 +483,16 @@ fn open_files_for(n: usize) {
     }
 }
 
-fn many_with<F: NorFlash>(flashes: Vec<F>, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+/// `started` is set once every device is set up and the fleet runs.
+fn many_with<F: NorFlash>(
+    flashes: Vec<F>,
+    args: &Args,
+    stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
+) -> anyhow::Result<()> {
     match args.protocol {
-        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop),
-        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop),
+        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop, started),
+        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop, started),
     }
 }
 
@@ -497,6 +500,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     flashes: Vec<F>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let rate = factory_rate(args.protocol);
     if args.pty {
@@ -505,7 +509,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
             let link = args.link.as_deref().map(|p| numbered(p, k));
             parts.push((f, PtyTransport::open(rate, link.as_deref())?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     } else {
         let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
         let sock: std::net::SocketAddr = addr
@@ -525,14 +529,25 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
             let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
             parts.push((f, TcpTransport::bind(&a)?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     }
+}
+
+/// `--motion FILE`, loaded (and said on stderr), if given.
+fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSource>> {
+    let Some(path) = &args.motion else {
+        return Ok(None);
+    };
+    let v = crate::vehicle::VehicleSource::load(path)?;
+    eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
+    Ok(Some(v))
 }
 
 fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     parts: Vec<(F, T)>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let trajectory = match &args.trajectory {
         Some(path) => Some(crate::trajectory::Trajectory::load(
@@ -541,6 +556,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -567,6 +583,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         seed: args.seed,
         pps: args.pps,
         trajectory,
+        vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
         web: web.as_ref().map(|(hub, _)| Arc::clone(hub)),
     };
@@ -585,6 +602,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     );
     let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
@@ -654,6 +672,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
         None => None,
     };
+    let vehicle = load_vehicle(args)?;
     let mut control = match &args.control {
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
@@ -671,9 +690,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     out.flush()?;
     drop(out);
 
-    if args.power_on == PowerOnAt::Connect {
+    // A serial port counts as connected at once: no message then.
+    if args.power_on == PowerOnAt::Connect && !transport.poll_client()? {
         eprintln!("imu-emu: the device powers on when a client connects (--power-on now: at once)");
-        while !transport.poll_client()? {
+        loop {
             if stop.load(std::sync::atomic::Ordering::Relaxed) {
                 eprintln!("imu-emu: stopped");
                 return Ok(());
@@ -692,6 +712,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
                 })?;
             }
             transport.wait(crate::runner::IDLE_WAKE)?;
+            if transport.poll_client()? {
+                break;
+            }
         }
     }
     let epoch = std::time::Instant::now();
@@ -726,6 +749,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     if let Some(t) = trajectory {
         runner = runner.with_trajectory(t);
+    }
+    if let Some(v) = vehicle {
+        runner = runner.with_vehicle(v);
     }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");

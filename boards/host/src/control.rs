@@ -7,24 +7,11 @@
 //! `error <why>` (a syntax error names the expected syntax). Lines the
 //! device raises by itself start with `event ` and never answer a command.
 //!
-//! | line | effect |
-//! |---|---|
-//! | `help` | `ok` and the list of commands |
-//! | `devices` | `ok count=N dev0=tcp:ADDR dev1=…`: the devices and where each listens |
-//! | `dev K <command>` | any command below for device K (0-based) of a many-device run (`--count N`; required there, optional with one device) |
-//! | `status` | `ok` and `key=value` words: mode, format, output rate, line rate, frames and bytes sent, frames rejected and why, link faults |
-//! | `pps` | a 1PPS rising edge now (ICD 5.2.3.1) |
-//! | `extrig high` / `extrig low` | the EXTRIG input changes level now (4.1.3) |
-//! | `power-cycle [boot=high\|boot=low]` | power cycle, BOOT at that level (or floating) |
-//! | `fault comm\|config\|gyro-bit\|accel-bit\|flash on\|off` | inject a sensor fault (USW bits 1–2, GetBIT) |
-//! | `fault temperature <°C>\|off` | force the sensor temperature (USW bit 14 outside −40…85 °C) |
-//! | `motion static [lat heading]` | the unit at rest (default 45° N, heading 0) |
-//! | `motion rotate <x> <y> <z>` | constant body rate, deg/s (USW bits 10–12 beyond the range) |
-//! | `link drop\|corrupt\|duplicate <rate> [tx\|rx]` | each byte lost / XORed / doubled with probability `rate` (both directions unless `tx` = device → client or `rx`) |
-//! | `link noise <bytes> [tx\|rx]` | a burst of random bytes now (default `tx`) |
-//! | `link stall <ms>` | the output held for `ms` of device time, then sent at once |
-//! | `link cut` | the rest of the output frame being sent is lost |
-//! | `link clear` | no link faults (a stall ends now) |
+//! The grammar is one table, [`COMMANDS`]: a row per form of a command
+//! (its syntax, whether `dev K` may address it, its parser). The parser,
+//! the `help` answer and the syntax an error names all read it, so a new
+//! command is a new row (what each command does: `docs/host-runner.md`,
+//! "The control protocol"; `runner::HostPort::apply` carries it out).
 //!
 //! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
@@ -40,7 +27,9 @@
 //! at most [`MAX_READ_PER_POLL`] bytes, the rest waiting for the next pass;
 //! a client that does not read its replies gets no more commands executed
 //! once [`MAX_PENDING_OUTPUT`] bytes wait for it (events that do not
-//! fit are dropped). A client that closes its sending side still gets its
+//! fit are dropped; an answer never is: every line gets its whole answer,
+//! however long, in order). A blank line is answered `error empty line`.
+//! A device number is canonical decimal (`dev 01`, `dev +1` are refused). A client that closes its sending side still gets its
 //! replies and the events.
 
 use std::collections::VecDeque;
@@ -54,16 +43,8 @@ use imu_emu::sensor::Motion;
 use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;
 
-/// The commands and their syntax, as `help` lists them.
-pub const HELP: &str = "help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
-| fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
-| motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
-| link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
-| link stall <ms> | link cut | link clear \
-| devices | dev <K> <command> (device K of a --count run)";
-
 /// A parsed control command.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     /// A pin edge now.
     Edge(Pin, Level),
@@ -73,6 +54,12 @@ pub enum Command {
     Fault(FaultChange),
     /// Change the motion the unit undergoes.
     Motion(Motion),
+    /// Fly a manoeuvre script from now (`motion script …`).
+    Script(Box<imu_emu::vehicle::Script>),
+    /// A manoeuvre script or full-state CSV file from now (`motion file …`).
+    MotionFile(std::path::PathBuf),
+    /// Report the vehicle truth (`ok key=value …`).
+    Truth,
     /// Change the link faults.
     Link(LinkChange),
     /// Report the device's and the line's state (`ok key=value …`).
@@ -146,119 +133,152 @@ fn dir(w: Option<&&str>, default: Dir) -> Result<Dir, String> {
     }
 }
 
-/// The syntax of the command family starting with `word`, for errors.
-fn usage(word: &str) -> Option<&'static str> {
-    Some(match word {
-        "help" => "help",
-        "devices" => "devices",
-        "dev" => "dev <K> <command>",
-        "status" => "status",
-        "pps" => "pps",
-        "extrig" => "extrig high|low",
-        "power-cycle" => "power-cycle [boot=high|boot=low]",
-        "fault" => {
-            "fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
-        }
-        "motion" => "motion static [<lat> <heading>], or motion rotate <x> <y> <z>",
-        "link" => {
-            "link drop|corrupt|duplicate <rate 0..1> [tx|rx], link noise <bytes> [tx|rx], \
-             link stall <ms>, link cut, or link clear"
-        }
-        _ => return None,
-    })
+/// One form of a control command: a row of [`COMMANDS`], the one table
+/// that drives the parser ([`parse`], [`parse_addressed`]), the `help`
+/// answer ([`help`]) and the syntax an error names ([`usage`]).
+///
+/// Adding a command is adding a row (and, if it needs one, a [`Command`]
+/// variant and what the runner does with it, `runner::HostPort::apply`).
+#[derive(Debug, Clone, Copy)]
+pub struct Form {
+    /// Its syntax, as `help` lists it and errors name it; the first word
+    /// selects the family of forms tried for a line.
+    pub syntax: &'static str,
+    /// Added after the syntax in `help` only (not in error hints).
+    pub note: &'static str,
+    /// Whether `dev K` may address it (a device's command); the others are
+    /// answered by the socket itself.
+    pub device: bool,
+    /// Parses the line's words after the first: `None` if they do not have
+    /// this form's shape (the next form of the family is tried, and when
+    /// none takes them the error names the family's syntax), `Some(Err)`
+    /// for a right shape with a wrong value (that error is the answer).
+    pub parse: fn(&[&str]) -> Option<Result<Command, String>>,
 }
 
-/// Parses one line of the control protocol. An error names the expected
-/// syntax (`bad syntax: …; expected extrig high|low`), says what a value
-/// should be (`not a probability in 0..1: 2`), or says `try help` for a
-/// word that starts no command.
-pub fn parse(line: &str) -> Result<Command, String> {
-    let words: Vec<&str> = line.split_whitespace().collect();
-    parse_one(line, &words)
-}
-
-/// Parses one line that may address a device: `dev K <command>` gives
-/// `(Some(K), command)`, any other line `(None, command)`.
-pub fn parse_addressed(line: &str) -> Result<(Option<usize>, Command), String> {
-    let words: Vec<&str> = line.split_whitespace().collect();
-    match words.as_slice() {
-        ["dev", k, rest @ ..] if !rest.is_empty() => {
-            let k = k
-                .parse::<usize>()
-                .map_err(|_| format!("not a device number: {k}"))?;
-            let start = line.find(rest[0]).unwrap_or(0);
-            match parse_one(&line[start..], rest)? {
-                Command::Help | Command::Devices => {
-                    Err(format!("not a device command: {}", rest[0]))
-                }
-                c => Ok((Some(k), c)),
-            }
-        }
-        ["dev", ..] => Err(format!("bad syntax: {line}; expected dev <K> <command>")),
-        _ => Ok((None, parse_one(line, &words)?)),
+impl Form {
+    /// The word that starts the command.
+    pub fn word(&self) -> &'static str {
+        self.syntax.split(' ').next().unwrap_or("")
     }
 }
 
-fn parse_one(line: &str, words: &[&str]) -> Result<Command, String> {
-    parse_words(words).map_err(|e| {
-        let first = words.first().copied().unwrap_or("");
-        match usage(first) {
-            Some(u) if e.is_empty() => format!("bad syntax: {line}; expected {u}"),
-            Some(_) => e,
-            None => format!("unknown command: {line}; try help"),
-        }
-    })
+/// Shorthand for the rows of [`COMMANDS`].
+const fn form(
+    syntax: &'static str,
+    device: bool,
+    parse: fn(&[&str]) -> Option<Result<Command, String>>,
+) -> Form {
+    Form {
+        syntax,
+        note: "",
+        device,
+        parse,
+    }
 }
 
-/// `Err("")` = wrong shape (the caller adds the usage).
-fn parse_words(words: &[&str]) -> Result<Command, String> {
-    match words {
-        ["help"] => Ok(Command::Help),
-        ["devices"] => Ok(Command::Devices),
-        ["status"] => Ok(Command::Status),
-        ["pps"] => Ok(Command::Edge(Pin::Pps, Level::High)),
-        ["extrig", "high"] => Ok(Command::Edge(Pin::Extrig, Level::High)),
-        ["extrig", "low"] => Ok(Command::Edge(Pin::Extrig, Level::Low)),
-        ["power-cycle"] => Ok(Command::PowerCycle(None)),
-        ["power-cycle", "boot=high"] => Ok(Command::PowerCycle(Some(Level::High))),
-        ["power-cycle", "boot=low"] => Ok(Command::PowerCycle(Some(Level::Low))),
-        ["fault", "temperature", "off"] => Ok(Command::Fault(FaultChange::Temperature(None))),
-        ["fault", "temperature", t] => {
-            Ok(Command::Fault(FaultChange::Temperature(Some(number(t)?))))
+/// The control grammar, in the order `help` lists it.
+pub const COMMANDS: &[Form] = &[
+    form("help", false, |w| w.is_empty().then_some(Ok(Command::Help))),
+    form("status", true, |w| {
+        w.is_empty().then_some(Ok(Command::Status))
+    }),
+    form("pps", true, |w| {
+        w.is_empty()
+            .then_some(Ok(Command::Edge(Pin::Pps, Level::High)))
+    }),
+    form("extrig high|low", true, |w| match w {
+        ["high"] => Some(Ok(Command::Edge(Pin::Extrig, Level::High))),
+        ["low"] => Some(Ok(Command::Edge(Pin::Extrig, Level::Low))),
+        _ => None,
+    }),
+    form("power-cycle [boot=high|boot=low]", true, |w| match w {
+        [] => Some(Ok(Command::PowerCycle(None))),
+        ["boot=high"] => Some(Ok(Command::PowerCycle(Some(Level::High)))),
+        ["boot=low"] => Some(Ok(Command::PowerCycle(Some(Level::Low)))),
+        _ => None,
+    }),
+    form(
+        "fault comm|config|gyro-bit|accel-bit|flash on|off",
+        true,
+        |w| match w {
+            [which, state] if *which != "temperature" => Some(on_off(state).and_then(|on| {
+                Ok(Command::Fault(match *which {
+                    "comm" => FaultChange::Comm(on),
+                    "config" => FaultChange::Config(on),
+                    "gyro-bit" => FaultChange::GyroBit(on),
+                    "accel-bit" => FaultChange::AccelBit(on),
+                    "flash" => FaultChange::Flash(on),
+                    _ => return Err(format!("unknown fault: {which}")),
+                }))
+            })),
+            _ => None,
+        },
+    ),
+    form("fault temperature <degC>|off", true, |w| match w {
+        ["temperature", "off"] => Some(Ok(Command::Fault(FaultChange::Temperature(None)))),
+        ["temperature", t] => {
+            Some(number(t).map(|t| Command::Fault(FaultChange::Temperature(Some(t)))))
         }
-        ["fault", which, state] => {
-            let on = on_off(state)?;
-            Ok(Command::Fault(match *which {
-                "comm" => FaultChange::Comm(on),
-                "config" => FaultChange::Config(on),
-                "gyro-bit" => FaultChange::GyroBit(on),
-                "accel-bit" => FaultChange::AccelBit(on),
-                "flash" => FaultChange::Flash(on),
-                _ => return Err(format!("unknown fault: {which}")),
-            }))
-        }
-        ["motion", "static"] => Ok(Command::Motion(Motion::Static {
+        _ => None,
+    }),
+    form("motion static [<lat> <heading>]", true, |w| match w {
+        ["static"] => Some(Ok(Command::Motion(Motion::Static {
             lat_deg: 45.0,
             heading_deg: 0.0,
-        })),
-        ["motion", "static", lat, heading] => Ok(Command::Motion(Motion::Static {
-            lat_deg: number(lat)?,
-            heading_deg: number(heading)?,
-        })),
-        ["motion", "rotate", x, y, z] => Ok(Command::Motion(Motion::ConstantRotation {
-            lat_deg: 45.0,
-            heading_deg: 0.0,
-            rate_dps: [number(x)?, number(y)?, number(z)?],
-        })),
-        ["link", what @ ("drop" | "corrupt" | "duplicate"), p, rest @ ..] if rest.len() <= 1 => {
-            let (p, d) = (rate(p)?, dir(rest.first(), Dir::Both)?);
-            Ok(Command::Link(match *what {
-                "drop" => LinkChange::Drop(p, d),
-                "corrupt" => LinkChange::Corrupt(p, d),
-                _ => LinkChange::Duplicate(p, d),
+        }))),
+        ["static", lat, heading] => Some((|| {
+            Ok(Command::Motion(Motion::Static {
+                lat_deg: number(lat)?,
+                heading_deg: number(heading)?,
             }))
-        }
-        ["link", "noise", n, rest @ ..] if rest.len() <= 1 => {
+        })()),
+        _ => None,
+    }),
+    form("motion rotate <x> <y> <z>", true, |w| match w {
+        ["rotate", x, y, z] => Some((|| {
+            Ok(Command::Motion(Motion::ConstantRotation {
+                lat_deg: 45.0,
+                heading_deg: 0.0,
+                rate_dps: [number(x)?, number(y)?, number(z)?],
+            }))
+        })()),
+        _ => None,
+    }),
+    form("motion script <statement>; …", true, |w| match w {
+        ["script", rest @ ..] if !rest.is_empty() => Some(
+            imu_emu::vehicle::Script::parse(&rest.join(" "))
+                .map(|s| Command::Script(Box::new(s)))
+                .map_err(|e| format!("manoeuvre script: {e}")),
+        ),
+        _ => None,
+    }),
+    form("motion file <path>", true, |w| match w {
+        ["file", path] => Some(Ok(Command::MotionFile((*path).into()))),
+        _ => None,
+    }),
+    form("truth", true, |w| {
+        w.is_empty().then_some(Ok(Command::Truth))
+    }),
+    form(
+        "link drop|corrupt|duplicate <rate 0..1> [tx|rx]",
+        true,
+        |w| match w {
+            [what @ ("drop" | "corrupt" | "duplicate"), p, rest @ ..] if rest.len() <= 1 => {
+                Some((|| {
+                    let (p, d) = (rate(p)?, dir(rest.first(), Dir::Both)?);
+                    Ok(Command::Link(match *what {
+                        "drop" => LinkChange::Drop(p, d),
+                        "corrupt" => LinkChange::Corrupt(p, d),
+                        _ => LinkChange::Duplicate(p, d),
+                    }))
+                })())
+            }
+            _ => None,
+        },
+    ),
+    form("link noise <bytes> [tx|rx]", true, |w| match w {
+        ["noise", n, rest @ ..] if rest.len() <= 1 => Some((|| {
             let n = n
                 .parse::<usize>()
                 .ok()
@@ -268,19 +288,119 @@ fn parse_words(words: &[&str]) -> Result<Command, String> {
                 n,
                 dir(rest.first(), Dir::Tx)?,
             )))
-        }
-        ["link", "stall", ms] => {
-            let ms = ms
-                .parse::<u64>()
+        })()),
+        _ => None,
+    }),
+    form("link stall <ms>", true, |w| match w {
+        ["stall", ms] => Some(
+            ms.parse::<u64>()
                 .ok()
                 .filter(|&ms| ms <= 3_600_000)
-                .ok_or_else(|| format!("not a time in ms (0..=3600000): {ms}"))?;
-            Ok(Command::Link(LinkChange::Stall(ms)))
-        }
-        ["link", "cut"] => Ok(Command::Link(LinkChange::Cut)),
-        ["link", "clear"] => Ok(Command::Link(LinkChange::Clear)),
-        _ => Err(String::new()),
+                .map(|ms| Command::Link(LinkChange::Stall(ms)))
+                .ok_or_else(|| format!("not a time in ms (0..=3600000): {ms}")),
+        ),
+        _ => None,
+    }),
+    form("link cut", true, |w| {
+        (w == ["cut"]).then_some(Ok(Command::Link(LinkChange::Cut)))
+    }),
+    form("link clear", true, |w| {
+        (w == ["clear"]).then_some(Ok(Command::Link(LinkChange::Clear)))
+    }),
+    form("devices", false, |w| {
+        w.is_empty().then_some(Ok(Command::Devices))
+    }),
+    // `dev K …` is taken apart by `parse_addressed` before the table is
+    // consulted; its row gives its syntax to `help` and the errors.
+    Form {
+        note: " (device K of a --count run)",
+        ..form("dev <K> <command>", false, |_| None)
+    },
+];
+
+/// The answer to `help` (after `ok `): every form of [`COMMANDS`].
+pub fn help() -> String {
+    let forms: Vec<String> = COMMANDS
+        .iter()
+        .map(|f| format!("{}{}", f.syntax, f.note))
+        .collect();
+    format!("commands: {}", forms.join(" | "))
+}
+
+/// The syntax of the command family starting with `word`, for errors
+/// (`a, b, or c`), from [`COMMANDS`]; `None` for a word that starts no
+/// command.
+pub fn usage(word: &str) -> Option<String> {
+    let forms: Vec<&str> = COMMANDS
+        .iter()
+        .filter(|f| f.word() == word)
+        .map(|f| f.syntax)
+        .collect();
+    match forms.as_slice() {
+        [] => None,
+        [one] => Some((*one).to_owned()),
+        [init @ .., last] => Some(format!("{}, or {last}", init.join(", "))),
     }
+}
+
+/// Parses one line of the control protocol. An error names the expected
+/// syntax (`bad syntax: …; expected extrig high|low`), says what a value
+/// should be (`not a probability in 0..1: 2`), or says `try help` for a
+/// word that starts no command.
+pub fn parse(line: &str) -> Result<Command, String> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    parse_one(line, &words).map(|(_, c)| c)
+}
+
+/// Parses one line that may address a device: `dev K <command>` gives
+/// `(Some(K), command)`, any other line `(None, command)`.
+pub fn parse_addressed(line: &str) -> Result<(Option<usize>, Command), String> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    match words.as_slice() {
+        ["dev", k, rest @ ..] if !rest.is_empty() => {
+            let k = device_number(k).ok_or_else(|| format!("not a device number: {k}"))?;
+            let start = line.find(rest[0]).unwrap_or(0);
+            match parse_one(&line[start..], rest)? {
+                (form, _) if !form.device => Err(format!("not a device command: {}", rest[0])),
+                (_, c) => Ok((Some(k), c)),
+            }
+        }
+        ["dev", ..] => Err(format!("bad syntax: {line}; expected dev <K> <command>")),
+        _ => Ok((None, parse_one(line, &words)?.1)),
+    }
+}
+
+/// A device number in canonical decimal (`0`, `17`; not `+1`, `01`).
+fn device_number(w: &str) -> Option<usize> {
+    let canonical = w.bytes().all(|b| b.is_ascii_digit()) && (w == "0" || !w.starts_with('0'));
+    canonical.then(|| w.parse().ok()).flatten()
+}
+
+/// [`parse_addressed`] for a line as received (trimmed): a blank line is
+/// answered `error empty line` (every line gets exactly one answer).
+fn parse_line(text: &str) -> Result<(Option<usize>, Command), String> {
+    if text.is_empty() {
+        return Err("empty line".to_owned());
+    }
+    parse_addressed(text)
+}
+
+/// The form of [`COMMANDS`] that takes `words` and its command.
+fn parse_one(line: &str, words: &[&str]) -> Result<(&'static Form, Command), String> {
+    let first = words.first().copied().unwrap_or("");
+    let mut family = COMMANDS.iter().filter(|f| f.word() == first).peekable();
+    if family.peek().is_none() {
+        return Err(format!("unknown command: {line}; try help"));
+    }
+    for form in family {
+        if let Some(r) = (form.parse)(&words[1..]) {
+            return r.map(|c| (form, c));
+        }
+    }
+    Err(format!(
+        "bad syntax: {line}; expected {}",
+        usage(first).unwrap_or_default()
+    ))
 }
 
 /// Longest command line accepted, bytes (the newline excluded). A longer
@@ -451,13 +571,18 @@ impl Client {
         }
     }
 
-    /// Queues `line` if there is room (else drops it); whether it was queued.
-    fn queue(&mut self, line: &[u8]) -> bool {
-        if self.out.len() + line.len() > MAX_PENDING_OUTPUT {
-            return false;
+    /// Queues an event `line` if there is room (else drops it).
+    fn event(&mut self, line: &[u8]) {
+        if self.out.len() + line.len() <= MAX_PENDING_OUTPUT {
+            self.out.extend(line);
         }
+    }
+
+    /// Queues the answer to a line, whole, however long: a command is only
+    /// executed while the queue has room ([`MAX_PENDING_OUTPUT`] less
+    /// [`REPLY_ROOM`]), so the queue stays below that plus one answer.
+    fn answer(&mut self, line: &[u8]) {
         self.out.extend(line);
-        true
     }
 
     /// Writes queued output the socket takes now; `false` if the client is
@@ -483,7 +608,7 @@ impl Control {
     /// Listens on `addr`.
     pub fn bind(addr: &str) -> anyhow::Result<Self> {
         let listener =
-            TcpListener::bind(addr).map_err(|e| crate::cli::bind_error(e, "--control", addr))?;
+            TcpListener::bind(addr).map_err(|e| crate::error::bind_error(e, "--control", addr))?;
         listener.set_nonblocking(true)?;
         Ok(Control {
             listener,
@@ -570,23 +695,20 @@ impl Control {
                 Line::Complete(from, to) => {
                     let text = String::from_utf8_lossy(&c.inbuf[from..to]);
                     let text = text.trim();
-                    if text.is_empty() {
-                        continue;
-                    }
                     commands += 1;
-                    let answer = match parse_addressed(text).and_then(|(k, c)| match c {
-                        Command::Help => Ok(format!("commands: {HELP}")),
+                    let answer = match parse_line(text).and_then(|(k, c)| match c {
+                        Command::Help => Ok(help()),
                         c => apply(k, c),
                     }) {
                         Ok(t) if t.is_empty() => "ok\n".to_owned(),
                         Ok(t) => format!("ok {t}\n"),
                         Err(e) => format!("error {e}\n"),
                     };
-                    c.queue(answer.as_bytes());
+                    c.answer(answer.as_bytes());
                 }
                 Line::TooLong => {
                     commands += 1;
-                    c.queue(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
+                    c.answer(format!("error line longer than {MAX_LINE} bytes\n").as_bytes());
                 }
                 Line::None => {
                     if read >= MAX_READ_PER_POLL || !may_read {
@@ -656,7 +778,7 @@ impl Control {
     /// [`MAX_PENDING_OUTPUT`] bytes wait, rather than stalling the device).
     pub fn event(&mut self, what: &str) {
         if let Some(c) = self.client.as_mut() {
-            c.queue(format!("event {what}\n").as_bytes());
+            c.event(format!("event {what}\n").as_bytes());
             if !c.flush() {
                 self.client = None;
             }
@@ -747,6 +869,65 @@ mod tests {
         assert_eq!(
             parse("warp 9"),
             Err("unknown command: warp 9; try help".to_owned())
+        );
+    }
+
+    #[test]
+    fn the_table_gives_the_help_and_the_hints() {
+        assert_eq!(
+            help(),
+            "commands: help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
+             | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
+             | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
+             | motion script <statement>; … | motion file <path> | truth \
+             | link drop|corrupt|duplicate <rate 0..1> [tx|rx] | link noise <bytes> [tx|rx] \
+             | link stall <ms> | link cut | link clear \
+             | devices | dev <K> <command> (device K of a --count run)"
+        );
+        assert_eq!(
+            usage("fault").as_deref(),
+            Some("fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off")
+        );
+        assert_eq!(
+            usage("motion").as_deref(),
+            Some(
+                "motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+                 motion script <statement>; …, or motion file <path>"
+            )
+        );
+        assert_eq!(usage("pps").as_deref(), Some("pps"));
+        assert_eq!(usage("dev").as_deref(), Some("dev <K> <command>"));
+        assert_eq!(usage("warp"), None);
+        assert_eq!(
+            parse("fault bogus on"),
+            Err("unknown fault: bogus".to_owned())
+        );
+        assert_eq!(
+            parse("fault comm"),
+            Err(
+                "bad syntax: fault comm; expected fault comm|config|gyro-bit|accel-bit|flash \
+                 on|off, or fault temperature <degC>|off"
+                    .to_owned()
+            )
+        );
+        assert_eq!(
+            parse("motion static 1"),
+            Err("bad syntax: motion static 1; expected \
+            motion static [<lat> <heading>], motion rotate <x> <y> <z>, \
+            motion script <statement>; …, or motion file <path>"
+                .to_owned())
+        );
+        assert_eq!(
+            parse_addressed("dev 2 pps"),
+            Ok((Some(2), Command::Edge(Pin::Pps, Level::High)))
+        );
+        assert_eq!(
+            parse_addressed("dev 2 devices"),
+            Err("not a device command: devices".to_owned())
+        );
+        assert_eq!(
+            parse("dev 2 pps"),
+            Err("bad syntax: dev 2 pps; expected dev <K> <command>".to_owned())
         );
     }
 

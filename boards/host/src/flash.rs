@@ -69,11 +69,15 @@ pub struct FileNor {
     nor: MemNor,
     file: File,
     path: PathBuf,
+    /// Writes to the file that failed so far, and when that was last said
+    /// on stderr (at most once a second: a full disk fails every save).
+    failed_writes: u64,
+    reported_at: Option<std::time::Instant>,
 }
 
 impl FileNor {
     /// Opens (or creates) the flash image at `path` and locks it; refuses
-    /// anything that is not a regular file ([`crate::cli::UsageError`])
+    /// anything that is not a regular file ([`crate::error::UsageError`])
     /// and a file another process holds locked.
     pub fn open(path: &Path) -> anyhow::Result<Self> {
         let shown = path.display();
@@ -92,7 +96,7 @@ impl FileNor {
             .with_context(|| format!("--flash {shown}: stat"))?
             .file_type();
         if !kind.is_file() {
-            return Err(crate::cli::UsageError(format!(
+            return Err(crate::error::UsageError(format!(
                 "--flash {shown}: not a regular file ({}); give the path of a file to keep the \
                  flash image in",
                 describe(kind)
@@ -130,7 +134,7 @@ impl FileNor {
             // a full or read-only file system): not a place for an image.
             file.write_all_at(&nor.image()[image.len()..], image.len() as u64)
                 .map_err(|e| {
-                    crate::cli::UsageError(format!(
+                    crate::error::UsageError(format!(
                         "--flash {shown}: cannot write the {FLASH_SIZE}-byte flash image there \
                          ({e}); give the path of an ordinary file on a writable disk"
                     ))
@@ -140,6 +144,8 @@ impl FileNor {
             nor,
             file,
             path: path.to_owned(),
+            failed_writes: 0,
+            reported_at: None,
         })
     }
 
@@ -162,7 +168,18 @@ impl FileNor {
         self.file
             .write_all_at(&self.nor.image()[from..to], from as u64)
             .map_err(|e| {
-                eprintln!("imu-emu: {}: {e}", self.path.display());
+                self.failed_writes += 1;
+                let due = self
+                    .reported_at
+                    .is_none_or(|t| t.elapsed() >= std::time::Duration::from_secs(1));
+                if due {
+                    self.reported_at = Some(std::time::Instant::now());
+                    eprintln!(
+                        "imu-emu: {}: {e} ({} failed writes so far; said at most once a second)",
+                        self.path.display(),
+                        self.failed_writes
+                    );
+                }
                 FileNorError::Io(e)
             })
     }

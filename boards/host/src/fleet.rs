@@ -60,6 +60,9 @@ pub struct Setup {
     pub pps: bool,
     /// The motion each device replays, if any (each from its start).
     pub trajectory: Option<Trajectory>,
+    /// The vehicle each device rides on (`--motion`), if any (each from
+    /// its start).
+    pub vehicle: Option<crate::vehicle::VehicleSource>,
     /// Power on at start instead of at the first client.
     pub power_on_now: bool,
     /// The web view (`--web`), fed by each device's runner.
@@ -160,6 +163,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         }
         if let Some(t) = &self.setup.trajectory {
             runner = runner.with_trajectory(t.clone());
+        }
+        if let Some(v) = &self.setup.vehicle {
+            runner = runner.with_vehicle(v.clone());
         }
         self.slots[k] = Some(Slot::On(Box::new(runner)));
         Ok(())

@@ -22,6 +22,8 @@
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
+//! * [`error`] — [`error::UsageError`] (exit status 2) and the bind
+//!   errors, below every other module;
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
 //!   (commands, record, decode, plot);
@@ -37,6 +39,7 @@ pub mod cli;
 pub mod client;
 pub mod clock;
 pub mod control;
+pub mod error;
 pub mod flash;
 pub mod fleet;
 pub mod link;
@@ -46,5 +49,6 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod vehicle;
 pub mod virtual_device;
 pub mod web;

@@ -20,7 +20,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use crate::cli::UsageError;
+use crate::error::UsageError;
 
 /// Image size of a PNG or SVG, pixels.
 pub const SIZE: (u32, u32) = (1200, 900);

@@ -21,6 +21,18 @@
 //! * **Visible loss**: a frame the device's TX queue could not take is
 //!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
 //!   (at most once a second) and counts it in [`Stats::tx_dropped`].
+//! * **Input at the line rate**: whatever the transport delivers at once
+//!   (a 70 KB burst of commands in one TCP write, a pty or serial buffer
+//!   full), the device gets its input no faster than its UART would at
+//!   the line rate: a host-side [`Pacer`] at the device's line rate, in
+//!   device time, bounds what each pass reads; the rest waits in the
+//!   transport (the kernel's buffers, then the peer: TCP flow control),
+//!   whose wait does not wake for input meanwhile
+//!   ([`Transport::hold_input`]) but when a burst of credit is there. So
+//!   the replies to a burst of commands, each shorter than its command,
+//!   always fit the line and the device's TX queue, as on a real UART.
+//!   (The firmware's UART delivers at the line rate by itself: this is
+//!   the host board's part, not the core schedule's.)
 //! * **A status line** on stdout once a second when it is a terminal
 //!   (mode, format, rates, frames sent, frames rejected).
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
@@ -42,6 +54,7 @@ use std::time::Duration;
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
 use imu_emu::kernel::Kernel;
+use imu_emu::line::Pacer;
 use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
@@ -53,6 +66,7 @@ use crate::link::Link;
 use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
+use crate::vehicle::VehicleSource;
 
 /// What the host runner asks of a personality beyond the core's seam.
 pub trait HostPersonality: Personality {
@@ -93,6 +107,16 @@ const LIMITS: Limits = Limits {
     max_ticks: MAX_TICKS_PER_PASS,
     max_rx: MAX_RX_PER_PASS,
     early_ns: 0,
+};
+/// Most ticks a pass runs while input is held back at the line rate:
+/// 2–4 ms of device time, so that input, fed after a pass's ticks, stays
+/// interleaved with them even when the host is behind (a command cut
+/// between two passes is not abandoned by the device's 100 ms RX idle
+/// rule because the ticks of a host stall ran in between).
+pub const HELD_RX_TICKS: u32 = 8;
+const HELD: Limits = Limits {
+    max_ticks: HELD_RX_TICKS,
+    ..LIMITS
 };
 /// The passes of a `--speed max` round after its first: no input read.
 const NO_RX: Limits = Limits {
@@ -147,12 +171,26 @@ struct HostPort<T: Transport> {
     next_pps_ns: Option<u64>,
     /// Motion replayed from a file (`--trajectory`), if any.
     trajectory: Option<Trajectory>,
+    /// The vehicle source (`--motion`, `motion script|file`), if any.
+    vehicle: Option<VehicleSource>,
     /// Faults between the device's UART and the transport (`link …`).
     link: Link,
     /// The device's input decoded on the host side (logs, `status`).
     monitor: Monitor,
     /// Input past the faults that did not fit the device's read yet.
     rx_carry: std::collections::VecDeque<u8>,
+    /// Input credit at the line rate (device time): what the device's
+    /// UART could have received by now.
+    rx_pacer: Pacer,
+    /// The last read was bounded by the credit (more input may wait in
+    /// the transport, which is not waited on for input meanwhile).
+    rx_held: bool,
+    /// Deadline of the last tick run, ns, and the tick period: input is
+    /// credited up to the schedule's time, never past the next tick (the
+    /// clock's `now` runs ahead while ticks are behind, and goes back when
+    /// the clock is held back).
+    tick_ns: u64,
+    period_ns: u64,
     /// Device time of the current pass, ns.
     now_ns: u64,
     /// Bytes the line carried (before link faults).
@@ -175,6 +213,12 @@ struct HostPort<T: Transport> {
 }
 
 impl<T: Transport> HostPort<T> {
+    /// Device time input is credited up to: the pass's time, but no later
+    /// than the tick after the last one run.
+    fn rx_time(&self) -> u64 {
+        self.now_ns.min(self.tick_ns.saturating_add(self.period_ns))
+    }
+
     /// Hands the transport what a stall released, if it is over.
     fn release(&mut self) -> anyhow::Result<()> {
         let mut out = Vec::new();
@@ -183,6 +227,26 @@ impl<T: Transport> HostPort<T> {
             self.transport.send(&out)?;
         }
         Ok(())
+    }
+
+    /// `truth`: the vehicle truth in `key=value` words, each key after
+    /// `prefix` ([`crate::vehicle::truth_words`]).
+    fn truth<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>, prefix: &str) -> String {
+        let chain = dev.chain();
+        let source = if self.trajectory.is_some() {
+            "trajectory"
+        } else if let Some(v) = &self.vehicle {
+            v.kind()
+        } else {
+            match chain.core_motion() {
+                Motion::Static { .. } => "static",
+                Motion::ConstantRotation { .. } => "rotation",
+                Motion::Vibration { .. } => "vibration",
+                Motion::Coning { .. } => "coning",
+                Motion::Sample(_) => "sample",
+            }
+        };
+        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
     }
 
     /// `status`: the device, the line and the link in `key=value` words.
@@ -216,6 +280,8 @@ impl<T: Transport> HostPort<T> {
         for (r, n) in rejected {
             s.push_str(&format!(" rejected-{}={n}", r.name()));
         }
+        s.push(' ');
+        s.push_str(&self.truth(dev, "truth-"));
         let l = self.link.stats();
         s.push_str(&format!(
             " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
@@ -259,15 +325,22 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
         eprintln!("imu-emu: {}line rate {bps} bit/s", self.label);
+        self.rx_pacer.set_rate(bps, self.rx_time());
         self.transport.set_line_rate(bps)
     }
 
     fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+        // No more than the line could have carried by now.
+        self.rx_pacer.advance(self.rx_time());
+        let limit = buf.len().min(self.rx_pacer.available());
+        let buf = &mut buf[..limit];
         // Input the faults made longer than the last read could take first.
         let mut n = self.rx_carry.len().min(buf.len());
         for (b, c) in buf.iter_mut().zip(self.rx_carry.drain(..n)) {
             *b = c;
         }
+        // Called even for 0 bytes: the transport also accepts and notices
+        // hang-ups there.
         let mut raw = Vec::new();
         self.transport
             .receive(buf.len() - n, &mut |bytes| raw.extend_from_slice(bytes))?;
@@ -279,6 +352,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             self.rx_carry.extend(&got[k..]);
             n += k;
         }
+        self.rx_pacer.consume(n);
+        self.rx_held = n == limit;
+        self.transport.hold_input(self.rx_held);
         if !self.fw_update {
             self.monitor.feed(&buf[..n]);
         }
@@ -306,11 +382,16 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 
     fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
+        let secs = deadline.as_nanos() as f64 * 1e-9;
         if let Some(t) = self.trajectory.as_mut() {
-            let truth = t.at(deadline.as_nanos() as f64 * 1e-9);
-            dev.chain_mut().set_motion(Motion::Sample(truth));
+            let (state, truth) = t.vehicle_at(secs);
+            dev.chain_mut().set_vehicle(state, truth);
+        } else if let Some(v) = self.vehicle.as_mut() {
+            let state = v.at(secs);
+            dev.chain_mut().set_vehicle(state, state.truth());
         }
         dev.on_tick(deadline);
+        self.tick_ns = deadline.as_nanos();
         self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
         Ok(())
     }
@@ -323,14 +404,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         if let Some(mut w) = self.web.take() {
             // The page's commands, through the control socket's executor.
             for p in w.commands() {
-                let r = self.apply(dev, p.command(), at);
-                p.answer(r);
+                p.run(|cmd| self.apply(dev, cmd, at));
             }
             if w.publish_due() {
                 let truth = dev
                     .chain()
                     .truth_attitude()
-                    .map(|q| imu_emu::ahrs::rotation::euler_from_quat(&q).map(f32::to_degrees));
+                    .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees));
                 w.publish(self.status(dev), at.as_nanos(), truth);
             }
             self.web = Some(w);
@@ -370,7 +450,22 @@ impl<T: Transport> HostPort<T> {
                 }
             }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-            control::Command::Motion(m) => dev.chain_mut().set_motion(m),
+            control::Command::Motion(m) => {
+                self.trajectory = None;
+                self.vehicle = None;
+                dev.chain_mut().set_motion(m);
+            }
+            control::Command::Script(s) => {
+                self.trajectory = None;
+                let v = VehicleSource::script(*s).starting_at(at.as_nanos() as f64 * 1e-9);
+                self.vehicle = Some(v);
+            }
+            control::Command::MotionFile(path) => {
+                let v = VehicleSource::load(&path).map_err(|e| format!("{e:#}"))?;
+                self.trajectory = None;
+                self.vehicle = Some(v.starting_at(at.as_nanos() as f64 * 1e-9));
+            }
+            control::Command::Truth => return Ok(self.truth(dev, "")),
             control::Command::Link(change) => {
                 let mut noise = Vec::new();
                 self.link.apply(change, self.now_ns, &mut noise);
@@ -395,6 +490,8 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
         let sched = Box::new(Schedule::new(&dev));
+        let rx_pacer = Pacer::new(dev.line_rate(), 0);
+        let period_ns = sched.period_ns();
         Runner {
             dev,
             sched,
@@ -403,9 +500,14 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 control: None,
                 next_pps_ns: None,
                 trajectory: None,
+                vehicle: None,
                 link: Link::new(0),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
+                rx_pacer,
+                rx_held: false,
+                tick_ns: 0,
+                period_ns,
                 now_ns: 0,
                 line_bytes: 0,
                 held_back_ns: 0,
@@ -429,6 +531,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// sample for that tick's time is handed to the signal chain.
     pub fn with_trajectory(mut self, t: Trajectory) -> Self {
         self.io.trajectory = Some(t);
+        self
+    }
+
+    /// Flies or plays `v` as the unit's vehicle (`--motion`): before each
+    /// tick its state at that tick's time is handed to the signal chain.
+    pub fn with_vehicle(mut self, v: VehicleSource) -> Self {
+        self.io.vehicle = Some(v);
         self
     }
 
@@ -594,6 +703,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         if self.io.transport.backlog_len() > 0 {
             wake = wake.min(busy_until);
         }
+        if self.io.rx_held {
+            // Input may wait in the transport: read again when a burst of
+            // it can reach the device.
+            wake = wake.min(self.io.rx_pacer.ready_at(usize::MAX));
+        }
         if let Some(pps) = self.io.next_pps_ns {
             // Delivered before the first tick at or after it.
             wake = wake.min(pps.max(self.sched.next_deadline()));
@@ -683,6 +797,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             let to = (self.sched.ticks() + MAX_BATCH_TICKS).saturating_mul(period);
             self.clock.advance_to(to);
             let now = self.now_ns();
+            self.io.now_ns = now;
             let limits = if first { &LIMITS } else { &NO_RX };
             first = false;
             let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
@@ -711,7 +826,8 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.io.now_ns = now;
         self.io.held_back_ns = self.clock.held_back_ns();
         self.io.release()?;
-        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, &LIMITS)?;
+        let limits = if self.io.rx_held { &HELD } else { &LIMITS };
+        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;
         self.stats.tx_bytes += pass.tx as u64;

@@ -9,11 +9,17 @@
 //! must increase. Between samples the values are interpolated linearly;
 //! before the first sample the first holds, after the last the last holds
 //! (or, with `--trajectory-loop`, the file starts over).
+//!
+//! The vehicle state of such a file (`truth`, docs/motion.md) is the
+//! strapdown integration of its values ([`Trajectory::vehicle_at`]) from
+//! the built-in motions' site (45° N, at rest, heading 0); the truth the
+//! chain measures stays the file's values, byte for byte.
 
 use std::path::Path;
 
 use anyhow::{bail, Context as _};
-use imu_emu::sensor::Truth;
+use imu_emu::sensor::{Motion, Truth};
+use imu_emu::vehicle::{housing_to_body, Strapdown, VehicleState, G_ICD};
 
 /// A loaded trajectory.
 #[derive(Debug, Clone)]
@@ -22,6 +28,9 @@ pub struct Trajectory {
     looped: bool,
     /// Index of the row at or before the last time asked (times only grow).
     cursor: usize,
+    /// The vehicle integrated from the file's values, and the time of its
+    /// last step, s ([`Trajectory::vehicle_at`]).
+    vehicle: Option<(Strapdown, f64)>,
 }
 
 /// `a + (b − a)·w` in `f64`: between two finite `f32`s it never overflows
@@ -87,6 +96,7 @@ impl Trajectory {
             rows,
             looped,
             cursor: 0,
+            vehicle: None,
         })
     }
 
@@ -98,6 +108,31 @@ impl Trajectory {
     /// Whether there are no samples (never, once parsed).
     pub fn is_empty(&self) -> bool {
         self.rows.is_empty()
+    }
+
+    /// The truth at `t` seconds (as [`Trajectory::at`]) and the vehicle
+    /// state it integrates to: a strapdown of the file's rates and forces
+    /// (housing axes → body axes, °/s → rad/s, g → m/s²) from the built-in
+    /// motions' default site at rest, one step per call.
+    pub fn vehicle_at(&mut self, t: f64) -> (VehicleState, Truth) {
+        let truth = self.at(t);
+        let w = housing_to_body(&truth.rate_dps.map(|x| f64::from(x).to_radians()));
+        let f = housing_to_body(&truth.specific_force_g.map(|x| f64::from(x) * G_ICD));
+        let (sd, last) = self.vehicle.get_or_insert_with(|| {
+            let site = Motion::default();
+            let at_rest = imu_emu::sensor::motion::BuiltinMotion::new(site, 1.0).truth_now();
+            let mut start = imu_emu::vehicle::builtin_state(&site, None, &at_rest, t);
+            start.rate_ib_b = w;
+            start.force_b = f;
+            (Strapdown::new(start), t)
+        });
+        if t > *last {
+            sd.step(&w, &f, truth.temperature_c, t - *last);
+            *last = t;
+        }
+        let mut s = *sd.state();
+        s.time_s = t;
+        (s, truth)
     }
 
     /// The truth at `t` seconds since the start; `t` never decreases between
@@ -163,6 +198,29 @@ mod tests {
         assert_eq!(t.at(1.5).specific_force_g, [0.25, 0.0, 1.0]);
         assert_eq!(t.at(1.5).temperature_c, Some(30.0));
         assert_eq!(t.at(9.0).specific_force_g, [0.5, 0.0, 1.0]);
+    }
+
+    /// A file that measures rest at the default site keeps the vehicle
+    /// there; the truth handed on is the file's.
+    #[test]
+    fn the_vehicle_of_a_file_at_rest_stays() {
+        let rest = imu_emu::sensor::Truth::at_rest();
+        let w = rest.rate_dps;
+        let line = |t: f64| format!("{t},{},{},{},0,0,1\n", w[0], w[1], w[2]);
+        let mut t = Trajectory::parse(&(line(0.0) + &line(600.0)), false).unwrap();
+        let (s0, _) = t.vehicle_at(0.0);
+        let mut last = s0;
+        for k in 1..=120_000 {
+            let (s, truth) = t.vehicle_at(f64::from(k) * 0.005);
+            assert_eq!(truth.specific_force_g, [0.0, 0.0, 1.0]);
+            last = s;
+        }
+        let north = (last.lat_rad - s0.lat_rad) * 6.37e6;
+        assert!(
+            north.abs() < 1.0 && (last.height_m - s0.height_m).abs() < 1.0,
+            "{last:?}"
+        );
+        assert!(last.vel_ned.iter().all(|v| v.abs() < 0.05), "{last:?}");
     }
 
     #[test]

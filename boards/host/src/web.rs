@@ -70,13 +70,10 @@ pub struct Pending {
 }
 
 impl Pending {
-    /// The command.
-    pub fn command(&self) -> control::Command {
-        self.cmd
-    }
-
-    /// Sends the runner's answer back (never blocks: room for one).
-    pub fn answer(self, r: Result<String, String>) {
+    /// Carries the command out with `apply` and sends its answer back
+    /// (never blocks: the channel has room for one).
+    pub fn run(self, apply: impl FnOnce(control::Command) -> Result<String, String>) {
+        let r = apply(self.cmd);
         let _ = self.answer.try_send(r);
     }
 }
@@ -331,7 +328,7 @@ impl Server {
     pub fn start(addr: &str, hub: Arc<Hub>) -> anyhow::Result<Server> {
         let server =
             tiny_http::Server::http(addr).map_err(|e| match e.downcast::<std::io::Error>() {
-                Ok(io) => crate::cli::bind_error(*io, "--web", addr),
+                Ok(io) => crate::error::bind_error(*io, "--web", addr),
                 Err(e) => anyhow::anyhow!("--web {addr}: {e}"),
             })?;
         let bound = server
@@ -511,7 +508,7 @@ fn command(hub: &Hub, k: usize, line: &str) -> Reply {
         Err(e) => return text(400, format!("error {e}")),
     };
     match cmd {
-        control::Command::Help => return text(200, format!("ok commands: {}", control::HELP)),
+        control::Command::Help => return text(200, format!("ok {}", control::help())),
         control::Command::Devices => {
             let places: Vec<String> = hub.slots.iter().map(|s| s.place.clone()).collect();
             return text(200, format!("ok {}", control::devices_reply(&places)));
@@ -594,7 +591,7 @@ fn devices_json(hub: &Hub) -> String {
         .collect();
     format!(
         "{{\"protocol\":\"{protocol}\",\"help\":{},\"devices\":[{}]}}",
-        json_str(control::HELP),
+        json_str(control::help().trim_start_matches("commands: ")),
         devs.join(",")
     )
 }

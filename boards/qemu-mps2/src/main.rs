@@ -3,7 +3,7 @@
 //! * UART0 carries the KERNEL protocol (with the `isb` feature: the ISB
 //!   protocol of an emulated IMX-5, [`imu_emu::isb::Isb`], from 921 600
 //!   bit/s);
-//! * UART1 is the pin bridge (see [`bridge`] and the README): the host
+//! * UART1 is the pin bridge (see [`bridge`] and this board's README): the host
 //!   injects 1PPS/EXTRIG edges, BOOT level and power cycles, reads TOV edges
 //!   and the tick's timing figures;
 //! * TIMER0 interrupts at the internal rate (2 kHz; 4 kHz on the K201) and

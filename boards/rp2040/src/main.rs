@@ -1,6 +1,6 @@
 //! # imu-emu on a Raspberry Pi Pico (RP2040)
 //!
-//! Pinout (README "Flash it to a board"):
+//! Pinout (docs/firmware.md "Flash it to a board"):
 //!
 //! | pin | function |
 //! |---|---|
@@ -84,7 +84,7 @@ mod app {
     /// The RX ring between the UART interrupt and the tick: ≈ 5 ms of the
     /// fastest line a stalled tick must survive (KERNEL: 2 Mbit/s, 1024 B;
     /// ISB: 921 600 bit/s, 512 B — which keeps the ISB image's static RAM
-    /// under its 20 KiB budget: its device is 17 040 B, 688 B more than
+    /// under the 20 KiB budget of the time: its device is 17 040 B, 688 B more than
     /// the KERNEL's, with its 2 KiB packet buffer and the chain's
     /// cumulative integrals).
     #[cfg(not(feature = "isb"))]

@@ -5,7 +5,7 @@
 //! addresses for everything used here (USART1, DMA2, TIM2/3, GPIOA/B,
 //! flash sectors 0–3 of 16 KiB), so only the clock source differs.
 //!
-//! Pinout (README "Flash it to a board"):
+//! Pinout (docs/firmware.md "Flash it to a board"):
 //!
 //! | pin | function |
 //! |---|---|

@@ -7,7 +7,7 @@
 //! then times 40 ticks and prints `load worst mean` over semihosting
 //! (load 0 is the empty measurement; line 9 gives
 //! `size_of` the signal chain without and with integrals). Run it with `scripts/v6m-tick.sh`;
-//! the figures are in docs/firmware-budget.md and the README.
+//! the figures are in docs/firmware-budget.md and docs/firmware.md.
 #![no_std]
 #![no_main]
 

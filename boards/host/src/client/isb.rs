@@ -15,7 +15,7 @@ use imu_emu::isb::packet::{self, Decoder, PacketType, FLAG_OFFSET, MAX_PACKET};
 use imu_emu::isb::{did, sets};
 
 use super::{Line, OutFormat};
-use crate::cli::UsageError;
+use crate::error::UsageError;
 
 /// A packet received.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -442,28 +442,31 @@ impl Recorder {
     }
 }
 
-/// Decodes a raw ISB capture to `w`; the recorder and the checksum errors.
+/// Decodes a raw ISB capture read from `src` (in chunks: bounded memory)
+/// to `w`; the recorder and the checksum errors.
 pub fn decode(
-    bytes: &[u8],
+    src: &mut dyn std::io::Read,
+    what: &dyn Fn() -> String,
     w: &mut dyn Write,
     to: OutFormat,
     only: Option<u8>,
 ) -> anyhow::Result<(Recorder, u32)> {
     let mut rec = Recorder::new(to);
     let mut d = Box::new(Decoder::<MAX_PACKET>::new());
-    let mut input: &[u8] = bytes;
-    while let Some(p) = d.next_packet(&mut input) {
-        let p = Packet {
-            flags: p.flags,
-            did: p.did,
-            payload: p.payload.to_vec(),
-        };
-        if p.whole_set()
-            .is_some_and(|(x, _)| only.is_none_or(|o| o == x))
-        {
-            rec.row(w, &p, None)?;
+    super::read_chunks(src, what, &mut |chunk| {
+        let mut input: &[u8] = chunk;
+        while let Some(p) = d.next_packet(&mut input) {
+            let p = Packet {
+                flags: p.flags,
+                did: p.did,
+                payload: p.payload.to_vec(),
+            };
+            if p.whole_set().is_some_and(|(x, _)| only.is_none_or(|o| o == x)) {
+                rec.row(w, &p, None)?;
+            }
         }
-    }
+        Ok(())
+    })?;
     Ok((rec, d.errors()))
 }
 

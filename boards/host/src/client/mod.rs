@@ -32,7 +32,8 @@ use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
 use imu_emu::model::Product;
 
-use crate::cli::{Protocol, UsageError};
+use crate::cli::Protocol;
+use crate::error::UsageError;
 
 /// Options of `imu-emu client`.
 #[derive(clap::Args, Debug, Clone)]
@@ -49,8 +50,9 @@ pub struct ClientArgs {
     #[arg(long, value_name = "N", default_value_t = 115_200)]
     pub baud: u32,
 
-    /// How long to wait for an answer, seconds.
-    #[arg(long, value_name = "S", default_value_t = 2.0)]
+    /// How long to wait for an answer (or, with `record`, for a data
+    /// frame), seconds: more than 0, at most 3600.
+    #[arg(long, value_name = "S", default_value_t = 2.0, value_parser = parse_timeout)]
     pub timeout: f64,
 
     /// The unit's protocol: `kernel` (an Inertial Labs KERNEL) or `isb`
@@ -67,6 +69,19 @@ pub struct ClientArgs {
     #[command(subcommand)]
     pub cmd: ClientCmd,
 }
+
+/// `--timeout`: a finite number of seconds in (0, 3600]; NaN, infinities
+/// and absurd values are usage errors (they used to panic or wait for
+/// ever).
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|t| *t > 0.0 && *t <= MAX_TIMEOUT_S)
+        .ok_or_else(|| format!("not a time in seconds in (0, {MAX_TIMEOUT_S}]: {s}"))
+}
+
+/// Longest `--timeout`, seconds.
+pub const MAX_TIMEOUT_S: f64 = 3600.0;
 
 fn parse_product(s: &str) -> Result<Product, String> {
     Product::parse(s).map_err(|e| e.to_string())
@@ -195,7 +210,7 @@ pub struct Line {
 impl Line {
     /// Opens the line `args` name.
     pub fn open(args: &ClientArgs) -> anyhow::Result<Line> {
-        let timeout = Duration::from_secs_f64(args.timeout.clamp(0.01, 3600.0));
+        let timeout = Duration::from_secs_f64(args.timeout.clamp(0.01, MAX_TIMEOUT_S));
         let (port, what): (Box<dyn Port>, String) = match (&args.tcp, &args.serial) {
             (Some(addr), None) => {
                 use std::net::ToSocketAddrs as _;
@@ -508,12 +523,12 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             to,
             did,
         } => {
-            let bytes =
-                std::fs::read(file).with_context(|| format!("decode {}", file.display()))?;
+            let what = || format!("decode {}", file.display());
+            let mut src = std::fs::File::open(file).with_context(what)?;
             let mut w = writer(o.as_ref())?;
             if args.protocol == Protocol::Isb {
                 let only = did.as_deref().map(isb::parse_set).transpose()?;
-                let (rec, errors) = isb::decode(&bytes, &mut w, *to, only)?;
+                let (rec, errors) = isb::decode(&mut src, &what, &mut w, *to, only)?;
                 w.flush()?;
                 eprintln!(
                     "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
@@ -526,12 +541,15 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             }
             let mut rec = Recorder::new(*to, args.model);
             let mut d = Box::new(Decoder::<CAP>::new());
-            let mut input: &[u8] = &bytes;
-            while let Some(f) = d.next_frame(&mut input) {
-                if f.msg_type == TYPE_DATA {
-                    rec.row(&mut w, f.id, f.payload, None)?;
+            read_chunks(&mut src, &what, &mut |chunk| {
+                let mut input: &[u8] = chunk;
+                while let Some(f) = d.next_frame(&mut input) {
+                    if f.msg_type == TYPE_DATA {
+                        rec.row(&mut w, f.id, f.payload, None)?;
+                    }
                 }
-            }
+                Ok(())
+            })?;
             w.flush()?;
             eprintln!(
                 "imu-emu: {} frames decoded, {} failed their checksum, {} counter gaps, {} skipped",
@@ -755,6 +773,25 @@ fn get(link: &mut Link, p: &ParamSpec) -> anyhow::Result<Vec<u8>> {
     Ok(f.payload)
 }
 
+/// Feeds `src` to `f` in 64 KiB chunks (a frame cut between two is
+/// completed by the decoder): any size of capture in bounded memory.
+fn read_chunks(
+    src: &mut dyn Read,
+    what: &dyn Fn() -> String,
+    f: &mut dyn FnMut(&[u8]) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut chunk = vec![0u8; 64 * 1024];
+    loop {
+        let n = match src.read(&mut chunk) {
+            Ok(0) => return Ok(()),
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(anyhow::Error::new(e).context(what())),
+        };
+        f(&chunk[..n])?;
+    }
+}
+
 /// A flag raised by Ctrl-C (SIGINT) or SIGTERM, so that `record` stops the
 /// stream it started and prints its summary instead of dying mid-stream.
 fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
@@ -942,20 +979,24 @@ fn record(
     let mut shown = t0;
     let mut quiet_since = Instant::now();
     while want.is_none_or(|n| rec.rows < n) && !stop() {
-        match link.frame_before(Instant::now() + Duration::from_millis(100))? {
+        let row = match link.frame_before(Instant::now() + Duration::from_millis(100))? {
             Some(f) if f.msg_type == TYPE_DATA => {
-                quiet_since = Instant::now();
-                rec.row(w, f.id, &f.payload, Some(t0.elapsed().as_secs_f64()))?;
+                rec.row(w, f.id, &f.payload, Some(t0.elapsed().as_secs_f64()))?
             }
-            Some(_) => {}
-            None if quiet_since.elapsed() > link.line.timeout => bail!(
+            _ => false,
+        };
+        // Only a row is data: a peer sending only other frames
+        // (acknowledgements, answers) times out too.
+        if row {
+            quiet_since = Instant::now();
+        } else if quiet_since.elapsed() > link.line.timeout {
+            bail!(
                 "{}: no data frame within {:?} after {} rows (is a stream running? --format GA \
                  starts one)",
                 link.line.what,
                 link.line.timeout,
                 rec.rows
-            ),
-            None => {}
+            )
         }
         if tty && shown.elapsed() > Duration::from_millis(250) {
             shown = Instant::now();

