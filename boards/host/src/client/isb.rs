@@ -461,7 +461,9 @@ pub fn decode(
                 did: p.did,
                 payload: p.payload.to_vec(),
             };
-            if p.whole_set().is_some_and(|(x, _)| only.is_none_or(|o| o == x)) {
+            if p.whole_set()
+                .is_some_and(|(x, _)| only.is_none_or(|o| o == x))
+            {
                 rec.row(w, &p, None)?;
             }
         }
