@@ -607,6 +607,12 @@ impl<I: Integrate> SignalChain<I> {
         }
     }
 
+    /// The state a board's vehicle source set ([`SignalChain::set_vehicle`]),
+    /// `None` while a built-in motion plays.
+    pub fn vehicle_source(&self) -> Option<&VehicleState> {
+        self.vehicle.as_ref()
+    }
+
     /// Which axes the motion describes (default: the unit's own).
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;

@@ -359,6 +359,12 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
         &self.personality
     }
 
+    /// The personality, mutably: a board's settings of it (the ISB's GPS
+    /// time, its navigation faults).
+    pub fn personality_mut(&mut self) -> &mut P {
+        &mut self.personality
+    }
+
     /// The flash (e.g. to persist its image).
     pub fn flash(&self) -> &F {
         &self.shell.flash

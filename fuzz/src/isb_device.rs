@@ -111,7 +111,7 @@ impl IsbHarness {
         let cfg = self.dev.personality().flash_config();
         assert!(cfg.is_valid(), "FLASH_CONFIG checksum in step");
         assert!(
-            self.dev.personality().streams().count() <= isb::device::MAX_STREAMS,
+            self.dev.personality().streams().count() <= isb::device::MAX_RUNNING,
             "streams bounded"
         );
     }

@@ -277,14 +277,9 @@ pub struct BuiltinMotion {
     state: State,
 }
 
-/// Latitude and heading of a motion's site, degrees (for a
-/// [`Motion::Sample`]: the default site, heading 0).
-pub fn site_of(motion: &Motion) -> (f32, f32) {
-    site(motion)
-}
-
-/// Latitude and heading of a motion's site, degrees.
-fn site(motion: &Motion) -> (f32, f32) {
+/// Latitude and heading of a motion's site, degrees (a replayed sample:
+/// [`DEFAULT_LATITUDE_DEG`], heading 0).
+pub fn site(motion: &Motion) -> (f32, f32) {
     match *motion {
         Motion::Static {
             lat_deg,

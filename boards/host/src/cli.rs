@@ -134,6 +134,14 @@ pub struct Args {
     #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
     pub power_on: PowerOnAt,
 
+    /// GPS time at power-on (ISB): an RFC 3339 date and time
+    /// (`2026-03-01T12:00:00Z`) or a date (`2026-03-01`, midnight UTC),
+    /// truncated to the second so that 1PPS edges (`--pps`) fall on GPS
+    /// seconds; default: the host clock at power-on. It then advances with
+    /// device time (`--speed`).
+    #[arg(long, value_name = "DATE", value_parser = parse_gps_time)]
+    pub gps_time: Option<u64>,
+
     /// Seed of the device's random processes (sensor noise, …); with
     /// --count, device K's seed is N + K.
     #[arg(long, value_name = "N", default_value_t = 0)]
@@ -586,6 +594,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
         web: web.as_ref().map(|(hub, _)| Arc::clone(hub)),
+        gps_time: args.gps_time,
     };
     eprintln!(
         "imu-emu: {} devices ({}), flash {}; each powers on {}",
@@ -723,7 +732,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         boot: None,
         seed: args.seed,
     };
-    let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    let mut dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    dev.personality_mut()
+        .set_gps_time(gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
@@ -756,6 +767,36 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
+}
+
+/// `--gps-time`: Unix seconds (UTC) of an RFC 3339 date and time or a
+/// date (midnight UTC), truncated to the second.
+fn parse_gps_time(s: &str) -> Result<u64, String> {
+    let full = if s.len() == 10 {
+        format!("{s}T00:00:00Z")
+    } else {
+        s.to_owned()
+    };
+    let t = humantime::parse_rfc3339_weak(&full).map_err(|e| format!("{s}: {e}"))?;
+    let unix = t
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_err(|_| format!("{s}: before 1970"))?
+        .as_secs();
+    if unix < imu_emu::isb::nav::GPS_EPOCH_UNIX_S {
+        return Err(format!("{s}: before the GPS epoch 1980-01-06"));
+    }
+    Ok(unix)
+}
+
+/// GPS seconds at device instant 0: `--gps-time` (Unix seconds, UTC) or the
+/// host clock now, as GPS time (+18 leap seconds).
+pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
+    let unix = gps_time.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs())
+    });
+    imu_emu::isb::nav::gps_s_of_unix(unix)
 }
 
 #[cfg(test)]

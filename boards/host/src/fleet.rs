@@ -67,6 +67,8 @@ pub struct Setup {
     pub power_on_now: bool,
     /// The web view (`--web`), fed by each device's runner.
     pub web: Option<std::sync::Arc<crate::web::Hub>>,
+    /// `--gps-time` (Unix seconds, UTC), else the host clock at power-on.
+    pub gps_time: Option<u64>,
 }
 
 /// One device: off (waiting for its first client) or running.
@@ -142,7 +144,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             boot: None,
             seed: self.setup.seed.wrapping_add(k as u64),
         };
-        let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+        let mut dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+        dev.personality_mut()
+            .set_gps_time(crate::cli::gps_s_at_power_on(self.setup.gps_time));
         transport.set_line_rate(dev.line_rate())?;
         eprintln!(
             "imu-emu: dev {k}: {} powered on at {} bit/s, seed {}",

@@ -53,6 +53,7 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
+use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
 use imu_emu::line::Pacer;
 use imu_emu::personality::Personality;
@@ -74,6 +75,17 @@ pub trait HostPersonality: Personality {
     /// monitor's reasons (`-v`); `None` where the protocol has no such
     /// parameters.
     fn param(&self, id: u16) -> Option<&[u8]>;
+
+    /// Sets GPS time: `gps_s` GPS seconds since 1980-01-06 at device
+    /// instant 0 (`--gps-time`, or the host clock at power-on); nothing
+    /// where the protocol has no GPS.
+    fn set_gps_time(&mut self, _gps_s: u64) {}
+
+    /// A navigation fault (`fault gps|mag|baro on|off`); an error where the
+    /// protocol has no navigation side.
+    fn nav_fault(&mut self, _change: control::NavFault) -> Result<(), String> {
+        Err("no GPS, magnetometer or barometer on this protocol (--protocol isb has them)".into())
+    }
 }
 
 impl HostPersonality for Kernel {
@@ -85,6 +97,21 @@ impl HostPersonality for Kernel {
 impl HostPersonality for imu_emu::isb::Isb {
     fn param(&self, _id: u16) -> Option<&[u8]> {
         None
+    }
+
+    fn set_gps_time(&mut self, gps_s: u64) {
+        Isb::set_gps_time(self, gps_s.saturating_mul(1_000_000_000));
+    }
+
+    fn nav_fault(&mut self, change: control::NavFault) -> Result<(), String> {
+        let mut f = self.nav().faults();
+        match change {
+            control::NavFault::Gps(on) => f.gps_off = !on,
+            control::NavFault::Mag(on) => f.mag_disturbed = on,
+            control::NavFault::Baro(on) => f.baro_failed = on,
+        }
+        self.set_nav_faults(f);
+        Ok(())
     }
 }
 
@@ -430,7 +457,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 impl<T: Transport> HostPort<T> {
     /// Carries out one control command at device time `at`; the answer
     /// for the control client (`Ok` text after `ok`, `Err` after `error`).
-    fn apply<F: NorFlash, P: Personality>(
+    fn apply<F: NorFlash, P: HostPersonality>(
         &mut self,
         dev: &mut Device<F, P>,
         cmd: control::Command,
@@ -450,6 +477,7 @@ impl<T: Transport> HostPort<T> {
                 }
             }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+            control::Command::NavFault(change) => dev.personality_mut().nav_fault(change)?,
             control::Command::Motion(m) => {
                 self.trajectory = None;
                 self.vehicle = None;
