@@ -6,6 +6,7 @@
 //! tests read and write data sets by field name through it.
 
 use crate::isb::did;
+use crate::isb::nav_sets as nav;
 use crate::isb::sets::{self, le};
 
 /// The type of a field, as packed in the struct.
@@ -25,6 +26,8 @@ pub enum Kind {
     F64,
     /// `f32[3]`.
     F32x3,
+    /// `f32[4]` (a quaternion).
+    F32x4,
     /// `f64[3]`.
     F64x3,
     /// `u8[4]` version `a.b.c.d`.
@@ -42,6 +45,7 @@ impl Kind {
             Kind::U32 | Kind::F32 | Kind::Version => 4,
             Kind::U64 | Kind::F64 => 8,
             Kind::F32x3 => 12,
+            Kind::F32x4 => 16,
             Kind::F64x3 => 24,
             Kind::Str24 => 24,
         }
@@ -70,6 +74,8 @@ pub enum Value {
     Float(f64),
     /// Three floats (x, y, z).
     Vec3([f64; 3]),
+    /// Four floats (a quaternion w, x, y, z).
+    Vec4([f64; 4]),
     /// A version `a.b.c.d`.
     Version([u8; 4]),
     /// NUL-padded text: the bytes, and the length up to the first NUL.
@@ -299,8 +305,148 @@ const BIT: &[FieldSpec] = &[
     ),
 ];
 
+const INS_1: &[FieldSpec] = &[
+    f("week", nav::ins1::WEEK, U32, ""),
+    f("timeOfWeek", nav::ins1::TIME_OF_WEEK, F64, "s"),
+    f("insStatus", nav::ins1::INS_STATUS, U32, ""),
+    f("hdwStatus", nav::ins1::HDW_STATUS, U32, ""),
+    f("theta", nav::ins1::THETA, F32x3, "rad"),
+    f("uvw", nav::ins1::UVW, F32x3, "m/s"),
+    f("lla", nav::ins1::LLA, F64x3, "deg, deg, m"),
+    f("ned", nav::ins1::NED, F32x3, "m"),
+];
+
+const INS_2: &[FieldSpec] = &[
+    f("week", nav::ins2::WEEK, U32, ""),
+    f("timeOfWeek", nav::ins2::TIME_OF_WEEK, F64, "s"),
+    f("insStatus", nav::ins2::INS_STATUS, U32, ""),
+    f("hdwStatus", nav::ins2::HDW_STATUS, U32, ""),
+    f("qn2b", nav::ins2::QN2B, F32x4, ""),
+    f("uvw", nav::ins2::UVW, F32x3, "m/s"),
+    f("lla", nav::ins2::LLA, F64x3, "deg, deg, m"),
+];
+
+const INS_3: &[FieldSpec] = &[
+    f("week", nav::ins3::WEEK, U32, ""),
+    f("timeOfWeek", nav::ins3::TIME_OF_WEEK, F64, "s"),
+    f("insStatus", nav::ins3::INS_STATUS, U32, ""),
+    f("hdwStatus", nav::ins3::HDW_STATUS, U32, ""),
+    f("qn2b", nav::ins3::QN2B, F32x4, ""),
+    f("uvw", nav::ins3::UVW, F32x3, "m/s"),
+    f("lla", nav::ins3::LLA, F64x3, "deg, deg, m"),
+    f("msl", nav::ins3::MSL, F32, "m"),
+];
+
+const INS_4: &[FieldSpec] = &[
+    f("week", nav::ins4::WEEK, U32, ""),
+    f("timeOfWeek", nav::ins4::TIME_OF_WEEK, F64, "s"),
+    f("insStatus", nav::ins4::INS_STATUS, U32, ""),
+    f("hdwStatus", nav::ins4::HDW_STATUS, U32, ""),
+    f("qe2b", nav::ins4::QE2B, F32x4, ""),
+    f("ve", nav::ins4::VE, F32x3, "m/s"),
+    f("ecef", nav::ins4::ECEF, F64x3, "m"),
+];
+
+const GPS_POS: &[FieldSpec] = &[
+    f("week", nav::gps_pos::WEEK, U32, ""),
+    f("timeOfWeekMs", nav::gps_pos::TIME_OF_WEEK_MS, U32, "ms"),
+    f("status", nav::gps_pos::STATUS, U32, ""),
+    f("ecef", nav::gps_pos::ECEF, F64x3, "m"),
+    f("lla", nav::gps_pos::LLA, F64x3, "deg, deg, m"),
+    f("hMSL", nav::gps_pos::H_MSL, F32, "m"),
+    f("hAcc", nav::gps_pos::H_ACC, F32, "m"),
+    f("vAcc", nav::gps_pos::V_ACC, F32, "m"),
+    f("pDop", nav::gps_pos::P_DOP, F32, ""),
+    f("cnoMean", nav::gps_pos::CNO_MEAN, F32, "dBHz"),
+    f("towOffset", nav::gps_pos::TOW_OFFSET, F64, "s"),
+    f("leapS", nav::gps_pos::LEAP_S, U8, "s"),
+    f("satsUsed", nav::gps_pos::SATS_USED, U8, ""),
+    f("cnoMeanSigma", nav::gps_pos::CNO_MEAN_SIGMA, U8, "dBHz"),
+    f("status2", nav::gps_pos::STATUS2, U8, ""),
+];
+
+const GPS_VEL: &[FieldSpec] = &[
+    f("timeOfWeekMs", nav::gps_vel::TIME_OF_WEEK_MS, U32, "ms"),
+    f("vel", nav::gps_vel::VEL, F32x3, "m/s"),
+    f("sAcc", nav::gps_vel::S_ACC, F32, "m/s"),
+    f("status", nav::gps_vel::STATUS, U32, ""),
+];
+
+const MAGNETOMETER: &[FieldSpec] = &[
+    f("time", nav::magnetometer::TIME, F64, "s"),
+    f("mag", nav::magnetometer::MAG, F32x3, "normalized"),
+];
+
+const BAROMETER: &[FieldSpec] = &[
+    f("time", nav::barometer::TIME, F64, "s"),
+    f("bar", nav::barometer::BAR, F32, "kPa"),
+    f("mslBar", nav::barometer::MSL_BAR, F32, "m"),
+    f("barTemp", nav::barometer::BAR_TEMP, F32, "°C"),
+    f("humidity", nav::barometer::HUMIDITY, F32, "%"),
+];
+
+/// `imu_mag_t`: an `imu_t`, then a `magnetometer_t`.
+const IMU_MAG: &[FieldSpec] = &[
+    f("time", nav::imu_mag::IMU + sets::imu::TIME, F64, "s"),
+    f("status", nav::imu_mag::IMU + sets::imu::STATUS, U32, ""),
+    f("pqr", nav::imu_mag::IMU + sets::imu::PQR, F32x3, "rad/s"),
+    f("acc", nav::imu_mag::IMU + sets::imu::ACC, F32x3, "m/s²"),
+    f(
+        "magTime",
+        nav::imu_mag::MAG + nav::magnetometer::TIME,
+        F64,
+        "s",
+    ),
+    f(
+        "mag",
+        nav::imu_mag::MAG + nav::magnetometer::MAG,
+        F32x3,
+        "normalized",
+    ),
+];
+
+/// `pimu_mag_t`: a `pimu_t`, then a `magnetometer_t`.
+const PIMU_MAG: &[FieldSpec] = &[
+    f("time", nav::pimu_mag::PIMU + sets::pimu::TIME, F64, "s"),
+    f("dt", nav::pimu_mag::PIMU + sets::pimu::DT, F32, "s"),
+    f("status", nav::pimu_mag::PIMU + sets::pimu::STATUS, U32, ""),
+    f(
+        "theta",
+        nav::pimu_mag::PIMU + sets::pimu::THETA,
+        F32x3,
+        "rad",
+    ),
+    f("vel", nav::pimu_mag::PIMU + sets::pimu::VEL, F32x3, "m/s"),
+    f(
+        "magTime",
+        nav::pimu_mag::MAG + nav::magnetometer::TIME,
+        F64,
+        "s",
+    ),
+    f(
+        "mag",
+        nav::pimu_mag::MAG + nav::magnetometer::MAG,
+        F32x3,
+        "normalized",
+    ),
+];
+
+const SYS_SENSORS: &[FieldSpec] = &[
+    f("time", nav::sys_sensors::TIME, F64, "s"),
+    f("temp", nav::sys_sensors::TEMP, F32, "°C"),
+    f("pqr", nav::sys_sensors::PQR, F32x3, "rad/s"),
+    f("acc", nav::sys_sensors::ACC, F32x3, "m/s²"),
+    f("mag", nav::sys_sensors::MAG, F32x3, "normalized"),
+    f("bar", nav::sys_sensors::BAR, F32, "kPa"),
+    f("barTemp", nav::sys_sensors::BAR_TEMP, F32, "°C"),
+    f("mslBar", nav::sys_sensors::MSL_BAR, F32, "m"),
+    f("humidity", nav::sys_sensors::HUMIDITY, F32, "%"),
+    f("vin", nav::sys_sensors::VIN, F32, "V"),
+    f("ana", nav::sys_sensors::ANA, F32x3, "V"),
+];
+
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 10] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 21] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
@@ -311,6 +457,17 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 10] = [
     (did::BIT, "BIT", BIT),
     (did::STROBE_IN_TIME, "STROBE_IN_TIME", STROBE),
     (did::IMU_RAW, "IMU_RAW", IMU),
+    (did::INS_1, "INS_1", INS_1),
+    (did::INS_2, "INS_2", INS_2),
+    (did::INS_3, "INS_3", INS_3),
+    (did::INS_4, "INS_4", INS_4),
+    (did::GPS1_POS, "GPS1_POS", GPS_POS),
+    (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
+    (did::MAGNETOMETER, "MAGNETOMETER", MAGNETOMETER),
+    (did::BAROMETER, "BAROMETER", BAROMETER),
+    (did::IMU_MAG, "IMU_MAG", IMU_MAG),
+    (did::PIMU_MAG, "PIMU_MAG", PIMU_MAG),
+    (did::SYS_SENSORS, "SYS_SENSORS", SYS_SENSORS),
 ];
 
 /// The DID name and fields of data set `did`, if served.
@@ -364,6 +521,7 @@ pub fn read(spec: &FieldSpec, b: &[u8]) -> Value {
         F32 => Value::Float(f64::from(le::f32(b, o))),
         F64 => Value::Float(le::f64(b, o)),
         F32x3 => Value::Vec3(le::f32x3(b, o).map(f64::from)),
+        F32x4 => Value::Vec4([0, 4, 8, 12].map(|i| f64::from(le::f32(b, o + i)))),
         F64x3 => Value::Vec3([le::f64(b, o), le::f64(b, o + 8), le::f64(b, o + 16)]),
         Version => Value::Version(le::get::<4>(b, o)),
         Str24 => {
@@ -375,11 +533,24 @@ pub fn read(spec: &FieldSpec, b: &[u8]) -> Value {
 }
 
 /// The device time a data set carries, in seconds: `time` (s since boot)
-/// of IMU, IMU_RAW and PIMU; `timeOfWeekMs` of STROBE_IN_TIME and
+/// of IMU, IMU_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER and
+/// SYS_SENSORS; the GPS time of week of INS_1..4 (`timeOfWeek`), GPS1_POS
+/// and GPS1_VEL (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
 /// SYS_PARAMS. `None` for the others.
 pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
     match did {
-        did::IMU | did::IMU_RAW | did::PIMU => Some(le::f64(b, 0)),
+        did::IMU
+        | did::IMU_RAW
+        | did::PIMU
+        | did::IMU_MAG
+        | did::PIMU_MAG
+        | did::MAGNETOMETER
+        | did::BAROMETER
+        | did::SYS_SENSORS => Some(le::f64(b, 0)),
+        // GPS seconds of the week.
+        did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => Some(le::f64(b, 4)),
+        did::GPS1_POS => Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3),
+        did::GPS1_VEL => Some(f64::from(le::u32(b, nav::gps_vel::TIME_OF_WEEK_MS)) / 1e3),
         did::STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),
         did::SYS_PARAMS => Some(f64::from(le::u32(b, sets::sys_params::TIME_OF_WEEK_MS)) / 1e3),
         _ => None,
@@ -391,7 +562,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_field_lies_inside_its_set() {
+    fn every_field_lies_inside_its_set_and_every_served_set_is_named() {
+        assert_eq!(SETS.len(), did::DATA_SETS.len());
+        for s in did::DATA_SETS {
+            assert!(set(s.did).is_some(), "{} has no field table", s.did);
+        }
         for (d, _, fs) in SETS {
             let size = usize::from(did::lookup(u16::from(d)).unwrap().size);
             for f in fs {

@@ -668,4 +668,21 @@ fn isb_client_record_decode_and_plot() {
     assert!(rows.contains("\"theta_x\":") && rows.contains("\"pqr_x\":"));
     let o = isb(&a, &["record", "--did", "IMU,PIMU", "--frames", "4"]);
     assert_eq!(o.status.code(), Some(2));
+    // A navigation set: INS_2 with its GPS time of week as device time.
+    let o = isb(
+        &a,
+        &["record", "--did", "ins_2", "--frames", "3", "--to", "json"],
+    );
+    let rows = stdout(&o);
+    assert_eq!(rows.lines().count(), 3);
+    for l in rows.lines() {
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        assert_eq!(v["did"], "INS_2");
+        let tow = v["timeOfWeek"].as_f64().unwrap();
+        assert!(
+            (v["device_time_s"].as_f64().unwrap() - tow).abs() < 1e-6,
+            "{l}"
+        );
+        assert!(v["qn2b_w"].is_number() && v["lla_z"].is_number(), "{l}");
+    }
 }

@@ -197,6 +197,10 @@ fn columns(spec: &FieldSpec) -> Vec<String> {
             .iter()
             .map(|a| format!("{}_{a}", spec.name))
             .collect(),
+        Kind::F32x4 => ["w", "x", "y", "z"]
+            .iter()
+            .map(|a| format!("{}_{a}", spec.name))
+            .collect(),
         _ => vec![spec.name.to_owned()],
     }
 }
@@ -204,7 +208,7 @@ fn columns(spec: &FieldSpec) -> Vec<String> {
 /// A float as sent: `f32` fields printed at `f32` precision.
 fn float(kind: Kind, x: f64) -> String {
     match kind {
-        Kind::F32 | Kind::F32x3 => (x as f32).to_string(),
+        Kind::F32 | Kind::F32x3 | Kind::F32x4 => (x as f32).to_string(),
         _ => x.to_string(),
     }
 }
@@ -215,6 +219,7 @@ fn cells(spec: &FieldSpec, b: &[u8]) -> Vec<Cell> {
         Value::Unsigned(u) => vec![Cell::Num(u.to_string())],
         Value::Float(x) => vec![Cell::Num(float(spec.kind, x))],
         Value::Vec3(v) => v.iter().map(|&x| Cell::Num(float(spec.kind, x))).collect(),
+        Value::Vec4(v) => v.iter().map(|&x| Cell::Num(float(spec.kind, x))).collect(),
         Value::Version(v) => vec![Cell::Text(format!("{}.{}.{}.{}", v[0], v[1], v[2], v[3]))],
         Value::Text(t, n) => vec![Cell::Text(
             t[..n]
@@ -243,6 +248,7 @@ pub fn numbers(did: u8, b: &[u8]) -> Vec<(String, f64)> {
             Value::Unsigned(u) => out.push((f.name.to_owned(), u as f64)),
             Value::Float(x) => out.push((f.name.to_owned(), x)),
             Value::Vec3(v) => out.extend(columns(f).into_iter().zip(v)),
+            Value::Vec4(v) => out.extend(columns(f).into_iter().zip(v)),
             Value::Version(_) | Value::Text(..) => {}
         }
     }
@@ -312,7 +318,7 @@ pub fn parse_field(f: &FieldSpec, text: &str) -> anyhow::Result<Vec<u8>> {
         Kind::U64 => uint(u64::MAX)?.to_le_bytes().to_vec(),
         Kind::F32 => (floats(1)?[0] as f32).to_le_bytes().to_vec(),
         Kind::F64 => floats(1)?[0].to_le_bytes().to_vec(),
-        Kind::F32x3 => floats(3)?
+        Kind::F32x3 | Kind::F32x4 => floats(if f.kind == Kind::F32x3 { 3 } else { 4 })?
             .iter()
             .flat_map(|&x| (x as f32).to_le_bytes())
             .collect(),
