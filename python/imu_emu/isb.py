@@ -24,6 +24,8 @@ MAX_PACKET = 2048
 
 DEV_INFO, PIMU, SYS_CMD, RMC, SYS_PARAMS, FLASH_CONFIG = 1, 3, 7, 9, 10, 12
 IMU, BIT, STROBE_IN_TIME, IMU_RAW = 58, 64, 68, 97
+INS_1, INS_2, INS_3, INS_4, GPS1_POS, GPS1_VEL = 4, 5, 65, 66, 13, 30
+MAGNETOMETER, BAROMETER, IMU_MAG, PIMU_MAG, SYS_SENSORS = 52, 53, 85, 86, 11
 
 # Field kinds: struct format and item count.
 _KINDS = {
@@ -34,6 +36,7 @@ _KINDS = {
     "f32": ("f", 1),
     "f64": ("d", 1),
     "f32x3": ("3f", 3),
+    "f32x4": ("4f", 4),
     "f64x3": ("3d", 3),
     "ver": ("4B", 4),
     "str24": ("24s", 1),
@@ -42,6 +45,11 @@ _KINDS = {
 Field = Tuple[str, int, str]
 
 _IMU: Sequence[Field] = (("time", 0, "f64"), ("status", 8, "u32"), ("pqr", 12, "f32x3"), ("acc", 24, "f32x3"))
+_PIMU: Sequence[Field] = (
+    ("time", 0, "f64"), ("dt", 8, "f32"), ("status", 12, "u32"), ("theta", 16, "f32x3"), ("vel", 28, "f32x3"),
+)
+_INS_HEAD: Sequence[Field] = (("week", 0, "u32"), ("timeOfWeek", 4, "f64"), ("insStatus", 12, "u32"), ("hdwStatus", 16, "u32"))
+_MAG_AT = lambda at: (("magTime", at, "f64"), ("mag", at + 8, "f32x3"))  # noqa: E731
 
 #: Data sets served: DID -> (name, size, fields as (name, offset, kind)).
 SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
@@ -62,11 +70,7 @@ SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
             ("addInfo", 60, "str24"),
         ),
     ),
-    PIMU: (
-        "PIMU",
-        40,
-        (("time", 0, "f64"), ("dt", 8, "f32"), ("status", 12, "u32"), ("theta", 16, "f32x3"), ("vel", 28, "f32x3")),
-    ),
+    PIMU: ("PIMU", 40, _PIMU),
     SYS_CMD: ("SYS_CMD", 8, (("command", 0, "u32"), ("invCommand", 4, "u32"))),
     RMC: ("RMC", 12, (("bits", 0, "u64"), ("options", 8, "u32"))),
     SYS_PARAMS: (
@@ -159,6 +163,40 @@ SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
         (("week", 0, "u32"), ("timeOfWeekMs", 4, "u32"), ("pin", 8, "u16"), ("count", 10, "u16")),
     ),
     IMU_RAW: ("IMU_RAW", 36, _IMU),
+    INS_1: ("INS_1", 80, tuple(_INS_HEAD) + (("theta", 20, "f32x3"), ("uvw", 32, "f32x3"), ("lla", 44, "f64x3"), ("ned", 68, "f32x3"))),
+    INS_2: ("INS_2", 72, tuple(_INS_HEAD) + (("qn2b", 20, "f32x4"), ("uvw", 36, "f32x3"), ("lla", 48, "f64x3"))),
+    INS_3: (
+        "INS_3", 76,
+        tuple(_INS_HEAD) + (("qn2b", 20, "f32x4"), ("uvw", 36, "f32x3"), ("lla", 48, "f64x3"), ("msl", 72, "f32")),
+    ),
+    INS_4: ("INS_4", 72, tuple(_INS_HEAD) + (("qe2b", 20, "f32x4"), ("ve", 36, "f32x3"), ("ecef", 48, "f64x3"))),
+    GPS1_POS: (
+        "GPS1_POS",
+        92,
+        (
+            ("week", 0, "u32"), ("timeOfWeekMs", 4, "u32"), ("status", 8, "u32"), ("ecef", 12, "f64x3"),
+            ("lla", 36, "f64x3"), ("hMSL", 60, "f32"), ("hAcc", 64, "f32"), ("vAcc", 68, "f32"),
+            ("pDop", 72, "f32"), ("cnoMean", 76, "f32"), ("towOffset", 80, "f64"), ("leapS", 88, "u8"),
+            ("satsUsed", 89, "u8"), ("cnoMeanSigma", 90, "u8"), ("status2", 91, "u8"),
+        ),
+    ),
+    GPS1_VEL: ("GPS1_VEL", 24, (("timeOfWeekMs", 0, "u32"), ("vel", 4, "f32x3"), ("sAcc", 16, "f32"), ("status", 20, "u32"))),
+    MAGNETOMETER: ("MAGNETOMETER", 20, (("time", 0, "f64"), ("mag", 8, "f32x3"))),
+    BAROMETER: (
+        "BAROMETER", 24,
+        (("time", 0, "f64"), ("bar", 8, "f32"), ("mslBar", 12, "f32"), ("barTemp", 16, "f32"), ("humidity", 20, "f32")),
+    ),
+    IMU_MAG: ("IMU_MAG", 56, tuple(_IMU) + _MAG_AT(36)),
+    PIMU_MAG: ("PIMU_MAG", 60, tuple(_PIMU) + _MAG_AT(40)),
+    SYS_SENSORS: (
+        "SYS_SENSORS",
+        80,
+        (
+            ("time", 0, "f64"), ("temp", 8, "f32"), ("pqr", 12, "f32x3"), ("acc", 24, "f32x3"),
+            ("mag", 36, "f32x3"), ("bar", 48, "f32"), ("barTemp", 52, "f32"), ("mslBar", 56, "f32"),
+            ("humidity", 60, "f32"), ("vin", 64, "f32"), ("ana", 68, "f32x3"),
+        ),
+    ),
 }
 
 Value = Union[int, float, str]
@@ -274,7 +312,7 @@ def _read(kind: str, b: bytes, off: int) -> List[Value]:
     if kind == "str24":
         text = vals[0].split(b"\0", 1)[0]
         return ["".join(chr(c) if 0x20 <= c < 0x7F else "?" for c in text)]
-    if kind in ("f32", "f32x3"):
+    if kind in ("f32", "f32x3", "f32x4"):
         # Shortest text that reads back as the same f32, as the Rust client prints.
         return [float(_f32_repr(v)) for v in vals]
     return list(vals)
@@ -295,6 +333,8 @@ def columns(did: int) -> List[str]:
     for name, _, kind in fields:
         if kind in ("f32x3", "f64x3"):
             out += [name + "_x", name + "_y", name + "_z"]
+        elif kind == "f32x4":
+            out += [name + "_w", name + "_x", name + "_y", name + "_z"]
         else:
             out.append(name)
     return out
@@ -316,10 +356,18 @@ def decode_set(did: int, data: bytes) -> Dict[str, Value]:
 
 
 def device_time(did: int, data: bytes) -> Optional[float]:
-    """The device time a set carries, s: ``time`` of IMU, IMU_RAW, PIMU;
-    ``timeOfWeekMs`` / 1000 of STROBE_IN_TIME and SYS_PARAMS."""
-    if did in (IMU, IMU_RAW, PIMU):
+    """The device time a set carries, s: ``time`` (since boot) of the IMU,
+    PIMU, magnetometer, barometer and sensor sets; the GPS time of week of
+    INS_1..4, GPS1_POS, GPS1_VEL; ``timeOfWeekMs`` / 1000 of
+    STROBE_IN_TIME and SYS_PARAMS."""
+    if did in (IMU, IMU_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER, SYS_SENSORS):
         return struct.unpack_from("<d", data, 0)[0]
+    if did in (INS_1, INS_2, INS_3, INS_4):
+        return struct.unpack_from("<d", data, 4)[0]
+    if did == GPS1_POS:
+        return struct.unpack_from("<I", data, 4)[0] / 1000.0
+    if did == GPS1_VEL:
+        return struct.unpack_from("<I", data, 0)[0] / 1000.0
     if did == STROBE_IN_TIME:
         return struct.unpack_from("<I", data, 4)[0] / 1000.0
     if did == SYS_PARAMS:

@@ -249,7 +249,9 @@ class DecoderTest(unittest.TestCase):
                     raw += s.recv(65536)
                 except OSError:
                     pass
-            for d in (isb.DEV_INFO, isb.SYS_PARAMS, isb.FLASH_CONFIG, isb.RMC, isb.BIT, isb.STROBE_IN_TIME):
+            for d in (isb.DEV_INFO, isb.SYS_PARAMS, isb.FLASH_CONFIG, isb.RMC, isb.BIT, isb.STROBE_IN_TIME,
+                      isb.INS_1, isb.INS_2, isb.INS_3, isb.INS_4, isb.GPS1_POS, isb.GPS1_VEL,
+                      isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS):
                 emu.send(isb.get_data(d))
                 raw += emu.frame(d).raw
             emu.send(isb.stop_all())
@@ -261,8 +263,7 @@ class DecoderTest(unittest.TestCase):
         self.assertEqual(got, want)
         self.assertEqual(
             {p.did for p in packets},
-            {isb.IMU, isb.PIMU, isb.DEV_INFO, isb.SYS_PARAMS, isb.FLASH_CONFIG, isb.RMC, isb.BIT,
-             isb.STROBE_IN_TIME},
+            set(isb.SETS) - {isb.SYS_CMD, isb.IMU_RAW},
         )
         imu = [isb.decode_set(p.did, p.payload) for p in packets if p.did == isb.IMU][-1]
         self.assertAlmostEqual(imu["acc_z"], -9.81, delta=0.1)
