@@ -153,24 +153,38 @@ function series(points, names, labels) {
   return names.map((n, i) => ({ name: labels[i], pts: points.filter((p) => n in p).map((p) => [p.t, p[n]]) }));
 }
 
+// The newest device time among a plot's own points: sets of one unit may
+// count time differently (an IMX's IMU since boot, its INS in GPS time).
+function lastOf(ser) {
+  let t = -Infinity;
+  for (const s of ser) if (s.pts.length) t = Math.max(t, s.pts[s.pts.length - 1][0]);
+  return Number.isFinite(t) ? t : 0;
+}
+
 function draw() {
   const u = units();
-  const last = state.points.length ? state.points[state.points.length - 1].t : 0;
-  const lastTruth = state.truth.length ? state.truth[state.truth.length - 1].t : last;
   const xyz = (p) => [p + "_x", p + "_y", p + "_z"];
-  plot($("plot-rate"), "Angular rate (sent)", "angular rate (" + u.rate[1] + ")", series(state.points, xyz(u.rate[0]), ["X", "Y", "Z"]), last);
-  plot($("plot-acc"), "Acceleration (sent)", "specific force (" + u.acc[1] + ")", series(state.points, xyz(u.acc[0]), ["X", "Y", "Z"]), last);
-  plot($("plot-att"), "Attitude (sent)", "angle (deg)", series(state.points, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]), last);
-  plot($("plot-truth"), "Attitude (truth)", "angle (deg)", series(state.truth, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]), lastTruth);
+  const rates = series(state.points, xyz(u.rate[0]), ["X", "Y", "Z"]);
+  const accs = series(state.points, xyz(u.acc[0]), ["X", "Y", "Z"]);
+  // KERNEL: heading, pitch, roll (deg); IMX INS_1: theta = roll, pitch, yaw (rad).
+  const att = state.protocol === "isb"
+    ? series(state.points.filter((p) => "theta_x" in p && "lla_x" in p).map((p) => ({
+        t: p.t, heading: p.theta_z * 180 / Math.PI, pitch: p.theta_y * 180 / Math.PI, roll: p.theta_x * 180 / Math.PI,
+      })), ["heading", "pitch", "roll"], ["yaw", "pitch", "roll"])
+    : series(state.points, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]);
+  const truth = series(state.truth, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]);
+  plot($("plot-rate"), "Angular rate (sent)", "angular rate (" + u.rate[1] + ")", rates, lastOf(rates));
+  plot($("plot-acc"), "Acceleration (sent)", "specific force (" + u.acc[1] + ")", accs, lastOf(accs));
+  plot($("plot-att"), state.protocol === "isb" ? "Attitude (sent, INS_1)" : "Attitude (sent)", "angle (deg)", att, lastOf(att));
+  plot($("plot-truth"), "Attitude (truth)", "angle (deg)", truth, lastOf(truth));
   state.drawn += 1;
 }
 
+// The newest points only (by count: sets of one unit may count time
+// differently; each plot then takes its own last WINDOW_S seconds).
+const KEEP = 24000;
 function keep(list) {
-  if (!list.length) return list;
-  const t1 = list[list.length - 1].t;
-  let i = 0;
-  while (i < list.length && list[i].t < t1 - WINDOW_S) i++;
-  return i ? list.slice(i) : list;
+  return list.length > KEEP ? list.slice(list.length - KEEP) : list;
 }
 
 async function poll() {
