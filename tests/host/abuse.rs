@@ -541,6 +541,10 @@ fn options_that_do_not_go_together_are_refused() {
         "imu-emu: --link names the pty's slave: it goes with --pty, not with --tcp or --serial\n"
     );
     assert!(!std::path::Path::new("/tmp/imu-emu-no-link").exists());
+    // The web view listens on loopback only, like the other sockets.
+    let out = run(&["--tcp", "127.0.0.1:0", "--web", "0.0.0.0:0"], &[]);
+    let err = refused(&out, 2, "--web 0.0.0.0:0: not a loopback address");
+    assert!(err.ends_with("add --allow-remote to allow it\n"), "{err}");
     let out = run(&["--flash", "/proc/version", "--tcp", "127.0.0.1:0"], &[]);
     let err = refused(&out, 2, "--flash /proc/version");
     assert!(
