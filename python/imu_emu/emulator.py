@@ -7,7 +7,9 @@ import subprocess
 import threading
 import time
 from pathlib import Path
+from typing import Any, List, Optional, Sequence, Union
 
+from .isb import PacketReader
 from .kernel import FrameReader
 
 _REPO = Path(__file__).resolve().parents[2]
@@ -33,6 +35,20 @@ def find_binary():
     raise FileNotFoundError(
         "imu-emu binary not found: build it (cargo build -p imu-emu-host) or set IMU_EMU_BIN"
     )
+
+
+class EmulatorStartError(RuntimeError):
+    """``imu-emu`` did not start (a bad option, a port in use, ...):
+    :attr:`stderr` is what it said, :attr:`returncode` its exit status."""
+
+    def __init__(self, cmd: Sequence[str], stderr: str, returncode: Optional[int]):
+        self.cmd = list(cmd)
+        self.stderr = stderr
+        self.returncode = returncode
+        super().__init__(
+            "imu-emu did not start (exit status %s): %s\ncommand: %s"
+            % (returncode, stderr.strip() or "(nothing on stderr)", " ".join(self.cmd))
+        )
 
 
 class Control:
@@ -87,12 +103,17 @@ class Uart:
     Connected on first use (a device powers on when its first client
     connects)."""
 
-    def __init__(self, addr, timeout=5.0):
+    def __init__(self, addr: str, timeout: float = 5.0, protocol: str = "kernel"):
         self.addr = addr
         self.timeout = timeout
-        self._uart = None
-        self._pending = []
-        self.reader = FrameReader()
+        self.protocol = protocol
+        self._uart: Optional[socket.socket] = None
+        self._pending: List[Any] = []
+        #: KERNEL frames (:class:`imu_emu.kernel.FrameReader`) or ISB
+        #: packets (:class:`imu_emu.isb.PacketReader`, ``protocol="isb"``).
+        self.reader: Union[FrameReader, PacketReader] = (
+            PacketReader() if protocol == "isb" else FrameReader()
+        )
 
     @property
     def port(self):
@@ -153,7 +174,7 @@ class Uart:
 
     def close(self):
         """Closes the UART connection, if open."""
-        if self._uart is not None:
+        if getattr(self, "_uart", None) is not None:
             self._uart.close()
             self._uart = None
 
@@ -161,28 +182,27 @@ class Uart:
 class _Process:
     """A running ``imu-emu`` whose stdout lines announce its ports."""
 
-    def __init__(self, cmd, timeout):
+    def __init__(self, cmd: Sequence[str], timeout: float):
         self.timeout = timeout
+        self.cmd = list(cmd)
+        self._control: Optional[Control] = None
+        self.stderr_lines: List[str] = []
         self.proc = subprocess.Popen(
             cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True,
         )
-        self.stderr_lines = []
         self._err = threading.Thread(target=self._drain_stderr, daemon=True)
         self._err.start()
-        self._control = None
 
     def _drain_stderr(self):
         for line in self.proc.stderr:
             self.stderr_lines.append(line.rstrip("\n"))
 
-    def _line(self, prefix):
+    def _line(self, prefix: str) -> str:
         line = self.proc.stdout.readline()
         if not line.startswith(prefix):
             self.stop()
-            raise RuntimeError(
-                "imu-emu did not start: %r; stderr: %s" % (line, "\n".join(self.stderr_lines))
-            )
+            raise EmulatorStartError(self.cmd, "\n".join(self.stderr_lines), self.proc.returncode)
         return line[len(prefix):].strip()
 
     def control(self):
@@ -206,6 +226,7 @@ class _Process:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        # All of stderr, for the start error's message.
         self._err.join(timeout=2)
         self.proc.stdout.close()
         self.proc.stderr.close()
@@ -217,18 +238,52 @@ class _Process:
         self.stop()
 
 
+def options(
+    model: Optional[str] = None,
+    protocol: Optional[str] = None,
+    seed: Optional[int] = None,
+    speed: Union[None, str, float] = None,
+    args: Sequence[str] = (),
+) -> List[str]:
+    """The command-line options of these settings (``None``: the default)."""
+    out: List[str] = []
+    if protocol is not None:
+        out += ["--protocol", protocol]
+    if model is not None:
+        out += ["--model", model]
+    if seed is not None:
+        out += ["--seed", str(seed)]
+    if speed is not None:
+        out += ["--speed", str(speed)]
+    return out + list(args)
+
+
+def _protocol_of(args: Sequence[str]) -> str:
+    a = list(args)
+    for i, w in enumerate(a):
+        if w == "--protocol" and i + 1 < len(a):
+            return a[i + 1]
+        if w.startswith("--protocol="):
+            return w.split("=", 1)[1]
+    return "kernel"
+
+
 class Emulator(_Process, Uart):
     """A running ``imu-emu`` on a free loopback port with a control socket.
 
     Use as a context manager, or call :meth:`stop`. ``args`` are extra
-    command-line options (``["--model", "K120", "--seed", "3"]``).
+    command-line options (``["--model", "K120", "--seed", "3"]``); with
+    ``--protocol isb`` the UART yields ISB packets (:class:`imu_emu.isb.Packet`)
+    instead of KERNEL frames. Raises :class:`EmulatorStartError` (with the
+    emulator's stderr) when it does not start.
     """
 
-    def __init__(self, args=(), binary=None, timeout=5.0):
+    def __init__(self, args: Sequence[str] = (), binary: Optional[str] = None, timeout: float = 5.0):
         cmd = [binary or find_binary(), "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0"]
         cmd += list(args)
         _Process.__init__(self, cmd, timeout)
-        Uart.__init__(self, self._line("listening on tcp "), timeout)
+        addr = self._line("listening on tcp ")
+        Uart.__init__(self, addr, timeout, _protocol_of(args))
         self.control_addr = self._line("control on tcp ")
 
     def _close_uarts(self):
@@ -245,12 +300,14 @@ class Fleet(_Process):
     flash in ``path.k``).
     """
 
-    def __init__(self, count, args=(), binary=None, timeout=5.0):
+    def __init__(self, count: int, args: Sequence[str] = (), binary: Optional[str] = None, timeout: float = 5.0):
         cmd = [binary or find_binary(), "--count", str(count), "--tcp", "127.0.0.1:0",
                "--control", "127.0.0.1:0"]
         cmd += list(args)
         _Process.__init__(self, cmd, timeout)
-        self.devices = [Uart(self._line("listening on tcp "), timeout) for _ in range(count)]
+        self.devices: List[Uart] = []
+        protocol = _protocol_of(args)
+        self.devices = [Uart(self._line("listening on tcp "), timeout, protocol) for _ in range(count)]
         self.control_addr = self._line("control on tcp ")
 
     def dev(self, k, *words):
@@ -263,5 +320,5 @@ class Fleet(_Process):
         return dict(w.split("=", 1) for w in self.dev(k, "status").split())
 
     def _close_uarts(self):
-        for d in self.devices:
+        for d in getattr(self, "devices", []):
             d.close()

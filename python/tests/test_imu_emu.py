@@ -1,14 +1,16 @@
 """Tests of the Python helper, against the real emulator binary."""
 
+import json
+import os
 import struct
-import sys
+import subprocess
+import tempfile
+import time
 import unittest
-from pathlib import Path
+from importlib import metadata
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import imu_emu  # noqa: E402
-from imu_emu import kernel  # noqa: E402
+import imu_emu
+from imu_emu import isb, kernel
 
 
 class CodecTest(unittest.TestCase):
@@ -148,15 +150,150 @@ class FleetTest(unittest.TestCase):
         )
 
 
-class PluginTest(unittest.TestCase):
-    def test_the_fixture_module_imports_where_pytest_is(self):
-        try:
-            import pytest  # noqa: F401
-        except ImportError:
-            self.skipTest("pytest not installed")
-        from imu_emu import pytest_plugin
+class PackageTest(unittest.TestCase):
+    def test_installed_with_its_pytest_entry_point_and_types(self):
+        self.assertEqual(metadata.version("imu-emu"), imu_emu.__version__)
+        eps = metadata.entry_points()
+        group = eps.select(group="pytest11") if hasattr(eps, "select") else eps.get("pytest11", [])
+        self.assertIn("imu_emu.pytest_plugin", [e.value for e in group])
+        typed = os.path.join(os.path.dirname(imu_emu.__file__), "py.typed")
+        self.assertTrue(os.path.isfile(typed))
 
-        self.assertTrue(callable(pytest_plugin.emulator))
+    def test_a_failed_start_says_why(self):
+        with self.assertRaises(imu_emu.EmulatorStartError) as e:
+            imu_emu.Emulator(["--model", "K999"])
+        self.assertEqual(e.exception.returncode, 2)
+        self.assertIn("K999", e.exception.stderr)
+        self.assertTrue(
+            str(e.exception).startswith(
+                "imu-emu did not start (exit status 2): error: invalid value 'K999' for "
+                "'--model <MODEL>'"
+            ),
+            str(e.exception),
+        )
+
+
+def _record(emu, start_frame, ident, seconds=0.5):
+    """Raw bytes of ``seconds`` of a stream started with ``start_frame``."""
+    emu.request(start_frame, ident)
+    emu.frames(0.05)
+    s = emu.uart()
+    raw = b""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        s.settimeout(0.05)
+        try:
+            raw += s.recv(65536)
+        except OSError:
+            pass
+    return raw
+
+
+def _binary_rows(raw, *args):
+    """``imu-emu client [args] decode`` of ``raw`` as JSON rows."""
+    with tempfile.NamedTemporaryFile(suffix=".bin") as f:
+        f.write(raw)
+        f.flush()
+        out = subprocess.run(
+            [imu_emu.find_binary(), "client", *args, "decode", f.name, "--to", "json"],
+            check=True, capture_output=True, text=True,
+        ).stdout
+    rows = [json.loads(line) for line in out.splitlines()]
+    for r in rows:
+        for k in ("frame", "format", "did", "device_time_s"):
+            r.pop(k, None)
+    return rows
+
+
+class DecoderTest(unittest.TestCase):
+    """The Python decoders give what the binary's decoder gives, on frames
+    of every KERNEL format, every UDD type and the ISB sets the emulator
+    streams."""
+
+    def _kernel_agrees(self, emu, product, start_frame, ident):
+        raw = _record(emu, start_frame, ident)
+        frames = [f for f in kernel.FrameReader().feed(raw) if f.ident == ident]
+        self.assertGreater(len(frames), 3)
+        want = _binary_rows(raw, "--model", product)
+        got = [imu_emu.decode_kernel(f.ident, f.payload, product) for f in frames]
+        self.assertEqual(len(got), len(want))
+        for g, w in zip(got, want):
+            self.assertEqual(g, w)
+        return got
+
+    def test_every_kernel_format(self):
+        product = "KERNEL-120-G2000-A40A90"
+        # At 10x: attitude streams start after the 2 s initial alignment (5.3.1).
+        with imu_emu.Emulator(["--model", "K120", "--seed", "2", "--speed", "10"]) as emu:
+            for code in imu_emu.decode.KERNEL_FORMATS:
+                rows = self._kernel_agrees(emu, product, kernel.command(bytes([code])), code)
+                self.assertTrue(any(k.startswith("gyro_") or k == "heading" for k in rows[0]))
+                emu.send(imu_emu.stop())
+                emu.frames(0.1)
+
+    def test_every_udd_type(self):
+        lists = [
+            ("K120", "KERNEL-120-G2000-A40A90", [0x02, 0x05, 0x07, 0x08, 0x09, 0x20]),
+            ("K120", "KERNEL-120-G2000-A40A90", [0x21, 0x22, 0x23, 0x2D, 0x2E, 0x2F]),
+            ("K120", "KERNEL-120-G2000-A40A90", [0x91, 0x92, 0x52, 0x53, 0x5B]),
+            ("K100", None, [0x50, 0x52]),
+        ]
+        seen = set()
+        for model, product, types in lists:
+            with imu_emu.Emulator(["--model", model, "--speed", "10"]) as emu:
+                emu.uart()
+                product = product or _product_of(emu)
+                # User_Def_Data_config (ICD 5.3.5): the command, then the
+                # list; the answer's error bits (byte 2) are 0.
+                emu.send(kernel.command(bytes([0x96])))
+                answer = emu.request(kernel.command(bytes([0x96, len(types), *types])), 0x96)
+                self.assertEqual(answer.payload[2], 0, types)
+                rows = self._kernel_agrees(emu, product, imu_emu.start("UDD"), 0x95)
+                seen.update(types)
+                self.assertEqual(
+                    set(rows[0]),
+                    {c for t in types for c in imu_emu.decode.FIELDS[imu_emu.decode.UDD_TYPES[t][1]][1]},
+                )
+        self.assertEqual(seen, set(imu_emu.decode.UDD_TYPES))
+
+    def test_isb_sets(self):
+        with imu_emu.Emulator(["--protocol", "isb"]) as emu:
+            emu.send(isb.get_data(isb.IMU, 1))
+            emu.send(isb.get_data(isb.PIMU, 1))
+            raw = b""
+            s = emu.uart()
+            end = time.monotonic() + 0.3
+            while time.monotonic() < end:
+                s.settimeout(0.05)
+                try:
+                    raw += s.recv(65536)
+                except OSError:
+                    pass
+            for d in (isb.DEV_INFO, isb.SYS_PARAMS, isb.FLASH_CONFIG, isb.RMC, isb.BIT, isb.STROBE_IN_TIME,
+                      isb.INS_1, isb.INS_2, isb.INS_3, isb.INS_4, isb.GPS1_POS, isb.GPS1_VEL,
+                      isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS):
+                emu.send(isb.get_data(d))
+                raw += emu.frame(d).raw
+            emu.send(isb.stop_all())
+        packets = [p for p in isb.PacketReader().feed(raw) if p.whole_set() is not None]
+        got = [isb.decode_set(p.did, p.payload) for p in packets]
+        want = _binary_rows(raw, "--protocol", "isb")
+        for w in want:
+            w.pop("host_time_s", None)
+        self.assertEqual(got, want)
+        self.assertEqual(
+            {p.did for p in packets},
+            set(isb.SETS) - {isb.SYS_CMD, isb.IMU_RAW},
+        )
+        imu = [isb.decode_set(p.did, p.payload) for p in packets if p.did == isb.IMU][-1]
+        self.assertAlmostEqual(imu["acc_z"], -9.81, delta=0.1)
+        info = next(isb.decode_set(p.did, p.payload) for p in packets if p.did == isb.DEV_INFO)
+        self.assertEqual(info["protocolVer"], "2.1.0.0")
+
+
+def _product_of(emu):
+    info = emu.request(imu_emu.get_dev_info(), 0x12).payload
+    return info[8:48].split(b" ")[0].decode()
 
 
 if __name__ == "__main__":

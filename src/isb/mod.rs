@@ -11,11 +11,13 @@
 //!   options, FLASH_CONFIG defaults and checksum (`docs/isb-data-sets.md`);
 //! - [`message`]: GET_DATA / SET_DATA / stop requests, ACK / NACK and DATA
 //!   encoders;
+//! - [`fields`]: the data sets' fields by `data_sets.h` name, for hosts;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
 //!   and [`nmea::Input`], the one place every received byte goes.
 
 pub mod device;
 pub mod did;
+pub mod fields;
 pub mod ins;
 pub mod layout;
 pub mod message;

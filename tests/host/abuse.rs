@@ -417,7 +417,7 @@ fn a_second_emulator_on_the_same_flash_file_is_refused() {
 /// as on a real line: GA frames keep coming, without a gap, for a second.
 #[test]
 fn a_half_closed_client_keeps_receiving_the_stream() {
-    let emu = Emu::tcp(&["--model", "K110"]);
+    let emu = Emu::tcp(&["--model", "K110", "-v"]);
     let s = TcpStream::connect(emu.addr()).unwrap();
     let half = s.try_clone().unwrap();
     let mut c = Conn::from_tcp(s);
@@ -518,4 +518,127 @@ fn a_trajectory_value_beyond_f32_saturates_on_the_wire() {
         "acc Z {}",
         i32_at(p, 20)
     );
+}
+
+/// Options that parse but do not go together are refused with one line
+/// (issue 21): a KERNEL model for the IMX-5, a pty link with TCP, a flash
+/// "file" that cannot hold an image.
+#[test]
+fn options_that_do_not_go_together_are_refused() {
+    let out = run(&["--protocol", "isb", "--model", "K120"], &[]);
+    let err = refused(&out, 2, "--model K120 is a KERNEL model");
+    assert_eq!(
+        err,
+        "imu-emu: --model K120 is a KERNEL model; --protocol isb emulates an IMX-5 (drop \
+         --model)\n"
+    );
+    let out = run(
+        &["--link", "/tmp/imu-emu-no-link", "--tcp", "127.0.0.1:0"],
+        &[],
+    );
+    let err = refused(&out, 2, "--link");
+    assert_eq!(
+        err,
+        "imu-emu: --link names the pty's slave: it goes with --pty, not with --tcp or --serial\n"
+    );
+    assert!(!std::path::Path::new("/tmp/imu-emu-no-link").exists());
+    // The web view listens on loopback only, like the other sockets.
+    let out = run(&["--tcp", "127.0.0.1:0", "--web", "0.0.0.0:0"], &[]);
+    let err = refused(&out, 2, "--web 0.0.0.0:0: not a loopback address");
+    assert!(err.ends_with("add --allow-remote to allow it\n"), "{err}");
+    let out = run(&["--flash", "/proc/version", "--tcp", "127.0.0.1:0"], &[]);
+    let err = refused(&out, 2, "--flash /proc/version");
+    assert!(
+        err.starts_with(
+            "imu-emu: --flash /proc/version: cannot write the 8192-byte flash image there ("
+        ) && err.ends_with("); give the path of an ordinary file on a writable disk\n"),
+        "{err}"
+    );
+}
+
+/// `--help` speaks to users: no source modules, --pps in device time.
+#[test]
+fn help_sends_nobody_to_the_source() {
+    let out = run(&["--help"], &[]);
+    assert!(out.status.success());
+    let help = String::from_utf8(out.stdout).unwrap();
+    assert!(!help.contains("module"), "{help}");
+    assert!(
+        help.contains(
+            "Generate a 1PPS rising edge every second of device time (so it follows --speed)"
+        ),
+        "{help}"
+    );
+    assert!(
+        help.contains("send `help` on it for every command"),
+        "{help}"
+    );
+}
+
+/// A client that connects, asks and leaves, then another: the log says the
+/// first left and the second connected — no "still sending", no
+/// "replaced" for a client already gone.
+#[test]
+fn a_client_that_leaves_is_logged_as_gone() {
+    let emu = Emu::tcp(&["--model", "K110"]);
+    let s = TcpStream::connect(emu.addr()).unwrap();
+    let first_addr = s.local_addr().unwrap();
+    let mut first = Conn::from_tcp(s);
+    first.send(&support::command(0x12));
+    let _ = first.frame_with_id(0x12);
+    drop(first);
+    std::thread::sleep(Duration::from_millis(200));
+    let second = TcpStream::connect(emu.addr()).unwrap();
+    let second_addr = second.local_addr().unwrap();
+    let want = format!("client {first_addr} left; client {second_addr} connected to");
+    let deadline = Instant::now() + TIMEOUT;
+    while !emu.stderr().contains(&want) {
+        assert!(
+            Instant::now() < deadline,
+            "{want:?} not in {}",
+            emu.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let log = emu.stderr();
+    assert!(!log.contains("closed its sending side"), "{log}");
+    assert!(!log.contains("replaced by"), "{log}");
+}
+
+/// Shell completions and the man page come from the command-line
+/// definition: every option is there; bash accepts the script.
+#[test]
+fn completions_and_man_page_come_from_the_cli_definition() {
+    let out = run(&["completions", "bash"], &[]);
+    assert!(out.status.success());
+    let script = String::from_utf8(out.stdout).unwrap();
+    for word in [
+        "_imu__emu()",
+        "--protocol",
+        "--allow-remote",
+        "client",
+        "record",
+        "--did",
+    ] {
+        assert!(script.contains(word), "no {word} in the bash completions");
+    }
+    let mut bash = Command::new("bash")
+        .arg("-n")
+        .stdin(Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write as _;
+    bash.stdin
+        .take()
+        .unwrap()
+        .write_all(script.as_bytes())
+        .unwrap();
+    assert!(bash.wait().unwrap().success(), "bash -n refused the script");
+    let out = run(&["man"], &[]);
+    assert!(out.status.success());
+    let man = String::from_utf8(out.stdout).unwrap();
+    assert!(man.contains(".TH imu-emu 1"), "{}", &man[..200]);
+    for word in ["\\-\\-protocol", "\\-\\-pps", "device time", "client"] {
+        assert!(man.contains(word), "no {word} in the man page");
+    }
 }

@@ -38,6 +38,17 @@ fn run(args: &[&str]) -> Output {
     }
 }
 
+/// Runs `imu-emu client plot CSV -o OUT`.
+fn plot(csv: &std::path::Path, out: &std::path::Path) -> Output {
+    run(&[
+        "client",
+        "plot",
+        csv.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ])
+}
+
 fn stdout(o: &Output) -> String {
     assert!(
         o.status.success(),
@@ -69,8 +80,12 @@ fn info_bit_get_set_and_their_errors() {
         lines[1].starts_with("firmware: KERNEL-110-G2000-A40 imu-emu "),
         "{info}"
     );
-    assert_eq!(lines[2], "imu_type: 0x6e");
-    assert_eq!(stdout(&client(&a, &["bit"])), "bit: 00 00 00 00 (pass)\n");
+    // IMU_type as the README and Table 4.3 write it.
+    assert_eq!(lines[2], "imu_type: 110");
+    assert_eq!(
+        stdout(&client(&a, &["bit"])),
+        "bit: 00 00 00 00 (pass: accelerometer 0 ok, gyroscope 0 ok, flash 0 ok)\n"
+    );
     assert_eq!(
         stdout(&client(&a, &["get", "Data_Rate"])),
         "Data_Rate = 100\n"
@@ -139,9 +154,19 @@ fn start_stop_udd_and_commit_baud_act_on_the_device() {
     );
     // Baud_Rate 230400 (code 8) saved, committed: the device switches; a
     // TCP client does not notice the rate, it still gets answers.
+    // Typed in bit/s; the hint says the line changes on CommitBaudRate.
     assert_eq!(
-        stdout(&client(&a, &["set", "Baud_Rate", "8"])),
-        "Baud_Rate saved = 8\n"
+        stdout(&client(&a, &["set", "Baud_Rate", "230400"])),
+        "Baud_Rate saved = 230400 bit/s (code 8) (the line changes after `imu-emu client \
+         commit-baud`, CommitBaudRate, ICD 5.3.9, or at the next power-on; `get` reads the \
+         running rate until then)\n"
+    );
+    let o = client(&a, &["set", "Baud_Rate", "12345"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("imu-emu: Baud_Rate: 12345 is not a line rate; bit/s: 115200 4800"),
+        "{}",
+        stderr(&o)
     );
     assert_eq!(
         stdout(&client(&a, &["commit-baud"])),
@@ -149,7 +174,28 @@ fn start_stop_udd_and_commit_baud_act_on_the_device() {
     );
     assert_eq!(
         stdout(&client(&a, &["get", "Baud_Rate"])),
-        "Baud_Rate = 8\n"
+        "Baud_Rate = 230400 bit/s (code 8)\n"
+    );
+}
+
+/// A BIT that fails: exit status 1, the failing result named on stdout and
+/// stderr (a script can test `$?`).
+#[test]
+fn a_failing_bit_exits_non_zero_and_names_the_bits() {
+    let ctl = format!("127.0.0.1:{}", support::free_port());
+    let e = Emu::tcp(&["--power-on", "now", "--control", &ctl]);
+    let a = e.addr().to_string();
+    let mut c = support::Control::connect(&ctl);
+    assert_eq!(c.cmd("fault gyro-bit on"), "ok");
+    let o = client(&a, &["bit"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        "bit: 04 00 00 00 (FAIL: accelerometer 0 ok, gyroscope 1 FAIL, flash 0 ok)\n"
+    );
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: BIT failed: accelerometer 0 ok, gyroscope 1 FAIL, flash 0 ok\n"
     );
 }
 
@@ -185,11 +231,16 @@ fn record_decode_and_plot() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "frame,format,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+        "frame,format,device_time_s,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,\
+         counter,usw,temp_c"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 200);
-    let counters: Vec<u16> = rows.iter().map(|r| r[9].parse().unwrap()).collect();
+    // Device time from the frames' counter: 10 ms a row from 0.
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.01), "row {i}");
+    }
+    let counters: Vec<u16> = rows.iter().map(|r| r[10].parse().unwrap()).collect();
     for (i, w) in counters.windows(2).enumerate() {
         assert_eq!(w[1], w[0].wrapping_add(20), "gap after row {i}");
     }
@@ -197,7 +248,7 @@ fn record_decode_and_plot() {
         assert_eq!(r[0], i.to_string());
         assert_eq!(r[1], "GA");
         // At rest, level: about 1 g on Z.
-        let az: f64 = r[8].parse().unwrap();
+        let az: f64 = r[9].parse().unwrap();
         assert!((az - 1.0).abs() < 0.05, "{az}");
     }
 
@@ -208,23 +259,17 @@ fn record_decode_and_plot() {
     let mut dl = decoded.lines();
     assert_eq!(
         dl.next().unwrap(),
-        "frame,format,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
+        "frame,format,device_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,counter,usw,temp_c"
     );
     let drows: Vec<Vec<&str>> = dl.map(|l| l.split(',').collect()).collect();
     assert!(drows.len() >= 200, "{}", drows.len());
-    let first = drows.iter().position(|r| r[8] == rows[0][9]).unwrap();
+    let first = drows.iter().position(|r| r[9] == rows[0][10]).unwrap();
     for (r, d) in rows.iter().zip(&drows[first..]) {
-        assert_eq!(r[3..], d[2..]);
+        assert_eq!(r[4..], d[3..]);
     }
 
     let png = dir.path().join("ga.png");
-    let o = run(&[
-        "client",
-        "plot",
-        csv.to_str().unwrap(),
-        "-o",
-        png.to_str().unwrap(),
-    ]);
+    let o = plot(&csv, &png);
     assert_eq!(stdout(&o), format!("{}: 200 rows plotted\n", png.display()));
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
@@ -233,6 +278,87 @@ fn record_decode_and_plot() {
     assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 1200);
     assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 900);
     assert!(bytes.len() > 10_000, "{}", bytes.len());
+
+    // SVG by extension: titled, labelled axes with units, a legend, ticks.
+    let svg = dir.path().join("ga.svg");
+    let o = plot(&csv, &svg);
+    assert_eq!(stdout(&o), format!("{}: 200 rows plotted\n", svg.display()));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"), "{}", &text[..80]);
+    for label in [
+        "ga.csv: GA, 200 rows",
+        "Angular rate",
+        "Acceleration",
+        "device time (s)",
+        "angular rate (deg/s)",
+        "specific force (g)",
+        "X",
+        "Z",
+        "1.0",
+        "1.8",
+    ] {
+        // plotters writes each text on a line of its own.
+        assert!(
+            text.contains(&format!(">\n{label}\n<")),
+            "no {label} in the SVG"
+        );
+    }
+    // A missing folder and an unknown extension: one clear line each.
+    let o = run(&[
+        "client",
+        "plot",
+        csv.to_str().unwrap(),
+        "-o",
+        "/nonexistent/ga.png",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: plot: /nonexistent/ga.png: the folder /nonexistent does not exist\n"
+    );
+    let o = plot(&csv, std::path::Path::new("ga.jpg"));
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: plot: ga.jpg: name a .png or .svg file\n"
+    );
+}
+
+/// A `--speed max` recording spans the whole device-time axis: its rows
+/// are 10 ms apart in device time however fast the host received them.
+#[test]
+fn a_speed_max_recording_is_plotted_against_device_time() {
+    let e = Emu::tcp(&["--power-on", "now", "--speed", "max"]);
+    let a = e.addr().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("fast.csv");
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GA",
+            "--frames",
+            "500",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 500);
+    assert_eq!(rows[499][2], "4.990000");
+    let svg = dir.path().join("fast.svg");
+    let o = plot(&csv, &svg);
+    stdout(&o);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // Ticks up to the last device second.
+    assert!(text.contains(">\n4.5\n<"), "no 4.5 s tick");
 }
 
 /// One clear line for each failure: a port nobody listens on, a unit that
@@ -317,4 +443,246 @@ fn the_client_talks_over_a_serial_port() {
         "{}",
         stderr(&o)
     );
+}
+
+/// Ctrl-C during `record`: the stream the client started is stopped, the
+/// summary printed, the exit status 0; the unit then sends nothing.
+#[test]
+fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
+    let (_e, a) = emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
+        .arg(&csv)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until rows arrive (the header and some rows are flushed by 8 KiB
+    // blocks: wait for the file to grow).
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no rows");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        assert!(std::time::Instant::now() < deadline, "record did not stop");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("imu-emu: ")
+            && err.ends_with(
+                " frames recorded, 0 failed their checksum, 0 counter gaps (interrupted; \
+                 stream stopped)\n"
+            ),
+        "{err}"
+    );
+    let rows: u64 = err["imu-emu: ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count() as u64, rows + 1);
+    // The stream is off: a new client hears no data frame.
+    let o = client(&a, &["--timeout", "0.5", "record", "--frames", "1"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("no data frame within 500ms after 0 rows"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// The ISB emulator (`--protocol isb`) on TCP, and `client --protocol isb`.
+fn isb_emu() -> (Emu, String) {
+    let e = Emu::tcp(&["--protocol", "isb", "--power-on", "now"]);
+    let a = e.addr().to_string();
+    (e, a)
+}
+
+fn isb(addr: &str, args: &[&str]) -> Output {
+    let mut all = vec!["--protocol", "isb"];
+    all.extend_from_slice(args);
+    client(addr, &all)
+}
+
+/// `--protocol isb`: info, BIT, get and set of data-set fields by name,
+/// the unit's NACK of a read-only field as exit status 1, names refused.
+#[test]
+fn isb_client_info_bit_get_and_set() {
+    let (_e, a) = isb_emu();
+    let info = stdout(&isb(&a, &["info"]));
+    for line in [
+        "hardwareType = 3",
+        "serialNumber = 10000000 (0x989680)",
+        "protocolVer = 2.1.0.0",
+        "manufacturer = Inertial Sense Inc",
+    ] {
+        assert!(info.lines().any(|l| l == line), "no {line} in\n{info}");
+    }
+    assert_eq!(
+        stdout(&isb(&a, &["bit"])),
+        "hdwBitStatus: 0x00000002 (pass: passed without GPS)\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 4 ms\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["set", "flash_config.startupNavDtMs", "8"])),
+        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `set \
+         SYS_CMD.command 99` with SYS_CMD.invCommand, or a power cycle)\n"
+    );
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 8 ms\n"
+    );
+    let rmc = stdout(&isb(&a, &["get", "RMC"]));
+    assert_eq!(rmc, "bits = 0\noptions = 0\n");
+    // The unit refuses a change of a read-only byte (NACK): exit 1.
+    let o = isb(&a, &["set", "SYS_PARAMS.imuTemp", "99"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {a}: SET_DATA SYS_PARAMS.imuTemp 99: the unit refused the value \
+             (NACK)\n"
+        )
+    );
+    // Ambiguous or unknown names, KERNEL-only commands: usage errors.
+    let o = isb(&a, &["get", "time"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("imu-emu: no field time; name it SET.field"));
+    let o = isb(&a, &["commit-baud"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).starts_with("imu-emu: commit-baud is a KERNEL command;"));
+    // A KERNEL client against the ISB unit: no answer, exit 1.
+    let o = client(&a, &["--timeout", "0.3", "info"]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+/// `--protocol isb record`: IMU packets to CSV with the set's own time as
+/// device time (4 ms apart), one second of device time; the raw capture
+/// decodes to the same rows; the plot is in the IMU's units; two sets to
+/// JSON lines.
+#[test]
+fn isb_client_record_decode_and_plot() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("imu.csv");
+    let raw = dir.path().join("imu.bin");
+    let o = isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "IMU",
+            "--duration",
+            "1",
+            "-o",
+            csv.to_str().unwrap(),
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "frame,did,device_time_s,host_time_s,time,status,pqr_x,pqr_y,pqr_z,acc_x,acc_y,acc_z"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let times: Vec<f64> = rows.iter().map(|r| r[4].parse().unwrap()).collect();
+    // After the packet the GET answers with at once, a stream on the 4 ms
+    // navigation period, up to one second after the first.
+    for w in times[1..].windows(2) {
+        assert!((w[1] - w[0] - 0.004).abs() < 1e-9, "{w:?}");
+    }
+    assert!(times[times.len() - 1] - times[0] < 1.0);
+    assert!(times[times.len() - 1] + 0.004 - times[0] >= 1.0 - 1e-9);
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: {} packets recorded, {:.3} s of device time, 0 failed their checksum\n",
+            rows.len(),
+            times[times.len() - 1] - times[0]
+        )
+    );
+    for r in &rows {
+        assert_eq!(r[1], "IMU");
+        // At rest, level, the IMX's z axis down: acc z about −g.
+        let az: f64 = r[11].parse().unwrap();
+        assert!((az + 9.81).abs() < 0.1, "{az}");
+    }
+    let o = run(&[
+        "client",
+        "--protocol",
+        "isb",
+        "decode",
+        "--did",
+        "IMU",
+        raw.to_str().unwrap(),
+    ]);
+    let decoded = stdout(&o);
+    let drows: Vec<Vec<&str>> = decoded
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    for (r, d) in rows.iter().zip(&drows) {
+        assert_eq!(r[4..], d[3..]);
+    }
+    let svg = dir.path().join("imu.svg");
+    stdout(&plot(&csv, &svg));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for label in [
+        "angular rate (rad/s)",
+        "specific force (m/s²)",
+        "device time (s)",
+    ] {
+        assert!(text.contains(&format!(">\n{label}\n<")), "no {label}");
+    }
+    // Two sets: JSON lines (a CSV holds one set's columns).
+    let o = isb(
+        &a,
+        &[
+            "record", "--did", "IMU,PIMU", "--frames", "4", "--to", "json",
+        ],
+    );
+    let rows = stdout(&o);
+    assert_eq!(rows.lines().count(), 4);
+    assert!(rows.contains("\"did\":\"IMU\"") && rows.contains("\"did\":\"PIMU\""));
+    assert!(rows.contains("\"theta_x\":") && rows.contains("\"pqr_x\":"));
+    let o = isb(&a, &["record", "--did", "IMU,PIMU", "--frames", "4"]);
+    assert_eq!(o.status.code(), Some(2));
+    // A navigation set: INS_2 with its GPS time of week as device time.
+    let o = isb(
+        &a,
+        &["record", "--did", "ins_2", "--frames", "3", "--to", "json"],
+    );
+    let rows = stdout(&o);
+    assert_eq!(rows.lines().count(), 3);
+    for l in rows.lines() {
+        let v: serde_json::Value = serde_json::from_str(l).unwrap();
+        assert_eq!(v["did"], "INS_2");
+        let tow = v["timeOfWeek"].as_f64().unwrap();
+        assert!(
+            (v["device_time_s"].as_f64().unwrap() - tow).abs() < 1e-6,
+            "{l}"
+        );
+        assert!(v["qn2b_w"].is_number() && v["lla_z"].is_number(), "{l}");
+    }
 }

@@ -55,9 +55,9 @@ pub struct Args {
 
     /// Model name or product code: K100 K102 K108 K110 K110M K120 K201 K210
     /// K220, or e.g. KERNEL-110-G2000-A8 (a bare name takes the model's
-    /// first product code).
-    #[arg(long, value_name = "MODEL", default_value = "K110", value_parser = parse_product)]
-    pub model: Product,
+    /// first product code) [default: K110]. KERNEL only.
+    #[arg(long, value_name = "MODEL", value_parser = parse_product)]
+    pub model: Option<Product>,
 
     /// Serve the UART on this TCP address (one client at a time; port 0
     /// picks a free port; loopback only without --allow-remote)
@@ -87,13 +87,23 @@ pub struct Args {
     pub flash: Option<PathBuf>,
 
     /// Serve the control socket on this TCP address: inject 1PPS/EXTRIG
-    /// edges, power-cycle with BOOT, read TOV edges (see the `control`
-    /// module). Its address is the second stdout line:
+    /// edges, faults, motion and link faults, power-cycle with BOOT, read
+    /// the status and TOV edges (send `help` on it for every command;
+    /// docs/tools.md). Its address is the second stdout line:
     /// `control on tcp ADDR`. Loopback only without --allow-remote.
     #[arg(long, value_name = "ADDR")]
     pub control: Option<String>,
 
-    /// Generate a 1PPS rising edge every second from the host clock.
+    /// Serve a live web view on this TCP address (`127.0.0.1:8080`; port 0
+    /// picks a free one): identity, status, rejections, link faults, live
+    /// plots of the output and the truth, buttons for the control socket's
+    /// commands. Its address is a stdout line: `web on http://ADDR/`.
+    /// Loopback only without --allow-remote.
+    #[arg(long, value_name = "ADDR")]
+    pub web: Option<String>,
+
+    /// Generate a 1PPS rising edge every second of device time (so it
+    /// follows --speed).
     #[arg(long)]
     pub pps: bool,
 
@@ -168,8 +178,8 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
-    /// Run N independent devices in this one process, driven by one loop
-    /// (see the `fleet` module): device K listens on the --tcp port + K (a
+    /// Run N independent devices in this one process, driven by one loop:
+    /// device K listens on the --tcp port + K (a
     /// free port each with port 0) or on a pty of its own (--link PATH:
     /// PATH.K), keeps its flash in FILE.K (--flash FILE), has the seed
     /// --seed + K and powers on at its own first client. One stdout line
@@ -213,13 +223,36 @@ pub struct Args {
     pub command: Option<Sub>,
 }
 
+impl Args {
+    /// The KERNEL product emulated: `--model`, else K110's first product
+    /// code.
+    pub fn product(&self) -> Product {
+        self.model
+            .or_else(|| Product::parse(DEFAULT_MODEL).ok())
+            .unwrap_or_else(Product::imx5)
+    }
+}
+
+/// The model emulated without `--model`.
+pub const DEFAULT_MODEL: &str = "K110";
+
 /// Subcommands of `imu-emu`.
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum Sub {
-    /// Talk to a KERNEL (the emulator or a real unit) over TCP or a serial
-    /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
-    /// decode, plot.
-    Client(crate::client::ClientArgs),
+    /// Talk to a unit (the emulator or a real one; a KERNEL, or an IMX-5
+    /// with --protocol isb) over TCP or a serial port: info, bit, start,
+    /// stop, get, set, commit-baud, udd, record, decode, plot.
+    Client(Box<crate::client::ClientArgs>),
+    /// Print a shell completion script (from this command-line
+    /// definition): `imu-emu completions bash > ~/.local/share/bash-completion/completions/imu-emu`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff, from this command-line definition):
+    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`.
+    Man,
     /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
     /// IMX-5) as a file to start from; `check FILE` reads one.
     #[command(name = "sensor-profile", subcommand)]
@@ -386,6 +419,9 @@ fn check_addresses(args: &Args) -> anyhow::Result<()> {
     if args.feed_shared && args.count < 2 {
         return Err(UsageError("--feed-shared goes with --count N (N > 1)".into()).into());
     }
+    if let Some(w) = &args.web {
+        wanted.push(("--web", w.as_str()));
+    }
     for (option, addr) in wanted {
         if check_local(option, addr, args.allow_remote)? {
             eprintln!(
@@ -434,12 +470,25 @@ pub fn one_line_panics() {
 pub fn run(mut args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
     match args.command {
-        Some(Sub::Client(c)) => return crate::client::run(c),
+        Some(Sub::Client(c)) => return crate::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
         Some(Sub::Allan(a)) => return crate::allan::run(&a),
+        Some(Sub::Completions { shell }) => {
+            let mut cmd = <Args as clap::CommandFactory>::command();
+            let mut text = Vec::new();
+            clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
+            return print_all(&text);
+        }
+        Some(Sub::Man) => {
+            let cmd = <Args as clap::CommandFactory>::command();
+            let mut text = Vec::new();
+            clap_mangen::Man::new(cmd).render(&mut text)?;
+            return print_all(&text);
+        }
         None => {}
     }
     check_addresses(&args)?;
+    check_combinations(&args)?;
     // A bad profile file stops the program before anything listens.
     args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))?;
     let stop = Arc::new(AtomicBool::new(false));
@@ -457,6 +506,51 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
     }
+}
+
+/// The web view of `--web`, if asked for: its hub and its running server
+/// (which stops when dropped).
+fn web_view(
+    args: &Args,
+    product: Product,
+    name: &str,
+    places: &[String],
+) -> anyhow::Result<Option<(Arc<crate::web::Hub>, crate::web::Server)>> {
+    let Some(addr) = &args.web else {
+        return Ok(None);
+    };
+    let hub = crate::web::Hub::new(args.protocol, product, name, places);
+    let server = crate::web::Server::start(addr, Arc::clone(&hub))?;
+    Ok(Some((hub, server)))
+}
+
+/// Writes `text` to stdout; a reader that stops early (`| head`) is fine.
+fn print_all(text: &[u8]) -> anyhow::Result<()> {
+    match std::io::stdout().write_all(text) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
+
+/// Options that parse but make no sense together: refused rather than
+/// ignored.
+fn check_combinations(args: &Args) -> anyhow::Result<()> {
+    if args.protocol == Protocol::Isb {
+        if let Some(m) = &args.model {
+            return Err(UsageError(format!(
+                "--model {} is a KERNEL model; --protocol isb emulates an IMX-5 (drop --model)",
+                m.model.short
+            ))
+            .into());
+        }
+    }
+    if args.link.is_some() && !args.pty {
+        return Err(UsageError(
+            "--link names the pty's slave: it goes with --pty, not with --tcp or --serial".into(),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 /// Device K's file for a --flash or --link PATH of a many-device run.
@@ -605,9 +699,12 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
             feeds.push(crate::feed::FeedSocket::bind(&a)?);
         }
     }
+    let (product, name) = product_of(args);
+    let places: Vec<String> = parts.iter().map(|(_, t)| t.describe()).collect();
+    let web = web_view(args, product, &name, &places)?;
     let mut out = std::io::stdout().lock();
-    for (_, t) in &parts {
-        writeln!(out, "listening on {}", t.describe())?;
+    for p in &places {
+        writeln!(out, "listening on {p}")?;
     }
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
@@ -615,9 +712,11 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     for f in &feeds {
         writeln!(out, "feed on {}", f.describe())?;
     }
+    if let Some((_, server)) = &web {
+        writeln!(out, "web on http://{}/", server.addr)?;
+    }
     out.flush()?;
     drop(out);
-    let (product, name) = product_of(args);
     let setup = crate::fleet::Setup {
         product,
         name,
@@ -628,6 +727,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         trajectory,
         vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
+        web: web.as_ref().map(|(hub, _)| Arc::clone(hub)),
         gps_time: args.gps_time,
         feed: feed_config(args),
     };
@@ -667,7 +767,10 @@ fn factory_rate(protocol: Protocol) -> u32 {
 /// The product a run emulates and its name in messages.
 fn product_of(args: &Args) -> (Product, String) {
     match args.protocol {
-        Protocol::Kernel => (args.model, args.model.code().to_string()),
+        Protocol::Kernel => {
+            let m = args.product();
+            (m, m.code().to_string())
+        }
         Protocol::Isb => (Product::imx5(), "IMX-5 (ISB)".to_owned()),
     }
 }
@@ -726,6 +829,8 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
+    let (product, name) = product_of(args);
+    let web = web_view(args, product, &name, &[transport.describe()])?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {
@@ -733,6 +838,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     if let Some(f) = &feed {
         writeln!(out, "feed on {}", f.describe())?;
+    }
+    if let Some((_, server)) = &web {
+        writeln!(out, "web on http://{}/", server.addr)?;
     }
     out.flush()?;
     drop(out);
@@ -765,7 +873,6 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     }
     let epoch = std::time::Instant::now();
-    let (product, name) = product_of(args);
     let cfg = PowerOn {
         product,
         boot: None,
@@ -791,6 +898,9 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         .with_seed(args.seed);
     if let Some(c) = control {
         runner = runner.with_control(c);
+    }
+    if let Some(tap) = web.as_ref().and_then(|(hub, _)| hub.tap(0)) {
+        runner = runner.with_web(tap);
     }
     if args.pps {
         runner = runner.with_pps();
@@ -836,7 +946,7 @@ mod tests {
     #[test]
     fn defaults() {
         let a = Args::try_parse_from(["imu-emu"]).unwrap();
-        assert_eq!(a.model.code(), "KERNEL-110-G2000-A40");
+        assert_eq!(a.product().code(), "KERNEL-110-G2000-A40");
         assert_eq!(a.tcp, None);
         assert!(!a.pty);
         assert_eq!(a.seed, 0);
@@ -860,9 +970,9 @@ mod tests {
     #[test]
     fn model_takes_names_and_product_codes() {
         let a = Args::try_parse_from(["imu-emu", "--model", "K120"]).unwrap();
-        assert_eq!(a.model.code(), "KERNEL-120-G2000-A40A90");
+        assert_eq!(a.product().code(), "KERNEL-120-G2000-A40A90");
         let a = Args::try_parse_from(["imu-emu", "--model", "KERNEL-110-G2000-A8"]).unwrap();
-        assert_eq!(a.model.measurement_range(), 0x93);
+        assert_eq!(a.product().measurement_range(), 0x93);
         assert!(Args::try_parse_from(["imu-emu", "--model", "K999"]).is_err());
     }
 

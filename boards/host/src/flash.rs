@@ -130,8 +130,15 @@ impl FileNor {
             .with_context(|| format!("--flash {shown}: reading"))?;
         let nor = MemNor::from_image(&image);
         if image.len() < FLASH_SIZE {
+            // A file that reads but cannot be written to (e.g. /proc/...,
+            // a full or read-only file system): not a place for an image.
             file.write_all_at(&nor.image()[image.len()..], image.len() as u64)
-                .with_context(|| format!("--flash {shown}: initialising"))?;
+                .map_err(|e| {
+                    crate::error::UsageError(format!(
+                        "--flash {shown}: cannot write the {FLASH_SIZE}-byte flash image there \
+                         ({e}); give the path of an ordinary file on a writable disk"
+                    ))
+                })?;
         }
         Ok(FileNor {
             nor,

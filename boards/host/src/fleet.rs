@@ -69,6 +69,8 @@ pub struct Setup {
     pub vehicle: Option<crate::vehicle::VehicleSource>,
     /// Power on at start instead of at the first client.
     pub power_on_now: bool,
+    /// The web view (`--web`), fed by each device's runner.
+    pub web: Option<std::sync::Arc<crate::web::Hub>>,
     /// `--gps-time` (Unix seconds, UTC), else the host clock at power-on.
     pub gps_time: Option<u64>,
     /// The live motion feed's clock and timeout, if there is a feed.
@@ -232,6 +234,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             .shared();
         if self.setup.pps {
             runner = runner.with_pps();
+        }
+        if let Some(tap) = self.setup.web.as_ref().and_then(|h| h.tap(k)) {
+            runner = runner.with_web(tap);
         }
         if let Some(t) = &self.setup.trajectory {
             runner = runner.with_trajectory(t.clone());

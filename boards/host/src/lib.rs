@@ -28,7 +28,11 @@
 //!   errors, below every other module;
 //! * [`cli`] — the command line and [`cli::run`], what `main` calls;
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL line
-//!   (commands, record, decode, plot).
+//!   (commands, record, decode, plot);
+//! * [`web`] — `--web ADDR`: the live web view (its own thread, fed by
+//!   the runners without blocking them);
+//! * [`plot`] — the one plot style (titled panels, labelled axes with
+//!   units, legend; PNG or SVG; embedded font).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
@@ -45,6 +49,7 @@ pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod plot;
 pub mod profile_file;
 pub mod runner;
 pub mod trajectory;
@@ -52,3 +57,4 @@ pub mod transport;
 pub mod uart;
 pub mod vehicle;
 pub mod virtual_device;
+pub mod web;

@@ -243,6 +243,8 @@ struct HostPort<T: Transport> {
     /// input is firmware data, not KERNEL commands, so the monitor does
     /// not decode, log or count it.
     fw_update: bool,
+    /// The web view's tap (`--web`), if any: never blocks.
+    web: Option<crate::web::Tap>,
 }
 
 impl<T: Transport> HostPort<T> {
@@ -347,6 +349,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         let mut out = core::mem::take(&mut self.scratch);
         out.clear();
         self.link.tx(bytes, self.now_ns, &mut out);
+        if let Some(w) = &self.web {
+            w.tx(&out);
+        }
         let r = if out.is_empty() {
             Ok(())
         } else {
@@ -441,6 +446,20 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         self.monitor.judge(&product, &|id| {
             P::param(dev.personality(), id).map(<[u8]>::to_vec)
         });
+        if let Some(mut w) = self.web.take() {
+            // The page's commands, through the control socket's executor.
+            for p in w.commands() {
+                p.run(|cmd| self.apply(dev, cmd, at));
+            }
+            if w.publish_due() {
+                let truth = dev
+                    .chain()
+                    .truth_attitude()
+                    .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees));
+                w.publish(self.status(dev), at.as_nanos(), truth);
+            }
+            self.web = Some(w);
+        }
         let Some(mut ctl) = self.control.take() else {
             return Ok(());
         };
@@ -544,6 +563,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 events: None,
                 label: String::new(),
                 fw_update: false,
+                web: None,
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
@@ -695,6 +715,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// Serves the control socket (pin edges, power cycle, TOV reports).
     pub fn with_control(mut self, control: Control) -> Self {
         self.io.control = Some(control);
+        self
+    }
+
+    /// Feeds the web view (`--web`): the output, the status and the truth
+    /// go to `tap`, and its commands are carried out between passes.
+    pub fn with_web(mut self, tap: crate::web::Tap) -> Self {
+        self.io.web = Some(tap);
         self
     }
 

@@ -13,12 +13,13 @@
 //! | `udd TYPE,…` | User_Def_Data_config (5.3.5) with the type codes, prints the device's check |
 //! | `record` | decoded frames to CSV or JSON lines, with a progress line on a terminal |
 //! | `decode FILE` | a raw capture decoded the same way |
-//! | `plot CSV` | a recording to PNG: rates, accelerations, attitude against time |
+//! | `plot CSV` | a recording to PNG or SVG: rates, accelerations, attitude against device time |
 //!
 //! Errors are one line: the port cannot be opened, no answer within
 //! `--timeout`, answers that fail their checksum.
 
 pub mod decode;
+pub mod isb;
 pub mod plot;
 
 use std::io::{IsTerminal as _, Read, Write};
@@ -31,6 +32,7 @@ use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
 use imu_emu::model::Product;
 
+use crate::cli::Protocol;
 use crate::error::UsageError;
 
 /// Options of `imu-emu client`.
@@ -53,8 +55,13 @@ pub struct ClientArgs {
     #[arg(long, value_name = "S", default_value_t = 2.0, value_parser = parse_timeout)]
     pub timeout: f64,
 
+    /// The unit's protocol: `kernel` (an Inertial Labs KERNEL) or `isb`
+    /// (an Inertial Sense IMX-5).
+    #[arg(long, value_enum, default_value_t = Protocol::Kernel)]
+    pub protocol: Protocol,
+
     /// The unit's model (scale factors of the low-resolution fields,
-    /// Table 5.6).
+    /// Table 5.6; KERNEL only).
     #[arg(long, value_name = "MODEL", default_value = "K110", value_parser = parse_product)]
     pub model: Product,
 
@@ -143,6 +150,13 @@ pub enum ClientCmd {
         /// Also keep the raw bytes received in this file.
         #[arg(long, value_name = "FILE")]
         raw: Option<PathBuf>,
+        /// ISB: the data sets to stream and record, comma-separated names
+        /// or numbers (IMU,PIMU); default IMU.
+        #[arg(long, value_name = "SETS")]
+        did: Option<String>,
+        /// ISB: stream every N source periods of the set (GET_DATA period).
+        #[arg(long, value_name = "N", default_value_t = 1)]
+        period: u16,
     },
     /// Decode a raw capture (the bytes of a line) to CSV or JSON lines.
     Decode {
@@ -154,12 +168,16 @@ pub enum ClientCmd {
         /// csv or json (lines).
         #[arg(long, value_enum, default_value_t = OutFormat::Csv)]
         to: OutFormat,
+        /// ISB: only this data set (a CSV holds the first set seen otherwise).
+        #[arg(long, value_name = "SET")]
+        did: Option<String>,
     },
-    /// Plot a CSV recording to PNG (rates, accelerations, attitude).
+    /// Plot a CSV recording (rates, accelerations, attitude against device
+    /// time) to PNG or SVG, by the output's extension.
     Plot {
-        /// The CSV recording (from `record`).
+        /// The CSV recording (from `record` or `decode`).
         file: PathBuf,
-        /// The PNG to write.
+        /// The .png or .svg to write (its folder must exist).
         #[arg(long, short, value_name = "FILE")]
         out: PathBuf,
     },
@@ -168,36 +186,30 @@ pub enum ClientCmd {
 trait Port: Read + Write + Send {}
 impl<T: Read + Write + Send> Port for T {}
 
+/// The rate of the KERNEL frame counter, whatever the model's internal
+/// rate (ICD Tables 5.7, 5.10 note 3).
+const COUNTER_HZ: u16 = 2000;
+
 /// Largest frame decoded.
 const CAP: usize = 4096;
 
-/// A line to a unit, with a frame decoder.
-pub struct Link {
+/// A byte line to a unit (TCP or serial), protocol-free.
+pub struct Line {
     port: Box<dyn Port>,
-    rx: Box<Decoder<CAP>>,
-    timeout: Duration,
-    what: String,
+    /// How long to wait for an answer (`--timeout`).
+    pub timeout: Duration,
+    /// The line as the user named it (`--tcp 127.0.0.1:7000`), for errors.
+    pub what: String,
     /// Raw bytes received go here too (`record --raw`).
-    tee: Option<std::fs::File>,
-    /// Bytes read and not yet fed to the decoder: `inbuf[inpos..]`.
+    pub tee: Option<std::fs::File>,
+    /// Bytes read and not yet taken by the decoder: `inbuf[inpos..]`.
     inbuf: Vec<u8>,
     inpos: usize,
 }
 
-/// A frame received: identifier and payload.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Frame {
-    /// Message type.
-    pub msg_type: u8,
-    /// Identifier.
-    pub id: u8,
-    /// Payload.
-    pub payload: Vec<u8>,
-}
-
-impl Link {
+impl Line {
     /// Opens the line `args` name.
-    pub fn open(args: &ClientArgs) -> anyhow::Result<Link> {
+    pub fn open(args: &ClientArgs) -> anyhow::Result<Line> {
         let timeout = Duration::from_secs_f64(args.timeout.clamp(0.01, MAX_TIMEOUT_S));
         let (port, what): (Box<dyn Port>, String) = match (&args.tcp, &args.serial) {
             (Some(addr), None) => {
@@ -229,9 +241,8 @@ impl Link {
                 .into())
             }
         };
-        Ok(Link {
+        Ok(Line {
             port,
-            rx: Box::new(Decoder::new()),
             timeout,
             what,
             tee: None,
@@ -240,31 +251,17 @@ impl Link {
         })
     }
 
-    /// Sends a command.
-    pub fn send(&mut self, c: Command<'_>) -> anyhow::Result<()> {
-        let mut buf = [0u8; 300];
-        let n = c.encode(&mut buf).context("command too long")?;
-        self.port
-            .write_all(&buf[..n])
-            .and_then(|()| self.port.flush())
-            .map_err(|e| anyhow!("{}: write: {e}", self.what))
-    }
-
-    /// Frames that failed their length or checksum so far.
-    pub fn checksum_errors(&self) -> u32 {
-        self.rx.errors()
-    }
-
-    /// The next frame before `deadline`, or `None`.
-    pub fn frame_before(&mut self, deadline: Instant) -> anyhow::Result<Option<Frame>> {
+    /// The next item `take` decodes from the bytes received (it advances
+    /// its input past what it took) before `deadline`, or `None`.
+    pub fn next_before<T>(
+        &mut self,
+        deadline: Instant,
+        mut take: impl FnMut(&mut &[u8]) -> Option<T>,
+    ) -> anyhow::Result<Option<T>> {
         loop {
             let mut input: &[u8] = &self.inbuf[self.inpos..];
             let before = input.len();
-            let got = self.rx.next_frame(&mut input).map(|f| Frame {
-                msg_type: f.msg_type,
-                id: f.id,
-                payload: f.payload.to_vec(),
-            });
+            let got = take(&mut input);
             self.inpos += before - input.len();
             if got.is_some() {
                 return Ok(got);
@@ -274,27 +271,93 @@ impl Link {
             if Instant::now() >= deadline {
                 return Ok(None);
             }
-            let mut buf = [0u8; 4096];
-            let n = match self.port.read(&mut buf) {
-                Ok(0) => bail!("{}: the unit closed the connection", self.what),
-                Ok(n) => n,
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock
-                            | std::io::ErrorKind::TimedOut
-                            | std::io::ErrorKind::Interrupted
-                    ) =>
-                {
-                    0
-                }
-                Err(e) => bail!("{}: read: {e}", self.what),
-            };
-            if let Some(t) = self.tee.as_mut() {
-                t.write_all(&buf[..n])?;
-            }
-            self.inbuf.extend_from_slice(&buf[..n]);
+            self.read_more()?;
         }
+    }
+
+    /// Writes `bytes`.
+    pub fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        self.port
+            .write_all(bytes)
+            .and_then(|()| self.port.flush())
+            .map_err(|e| anyhow!("{}: write: {e}", self.what))
+    }
+
+    /// Appends what arrives within about 20 ms to the input (also to the
+    /// tee); an error when the unit closed the connection.
+    fn read_more(&mut self) -> anyhow::Result<()> {
+        let mut buf = [0u8; 4096];
+        let n = match self.port.read(&mut buf) {
+            Ok(0) => bail!("{}: the unit closed the connection", self.what),
+            Ok(n) => n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                0
+            }
+            Err(e) => bail!("{}: read: {e}", self.what),
+        };
+        if let Some(t) = self.tee.as_mut() {
+            t.write_all(&buf[..n])?;
+        }
+        self.inbuf.extend_from_slice(&buf[..n]);
+        Ok(())
+    }
+}
+
+/// A KERNEL line: a [`Line`] with a frame decoder.
+pub struct Link {
+    line: Line,
+    rx: Box<Decoder<CAP>>,
+}
+
+/// A frame received: identifier and payload.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Frame {
+    /// Message type.
+    pub msg_type: u8,
+    /// Identifier.
+    pub id: u8,
+    /// Payload.
+    pub payload: Vec<u8>,
+}
+
+impl Link {
+    /// Opens the line `args` name.
+    pub fn open(args: &ClientArgs) -> anyhow::Result<Link> {
+        Ok(Link {
+            line: Line::open(args)?,
+            rx: Box::new(Decoder::new()),
+        })
+    }
+
+    /// Sends a command.
+    pub fn send(&mut self, c: Command<'_>) -> anyhow::Result<()> {
+        let mut buf = [0u8; 300];
+        let n = c.encode(&mut buf).context("command too long")?;
+        self.line.write(&buf[..n])
+    }
+
+    /// Frames that failed their length or checksum so far.
+    pub fn checksum_errors(&self) -> u32 {
+        self.rx.errors()
+    }
+
+    /// The next frame before `deadline`, or `None`.
+    pub fn frame_before(&mut self, deadline: Instant) -> anyhow::Result<Option<Frame>> {
+        let rx = &mut self.rx;
+        self.line.next_before(deadline, |input| {
+            rx.next_frame(input).map(|f| Frame {
+                msg_type: f.msg_type,
+                id: f.id,
+                payload: f.payload.to_vec(),
+            })
+        })
     }
 
     /// Sends `c` and waits for a data frame with `id`; a one-line error
@@ -306,7 +369,7 @@ impl Link {
     }
 
     fn answer(&mut self, id: u8, what: &str, errors_before: u32) -> anyhow::Result<Frame> {
-        let deadline = Instant::now() + self.timeout;
+        let deadline = Instant::now() + self.line.timeout;
         while let Some(f) = self.frame_before(deadline)? {
             if f.msg_type == TYPE_DATA && f.id == id {
                 return Ok(f);
@@ -317,14 +380,14 @@ impl Link {
             bail!(
                 "{}: no valid answer to {what} within {:?}: {bad} frames failed their \
                  checksum (wrong --baud?)",
-                self.what,
-                self.timeout
+                self.line.what,
+                self.line.timeout
             );
         }
         bail!(
             "{}: no answer to {what} within {:?} (is the unit on, the line rate right?)",
-            self.what,
-            self.timeout
+            self.line.what,
+            self.line.timeout
         )
     }
 
@@ -356,6 +419,9 @@ pub fn find_param(s: &str) -> anyhow::Result<&'static ParamSpec> {
 
 /// A parameter value as text (`get`).
 pub fn show_value(p: &ParamSpec, v: &[u8]) -> String {
+    if p.id == params::BAUD_RATE.id {
+        return format!("{} bit/s (code {})", params::baud_rate(v[0]), v[0]);
+    }
     match p.kind {
         Kind::U8 => v[0].to_string(),
         Kind::U16 => u16::from_le_bytes([v[0], v[1]]).to_string(),
@@ -370,6 +436,9 @@ pub fn show_value(p: &ParamSpec, v: &[u8]) -> String {
 /// Parses a value for `p` (`set`).
 pub fn parse_value(p: &ParamSpec, s: &str) -> anyhow::Result<Vec<u8>> {
     let bad = || UsageError(format!("{}: {s} is not a {:?} value", p.name, p.kind));
+    if p.id == params::BAUD_RATE.id {
+        return baud_code(s).map(|c| vec![c]);
+    }
     Ok(match p.kind {
         Kind::U8 => vec![s.parse::<u8>().map_err(|_| bad())?],
         Kind::U16 => s.parse::<u16>().map_err(|_| bad())?.to_le_bytes().to_vec(),
@@ -386,6 +455,47 @@ pub fn parse_value(p: &ParamSpec, s: &str) -> anyhow::Result<Vec<u8>> {
             xs.iter().flat_map(|x| x.to_le_bytes()).collect()
         }
     })
+}
+
+/// The Baud_Rate code of a line rate in bit/s (`921600`), or a code
+/// itself (0..=16, Table 5.24).
+fn baud_code(s: &str) -> anyhow::Result<u8> {
+    let n: u32 = s.trim().parse().unwrap_or(u32::MAX);
+    if let Some(c) = params::BAUD_RATES.iter().position(|&r| r == n) {
+        return Ok(c as u8);
+    }
+    if n < params::BAUD_RATES.len() as u32 {
+        return Ok(n as u8);
+    }
+    let rates: Vec<String> = params::BAUD_RATES.iter().map(u32::to_string).collect();
+    Err(UsageError(format!(
+        "Baud_Rate: {s} is not a line rate; bit/s: {}",
+        rates.join(" ")
+    ))
+    .into())
+}
+
+/// The GetBIT payload (Table 5.18) in words, and whether it passes:
+/// accelerometer result (bits 0–1: 0 or 2 okay), gyroscope result (bits
+/// 2–4: 0 okay), flash check (bits 12–13: 0 okay); the rest reserved.
+pub fn bit_words(p: &[u8]) -> (String, bool) {
+    let w = u32::from_le_bytes([
+        p.first().copied().unwrap_or(0),
+        p.get(1).copied().unwrap_or(0),
+        p.get(2).copied().unwrap_or(0),
+        p.get(3).copied().unwrap_or(0),
+    ]);
+    let accel = w & 0x3;
+    let gyro = (w >> 2) & 0x7;
+    let flash = (w >> 12) & 0x3;
+    let ok = |good: bool| if good { "ok" } else { "FAIL" };
+    let parts = [
+        format!("accelerometer {accel} {}", ok(accel == 0 || accel == 2)),
+        format!("gyroscope {gyro} {}", ok(gyro == 0)),
+        format!("flash {flash} {}", ok(flash == 0)),
+    ];
+    let pass = (accel == 0 || accel == 2) && gyro == 0 && flash == 0;
+    (parts.join(", "), pass)
 }
 
 fn ascii(b: &[u8]) -> String {
@@ -407,29 +517,39 @@ fn ascii(b: &[u8]) -> String {
 pub fn run(args: ClientArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     match &args.cmd {
-        ClientCmd::Decode { file, out: o, to } => {
+        ClientCmd::Decode {
+            file,
+            out: o,
+            to,
+            did,
+        } => {
             let what = || format!("decode {}", file.display());
             let mut src = std::fs::File::open(file).with_context(what)?;
             let mut w = writer(o.as_ref())?;
+            if args.protocol == Protocol::Isb {
+                let only = did.as_deref().map(isb::parse_set).transpose()?;
+                let (rec, errors) = isb::decode(&mut src, &what, &mut w, *to, only)?;
+                w.flush()?;
+                eprintln!(
+                    "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
+                    rec.rows, rec.skipped
+                );
+                return Ok(());
+            }
+            if did.is_some() {
+                return Err(UsageError("decode --did goes with --protocol isb".into()).into());
+            }
             let mut rec = Recorder::new(*to, args.model);
             let mut d = Box::new(Decoder::<CAP>::new());
-            // Streamed in chunks (a frame cut between two is completed
-            // by the decoder): any size of capture in bounded memory.
-            let mut chunk = vec![0u8; 64 * 1024];
-            loop {
-                let n = match src.read(&mut chunk) {
-                    Ok(0) => break,
-                    Ok(n) => n,
-                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                    Err(e) => return Err(anyhow::Error::new(e).context(what())),
-                };
-                let mut input: &[u8] = &chunk[..n];
+            read_chunks(&mut src, &what, &mut |chunk| {
+                let mut input: &[u8] = chunk;
                 while let Some(f) = d.next_frame(&mut input) {
                     if f.msg_type == TYPE_DATA {
                         rec.row(&mut w, f.id, f.payload, None)?;
                     }
                 }
-            }
+                Ok(())
+            })?;
             w.flush()?;
             eprintln!(
                 "imu-emu: {} frames decoded, {} failed their checksum, {} counter gaps, {} skipped",
@@ -447,6 +567,11 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         }
         _ => {}
     }
+    let interrupted = interrupt_flag();
+    let stop = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
+    if args.protocol == Protocol::Isb {
+        return isb::run(&args, &mut out, &stop);
+    }
     let mut link = Link::open(&args)?;
     match &args.cmd {
         ClientCmd::Info => {
@@ -457,17 +582,19 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             }
             writeln!(out, "serial: {}", ascii(&p[0..8]))?;
             writeln!(out, "firmware: {}", ascii(&p[8..48]))?;
-            writeln!(out, "imu_type: {:#04x}", p[49])?;
+            writeln!(out, "imu_type: {}", p[49])?;
         }
         ClientCmd::Bit => {
             let f = link.request(Command::GetBit, command::GET_BIT, "GetBIT")?;
             let hex: Vec<String> = f.payload.iter().map(|b| format!("{b:02X}")).collect();
-            let verdict = if f.payload.iter().all(|&b| b == 0) {
-                "pass"
-            } else {
-                "FAIL"
-            };
-            writeln!(out, "bit: {} ({verdict})", hex.join(" "))?;
+            let (words, pass) = bit_words(&f.payload);
+            let verdict = if pass { "pass" } else { "FAIL" };
+            let line = format!("bit: {} ({verdict}: {words})", hex.join(" "));
+            writeln!(out, "{line}")?;
+            if !pass {
+                out.flush()?;
+                bail!("BIT failed: {words}");
+            }
         }
         ClientCmd::Start { format } => {
             let code = start(&mut link, format)?;
@@ -491,13 +618,21 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                 value: &v,
             };
             match link.request(c, 0xB2, "SaveFlash") {
+                Ok(_) if p.id == params::BAUD_RATE.id => writeln!(
+                    out,
+                    "{} saved = {} (the line changes after `imu-emu client commit-baud`, \
+                     CommitBaudRate, ICD 5.3.9, or at the next power-on; `get` reads the running \
+                     rate until then)",
+                    p.name,
+                    show_value(p, &v)
+                )?,
                 Ok(_) => writeln!(out, "{} saved = {value}", p.name)?,
                 Err(_) => bail!(
                     "{}: SaveFlash {} {value}: no acknowledgement within {:?}: the unit refused \
                      the value (ICD 5.3.7) or did not hear it",
-                    link.what,
+                    link.line.what,
                     p.name,
-                    link.timeout
+                    link.line.timeout
                 ),
             }
         }
@@ -543,9 +678,14 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             out: o,
             to,
             raw,
+            did,
+            period: _,
         } => {
+            if did.is_some() {
+                return Err(UsageError("record --did goes with --protocol isb".into()).into());
+            }
             if let Some(r) = raw {
-                link.tee = Some(
+                link.line.tee = Some(
                     std::fs::File::create(r).with_context(|| format!("--raw {}", r.display()))?,
                 );
             }
@@ -563,17 +703,26 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                 (None, None) => None,
             };
             let mut w = writer(o.as_ref())?;
-            let r = record(&mut link, &mut w, *to, args.model, want);
+            let r = record(&mut link, &mut w, *to, args.model, want, &stop);
             if started.is_some() {
                 link.send(Command::Stop)?;
             }
             w.flush()?;
             let rec = r?;
             eprintln!(
-                "imu-emu: {} frames recorded, {} failed their checksum, {} counter gaps",
+                "imu-emu: {} frames recorded, {} failed their checksum, {} counter gaps{}",
                 rec.rows,
                 link.checksum_errors(),
-                rec.gaps
+                rec.gaps,
+                if stop() {
+                    if started.is_some() {
+                        " (interrupted; stream stopped)"
+                    } else {
+                        " (interrupted)"
+                    }
+                } else {
+                    ""
+                }
             );
         }
         ClientCmd::Decode { .. } | ClientCmd::Plot { .. } => unreachable!(),
@@ -624,6 +773,36 @@ fn get(link: &mut Link, p: &ParamSpec) -> anyhow::Result<Vec<u8>> {
     Ok(f.payload)
 }
 
+/// Feeds `src` to `f` in 64 KiB chunks (a frame cut between two is
+/// completed by the decoder): any size of capture in bounded memory.
+fn read_chunks(
+    src: &mut dyn Read,
+    what: &dyn Fn() -> String,
+    f: &mut dyn FnMut(&[u8]) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut chunk = vec![0u8; 64 * 1024];
+    loop {
+        let n = match src.read(&mut chunk) {
+            Ok(0) => return Ok(()),
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(anyhow::Error::new(e).context(what())),
+        };
+        f(&chunk[..n])?;
+    }
+}
+
+/// A flag raised by Ctrl-C (SIGINT) or SIGTERM, so that `record` stops the
+/// stream it started and prints its summary instead of dying mid-stream.
+fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // Without the handler the signal keeps its default action.
+        let _ = signal_hook::flag::register(sig, flag.clone());
+    }
+    flag
+}
+
 fn writer(path: Option<&PathBuf>) -> anyhow::Result<Box<dyn Write>> {
     Ok(match path {
         Some(p) => Box::new(std::io::BufWriter::new(
@@ -647,6 +826,36 @@ pub struct Recorder {
     pub gaps: u64,
     last_counter: Option<u16>,
     step: Option<u16>,
+    /// Whether rows carry `device_time_s` (the first frame had a clock).
+    timed: bool,
+    clock: DeviceClock,
+}
+
+/// Device time from the frames themselves: seconds since the first frame,
+/// from `imu_time_ns` (ns since power-on) when a frame has it, else from
+/// the counter (2 kHz ticks, ICD Tables 5.7, 5.10 note 3) unwrapped, which
+/// holds while frames are less than 32.768 s apart.
+#[derive(Debug, Clone, Default)]
+pub struct DeviceClock {
+    t0_ns: Option<f64>,
+    last_counter: Option<u16>,
+    ticks: u64,
+}
+
+impl DeviceClock {
+    /// The device time of frame `d`, s, or `None` if it carries no clock.
+    pub fn time(&mut self, d: &decode::Decoded) -> Option<f64> {
+        if let Some(ns) = d.get("imu_time_ns") {
+            let t0 = *self.t0_ns.get_or_insert(ns);
+            return Some((ns - t0) / 1e9);
+        }
+        let c = d.get("counter")? as u16;
+        if let Some(last) = self.last_counter {
+            self.ticks += u64::from(c.wrapping_sub(last));
+        }
+        self.last_counter = Some(c);
+        Some(self.ticks as f64 / f64::from(COUNTER_HZ))
+    }
 }
 
 impl Recorder {
@@ -661,6 +870,8 @@ impl Recorder {
             gaps: 0,
             last_counter: None,
             step: None,
+            timed: false,
+            clock: DeviceClock::default(),
         }
     }
 
@@ -680,8 +891,12 @@ impl Recorder {
         let cols: Vec<&'static str> = d.values.iter().map(|v| v.0).collect();
         match &self.columns {
             None => {
+                self.timed = d.get("imu_time_ns").is_some() || d.get("counter").is_some();
                 if self.to == OutFormat::Csv {
                     let mut h = vec!["frame", "format"];
+                    if self.timed {
+                        h.push("device_time_s");
+                    }
                     if t.is_some() {
                         h.push("host_time_s");
                     }
@@ -696,6 +911,11 @@ impl Recorder {
             }
             Some(_) => {}
         }
+        let device_t = if self.timed {
+            self.clock.time(&d)
+        } else {
+            None
+        };
         if let Some(c) = d.get("counter") {
             let c = c as u16;
             if let Some(last) = self.last_counter {
@@ -712,6 +932,9 @@ impl Recorder {
         match self.to {
             OutFormat::Csv => {
                 let mut line = format!("{},{fmt}", self.rows);
+                if let Some(t) = device_t {
+                    line.push_str(&format!(",{t:.6}"));
+                }
                 if let Some(t) = t {
                     line.push_str(&format!(",{t:.6}"));
                 }
@@ -722,6 +945,9 @@ impl Recorder {
             }
             OutFormat::Json => {
                 let mut line = format!("{{\"frame\":{},\"format\":\"{fmt}\"", self.rows);
+                if let Some(t) = device_t {
+                    line.push_str(&format!(",\"device_time_s\":{t:.6}"));
+                }
                 if let Some(t) = t {
                     line.push_str(&format!(",\"host_time_s\":{t:.6}"));
                 }
@@ -745,13 +971,14 @@ fn record(
     to: OutFormat,
     product: Product,
     want: Option<u64>,
+    stop: &dyn Fn() -> bool,
 ) -> anyhow::Result<Recorder> {
     let mut rec = Recorder::new(to, product);
     let t0 = Instant::now();
     let tty = std::io::stderr().is_terminal();
     let mut shown = t0;
     let mut quiet_since = Instant::now();
-    while want.is_none_or(|n| rec.rows < n) {
+    while want.is_none_or(|n| rec.rows < n) && !stop() {
         let row = match link.frame_before(Instant::now() + Duration::from_millis(100))? {
             Some(f) if f.msg_type == TYPE_DATA => {
                 rec.row(w, f.id, &f.payload, Some(t0.elapsed().as_secs_f64()))?
@@ -762,12 +989,12 @@ fn record(
         // (acknowledgements, answers) times out too.
         if row {
             quiet_since = Instant::now();
-        } else if quiet_since.elapsed() > link.timeout {
+        } else if quiet_since.elapsed() > link.line.timeout {
             bail!(
                 "{}: no data frame within {:?} after {} rows (is a stream running? --format GA \
                  starts one)",
-                link.what,
-                link.timeout,
+                link.line.what,
+                link.line.timeout,
                 rec.rows
             )
         }

@@ -1,23 +1,77 @@
-//! `client plot`: a CSV recording drawn to PNG with the plotters bitmap
-//! backend: one panel each for the angular rates (`gyro_*`), the
-//! accelerations (`acc_*`) and the attitude (`heading`, `pitch`, `roll`),
-//! those the recording has, against `host_time_s` (or the frame number).
-//! X red, Y green, Z blue (heading, pitch, roll likewise).
-//!
-//! No text is drawn (no axis labels or captions), so no font — system or
-//! bundled — is needed: the plot is for looking at shapes; the numbers are
-//! in the CSV.
+//! `client plot`: a CSV recording (from `client record` or `client
+//! decode`, either protocol) drawn in the house style ([`crate::plot`]):
+//! one panel for each group of columns the recording has (angular rates,
+//! accelerations, attitude, …), against device time (`device_time_s`,
+//! from the frames' own counters or time fields, so a `--speed max`
+//! recording spans the whole axis), else host time, else the frame number.
 
 use std::path::Path;
 
 use anyhow::{bail, Context as _};
-use plotters::prelude::*;
 
-/// Image size, pixels.
-pub const SIZE: (u32, u32) = (1200, 900);
+use crate::plot::{Figure, Panel, Scale, Series};
 
-/// Plots `csv` to `png`; returns the rows plotted.
-pub fn plot(csv: &Path, png: &Path) -> anyhow::Result<usize> {
+/// Groups of columns drawn together: panel title, y label with unit, and
+/// `(column, legend)` pairs.
+type Group = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
+
+/// The panels a KERNEL recording may have, in order.
+const KERNEL_GROUPS: &[Group] = &[
+    (
+        "Angular rate",
+        "angular rate (deg/s)",
+        &[("gyro_x", "X"), ("gyro_y", "Y"), ("gyro_z", "Z")],
+    ),
+    (
+        "Acceleration",
+        "specific force (g)",
+        &[("acc_x", "X"), ("acc_y", "Y"), ("acc_z", "Z")],
+    ),
+    (
+        "Attitude",
+        "angle (deg)",
+        &[("heading", "heading"), ("pitch", "pitch"), ("roll", "roll")],
+    ),
+];
+
+/// The panels of an ISB recording (`did` column), in the sets' own units.
+const ISB_GROUPS: &[Group] = &[
+    (
+        "Angular rate",
+        "angular rate (rad/s)",
+        &[("pqr_x", "X"), ("pqr_y", "Y"), ("pqr_z", "Z")],
+    ),
+    (
+        "Acceleration",
+        "specific force (m/s²)",
+        &[("acc_x", "X"), ("acc_y", "Y"), ("acc_z", "Z")],
+    ),
+    (
+        "Delta angle",
+        "Δθ per packet (rad)",
+        &[("theta_x", "X"), ("theta_y", "Y"), ("theta_z", "Z")],
+    ),
+    (
+        "Delta velocity",
+        "Δv per packet (m/s)",
+        &[("vel_x", "X"), ("vel_y", "Y"), ("vel_z", "Z")],
+    ),
+];
+
+/// The x columns, best first: column, axis label.
+const X_AXES: &[(&str, &str)] = &[
+    ("device_time_s", "device time (s)"),
+    ("host_time_s", "host time (s)"),
+    ("frame", "frame"),
+];
+
+/// Plots `csv` to `out` (`.png` or `.svg`); returns the rows plotted.
+pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
+    crate::plot::check_output(out)?;
     let text = std::fs::read_to_string(csv).with_context(|| format!("plot {}", csv.display()))?;
     let mut lines = text.lines();
     let header: Vec<&str> = lines
@@ -34,77 +88,61 @@ pub fn plot(csv: &Path, png: &Path) -> anyhow::Result<usize> {
         })
         .collect();
     let col = |name: &str| header.iter().position(|h| *h == name);
-    let x_col = col("host_time_s").or_else(|| col("frame"));
-    let Some(x_col) = x_col else {
+    let Some((x_col, x_label)) = X_AXES
+        .iter()
+        .find_map(|(c, label)| col(c).map(|i| (i, *label)))
+    else {
         bail!(
-            "plot {}: no host_time_s or frame column (a `client record` CSV?)",
+            "plot {}: no device_time_s, host_time_s or frame column (a `client record` CSV?)",
             csv.display()
         );
     };
-    let groups: Vec<[Option<usize>; 3]> = [
-        ["gyro_x", "gyro_y", "gyro_z"],
-        ["acc_x", "acc_y", "acc_z"],
-        ["heading", "pitch", "roll"],
-    ]
-    .iter()
-    .map(|g| [col(g[0]), col(g[1]), col(g[2])])
-    .filter(|g| g.iter().any(Option::is_some))
-    .collect();
-    if groups.is_empty() || rows.is_empty() {
+    let isb = col("did").is_some();
+    let format = header
+        .iter()
+        .position(|h| *h == if isb { "did" } else { "format" })
+        .and_then(|i| text.lines().nth(1)?.split(',').nth(i))
+        .unwrap_or("recording");
+    let groups = if isb { ISB_GROUPS } else { KERNEL_GROUPS };
+    let panels: Vec<Panel> = groups
+        .iter()
+        .filter_map(|(title, y_label, cols)| {
+            let series: Vec<Series> = cols
+                .iter()
+                .filter_map(|(c, legend)| {
+                    let i = col(c)?;
+                    Some(Series {
+                        name: (*legend).to_owned(),
+                        points: rows
+                            .iter()
+                            .filter_map(|r| Some((*r.get(x_col)?, *r.get(i)?)))
+                            .collect(),
+                    })
+                })
+                .collect();
+            (!series.is_empty()).then(|| Panel {
+                title: (*title).to_owned(),
+                y_label: (*y_label).to_owned(),
+                y_scale: Scale::Linear,
+                series,
+            })
+        })
+        .collect();
+    if panels.is_empty() || rows.is_empty() {
         bail!(
-            "plot {}: nothing to plot (no rows, or no gyro_*, acc_* or attitude columns)",
+            "plot {}: nothing to plot (no rows, or no rate, acceleration or attitude columns)",
             csv.display()
         );
     }
-    let xs: Vec<f64> = rows
-        .iter()
-        .map(|r| r.get(x_col).copied().unwrap_or(f64::NAN))
-        .collect();
-    let (x0, x1) = range(xs.iter().copied());
-    let root = BitMapBackend::new(png, SIZE).into_drawing_area();
-    root.fill(&WHITE)?;
-    let panels = root.split_evenly((groups.len(), 1));
-    let colors = [RED, GREEN, BLUE];
-    for (panel, group) in panels.iter().zip(&groups) {
-        let ys = group
-            .iter()
-            .flatten()
-            .flat_map(|&c| rows.iter().filter_map(move |r| r.get(c).copied()));
-        let (y0, y1) = range(ys);
-        let mut chart = ChartBuilder::on(panel)
-            .margin(12)
-            .build_cartesian_2d(x0..x1, y0..y1)?;
-        chart
-            .configure_mesh()
-            .x_labels(0)
-            .y_labels(0)
-            .light_line_style(WHITE.mix(0.0))
-            .draw()?;
-        for (c, color) in group.iter().zip(colors) {
-            let Some(c) = *c else { continue };
-            let points = rows
-                .iter()
-                .zip(&xs)
-                .filter_map(|(r, &x)| r.get(c).map(|&y| (x, y)))
-                .filter(|(x, y)| x.is_finite() && y.is_finite());
-            chart.draw_series(LineSeries::new(points, color.stroke_width(2)))?;
-        }
-    }
-    root.present()
-        .with_context(|| format!("plot: writing {}", png.display()))?;
+    let name = csv
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let fig = Figure {
+        title: format!("{name}: {format}, {} rows", rows.len()),
+        x_label: x_label.to_owned(),
+        x_scale: Scale::Linear,
+        panels,
+    };
+    crate::plot::render(&fig, out)?;
     Ok(rows.len())
-}
-
-/// The finite range of `v`, widened a little (and never empty).
-fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = v
-        .filter(|x| x.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        });
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    let pad = ((hi - lo) * 0.05).max(1e-3);
-    (lo - pad, hi + pad)
 }

@@ -98,7 +98,17 @@ impl TcpTransport {
                     // Small frames should leave at once, like bytes on a wire.
                     stream.set_nodelay(true)?;
                     if let Some((_, old)) = self.client.replace((stream, peer)) {
-                        eprintln!("imu-emu: client {old} replaced by {peer}");
+                        if self.read_closed {
+                            // It closed its side (end of file) and nothing
+                            // written since failed: most likely gone for
+                            // good, which TCP cannot tell from a half-close.
+                            eprintln!(
+                                "imu-emu: client {old} left; client {peer} connected to {}",
+                                self.local
+                            );
+                        } else {
+                            eprintln!("imu-emu: client {old} replaced by {peer}");
+                        }
                     } else {
                         eprintln!("imu-emu: client {peer} connected to {}", self.local);
                     }
@@ -206,10 +216,12 @@ impl Transport for TcpTransport {
             }
             match stream.read(&mut buf[..want]) {
                 Ok(0) => {
-                    // Half-closed (or closed: the next write will tell).
-                    eprintln!(
-                        "imu-emu: client {peer} closed its sending side (half-closed or gone); \
-                         still sending until the connection fails"
+                    // Closed or half-closed: TCP cannot tell which until a
+                    // write fails, so no warning (a client that leaves is
+                    // the common case); `-v` says it.
+                    tracing::info!(
+                        "client {peer} closed its sending side; output goes on until the \
+                         connection fails or another client connects"
                     );
                     self.read_closed = true;
                     self.quiet_since = std::time::Instant::now();

@@ -1,0 +1,706 @@
+//! `--web ADDR`: a live web view of the emulated unit(s), served from a
+//! thread of its own with [`tiny_http`] (a small, synchronous HTTP/1.1
+//! server with no async runtime; the page polls a JSON endpoint, so no
+//! WebSocket or Server-Sent-Events stack is needed).
+//!
+//! The device loop never waits for the web side:
+//! - **Out of the loop**: each runner holds a [`Tap`]. It copies the bytes
+//!   the unit sends (after the link faults: what a client sees) into a
+//!   bounded ring, and, at most every [`PUBLISH_EVERY`], the control
+//!   socket's `status` words, the device time and the truth attitude. Each
+//!   of these takes its lock with `try_lock`: when the web thread holds it,
+//!   the bytes are counted as lost to the view ([`Slot::lost`]) and the
+//!   loop goes on. A closed or slow tab therefore costs the device nothing.
+//! - **The web thread** drains the ring, decodes the frames (the client's
+//!   decoders: [`crate::client::decode`], [`crate::client::isb`]), keeps
+//!   the last [`KEEP_POINTS`] points per device with their device time, and
+//!   answers the page's polls.
+//! - **Commands**: `POST /api/command?dev=K` carries one control-socket
+//!   line. It is parsed here with the control socket's own parser
+//!   ([`control::parse`]): a malformed line gets HTTP 400 with the parser's
+//!   words and never reaches the device; a line over [`MAX_BODY`] bytes
+//!   gets 413. A valid command is queued for device K's runner, which
+//!   carries it out between ticks with the same executor as the control
+//!   socket (`Runner`'s `apply`), and its answer comes back (`ok …` 200,
+//!   `error …` 422; 503 while the device is off). A request must carry the
+//!   header `X-Imu-Emu: 1` (a cross-site page cannot add it) and a `Host`
+//!   naming this server.
+
+use std::collections::VecDeque;
+use std::io::Read as _;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
+use imu_emu::model::Product;
+
+use crate::cli::Protocol;
+use crate::client::{self, DeviceClock};
+use crate::control;
+
+/// How often a runner publishes its status (host time): 25 Hz.
+pub const PUBLISH_EVERY: Duration = Duration::from_millis(40);
+/// Bytes of output kept for the web thread between two of its polls.
+pub const TX_RING: usize = 512 * 1024;
+/// Decoded points kept per device (the page asks for what is new).
+pub const KEEP_POINTS: usize = 8192;
+/// Most points one poll returns.
+pub const MAX_POINTS_PER_POLL: usize = 2000;
+/// Largest command body accepted, bytes.
+pub const MAX_BODY: usize = 256;
+/// Commands a runner takes from its queue per pass.
+const COMMANDS_PER_PASS: usize = 8;
+/// Commands waiting for a runner, at most (then 503).
+const MAX_QUEUED: usize = 16;
+/// How long the web thread waits for a runner's answer.
+const ANSWER_WITHIN: Duration = Duration::from_secs(2);
+
+const INDEX_HTML: &str = include_str!("web/index.html");
+const APP_JS: &str = include_str!("web/app.js");
+const STYLE_CSS: &str = include_str!("web/style.css");
+
+/// A command waiting for its runner, with where its answer goes.
+#[derive(Debug)]
+pub struct Pending {
+    cmd: control::Command,
+    answer: mpsc::SyncSender<Result<String, String>>,
+}
+
+impl Pending {
+    /// Carries the command out with `apply` and sends its answer back
+    /// (never blocks: the channel has room for one).
+    pub fn run(self, apply: impl FnOnce(control::Command) -> Result<String, String>) {
+        let r = apply(self.cmd);
+        let _ = self.answer.try_send(r);
+    }
+}
+
+/// What a runner published last.
+#[derive(Debug, Default)]
+struct Shared {
+    tx: VecDeque<u8>,
+    status: String,
+    device_ns: u64,
+    /// Truth attitude (heading, pitch, roll, deg) at device times, ns.
+    truth: VecDeque<(u64, [f32; 3])>,
+    on: bool,
+}
+
+/// One device's place in the hub.
+#[derive(Debug)]
+pub struct Slot {
+    name: String,
+    product: Product,
+    place: String,
+    shared: Mutex<Shared>,
+    commands: Mutex<VecDeque<Pending>>,
+    /// Output bytes the view missed (its lock was busy, or the ring full).
+    lost: AtomicU64,
+}
+
+/// The devices the web view shows.
+#[derive(Debug)]
+pub struct Hub {
+    protocol: Protocol,
+    slots: Vec<Arc<Slot>>,
+}
+
+impl Hub {
+    /// A hub for devices named `name` at `places` (`tcp 127.0.0.1:7000`).
+    pub fn new(protocol: Protocol, product: Product, name: &str, places: &[String]) -> Arc<Hub> {
+        Arc::new(Hub {
+            protocol,
+            slots: places
+                .iter()
+                .map(|p| {
+                    Arc::new(Slot {
+                        name: name.to_owned(),
+                        product,
+                        place: p.clone(),
+                        shared: Mutex::new(Shared {
+                            status: "mode=off".to_owned(),
+                            ..Shared::default()
+                        }),
+                        commands: Mutex::new(VecDeque::new()),
+                        lost: AtomicU64::new(0),
+                    })
+                })
+                .collect(),
+        })
+    }
+
+    /// Device `k`'s tap, for its runner.
+    pub fn tap(&self, k: usize) -> Option<Tap> {
+        Some(Tap {
+            slot: Arc::clone(self.slots.get(k)?),
+            published_at: None,
+        })
+    }
+}
+
+/// A runner's end: never blocks.
+pub struct Tap {
+    slot: Arc<Slot>,
+    published_at: Option<Instant>,
+}
+
+impl Tap {
+    /// The bytes the unit sent (as the client receives them).
+    pub fn tx(&self, bytes: &[u8]) {
+        let Ok(mut s) = self.slot.shared.try_lock() else {
+            self.slot
+                .lost
+                .fetch_add(bytes.len() as u64, Ordering::Relaxed);
+            return;
+        };
+        let room = TX_RING.saturating_sub(s.tx.len());
+        let take = bytes.len().min(room);
+        s.tx.extend(&bytes[..take]);
+        if take < bytes.len() {
+            self.slot
+                .lost
+                .fetch_add((bytes.len() - take) as u64, Ordering::Relaxed);
+        }
+    }
+
+    /// Commands the page sent, a few at a time.
+    pub fn commands(&self) -> Vec<Pending> {
+        let Ok(mut q) = self.slot.commands.try_lock() else {
+            return Vec::new();
+        };
+        let n = q.len().min(COMMANDS_PER_PASS);
+        q.drain(..n).collect()
+    }
+
+    /// Whether a status is due ([`PUBLISH_EVERY`]).
+    pub fn publish_due(&self) -> bool {
+        self.published_at
+            .is_none_or(|t| t.elapsed() >= PUBLISH_EVERY)
+    }
+
+    /// Publishes the `status` words, the device time and the truth
+    /// attitude (deg), if the web thread is not reading right now.
+    pub fn publish(&mut self, status: String, device_ns: u64, truth: Option<[f32; 3]>) {
+        self.published_at = Some(Instant::now());
+        let Ok(mut s) = self.slot.shared.try_lock() else {
+            return;
+        };
+        s.status = status;
+        s.device_ns = device_ns;
+        s.on = true;
+        if let Some(t) = truth {
+            if s.truth.len() >= KEEP_POINTS {
+                s.truth.pop_front();
+            }
+            s.truth.push_back((device_ns, t));
+        }
+    }
+}
+
+/// One decoded output frame: its sequence number, device time (s) and
+/// named values.
+struct Point {
+    seq: u64,
+    t: f64,
+    values: Vec<(String, f64)>,
+}
+
+/// The web thread's view of one device.
+struct View {
+    slot: Arc<Slot>,
+    kernel: Box<KernelDecoder<4096>>,
+    isb: Box<imu_emu::isb::packet::Decoder<{ imu_emu::isb::packet::MAX_PACKET }>>,
+    clock: DeviceClock,
+    points: VecDeque<Point>,
+    truth: VecDeque<(u64, f64, [f32; 3])>,
+    seq: u64,
+    truth_seq: u64,
+    frames: u64,
+}
+
+impl View {
+    fn new(slot: Arc<Slot>) -> View {
+        View {
+            slot,
+            kernel: Box::new(KernelDecoder::new()),
+            isb: Box::new(imu_emu::isb::packet::Decoder::new()),
+            clock: DeviceClock::default(),
+            points: VecDeque::new(),
+            truth: VecDeque::new(),
+            seq: 0,
+            truth_seq: 0,
+            frames: 0,
+        }
+    }
+
+    /// Takes what the runner published; decodes the new bytes.
+    fn refresh(&mut self, protocol: Protocol) -> (String, u64, bool) {
+        let (bytes, status, device_ns, truth, on) = {
+            let Ok(mut s) = self.slot.shared.lock() else {
+                return ("mode=off".to_owned(), 0, false);
+            };
+            (
+                std::mem::take(&mut s.tx),
+                s.status.clone(),
+                s.device_ns,
+                std::mem::take(&mut s.truth),
+                s.on,
+            )
+        };
+        for (ns, a) in truth {
+            self.truth_seq += 1;
+            self.truth.push_back((self.truth_seq, ns as f64 * 1e-9, a));
+        }
+        while self.truth.len() > KEEP_POINTS {
+            self.truth.pop_front();
+        }
+        let bytes: Vec<u8> = bytes.into();
+        let mut input: &[u8] = &bytes;
+        let product = self.slot.product;
+        match protocol {
+            Protocol::Kernel => {
+                while let Some(f) = self.kernel.next_frame(&mut input) {
+                    if f.msg_type != TYPE_DATA {
+                        continue;
+                    }
+                    let Some(d) = client::decode::decode(f.id, f.payload, &product) else {
+                        continue;
+                    };
+                    let Some(t) = self.clock.time(&d) else {
+                        continue;
+                    };
+                    let values = d
+                        .values
+                        .iter()
+                        .map(|(k, v)| ((*k).to_owned(), *v))
+                        .collect();
+                    self.push(t, values);
+                }
+            }
+            Protocol::Isb => {
+                while let Some(p) = self.isb.next_packet(&mut input) {
+                    let p = client::isb::Packet {
+                        flags: p.flags,
+                        did: p.did,
+                        payload: p.payload.to_vec(),
+                    };
+                    let Some((did, b)) = p.whole_set() else {
+                        continue;
+                    };
+                    let Some(t) = imu_emu::isb::fields::device_time(did, b) else {
+                        continue;
+                    };
+                    let values = client::isb::numbers(did, b);
+                    self.push(t, values);
+                }
+            }
+        }
+        (status, device_ns, on)
+    }
+
+    fn push(&mut self, t: f64, values: Vec<(String, f64)>) {
+        self.seq += 1;
+        self.frames += 1;
+        self.points.push_back(Point {
+            seq: self.seq,
+            t,
+            values,
+        });
+        while self.points.len() > KEEP_POINTS {
+            self.points.pop_front();
+        }
+    }
+}
+
+/// The running web server.
+pub struct Server {
+    /// The address it listens on.
+    pub addr: SocketAddr,
+    thread: Option<std::thread::JoinHandle<()>>,
+    stop: Arc<AtomicBool>,
+}
+
+impl Server {
+    /// Binds `addr` and serves `hub` from a thread of its own.
+    pub fn start(addr: &str, hub: Arc<Hub>) -> anyhow::Result<Server> {
+        let server =
+            tiny_http::Server::http(addr).map_err(|e| match e.downcast::<std::io::Error>() {
+                Ok(io) => crate::error::bind_error(*io, "--web", addr),
+                Err(e) => anyhow::anyhow!("--web {addr}: {e}"),
+            })?;
+        let bound = server
+            .server_addr()
+            .to_ip()
+            .ok_or_else(|| anyhow::anyhow!("--web {addr}: not an IP address"))?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&stop);
+        let thread = std::thread::Builder::new()
+            .name("imu-emu-web".into())
+            .spawn(move || serve(server, bound, hub, &flag))?;
+        Ok(Server {
+            addr: bound,
+            thread: Some(thread),
+            stop,
+        })
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn serve(server: tiny_http::Server, bound: SocketAddr, hub: Arc<Hub>, stop: &AtomicBool) {
+    let mut views: Vec<View> = hub.slots.iter().map(|s| View::new(Arc::clone(s))).collect();
+    while !stop.load(Ordering::Relaxed) {
+        let Ok(Some(mut req)) = server.recv_timeout(Duration::from_millis(100)) else {
+            continue;
+        };
+        let parts = req_parts(&req);
+        let (code, ctype, body) = handle(&hub, &mut views, bound, parts, req.as_reader());
+        let mut resp = tiny_http::Response::from_string(body).with_status_code(code);
+        for (k, v) in [("Content-Type", ctype), ("Cache-Control", "no-store")] {
+            if let Ok(h) = tiny_http::Header::from_bytes(k.as_bytes(), v.as_bytes()) {
+                resp.add_header(h);
+            }
+        }
+        let _ = req.respond(resp);
+    }
+}
+
+/// What `handle` needs of a request.
+struct Parts {
+    method: tiny_http::Method,
+    url: String,
+    host: Option<String>,
+    marked: bool,
+    length: Option<usize>,
+}
+
+fn req_parts(req: &tiny_http::Request) -> Parts {
+    let get = |name: &str| {
+        req.headers()
+            .iter()
+            .find(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
+            .map(|h| h.value.as_str().to_owned())
+    };
+    Parts {
+        method: req.method().clone(),
+        url: req.url().to_owned(),
+        host: get("Host"),
+        marked: get("X-Imu-Emu").as_deref() == Some("1"),
+        length: req.body_length(),
+    }
+}
+
+type Reply = (u16, &'static str, String);
+
+const TEXT: &str = "text/plain; charset=utf-8";
+const JSON: &str = "application/json";
+
+fn text(code: u16, s: impl Into<String>) -> Reply {
+    (code, TEXT, s.into())
+}
+
+fn handle(
+    hub: &Hub,
+    views: &mut [View],
+    bound: SocketAddr,
+    p: Parts,
+    body: &mut dyn std::io::Read,
+) -> Reply {
+    let host_ok = p
+        .host
+        .as_deref()
+        .is_some_and(|h| h == bound.to_string() || h == format!("localhost:{}", bound.port()));
+    if !host_ok {
+        return text(421, "this server answers to its own address only");
+    }
+    let (path, query) = p.url.split_once('?').unwrap_or((&p.url, ""));
+    let param = |name: &str| {
+        query
+            .split('&')
+            .find_map(|kv| kv.strip_prefix(name)?.strip_prefix('='))
+    };
+    let dev = || -> Result<usize, Reply> {
+        let k = param("dev").unwrap_or("0");
+        let k: usize = k
+            .parse()
+            .map_err(|_| text(400, format!("not a device number: {k}")))?;
+        if k >= views.len() {
+            return Err(text(
+                404,
+                format!("no device {k}: this run has devices 0..{}", views.len() - 1),
+            ));
+        }
+        Ok(k)
+    };
+    use tiny_http::Method::{Get, Post};
+    match (&p.method, path) {
+        (Get, "/") => (200, "text/html; charset=utf-8", INDEX_HTML.to_owned()),
+        (Get, "/app.js") => (200, "text/javascript; charset=utf-8", APP_JS.to_owned()),
+        (Get, "/style.css") => (200, "text/css; charset=utf-8", STYLE_CSS.to_owned()),
+        (Get, "/api/devices") => (200, JSON, devices_json(hub)),
+        (Get, "/api/state") => {
+            let k = match dev() {
+                Ok(k) => k,
+                Err(r) => return r,
+            };
+            let since: u64 = param("since").and_then(|s| s.parse().ok()).unwrap_or(0);
+            let truth_since: u64 = param("truth_since")
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(0);
+            (
+                200,
+                JSON,
+                state_json(hub.protocol, &mut views[k], since, truth_since),
+            )
+        }
+        (Post, "/api/command") => {
+            if !p.marked {
+                return text(403, "commands need the header X-Imu-Emu: 1");
+            }
+            let k = match dev() {
+                Ok(k) => k,
+                Err(r) => return r,
+            };
+            if p.length.is_some_and(|n| n > MAX_BODY) {
+                return text(413, format!("a command is at most {MAX_BODY} bytes"));
+            }
+            let mut raw = Vec::new();
+            if body
+                .take(MAX_BODY as u64 + 1)
+                .read_to_end(&mut raw)
+                .is_err()
+            {
+                return text(400, "could not read the request body");
+            }
+            if raw.len() > MAX_BODY {
+                return text(413, format!("a command is at most {MAX_BODY} bytes"));
+            }
+            let Ok(line) = String::from_utf8(raw) else {
+                return text(400, "error not UTF-8");
+            };
+            let line = line.trim();
+            if line.chars().any(char::is_control) {
+                return text(400, "error one line, no control characters");
+            }
+            command(hub, k, line)
+        }
+        (_, "/" | "/app.js" | "/style.css" | "/api/devices" | "/api/state" | "/api/command") => {
+            text(405, "method not allowed")
+        }
+        _ => text(404, "not found"),
+    }
+}
+
+/// One control line for device `k`: parsed here, carried out by its runner.
+fn command(hub: &Hub, k: usize, line: &str) -> Reply {
+    let cmd = match control::parse(line) {
+        Ok(c) => c,
+        Err(e) => return text(400, format!("error {e}")),
+    };
+    match cmd {
+        control::Command::Help => return text(200, format!("ok {}", control::help())),
+        control::Command::Devices => {
+            let places: Vec<String> = hub.slots.iter().map(|s| s.place.clone()).collect();
+            return text(200, format!("ok {}", control::devices_reply(&places)));
+        }
+        _ => {}
+    }
+    let slot = &hub.slots[k];
+    let (answer, rx) = mpsc::sync_channel(1);
+    {
+        let Ok(mut q) = slot.commands.lock() else {
+            return text(500, "error internal");
+        };
+        if q.len() >= MAX_QUEUED {
+            return text(503, "error busy: too many commands waiting");
+        }
+        q.push_back(Pending { cmd, answer });
+    }
+    match rx.recv_timeout(ANSWER_WITHIN) {
+        Ok(Ok(t)) if t.is_empty() => text(200, "ok"),
+        Ok(Ok(t)) => text(200, format!("ok {t}")),
+        Ok(Err(e)) => text(422, format!("error {e}")),
+        Err(_) => {
+            // Not taken: the device is off (or stalled); drop it so that it
+            // does not run later by surprise.
+            if let Ok(mut q) = slot.commands.lock() {
+                q.clear();
+            }
+            text(
+                503,
+                format!(
+                    "error dev {k} did not answer within {ANSWER_WITHIN:?} (off? it powers on \
+                     when a client connects to its UART, or with --power-on now)"
+                ),
+            )
+        }
+    }
+}
+
+/// `"` and `\` escaped, control characters dropped.
+fn json_str(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => {}
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// A finite number, or `null`.
+fn json_num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        "null".to_owned()
+    }
+}
+
+fn devices_json(hub: &Hub) -> String {
+    let protocol = match hub.protocol {
+        Protocol::Kernel => "kernel",
+        Protocol::Isb => "isb",
+    };
+    let devs: Vec<String> = hub
+        .slots
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            format!(
+                "{{\"dev\":{k},\"name\":{},\"place\":{}}}",
+                json_str(&s.name),
+                json_str(&s.place)
+            )
+        })
+        .collect();
+    format!(
+        "{{\"protocol\":\"{protocol}\",\"help\":{},\"devices\":[{}]}}",
+        json_str(control::help().trim_start_matches("commands: ")),
+        devs.join(",")
+    )
+}
+
+fn state_json(protocol: Protocol, v: &mut View, since: u64, truth_since: u64) -> String {
+    let (status, device_ns, on) = v.refresh(protocol);
+    let words: Vec<String> = status
+        .split_whitespace()
+        .filter_map(|w| w.split_once('='))
+        .map(|(k, val)| format!("{}:{}", json_str(k), json_str(val)))
+        .collect();
+    let new: Vec<&Point> = v.points.iter().filter(|p| p.seq > since).collect();
+    let skip = new.len().saturating_sub(MAX_POINTS_PER_POLL);
+    let points: Vec<String> = new[skip..]
+        .iter()
+        .map(|p| {
+            let vals: Vec<String> = p
+                .values
+                .iter()
+                .map(|(k, x)| format!("{}:{}", json_str(k), json_num(*x)))
+                .collect();
+            format!(
+                "{{\"seq\":{},\"t\":{},{}}}",
+                p.seq,
+                json_num(p.t),
+                vals.join(",")
+            )
+        })
+        .collect();
+    let truth: Vec<String> = v
+        .truth
+        .iter()
+        .filter(|t| t.0 > truth_since)
+        .map(|(seq, t, a)| {
+            format!(
+                "{{\"seq\":{seq},\"t\":{},\"heading\":{},\"pitch\":{},\"roll\":{}}}",
+                json_num(*t),
+                json_num(f64::from(a[0])),
+                json_num(f64::from(a[1])),
+                json_num(f64::from(a[2]))
+            )
+        })
+        .collect();
+    format!(
+        "{{\"on\":{on},\"device_time_s\":{},\"status\":{{{}}},\"frames_decoded\":{},\
+         \"view_lost_bytes\":{},\"points\":[{}],\"truth\":[{}]}}",
+        json_num(device_ns as f64 * 1e-9),
+        words.join(","),
+        v.frames,
+        v.slot.lost.load(Ordering::Relaxed),
+        points.join(","),
+        truth.join(",")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hub() -> Arc<Hub> {
+        Hub::new(
+            Protocol::Kernel,
+            Product::parse("K110").unwrap(),
+            "K110",
+            &["tcp 127.0.0.1:1".to_owned()],
+        )
+    }
+
+    fn call(hub: &Hub, method: tiny_http::Method, url: &str, marked: bool, body: &str) -> Reply {
+        let mut views: Vec<View> = hub.slots.iter().map(|s| View::new(Arc::clone(s))).collect();
+        let bound: SocketAddr = "127.0.0.1:8080".parse().unwrap();
+        let p = Parts {
+            method,
+            url: url.to_owned(),
+            host: Some("127.0.0.1:8080".to_owned()),
+            marked,
+            length: Some(body.len()),
+        };
+        handle(hub, &mut views, bound, p, &mut body.as_bytes())
+    }
+
+    #[test]
+    fn bad_requests_never_reach_the_device() {
+        use tiny_http::Method::{Get, Post};
+        let h = hub();
+        assert_eq!(call(&h, Post, "/api/command", false, "pps").0, 403);
+        assert_eq!(call(&h, Post, "/api/command", true, "warp 9").0, 400);
+        assert_eq!(
+            call(&h, Post, "/api/command", true, &"p".repeat(300)).0,
+            413
+        );
+        assert_eq!(call(&h, Post, "/api/command", true, "pps\nstatus").0, 400);
+        assert_eq!(call(&h, Post, "/api/command?dev=3", true, "pps").0, 404);
+        assert_eq!(call(&h, Get, "/api/command", true, "").0, 405);
+        assert_eq!(call(&h, Get, "/nope", true, "").0, 404);
+        assert!(h.slots[0].commands.lock().unwrap().is_empty());
+        let r = call(&h, Post, "/api/command", true, "help");
+        assert_eq!((r.0, r.2.starts_with("ok commands: help")), (200, true));
+    }
+
+    #[test]
+    fn a_busy_lock_costs_the_tap_nothing() {
+        let h = hub();
+        let tap = h.tap(0).unwrap();
+        let guard = h.slots[0].shared.lock().unwrap();
+        tap.tx(&[1, 2, 3]);
+        drop(guard);
+        assert_eq!(h.slots[0].lost.load(Ordering::Relaxed), 3);
+        tap.tx(&[4]);
+        assert_eq!(h.slots[0].shared.lock().unwrap().tx.len(), 1);
+    }
+}
