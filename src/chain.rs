@@ -171,9 +171,9 @@
 //! K110 factory settings, 2 Mbit/s, the `qemu::tick_cost` conformance
 //! tests): 3 800 with a GA frame at 2 kHz, 5 640–5 840 with the largest UDD
 //! frame. With `fixed-point` on thumbv6m (`scripts/v6m-tick.sh`, worst of
-//! 40 ticks, ±40): 11 920 a tick without output, 15 600 GA at 2 kHz,
-//! 23 800 the largest UDD, 26 080 the same with LPF 16 Hz. `docs/performance.md`,
-//! `docs/firmware-budget.md`.
+//! 40 ticks, ±40; with the flicker bias, docs/sensors.md): 11 080 a tick
+//! without output, 14 760 GA at 2 kHz, 22 920 the largest UDD, 27 000 the
+//! same with LPF 16 Hz. `docs/performance.md`, `docs/firmware-budget.md`.
 //! On the host (criterion, `benches/tick.rs`) a worst-case tick takes
 //! ≈ 0.3 µs and a factory tick ≈ 0.15 µs.
 

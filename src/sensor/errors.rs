@@ -486,7 +486,7 @@ fn delta(x: f32) -> f64 {
 
 /// [`TriadEngine`] in integers, for the `fixed-point` build: the same
 /// model and the same random draws, on measurements scaled by 2^`bits`
-/// ([`GYRO_BITS`](crate::math::GYRO_BITS), [`ACC_BITS`](crate::math::ACC_BITS)).
+/// ([`GYRO_BITS`](crate::math::GYRO_BITS), [`ACC_BITS`]).
 ///
 /// - M − I as [`Coef`]s (14-bit mantissas: a 300 ppm scale factor is kept to
 ///   0.02 ppm); the temperature terms (scale factor and bias) are set one
