@@ -143,7 +143,8 @@ pub enum Reject {
     /// A kind this build does not take (the full state, for now).
     UnsupportedKind,
     /// A value out of range: time negative or beyond [`MAX_TIME_S`], a
-    /// rate beyond ±2048 °/s, a force beyond ±128 g, a temperature
+    /// rate beyond ±[`TRUTH_RATE_LIMIT_DPS`] (8192 °/s), a force beyond
+    /// ±128 g, a temperature
     /// outside [`TEMPERATURE_RANGE_C`], or not finite.
     OutOfRange,
     /// A time not after the device's previous sample ([`Track`]).
@@ -915,7 +916,7 @@ mod tests {
             (b"0,1,2,3,4,5,6,7,8\n", Malformed),
             (b"x,1,2,3,4,5,6\n", Malformed),
             (b"-1,0,0,0,0,0,1\n", OutOfRange),
-            (b"0,3000,0,0,0,0,1\n", OutOfRange),
+            (b"0,9000,0,0,0,0,1\n", OutOfRange),
             (b"0,0,0,0,0,0,200\n", OutOfRange),
             (b"0,0,0,0,0,0,1,NaN\n", Malformed),
             (b"0,0,0,0,0,0,1,1e40\n", OutOfRange),

@@ -51,7 +51,7 @@ pub fn feed(data: &[u8]) {
     for (k, s) in one.iter().flatten().enumerate() {
         let Sample::Rates(r) = s else { continue };
         let t = &r.truth;
-        assert!(t.rate_dps.iter().all(|v| v.abs() <= 2048.0));
+        assert!(t.rate_dps.iter().all(|v| v.abs() <= 8192.0));
         assert!(t.specific_force_g.iter().all(|v| v.abs() <= 128.0));
         let mut f = [0u8; MAX_FRAME];
         let n = encode(r, &mut f);
