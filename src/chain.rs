@@ -83,10 +83,7 @@
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
 //! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
-//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The vehicle
-//! state a board may set ([`SignalChain::set_vehicle`]) adds 144 B to
-//! both (measured on x86-64: 10 208 → 10 352 B; `f64` fields align alike
-//! on thumbv7em). The
+//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192
@@ -360,9 +357,6 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     ticks: u64,
     interval: f32,
     integrals: I,
-    /// The vehicle a board's source set for this tick
-    /// ([`SignalChain::set_vehicle`]); `None`: the built-in motion's.
-    vehicle: Option<VehicleState>,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -467,7 +461,6 @@ impl<I: Integrate> SignalChain<I> {
             ticks: 0,
             interval: dt,
             integrals: I::default(),
-            vehicle: None,
         }
     }
 
@@ -521,7 +514,6 @@ impl<I: Integrate> SignalChain<I> {
             ticks,
             interval,
             integrals,
-            vehicle,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -547,7 +539,6 @@ impl<I: Integrate> SignalChain<I> {
         *ticks = 0;
         *interval = dt;
         *integrals = I::default();
-        *vehicle = None;
         self.refresh_errors();
     }
 
@@ -575,36 +566,21 @@ impl<I: Integrate> SignalChain<I> {
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
-        self.vehicle = None;
         self.core.set_motion(m, self.dt);
     }
 
-    /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
-    /// the chain measures `truth` (for the script and full-state sources
-    /// `state.truth()`; for rate/force rows the row's own values, so their
-    /// bytes stay as they were) and reports `state` as the unit's vehicle
-    /// ([`SignalChain::vehicle`]) until the next call or
-    /// [`SignalChain::set_motion`].
-    pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
-        self.core.set_motion(Motion::Sample(truth), self.dt);
-        self.vehicle = Some(state);
-    }
-
-    /// The unit's vehicle now: the state a board's source set
-    /// ([`SignalChain::set_vehicle`]), or the built-in motion's
+    /// The vehicle of the built-in motion now
     /// ([`crate::vehicle::builtin_state`]: its site, at rest, its attitude
     /// and its last truth; time = ticks × tick period). Derived when read:
-    /// the tick does no `f64` work for it.
-    pub fn vehicle(&self) -> VehicleState {
-        match &self.vehicle {
-            Some(v) => *v,
-            None => crate::vehicle::builtin_state(
-                self.core.motion.motion(),
-                self.core.motion.attitude(),
-                &self.core.motion.truth_now(),
-                self.ticks as f64 * f64::from(self.dt),
-            ),
-        }
+    /// the tick does no `f64` work for it. A board's vehicle source keeps
+    /// its own state in the device ([`crate::device::Device::vehicle`]).
+    pub fn builtin_vehicle(&self) -> VehicleState {
+        crate::vehicle::builtin_state(
+            self.core.motion.motion(),
+            self.core.motion.attitude(),
+            &self.core.motion.truth_now(),
+            self.ticks as f64 * f64::from(self.dt),
+        )
     }
 
     /// Which axes the motion describes (default: the unit's own).

@@ -203,7 +203,7 @@ impl<T: Transport> HostPort<T> {
                 Motion::Sample(_) => "sample",
             }
         };
-        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
+        crate::vehicle::truth_words(&dev.vehicle(), source, chain.temperature(), prefix)
     }
 
     /// `status`: the device, the line and the link in `key=value` words.
@@ -329,10 +329,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         let secs = deadline.as_nanos() as f64 * 1e-9;
         if let Some(t) = self.trajectory.as_mut() {
             let (state, truth) = t.vehicle_at(secs);
-            dev.chain_mut().set_vehicle(state, truth);
+            dev.set_vehicle(state, truth);
         } else if let Some(v) = self.vehicle.as_mut() {
             let state = v.at(secs);
-            dev.chain_mut().set_vehicle(state, state.truth());
+            dev.set_vehicle(state, state.truth());
         }
         dev.on_tick(deadline);
         self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
@@ -382,7 +382,7 @@ impl<T: Transport> HostPort<T> {
             control::Command::Motion(m) => {
                 self.trajectory = None;
                 self.vehicle = None;
-                dev.chain_mut().set_motion(m);
+                dev.set_motion(m);
             }
             control::Command::Script(s) => {
                 self.trajectory = None;
