@@ -5,7 +5,7 @@
 //! turn while climbing (every rate live). `vehicle/full-state`:
 //! `fullstate::sample` over one tick between 10 Hz rows.
 //! `vehicle/strapdown`: `Strapdown::step` (the state of `--trajectory`).
-//! `vehicle/builtin`: `SignalChain::builtin_vehicle` of the built-in static motion
+//! `vehicle/builtin`: `SignalChain::vehicle` of the built-in static motion
 //! (what `truth` reads; never in a tick).
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -61,7 +61,7 @@ fn bench(cr: &mut Criterion) {
         b.iter(|| sd.step(black_box(&s0.rate_ib_b), black_box(&s0.force_b), None, DT))
     });
     let chain = SignalChain::new(Product::parse("K110").unwrap(), 1);
-    g.bench_function("builtin", |b| b.iter(|| black_box(chain.builtin_vehicle())));
+    g.bench_function("builtin", |b| b.iter(|| black_box(chain.vehicle())));
     g.finish();
 }
 

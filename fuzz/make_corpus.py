@@ -141,6 +141,20 @@ def main():
     write("store", "cuts", op(0, [(0x12, 200)], 0) + op(0, [(0x12, 5)], (100 << 2) | 1) + op(1, [(7, 7)], (40 << 2) | 2, 99))
     write("store", "torn-commit", op(0, [(1, 1)], 0) + op(0, [(2, 2)], (389 << 2) | 3, 1234) + op(0, [(3, 3)], (0 << 2) | 2, 5))
 
+    # feed: u32 chunking seed, then the stream (text rows and binary
+    # samples, encoded by the Python helper's imu_emu.feed).
+    sys.path.insert(0, os.path.join(HERE, "..", "python"))
+    from imu_emu import feed
+
+    seed = b"\x05\x00\x00\x00"
+    write("feed", "text_rows", seed + b"time,wx,wy,wz,fx,fy,fz\n0.0,10,0,0,0,0,1\n0.001,10,0,0,0,0,1,25\n")
+    write("feed", "binary", seed + feed.encode_sample(0.0, (1, 2, 3), (0, 0, 1))
+          + feed.encode_sample(0.0005, (1, 2, 3), (0, 0, 1), temp_c=30, device=2))
+    bad = bytearray(feed.encode_sample(0.001, (5, 0, 0), (0, 0, 1)))
+    bad[20] ^= 1
+    write("feed", "mixed", seed + b"0.0,1,1,1,0,0,1\n0.0001,1" + feed.encode_sample(0.0002, (0, 0, 9), (0, 0, 1))
+          + bytes(bad) + b"\ngarbage\n")
+
 
 if __name__ == "__main__":
     main()

@@ -61,9 +61,10 @@
 //!   heading 0, level ([`crate::sensor::motion`]). The built-in motion moves
 //!   the unit itself ([`TruthFrame::Sensor`]); Alignment_Angles rotate what it
 //!   reports.
-//! - Errors: per-model defaults in [`crate::sensor::errors::ErrorSpec`];
-//!   temperature: warm-up from 25 °C by +8 °C, τ 600 s
-//!   ([`crate::sensor::temperature`]).
+//! - Errors and temperature model: the model's built-in sensor profile
+//!   ([`crate::sensor::profiles`]) or one set with
+//!   [`SignalChain::set_profile`]; default warm-up from 25 °C by +8 °C,
+//!   τ 600 s ([`crate::sensor::temperature`]).
 //! - Alignment: averaging with the STD of 10 ms means vs the threshold, or a
 //!   Kalman filter (ZUPT); heading relative (0 after alignment)
 //!   ([`crate::ahrs::alignment`]).
@@ -82,8 +83,13 @@
 //! # Memory
 //!
 //! `size_of::<SignalChain>()` (thumbv7em / thumbv6m): 10 160 B float,
-//! 10 184 B `fixed-point` (budget 10 KiB; 18 792 B before this layout);
-//! `SignalChain<Integrals>` adds the 104 B of [`Integrals`]. The
+//! 10 184 B `fixed-point` before the flicker bias (budget then 10 KiB;
+//! 18 792 B before this layout); the flicker's six states a sensor axis
+//! and the profile terms' coefficients add ≈ 0.75 KiB (10 920 B float on
+//! a 64-bit host), the vehicle state a board may set
+//! ([`SignalChain::set_vehicle`]) 144 B (budget now 12 KiB,
+//! `tests/signal_chain.rs`); `SignalChain<Integrals>` adds the 104 B of
+//! [`Integrals`]. The
 //! FIR history is 8 136 B of it: single rings read as up to three runs
 //! ([`crate::dsp::fir`]; a doubled ring would be 16 272 B) — 49 input rows
 //! and 177 pre-filter rows of 9 channels, the minimum for the order-192
@@ -180,6 +186,8 @@ use crate::math::rotation::{Quat, Vec3};
 use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
+use crate::sensor::profile::SensorProfile;
+use crate::sensor::profiles;
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
@@ -242,6 +250,23 @@ impl ChainConfig {
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
     }
+
+    /// The longest output interval, in ticks, at which Instant samples
+    /// the FIR's output (ICD 5.3.6); at longer intervals it decimates by
+    /// the interval's mean (a boxcar over the output interval): the
+    /// **decimation's band limit**. Sampling keeps the white noise within
+    /// the profile's figure only while the FIR's bandwidth is below the
+    /// output's Nyquist frequency (2·f_c·n ≤ f_s); beyond it the noise of
+    /// the whole FIR band would alias into the output band and read high
+    /// by up to √(2·f_c/f_out) — the K201 with its LPF off (f_c = ∞: 1
+    /// tick) read its ARW √2 high at 2 kHz, a K110 at its factory 262 Hz
+    /// and 100 Hz read it 2.3× high. docs/sensors.md "Decimation".
+    pub fn instant_sample_limit(&self) -> u32 {
+        match self.lpf.hz() {
+            None => 1,
+            Some(fc) => ((self.internal_rate_hz as f32 / (2.0 * fc)) as u32).max(1),
+        }
+    }
 }
 
 /// Injectable faults (they drive [`Health`]).
@@ -263,6 +288,11 @@ pub struct Faults {
     pub temperature_c: Option<f32>,
     /// Forces the reported supply voltage, V.
     pub supply_voltage: Option<f32>,
+    /// The board's live motion feed has been silent beyond its timeout
+    /// (`crate::feed`): reported as [`Health::sensor_comm_failure`] (the
+    /// feed is this unit's sensor), but the data do not freeze — the last
+    /// sample holds, with the sensor errors on it.
+    pub motion_feed_lost: bool,
 }
 
 /// The unit's health now, protocol neutral (the KERNEL encodes it as USW,
@@ -340,6 +370,8 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     rng: Rng,
     errors: ErrorModel,
     errors_dirty: bool,
+    /// A profile replacing the built-in one at each power-on.
+    profile: Option<&'static SensorProfile>,
     temp_model: TemperatureModel,
     temperature: f32,
     faults: Faults,
@@ -357,6 +389,9 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     ticks: u64,
     interval: f32,
     integrals: I,
+    /// The vehicle a board's source set for this tick
+    /// ([`SignalChain::set_vehicle`]); `None`: the built-in motion's.
+    vehicle: Option<VehicleState>,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -397,7 +432,7 @@ impl SignalChain {
     /// The unit is static, level, z up, heading 0 at
     /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
-    /// [`crate::sensor::ErrorSpec`]; the configuration is
+    /// built-in profile ([`crate::sensor::profiles::for_product`]); the configuration is
     /// [`ChainConfig::defaults`] until [`SignalChain::configure`]. The AHRS
     /// starts levelled, unaligned (bias 0), not aligning.
     pub fn new(product: Product, seed: u64) -> Self {
@@ -446,6 +481,7 @@ impl<I: Integrate> SignalChain<I> {
             rng: Rng::new(0),
             errors: ErrorModel::default(),
             errors_dirty: true,
+            profile: None,
             temp_model: TemperatureModel::default(),
             temperature: 0.0,
             faults: Faults::default(),
@@ -461,6 +497,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks: 0,
             interval: dt,
             integrals: I::default(),
+            vehicle: None,
         }
     }
 
@@ -473,8 +510,12 @@ impl<I: Integrate> SignalChain<I> {
         let dt = 1.0 / rate_hz as f32;
         let has_aux = product.model.has(Capability::AuxAccel);
         let mut rng = Rng::new(seed);
-        let errors = ErrorModel::for_product(&product, &mut rng);
-        let temp_model = TemperatureModel::default();
+        let profile = match self.profile {
+            Some(p) => *p,
+            None => profiles::for_product(&product),
+        };
+        let errors = ErrorModel::from_profile(&profile, &mut rng);
+        let temp_model = TemperatureModel::from_spec(&profile.temperature);
         let cfg = ChainConfig::defaults(&product);
         let t0 = Truth::at_rest();
         let sensor = [
@@ -489,7 +530,7 @@ impl<I: Integrate> SignalChain<I> {
         let mut core = Core::new(&product, &cfg, &sensor, dt);
         let sensors = [&errors.gyro, &errors.acc, &errors.aux];
         for (e, s) in core.engines.iter_mut().zip(sensors) {
-            e.randomize_gm(s, &mut rng);
+            e.randomize_slow(s, &mut rng);
         }
         // Every field, by name: a field added later cannot be forgotten.
         let SignalChain {
@@ -499,6 +540,7 @@ impl<I: Integrate> SignalChain<I> {
             rng: rng_,
             errors: errors_,
             errors_dirty,
+            profile: _,
             temp_model: temp_model_,
             temperature,
             faults,
@@ -514,6 +556,7 @@ impl<I: Integrate> SignalChain<I> {
             ticks,
             interval,
             integrals,
+            vehicle,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -539,6 +582,7 @@ impl<I: Integrate> SignalChain<I> {
         *ticks = 0;
         *interval = dt;
         *integrals = I::default();
+        *vehicle = None;
         self.refresh_errors();
     }
 
@@ -566,21 +610,42 @@ impl<I: Integrate> SignalChain<I> {
     /// Chooses a built-in motion, from its initial state (level at its
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
+        self.vehicle = None;
         self.core.set_motion(m, self.dt);
     }
 
-    /// The vehicle of the built-in motion now
+    /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
+    /// the chain measures `truth` (for the script and full-state sources
+    /// `state.truth()`; for rate/force rows the row's own values, so their
+    /// bytes stay as they were) and reports `state` as the unit's vehicle
+    /// ([`SignalChain::vehicle`]) until the next call or
+    /// [`SignalChain::set_motion`].
+    pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
+        self.core.set_motion(Motion::Sample(truth), self.dt);
+        self.vehicle = Some(state);
+    }
+
+    /// The unit's vehicle now: the state a board's source set
+    /// ([`SignalChain::set_vehicle`]), or the built-in motion's
     /// ([`crate::vehicle::builtin_state`]: its site, at rest, its attitude
     /// and its last truth; time = ticks × tick period). Derived when read:
-    /// the tick does no `f64` work for it. A board's vehicle source keeps
-    /// its own state in the device ([`crate::device::Device::vehicle`]).
-    pub fn builtin_vehicle(&self) -> VehicleState {
-        crate::vehicle::builtin_state(
-            self.core.motion.motion(),
-            self.core.motion.attitude(),
-            &self.core.motion.truth_now(),
-            self.ticks as f64 * f64::from(self.dt),
-        )
+    /// the tick does no `f64` work for it.
+    pub fn vehicle(&self) -> VehicleState {
+        match &self.vehicle {
+            Some(v) => *v,
+            None => crate::vehicle::builtin_state(
+                self.core.motion.motion(),
+                self.core.motion.attitude(),
+                &self.core.motion.truth_now(),
+                self.ticks as f64 * f64::from(self.dt),
+            ),
+        }
+    }
+
+    /// The state a board's vehicle source set ([`SignalChain::set_vehicle`]),
+    /// `None` while a built-in motion plays.
+    pub fn vehicle_source(&self) -> Option<&VehicleState> {
+        self.vehicle.as_ref()
     }
 
     /// Which axes the motion describes (default: the unit's own).
@@ -598,6 +663,20 @@ impl<I: Integrate> SignalChain<I> {
     /// carrier per [`TruthFrame`], Appendix C convention).
     pub fn truth_attitude(&self) -> Option<Quat> {
         self.core.motion.attitude()
+    }
+
+    /// Uses `profile` instead of the built-in one from the next power-on
+    /// ([`SignalChain::reset`]) on: the errors are drawn from it with the
+    /// seed and its temperature model runs (`None`: the built-in profile).
+    /// A host holds its profiles for the process's life (`&'static`), so
+    /// the chain keeps a reference, not a copy.
+    pub fn set_profile(&mut self, profile: Option<&'static SensorProfile>) {
+        self.profile = profile;
+    }
+
+    /// The profile set with [`SignalChain::set_profile`], if any.
+    pub fn profile(&self) -> Option<&'static SensorProfile> {
+        self.profile
     }
 
     /// The error model, for reading or changing (changes apply at the next
@@ -876,7 +955,7 @@ impl<I: Integrate> SignalChain<I> {
         let sat = self.sat_live | self.sat_reported;
         let (lo, hi) = OPERATING_RANGE_C;
         Health {
-            sensor_comm_failure: f.sensor_comm,
+            sensor_comm_failure: f.sensor_comm || f.motion_feed_lost,
             sensor_config_failure: f.sensor_config,
             gyro_over_range: sat & 0x07,
             accel_over_range: sat >> 3,

@@ -31,10 +31,8 @@ use crate::kernel::Kernel;
 use crate::line::Line;
 use crate::model::Product;
 use crate::personality::{Context, Personality};
-use crate::sensor::motion::{Motion, Truth};
 use crate::store::{ParamStore, StoreError};
 use crate::time::{Instant, TimeBase};
-use crate::vehicle::VehicleState;
 
 pub use crate::io::{Event, Level, Mode, Pin};
 pub use crate::line::TX_CAP;
@@ -70,10 +68,6 @@ pub struct Shell<F: NorFlash, P: Personality> {
     chain: SignalChain<P::Integrate>,
     /// A software reset waits for the bytes queued before it.
     reset_pending: bool,
-    /// The vehicle a board's source set for the next tick
-    /// ([`Device::set_vehicle`]); `None`: the built-in motion's. Beside the
-    /// chain, not in it: the chain's RAM budget is its own.
-    vehicle: Option<VehicleState>,
 }
 
 impl<F: NorFlash, P: Personality> Shell<F, P> {
@@ -91,7 +85,6 @@ impl<F: NorFlash, P: Personality> Shell<F, P> {
             time: TimeBase::new(now),
             chain: SignalChain::placeholder(cfg.product),
             reset_pending: false,
-            vehicle: None,
         }
     }
 
@@ -100,7 +93,6 @@ impl<F: NorFlash, P: Personality> Shell<F, P> {
     fn cold_start(&mut self, now: Instant) {
         self.line.reset(now);
         self.reset_pending = false;
-        self.vehicle = None;
         self.events.clear();
         self.time = TimeBase::new(now);
         self.chain.reset(self.cfg.product, self.cfg.seed);
@@ -203,6 +195,22 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
     /// the personality boots ([`Personality::boot`]).
     pub fn new(cfg: PowerOn, flash: F, now: Instant) -> Self {
         let mut dev = Self::unpowered(cfg, flash, now);
+        dev.cold_start(now);
+        dev
+    }
+
+    /// [`Device::new`] with the sensor profile `profile` instead of the
+    /// model's built-in one (`None`: the built-in one); it stays across
+    /// power cycles ([`SignalChain::set_profile`]). A host's
+    /// `--sensor-profile` file.
+    pub fn with_profile(
+        cfg: PowerOn,
+        profile: Option<&'static crate::sensor::profile::SensorProfile>,
+        flash: F,
+        now: Instant,
+    ) -> Self {
+        let mut dev = Self::unpowered(cfg, flash, now);
+        dev.shell.chain.set_profile(profile);
         dev.cold_start(now);
         dev
     }
@@ -367,6 +375,12 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
         &self.personality
     }
 
+    /// The personality, mutably: a board's settings of it (the ISB's GPS
+    /// time, its navigation faults).
+    pub fn personality_mut(&mut self) -> &mut P {
+        &mut self.personality
+    }
+
     /// The flash (e.g. to persist its image).
     pub fn flash(&self) -> &F {
         &self.shell.flash
@@ -391,33 +405,5 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
     /// The signal chain (read-only).
     pub fn chain(&self) -> &SignalChain<P::Integrate> {
         &self.shell.chain
-    }
-
-    /// A built-in motion from the next tick on (the chain's
-    /// [`SignalChain::set_motion`]); it ends a board's vehicle source
-    /// ([`Device::set_vehicle`]).
-    pub fn set_motion(&mut self, m: Motion) {
-        self.shell.vehicle = None;
-        self.shell.chain.set_motion(m);
-    }
-
-    /// A board's vehicle source ([`crate::vehicle`], docs/motion.md) for
-    /// the next tick: the chain measures `truth` (for the script and
-    /// full-state sources `state.truth()`; for rate/force rows the row's
-    /// own values, so their bytes stay as they were) and the device
-    /// reports `state` ([`Device::vehicle`]) until the next call,
-    /// [`Device::set_motion`] or a power cycle.
-    pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
-        self.shell.chain.set_motion(Motion::Sample(truth));
-        self.shell.vehicle = Some(state);
-    }
-
-    /// The unit's vehicle now: the state a board's source set
-    /// ([`Device::set_vehicle`]), or the built-in motion's
-    /// ([`SignalChain::builtin_vehicle`]).
-    pub fn vehicle(&self) -> VehicleState {
-        self.shell
-            .vehicle
-            .unwrap_or_else(|| self.shell.chain.builtin_vehicle())
     }
 }

@@ -101,19 +101,16 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     /// taken. (Each protocol adds a typed reader on top: `next_frame`,
     /// `next_packet`.)
     ///
-    /// On 64-bit hosts, while no bytes of a candidate are held, packets are
+    /// While no bytes of a candidate are held, packets are
     /// found in `input` itself and returned borrowing it (no copy); only a
     /// candidate cut at the end of `input` is kept in the buffer, and only
     /// the bytes it needs are added to it from the next input, so that the
     /// scan is back in place once it is decided. The packets found are the
     /// same either way.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[inline(always)]
     pub fn next_raw<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<&'r [u8]> {
         self.skip_consumed();
         loop {
-            // Hosts only: the firmware's decoder sees a few bytes at a
-            // time, and its flash has no room for a second path (RP2040).
-            #[cfg(target_pointer_width = "64")]
             if self.start == self.end {
                 // Nothing held: scan the input in place.
                 let bytes: &'i [u8] = input;
@@ -144,19 +141,16 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
             if input.is_empty() {
                 return None;
             }
-            #[cfg(target_pointer_width = "64")]
             if self.start == self.end {
                 continue;
             }
-            // Compact and take as many bytes as fit (hosts: as the held
-            // candidate needs).
+            // Compact and take as many bytes as the held candidate needs.
             if self.start > 0 {
                 self.buf.copy_within(self.start..self.end, 0);
                 self.end -= self.start;
                 self.start = 0;
             }
             let room = CAP - self.end;
-            #[cfg(target_pointer_width = "64")]
             let room = room.min(self.wanted());
             let n = room.min(input.len());
             self.buf[self.end..self.end + n].copy_from_slice(&input[..n]);
@@ -167,7 +161,6 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
 
     /// Bytes the held candidate needs before it can be decided: up to its
     /// header, then up to its length (at least one).
-    #[cfg(target_pointer_width = "64")]
     fn wanted(&self) -> usize {
         let held = &self.buf[self.start..self.end];
         let need = match held.get(..F::HEADER_LEN) {
@@ -178,8 +171,7 @@ impl<F: Framing, const CAP: usize> Scanner<F, CAP> {
     }
 }
 
-/// The first `b` in `bytes` (hosts: `memchr`).
-#[cfg(target_pointer_width = "64")]
+/// The first `b` in `bytes` (`memchr`).
 #[inline]
 fn find_byte(b: u8, bytes: &[u8]) -> Option<usize> {
     // Back-to-back packets: the next one starts right here (no call).
@@ -187,13 +179,6 @@ fn find_byte(b: u8, bytes: &[u8]) -> Option<usize> {
         return Some(0);
     }
     memchr::memchr(b, bytes)
-}
-
-/// The first `b` in `bytes` (firmware: a byte loop, no flash for more).
-#[cfg(not(target_pointer_width = "64"))]
-#[inline]
-fn find_byte(b: u8, bytes: &[u8]) -> Option<usize> {
-    bytes.iter().position(|&x| x == b)
 }
 
 /// What [`scan`] found in a byte slice.
@@ -208,8 +193,7 @@ enum Scan {
 /// Skips garbage and bad candidates in `avail` (each dropped candidate
 /// counted in `errors`) up to the first complete valid packet of at most
 /// `cap` bytes.
-#[cfg_attr(target_pointer_width = "64", inline(always))]
-#[cfg_attr(not(target_pointer_width = "64"), inline)]
+#[inline(always)]
 fn scan<F: Framing>(avail: &[u8], cap: usize, errors: &mut u32) -> Scan {
     let mut at = 0;
     loop {

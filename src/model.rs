@@ -127,22 +127,8 @@ pub enum Capability {
     Extrig,
 }
 
-/// Grade of a model's inertial sensors: which error spread the sensor
-/// error model draws its units from (`crate::sensor::ErrorSpec::for_product`
-/// gives the figures). The ICD gives no noise figures: the grades are the
-/// emulator's three classes of the models.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SensorGrade {
-    /// K100, K102, K201: gyro ARW 0.24 °/√h, bias instability 3 °/h.
-    Entry,
-    /// K108, K110, K110M, K120: gyro ARW 0.2 °/√h, bias instability 2 °/h.
-    Mid,
-    /// K210, K220: gyro ARW 0.1 °/√h, bias instability 1 °/h.
-    High,
-}
-
 /// One row of the model table.
-#[derive(Debug, PartialEq, Eq)]
+#[derive(Debug)]
 pub struct ModelSpec {
     /// Short name, as accepted by `--model` (`K110`).
     pub short: &'static str,
@@ -166,13 +152,24 @@ pub struct ModelSpec {
     /// (K100: pull-up, Table 4.1 note 4; K110M: Table 4.4 pin 9). Others:
     /// held high (note 5).
     pub boot_active_low: bool,
-    /// Grade of the inertial sensors (the sensor error model's spread).
-    pub grade: SensorGrade,
+    /// The built-in sensor profile: every error term of its sensors
+    /// ([`crate::sensor::profiles`], where each cites its source).
+    pub profile: &'static SensorProfile,
     /// IMU_type byte of GetDevInfo (Table 5.17). The ICD gives no values;
     /// the emulator uses the model number (100, 102, …; 111 for K110M,
     /// 201 wraps to 201) so host software can tell models apart.
     pub imu_type: u8,
 }
+
+/// Rows are equal when they are the same model (the short name is unique
+/// in the table; the profile holds `f32`s, which have no `Eq`).
+impl PartialEq for ModelSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.short == other.short
+    }
+}
+
+impl Eq for ModelSpec {}
 
 impl ModelSpec {
     /// Whether the model has `cap`.
@@ -197,6 +194,8 @@ const LISTED_3_2_2: &[(GyroRange, AccelRange)] = &[
     (GyroRange::G2000, AccelRange::A8),
 ];
 
+use crate::sensor::profile::SensorProfile;
+use crate::sensor::profiles;
 use Capability::*;
 
 /// The model table (ICD section 2.1 models, in its order).
@@ -211,7 +210,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: true,
-        grade: SensorGrade::Entry,
+        profile: &profiles::KERNEL_ENTRY,
         imu_type: 100,
     },
     ModelSpec {
@@ -224,7 +223,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
-        grade: SensorGrade::Entry,
+        profile: &profiles::KERNEL_ENTRY,
         imu_type: 102,
     },
     ModelSpec {
@@ -237,7 +236,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
-        grade: SensorGrade::Mid,
+        profile: &profiles::KERNEL_MID,
         imu_type: 108,
     },
     ModelSpec {
@@ -250,7 +249,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
-        grade: SensorGrade::Mid,
+        profile: &profiles::KERNEL_MID,
         imu_type: 110,
     },
     ModelSpec {
@@ -263,7 +262,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: true,
-        grade: SensorGrade::Mid,
+        profile: &profiles::KERNEL_MID,
         imu_type: 111,
     },
     ModelSpec {
@@ -276,7 +275,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: LISTED_3_2_2,
         boot_active_low: false,
-        grade: SensorGrade::Mid,
+        profile: &profiles::KERNEL_MID,
         imu_type: 120,
     },
     ModelSpec {
@@ -289,7 +288,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: K201_LPF,
         products: G2000_A40,
         boot_active_low: false,
-        grade: SensorGrade::Entry,
+        profile: &profiles::KERNEL_ENTRY,
         imu_type: 201,
     },
     ModelSpec {
@@ -302,7 +301,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
-        grade: SensorGrade::High,
+        profile: &profiles::KERNEL_HIGH,
         imu_type: 210,
     },
     ModelSpec {
@@ -315,7 +314,7 @@ pub static MODELS: &[ModelSpec] = &[
         lpf_codes: ALL_LPF,
         products: G2000_A40,
         boot_active_low: false,
-        grade: SensorGrade::High,
+        profile: &profiles::KERNEL_HIGH,
         imu_type: 220,
     },
 ];
@@ -364,10 +363,12 @@ impl core::fmt::Display for ProductError {
 /// The Inertial Sense IMX-5 the ISB personality emulates (IMU mode): not
 /// a KERNEL model (it is not in [`MODELS`], so `--model` never takes it);
 /// only its sensor half is used — the chain at 2 kHz, EXTRIG as the strobe
-/// input, gyro ±2000 °/s. Decision (docs/isb.md): the IMX-5's
-/// ±16 g accelerometer is modelled with the nearest range the sensor
-/// model has, ±15 g; the grade is the mid one. The KERNEL columns
-/// (formats, LPF codes, IMU_type) are empty or zero.
+/// input, and its sensor profile ([`profiles::IMX5_PROFILE`]: ±4000 °/s,
+/// ±16 g and the datasheet's noise figures). The product-code column keeps
+/// the nearest KERNEL options (G2000, A15) for the code that reads them;
+/// the sensors saturate at the profile's ranges
+/// ([`profiles::for_product`]). The KERNEL columns (formats, LPF codes,
+/// IMU_type) are empty or zero.
 pub static IMX5: ModelSpec = ModelSpec {
     short: "IMX-5",
     number: "IMX-5",
@@ -378,7 +379,7 @@ pub static IMX5: ModelSpec = ModelSpec {
     lpf_codes: &[],
     products: &[(GyroRange::G2000, AccelRange::A15)],
     boot_active_low: false,
-    grade: SensorGrade::Mid,
+    profile: &profiles::IMX5_PROFILE,
     imu_type: 0,
 };
 
@@ -465,23 +466,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn each_model_row_carries_its_sensor_grade() {
-        use SensorGrade::*;
+    fn each_model_row_carries_its_sensor_profile() {
+        use profiles::{KERNEL_ENTRY as E, KERNEL_HIGH as H, KERNEL_MID as M};
         let expect = [
-            ("K100", Entry),
-            ("K102", Entry),
-            ("K108", Mid),
-            ("K110", Mid),
-            ("K110M", Mid),
-            ("K120", Mid),
-            ("K201", Entry),
-            ("K210", High),
-            ("K220", High),
+            ("K100", &E),
+            ("K102", &E),
+            ("K108", &M),
+            ("K110", &M),
+            ("K110M", &M),
+            ("K120", &M),
+            ("K201", &E),
+            ("K210", &H),
+            ("K220", &H),
         ];
         assert_eq!(MODELS.len(), expect.len());
-        for (m, (short, grade)) in MODELS.iter().zip(expect) {
-            assert_eq!((m.short, m.grade), (short, grade));
+        for (m, (short, p)) in MODELS.iter().zip(expect) {
+            assert_eq!(m.short, short);
+            assert!(core::ptr::eq(m.profile, p), "{short}");
         }
+        assert!(core::ptr::eq(IMX5.profile, &profiles::IMX5_PROFILE));
     }
 
     #[test]

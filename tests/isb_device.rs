@@ -4,10 +4,16 @@
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
 use imu_emu::isb::did;
+use imu_emu::isb::ins::{self, NavFaults};
 use imu_emu::isb::message::{self, GetRequest};
+use imu_emu::isb::nav;
+use imu_emu::isb::nav_sets::{
+    hdw_nav, ins_status, rmc_nav, Barometer, GpsPos, ImuMag, Ins1, Ins2, Ins4, Magnetometer,
+    PimuMag, SysSensors,
+};
 use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
-    dev_info, flash, hdw_status, imu_status, rmc, sys_params, DevInfo, Imu, Pimu, Rmc,
+    dev_info, flash, hdw_status, imu_status, rmc, sys_cmd, sys_params, DevInfo, Imu, Pimu, Rmc,
     StrobeInTime, SysParams, SystemCommand,
 };
 use imu_emu::isb::Isb;
@@ -176,6 +182,8 @@ fn the_vendor_tools_connection_sequence() {
         assert!(d.accepted_by_sdk(), "{d:?}");
         assert_eq!(d.hardware_type, dev_info::HARDWARE_TYPE_IMX);
         assert_eq!(d.protocol_ver, [2, 1, 0, 0]);
+        // The IMX-5 firmware released with SDK 2.7.1, not the protocol.
+        assert_eq!(d.firmware_ver, [2, 7, 1, 0]);
         assert_eq!(d.serial_number, 10_000_011);
     }
     for _ in 0..2 {
@@ -218,13 +226,14 @@ fn imu_streams_every_nav_period_with_exact_time() {
     b.run_ticks(100);
     let r = b.send(&hex("ef 49 03 00 08 00 3a 00 00 00 00 00 01 00 7e 0d"));
     assert_eq!(r.len(), 1, "one packet at once");
-    // Whole, without the offset flag, the last tick's sample.
+    // Whole, without the offset flag: the last whole navigation period,
+    // which ended at tick 96 (on the 4 ms grid).
     assert_eq!(
         (r[0].flags, r[0].did, r[0].payload.len()),
         (4, did::IMU, 36)
     );
     let imu = Imu::decode(&r[0].payload.clone().try_into().unwrap());
-    assert_eq!(imu.time, 0.05);
+    assert_eq!(imu.time, 0.048);
     assert!((imu.acc[2] + 9.81).abs() < 0.1, "{:?}", imu.acc);
     let r = b.run_ticks(2000);
     assert_eq!(r.len(), 250);
@@ -236,7 +245,8 @@ fn imu_streams_every_nav_period_with_exact_time() {
         })
         .collect();
     for (k, (p, imu)) in r.iter().zip(&imus).enumerate() {
-        assert_eq!(p.tick, 100 + 8 * (k as u64 + 1));
+        // On the grid: 104, 112, …
+        assert_eq!(p.tick, 96 + 8 * (k as u64 + 1));
         assert_eq!(imu.time, (p.tick * 500_000) as f64 / 1e9, "{k}");
         assert_eq!(imu.status, imu_status::ALL_OK);
         assert!((imu.acc[2] + 9.81).abs() < 0.05, "{:?}", imu.acc);
@@ -261,12 +271,17 @@ fn pimu_integrates_exactly_its_period() {
         rate_dps: [0.0, 0.0, 90.0],
     });
     b.run_ticks(10);
-    b.send(&get(did::PIMU, 2));
+    // The reply at once covers the last whole navigation period (ticks
+    // 0..8): dt = startupNavDtMs, time on the grid.
+    let once = b.send(&get(did::PIMU, 2));
+    let first = Pimu::decode(&once[0].payload.clone().try_into().unwrap());
+    assert_eq!((first.dt, first.time), (0.004, 0.004));
     let r = b.run_ticks(4000);
     assert_eq!(r.len(), 250);
     let mut total = 0.0f64;
     for (k, p) in r.iter().enumerate() {
-        assert_eq!(p.tick, 10 + 16 * (k as u64 + 1));
+        // The stream starts where the reply ended (tick 8): 24, 40, …
+        assert_eq!(p.tick, 8 + 16 * (k as u64 + 1));
         let pimu = Pimu::decode(&p.payload.clone().try_into().unwrap());
         assert_eq!(pimu.dt, 0.008, "{k}");
         assert_eq!(pimu.time, (p.tick * 500_000) as f64 / 1e9);
@@ -517,7 +532,9 @@ fn saturation_reaches_the_status_words() {
     b.dev.chain_mut().set_motion(Motion::ConstantRotation {
         lat_deg: 45.0,
         heading_deg: 0.0,
-        rate_dps: [3000.0, 0.0, 0.0],
+        // Beyond the IMX-5's ±4000 °/s (the fixed-point build saturates
+        // at its truth limit, ±2048 °/s).
+        rate_dps: [5000.0, 0.0, 0.0],
     });
     b.send(&get(did::IMU, 1));
     let r = b.run_ticks(16);
@@ -634,4 +651,523 @@ fn a_changed_key_restores_the_factory_defaults_at_boot() {
     let fc = b.flash_config();
     assert_eq!(u32_at(&fc, flash::KEY), flash::FACTORY_KEY);
     assert_eq!(u32_at(&fc, flash::STARTUP_NAV_DT_MS), 4);
+}
+
+/// The vendor tool's `-factoryReset`: SYS_CMD 1122334455 (unlock) then
+/// 1357924680 back to back restores the FLASH_CONFIG defaults, saves them
+/// and resets; without the unlock right before it, it does nothing.
+#[test]
+fn the_factory_reset_pair_restores_the_defaults_and_resets() {
+    let mut b = Bench::new();
+    let factory = b.flash_config();
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::STARTUP_NAV_DT_MS as u16,
+        &8u32.to_le_bytes(),
+    ));
+    b.run_ticks(1);
+    let changed = b.flash_config();
+    assert_ne!(changed, factory);
+    // The factory reset alone, or with another command between: nothing.
+    for code in [
+        sys_cmd::MANF_FACTORY_RESET,
+        sys_cmd::MANF_UNLOCK,
+        sys_cmd::ZERO_MOTION,
+        sys_cmd::MANF_FACTORY_RESET,
+    ] {
+        b.send(&set(did::SYS_CMD, 0, &SystemCommand::new(code).encode()));
+    }
+    b.run_ticks(2);
+    assert_eq!(b.flash_config(), changed);
+    // The pair as the tool sends it ({1122334455, 3172632840} then
+    // {1357924680, 2937042615}), back to back: each ACKed, then the reset.
+    b.send(&get(did::IMU, 1));
+    let both = hex("ef 49 05 07 08 00 f7 76 e5 42 08 89 1a bd 48 e6 \
+         ef 49 05 07 08 00 48 49 f0 50 b7 b6 0f af 48 da");
+    let r = b.send(&both);
+    assert_eq!(r.iter().filter(|p| p.flags == 1).count(), 2, "{r:?}");
+    b.run_ticks(1);
+    assert_eq!(b.flash_config(), factory, "defaults in RAM");
+    assert!(b.dev.personality().streams().next().is_none(), "it reset");
+    let mut b = b.power_cycle();
+    assert_eq!(b.flash_config(), factory, "and in flash");
+}
+
+// ---- navigation (docs/isb.md "Navigation") -------------------------------
+
+fn ins2_of(p: &Pkt) -> Ins2 {
+    Ins2::decode(&p.payload.clone().try_into().unwrap())
+}
+
+/// Element by element within `tol`.
+fn close(a: &[f64], b: &[f64], tol: f64) {
+    assert!(
+        a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol),
+        "{a:?} vs {b:?}"
+    );
+}
+
+fn of_did(r: &[Pkt], d: u8) -> Vec<Pkt> {
+    r.iter().filter(|p| p.did == d).cloned().collect()
+}
+
+/// After power-on the INS aligns (5 s), runs as an AHRS until the
+/// receiver's cold-start fix (30 s), then navigates: insStatus through
+/// those phases, INS_2 every 4 ms and GPS1_POS every 200 ms by their own
+/// time fields, GPS time once known (week 2399 for the default epoch),
+/// `towOffset` tying the IMU's time since boot to the time of week.
+#[test]
+fn ins_phases_gps_time_and_periods() {
+    let mut b = Bench::new();
+    b.send(&get(did::INS_2, 1));
+    b.send(&get(did::GPS1_POS, 1));
+    let r = b.run_ticks(2000);
+    let ins = of_did(&r, did::INS_2);
+    assert_eq!(ins.len(), 250);
+    let first = ins2_of(&ins[0]);
+    assert_eq!(ins_status::solution(first.header.ins_status), 1, "aligning");
+    assert_eq!((first.header.week, first.qn2b), (0, [1.0, 0.0, 0.0, 0.0]));
+    // Before GPS time: time since boot.
+    assert_eq!(first.header.time_of_week, ins[0].tick as f64 / 2000.0);
+    let r = b.run_ticks(10_000);
+    let s = ins2_of(of_did(&r, did::INS_2).last().unwrap())
+        .header
+        .ins_status;
+    assert_eq!(ins_status::solution(s), ins_status::SOLUTION_AHRS);
+    assert_eq!(s & ins_status::NAV_MODE, 0);
+    let r = b.run_ticks(50_000);
+    let gps = of_did(&r, did::GPS1_POS);
+    let fixes: Vec<GpsPos> = gps
+        .iter()
+        .map(|p| GpsPos::decode(&p.payload.clone().try_into().unwrap()))
+        .filter(|g| g.status != 0)
+        .collect();
+    assert!(!fixes.is_empty());
+    for w in fixes.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+        assert_eq!(w[1].time_of_week_ms % 200, 0);
+    }
+    let g = fixes.last().unwrap();
+    assert_eq!(g.status, 0x0001_030C);
+    assert_eq!((g.week, g.leap_s, g.sats_used), (2399, 18, 12));
+    let ins = of_did(&r, did::INS_2);
+    let last = ins2_of(ins.last().unwrap());
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
+    assert_eq!(last.header.week, 2399);
+    let since_boot = ins.last().unwrap().tick as f64 / 2000.0;
+    assert!((last.header.time_of_week - (g.tow_offset + since_boot)).abs() < 1e-6);
+    for w in ins.windows(2) {
+        let (a, c) = (ins2_of(&w[0]), ins2_of(&w[1]));
+        if a.header.week == c.header.week && a.header.week != 0 {
+            assert!((c.header.time_of_week - a.header.time_of_week - 0.004).abs() < 1e-6);
+        }
+    }
+    // SYS_PARAMS carries the same words.
+    let sp = b.sys_params();
+    assert_eq!(sp.ins_status, 0x0103_5970);
+    assert_ne!(sp.hdw_status & hdw_nav::GPS_TIME_OF_WEEK_VALID, 0);
+}
+
+/// INS_1's NED offset agrees with its LLA and `refLla`; INS_4's ECEF with
+/// INS_2's LLA; qe2b with qe2n ⊗ qn2b; GPS1_POS with the INS within the
+/// stated errors (σ 1 m / 1.5 m receiver, 0.7 m / 1 m INS).
+#[test]
+fn the_navigation_data_sets_agree() {
+    let mut b = Bench::new();
+    let mut ref_lla = Vec::new();
+    for v in [44.9f64, 0.1, -20.0] {
+        ref_lla.extend_from_slice(&v.to_le_bytes());
+    }
+    let r = b.send(&set(did::FLASH_CONFIG, flash::REF_LLA as u16, &ref_lla));
+    assert_eq!(r[0].flags, 1);
+    b.run_ticks(62_000);
+    let one = |b: &mut Bench, d| b.get_once(d);
+    let i1 = Ins1::decode(&one(&mut b, did::INS_1).try_into().unwrap());
+    let i2 = Ins2::decode(&one(&mut b, did::INS_2).try_into().unwrap());
+    let i4 = Ins4::decode(&one(&mut b, did::INS_4).try_into().unwrap());
+    let g = GpsPos::decode(&one(&mut b, did::GPS1_POS).try_into().unwrap());
+    let want = nav::ned_from_ref(&i1.lla, &[44.9, 0.1, -20.0]);
+    close(&i1.ned.map(f64::from), &want, 0.01);
+    assert!((f64::from(i1.ned[0]) - 0.1f64.to_radians() * 6_366_707.019_5).abs() < 5.0);
+    assert_eq!(i1.lla, i2.lla);
+    close(&i4.ecef, &nav::ecef_of(&i2.lla), 1e-6);
+    let q = nav::quat_mul(
+        &nav::quat_e2n(i2.lla[0], i2.lla[1]),
+        &i2.qn2b.map(f64::from),
+    );
+    close(&i4.qe2b.map(f64::from), &q, 1e-6);
+    // Euler of INS_1 = the quaternion of INS_2.
+    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    close(&i1.theta.map(f64::from), &e, 1e-5);
+    // GPS vs INS: within 4σ of the two errors combined.
+    let d = nav::ned_from_ref(&g.lla, &i2.lla);
+    assert!(d[0].hypot(d[1]) < 4.0 * 1.22 * 2f64.sqrt(), "{d:?}");
+    assert!(d[2].abs() < 4.0 * 1.8, "{d:?}");
+    assert_eq!(g.ecef, nav::ecef_of(&g.lla));
+    // The truth: 45° N, level; heading error ≤ 4σ (0.3°).
+    assert!((i2.lla[0] - 45.0).abs() < 1e-4);
+}
+
+/// `fault gps off` (Isb::set_nav_faults): the fix drops, insStatus says
+/// dead reckoning (fix 0, GPS aiding clear), the position error grows as
+/// the drawn acceleration error integrates twice and, after 10 s, the
+/// solution reads "high variance"; once the fix is back the error shrinks
+/// (τ 5 s) and the status is NAV again. Faults outlast a reset.
+#[test]
+fn a_gps_outage_and_its_recovery() {
+    let mut b = Bench::new();
+    b.run_ticks(64_000);
+    assert!(b.dev.personality().nav().has_fix());
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        gps_off: true,
+        ..NavFaults::default()
+    });
+    b.run_ticks(4000);
+    let sp = b.sys_params();
+    assert!(
+        ins_status::dead_reckoning(sp.ins_status),
+        "{:#x}",
+        sp.ins_status
+    );
+    assert_eq!(sp.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+    assert_eq!(sp.hdw_status & hdw_nav::GPS_SATELLITE_RX_VALID, 0);
+    let g = GpsPos::decode(&b.get_once(did::GPS1_POS).try_into().unwrap());
+    assert_eq!(g.status, 0);
+    let e2 = b.dev.personality().nav().dead_reckoning_error();
+    b.run_ticks(40_000);
+    let sp = b.sys_params();
+    assert_eq!(
+        ins_status::solution(sp.ins_status),
+        4,
+        "{:#x}",
+        sp.ins_status
+    );
+    let e22 = b.dev.personality().nav().dead_reckoning_error();
+    let h = |e: [f64; 3]| e[0].hypot(e[1]);
+    assert!(h(e22) > 50.0 * h(e2), "{e2:?} {e22:?}");
+    b.dev.personality_mut().set_nav_faults(NavFaults::default());
+    b.run_ticks(40_000);
+    let sp = b.sys_params();
+    assert_eq!(sp.ins_status, 0x0103_5970);
+    let back = b.dev.personality().nav().dead_reckoning_error();
+    assert!(h(back) < 0.05 * h(e22), "{back:?}");
+}
+
+/// MAGNETOMETER every 10 ms and BAROMETER every 8 ms by their time fields;
+/// the field's inclination at 45° N is the dipole's atan(2) = 63.4°; the
+/// pressure is the ISA's at 0 m; a magnetic disturbance and a barometer
+/// failure reach insStatus / hdwStatus.
+#[test]
+fn magnetometer_and_barometer() {
+    let mut b = Bench::new();
+    b.send(&get(did::MAGNETOMETER, 1));
+    b.send(&get(did::BAROMETER, 1));
+    let r = b.run_ticks(12_000);
+    let mags: Vec<Magnetometer> = of_did(&r, did::MAGNETOMETER)
+        .iter()
+        .map(|p| Magnetometer::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    let baros: Vec<Barometer> = of_did(&r, did::BAROMETER)
+        .iter()
+        .map(|p| Barometer::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!((mags.len(), baros.len()), (600, 750));
+    for w in mags.windows(2) {
+        assert!((w[1].time - w[0].time - 0.010).abs() < 1e-9);
+    }
+    for w in baros.windows(2) {
+        assert!((w[1].time - w[0].time - 0.008).abs() < 1e-9);
+    }
+    let m = mags.last().unwrap().mag.map(f64::from);
+    let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    assert!((n - 1.0).abs() < 0.01, "{m:?}");
+    // Body down = −(chain z): at rest the vertical component is m[2].
+    let incl = (m[2] / n).asin().to_degrees();
+    assert!((incl - 2f64.atan().to_degrees()).abs() < 0.5, "{incl}");
+    // The built-in site's height (where normal gravity is the ICD's g).
+    let h = nav::truth_of(b.dev.chain()).h_m;
+    let p = baros.last().unwrap();
+    assert!(
+        (f64::from(p.bar) - ins::isa_kpa(h)).abs() < 0.01,
+        "{p:?} at {h} m"
+    );
+    // mslBar is the SDK's baro2msl of the pressure (an exponential
+    // atmosphere: 22 m from the ISA at this height).
+    let sdk = -8434.668 * (f64::from(p.bar) / 101.325).ln();
+    assert!((f64::from(p.msl_bar) - sdk).abs() < 0.01, "{p:?}");
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        mag_disturbed: true,
+        baro_failed: true,
+        ..NavFaults::default()
+    });
+    b.run_ticks(40);
+    let sp = b.sys_params();
+    assert_ne!(sp.ins_status & ins_status::MAG_INTERFERENCE_OR_BAD_CAL, 0);
+    assert_eq!(sp.ins_status & ins_status::MAG_AIDING_HEADING, 0);
+    assert_ne!(sp.hdw_status & hdw_nav::SATURATION_BARO, 0);
+    let r = b.run_ticks(400);
+    let frozen: Vec<f32> = of_did(&r, did::BAROMETER)
+        .iter()
+        .map(|p| Barometer::decode(&p.payload.clone().try_into().unwrap()).bar)
+        .collect();
+    assert!(frozen.windows(2).all(|w| w[0] == w[1]), "{frozen:?}");
+}
+
+/// The RMC presets of SDK 2.7.1: INS (INS_2 and GPS1_POS at their source
+/// periods) and PPD (INS_2 every 100 ms, PIMU every 4 ms, MAGNETOMETER,
+/// BAROMETER, GPS1_POS, GPS1_VEL at theirs); persistent with `$PERS`.
+#[test]
+fn rmc_presets_and_persistent_navigation_streams() {
+    let mut b = Bench::new();
+    let rmc_set = |b: &mut Bench, bits: u64| {
+        let r = b.send(&set(did::RMC, 0, &Rmc { bits, options: 0 }.encode()));
+        assert_eq!(r[0].flags, 1);
+    };
+    rmc_set(&mut b, rmc_nav::PRESET_INS);
+    let r = b.run_ticks(2000);
+    assert_eq!(of_did(&r, did::INS_2).len(), 250);
+    assert_eq!(of_did(&r, did::GPS1_POS).len(), 5);
+    rmc_set(&mut b, rmc_nav::PRESET_PPD);
+    let r = b.run_ticks(2000);
+    let count = |d| of_did(&r, d).len();
+    assert_eq!(
+        [
+            count(did::INS_2),
+            count(did::PIMU),
+            count(did::MAGNETOMETER),
+            count(did::BAROMETER),
+            count(did::GPS1_POS),
+            count(did::GPS1_VEL),
+            count(did::IMU)
+        ],
+        [10, 250, 100, 125, 5, 5, 0]
+    );
+    b.send(b"$PERS*14\r\n");
+    let mut b = b.power_cycle();
+    let r = b.run_ticks(2000);
+    assert_eq!(of_did(&r, did::INS_2).len(), 10);
+    assert_eq!(of_did(&r, did::BAROMETER).len(), 125);
+}
+
+/// Bad input: writes to the read-only navigation sets are NACKed; an
+/// absurd `refLla` or `startupGPSDtMs` is NACKed and changes nothing; a
+/// GET window past the end gives the whole set.
+#[test]
+fn bad_navigation_input() {
+    let mut b = Bench::new();
+    let nav_dids = [
+        did::INS_1,
+        did::INS_2,
+        did::INS_3,
+        did::INS_4,
+        did::GPS1_POS,
+        did::GPS1_VEL,
+        did::MAGNETOMETER,
+        did::BAROMETER,
+        did::SYS_SENSORS,
+        did::IMU_MAG,
+        did::PIMU_MAG,
+    ];
+    for d in nav_dids {
+        let size = did::lookup(u16::from(d)).unwrap().size;
+        // Read-only: a SET changing bytes is NACKed, at any offset.
+        for off in [0u16, 4, size - 4] {
+            let r = b.send(&set(d, off, &[0xFF; 4]));
+            assert_eq!(r[0].flags, 2, "DID {d} @{off}");
+        }
+        // A part: the offset flag and exactly those bytes; a window past
+        // the end: the whole set without it.
+        for (sz, off, flags, len) in [
+            (4u16, 4u16, 0x24, 6),
+            (size, 8, 4, size),
+            (4, size, 4, size),
+        ] {
+            let req = GetRequest {
+                did: u16::from(d),
+                size: sz,
+                offset: off,
+                period: 0,
+            };
+            let mut out = [0u8; 64];
+            let n = message::encode_get(&req, &mut out).unwrap();
+            let r = b.send(&out[..n]);
+            assert_eq!(
+                (r[0].flags, r[0].payload.len()),
+                (flags, usize::from(len)),
+                "DID {d} size {sz} offset {off}"
+            );
+        }
+    }
+    let before = b.flash_config();
+    for (off, v) in [
+        (flash::REF_LLA, 91f64.to_le_bytes().to_vec()),
+        (flash::REF_LLA + 16, f64::NAN.to_le_bytes().to_vec()),
+        (flash::STARTUP_GPS_DT_MS, 50u32.to_le_bytes().to_vec()),
+    ] {
+        let r = b.send(&set(did::FLASH_CONFIG, off as u16, &v));
+        assert_eq!(r[0].flags, 2, "offset {off}");
+    }
+    assert_eq!(b.flash_config(), before);
+    let req = GetRequest {
+        did: u16::from(did::INS_1),
+        size: 200,
+        offset: 70,
+        period: 0,
+    };
+    let mut out = [0u8; 64];
+    let n = message::encode_get(&req, &mut out).unwrap();
+    let r = b.send(&out[..n]);
+    assert_eq!((r[0].flags, r[0].payload.len()), (4, 80));
+}
+
+/// PIMU_MAG every 2 navigation periods: the PIMU part is the same window
+/// PIMU gives (dt 8 ms, on the grid), the magnetometer part carries the
+/// same time; IMU_MAG the same with an IMU; SYS_SENSORS at once with the
+/// measurement at rest (−g down), the ISA pressure and a unit field; the
+/// RMC bits of IMU_MAG and PIMU_MAG start them.
+#[test]
+fn imu_mag_pimu_mag_and_sys_sensors() {
+    let mut b = Bench::new();
+    b.run_ticks(10);
+    b.send(&get(did::PIMU_MAG, 2));
+    let r = b.run_ticks(400);
+    let ps: Vec<PimuMag> = of_did(&r, did::PIMU_MAG)
+        .iter()
+        .map(|p| PimuMag::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(ps.len(), 25);
+    for (p, pkt) in ps.iter().zip(of_did(&r, did::PIMU_MAG)) {
+        assert_eq!(p.pimu.dt, 0.008);
+        assert_eq!(p.pimu.time, pkt.tick as f64 / 2000.0);
+        assert_eq!(p.mag.time, p.pimu.time);
+        assert!((p.pimu.vel[2] + 9.8106 * 0.008).abs() < 2e-3, "{p:?}");
+    }
+    let s = SysSensors::decode(&b.get_once(did::SYS_SENSORS).try_into().unwrap());
+    assert!((s.acc[2] + 9.81).abs() < 0.1, "{s:?}");
+    let h = nav::truth_of(b.dev.chain()).h_m;
+    assert!((f64::from(s.bar) - ins::isa_kpa(h)).abs() < 0.01);
+    assert!((f64::from(s.msl_bar) + 8434.668 * (f64::from(s.bar) / 101.325).ln()).abs() < 0.01);
+    let m = s.mag.map(f64::from);
+    assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);
+    let r = b.send(&set(
+        did::RMC,
+        0,
+        &Rmc {
+            bits: rmc_nav::BITS_IMU_MAG,
+            options: 0,
+        }
+        .encode(),
+    ));
+    assert_eq!(r[0].flags, 1);
+    let r = b.run_ticks(80);
+    let im = of_did(&r, did::IMU_MAG);
+    assert_eq!(im.len(), 10);
+    let i = ImuMag::decode(&im[0].payload.clone().try_into().unwrap());
+    assert_eq!((i.imu.time, i.mag.time), (i.imu.time, i.imu.time));
+    assert!((i.imu.acc[2] + 9.81).abs() < 0.1);
+}
+
+/// FLASH_CONFIG navigation fields take effect: `gps1AntOffset` 10 m up
+/// (sensor z is down) raises GPS1_POS by 10 m against the INS; a yaw of
+/// 90° in `insRotation` turns INS_1's yaw by 90°; a strobe after the fix
+/// carries GPS week and time of week.
+#[test]
+fn navigation_flash_config_fields_take_effect() {
+    let mut b = Bench::new();
+    b.run_ticks(62_000);
+    let yaw0 = Ins1::decode(&b.get_once(did::INS_1).try_into().unwrap()).theta[2];
+    let mut ant = Vec::new();
+    for v in [0f32, 0.0, -10.0] {
+        ant.extend_from_slice(&v.to_le_bytes());
+    }
+    b.send(&set(did::FLASH_CONFIG, flash::GPS1_ANT_OFFSET as u16, &ant));
+    let mut rot = Vec::new();
+    for v in [0f32, 0.0, std::f32::consts::FRAC_PI_2] {
+        rot.extend_from_slice(&v.to_le_bytes());
+    }
+    b.send(&set(did::FLASH_CONFIG, flash::INS_ROTATION as u16, &rot));
+    b.run_ticks(1);
+    let i1 = Ins1::decode(&b.get_once(did::INS_1).try_into().unwrap());
+    let g = GpsPos::decode(&b.get_once(did::GPS1_POS).try_into().unwrap());
+    let up = g.lla[2] - i1.lla[2];
+    assert!((up - 10.0).abs() < 4.0 * 1.8, "{up}");
+    let turned = (i1.theta[2] - yaw0).rem_euclid(std::f32::consts::TAU);
+    assert!(
+        (turned - std::f32::consts::FRAC_PI_2).abs() < 0.01,
+        "{turned}"
+    );
+    b.send(&get(did::STROBE_IN_TIME, 1));
+    b.dev.on_pin(Pin::Extrig, Level::High, Instant(b.now));
+    let r = b.drain();
+    let s = StrobeInTime::decode(&r[0].payload.clone().try_into().unwrap());
+    assert_eq!(s.week, 2399);
+    assert!(s.time_of_week_ms > 4 * 86_400_000);
+}
+
+/// An IMX-5 on a scripted vehicle (`imu_emu::vehicle`, the board's source
+/// set before each tick as the host runner does): its IMU reads the
+/// forward acceleration on its x axis (the IMX body frame is the
+/// vehicle's, forward-right-down), and once navigating its INS_2 reports
+/// the vehicle's position, heading and body velocity within the INS error
+/// model's bounds.
+#[test]
+fn the_ins_reports_the_vehicle_it_rides_on() {
+    use imu_emu::vehicle::{Manoeuvres, Script};
+    let script = "start 45.5 7.25 300 90 10; hold 40; accel 2 5; hold 100";
+    let mut m = Manoeuvres::new(Script::parse(script).unwrap());
+    let mut b = Bench::new();
+    let period = b.dev.tick_period_ns();
+    let mut step = |b: &mut Bench, n: u64| {
+        let mut out = Vec::new();
+        for _ in 0..n {
+            let t = (b.ticks + 1) as f64 * period as f64 * 1e-9;
+            let s = m.at(t);
+            b.dev.chain_mut().set_vehicle(s, s.truth());
+            out.extend(b.run_ticks(1));
+        }
+        out
+    };
+    step(&mut b, 80_000); // 40 s: aligned, GPS fix, navigating
+    b.send(&get(did::IMU, 1));
+    let r = step(&mut b, 4_000); // 2 s into `accel 2 5`
+    let imu: Vec<Imu> = of_did(&r, did::IMU)
+        .iter()
+        .map(|p| Imu::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    let last = imu.last().unwrap();
+    // Forward: +2 m/s² on x; right: ~0; down: −g.
+    assert!((f64::from(last.acc[0]) - 2.0).abs() < 0.05, "{last:?}");
+    assert!(f64::from(last.acc[1]).abs() < 0.05, "{last:?}");
+    assert!((f64::from(last.acc[2]) + 9.8).abs() < 0.05, "{last:?}");
+    let i2 = Ins2::decode(&b.get_once(did::INS_2).try_into().unwrap());
+    let truth = m.at(b.ticks as f64 * period as f64 * 1e-9);
+    assert_eq!(
+        i2.header.ins_status & ins_status::NAV_MODE,
+        ins_status::NAV_MODE,
+        "{:#x}",
+        i2.header.ins_status
+    );
+    // Position within a few metres (σ 0.7 m / 1 m), body velocity along x.
+    let d = nav::ned_from_ref(
+        &i2.lla,
+        &[
+            truth.lat_rad.to_degrees(),
+            truth.lon_rad.to_degrees(),
+            truth.height_m,
+        ],
+    );
+    assert!(d[0].hypot(d[1]) < 5.0 && d[2].abs() < 5.0, "{d:?}");
+    let speed = (truth.vel_ned[0].powi(2) + truth.vel_ned[1].powi(2)).sqrt();
+    assert!(
+        (f64::from(i2.uvw[0]) - speed).abs() < 0.5,
+        "{i2:?} vs {speed}"
+    );
+    assert!(f64::from(i2.uvw[1]).abs() < 0.5, "{i2:?}");
+    // Heading east (90°) within a degree.
+    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    assert!((e[2].to_degrees() - 90.0).abs() < 1.0, "{e:?}");
 }

@@ -269,10 +269,12 @@ fn static_after_alignment_with_default_errors() {
     ];
     let n = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     let (pitch, roll) = ((f[1] / n).asin() / DEG, (-f[0]).atan2(f[2]) / DEG);
-    // Within 0.05°: the residual gyro bias after a 2 s alignment (noise
-    // N/√2 s ≈ 0.002 °/s) holds the tilt loop off by bias/k_p ≈ 0.02°.
+    // Within 0.1°: the residual gyro bias after a 2 s alignment (noise
+    // N/√2 s ≈ 0.002 °/s, and the bias instability's flicker terms of 1 s
+    // and 10 s corner moving over the minute, 0.86·B ≈ 5e-4 °/s each)
+    // holds the tilt loop off by bias/k_p, a few hundredths of a degree.
     assert!(
-        (s.euler[1] - pitch).abs() < 0.05 && (s.euler[2] - roll).abs() < 0.05,
+        (s.euler[1] - pitch).abs() < 0.1 && (s.euler[2] - roll).abs() < 0.1,
         "{:?} vs {pitch} {roll}",
         s.euler
     );

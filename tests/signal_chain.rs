@@ -196,8 +196,11 @@ fn output_variants_instant_average_incremental() {
             }
         }
     }
+    // With the LPF off, Instant decimates by the interval mean (the band
+    // limit of `ChainConfig::instant_sample_limit`): 1.0 over 40 ticks;
+    // at one tick an interval it is each tick's value (below).
     for (variant, expect) in [
-        (OutputVariant::Instant, 2.0),
+        (OutputVariant::Instant, 1.0),
         (OutputVariant::Average, 1.0),
         (OutputVariant::Incremental, 1.0),
     ] {
@@ -224,6 +227,13 @@ fn output_variants_instant_average_incremental() {
             s.acc[2]
         );
         assert!((c.output_interval() - 0.02).abs() < 1e-7);
+        if variant == OutputVariant::Instant {
+            for t in 41..=44u64 {
+                c.tick_with(Instant::from_micros(500 * t), &mut src);
+                let v = if t % 2 == 0 { 2.0 } else { 0.0 };
+                assert_eq!(c.output().gyro[2], v, "tick {t}");
+            }
+        }
         // Average_Output_Data = 1 forces the average.
         assert_eq!(config::output_variant(0, 1), OutputVariant::Average);
         assert_eq!(config::output_variant(2, 1), OutputVariant::Average);
@@ -458,11 +468,13 @@ fn from_block_reads_the_parameter_rows() {
 
 /// The chain's share of RAM (the firmware has 64 KiB of static RAM for the
 /// whole image; the device around the chain takes ~6 KiB): the chain fits
-/// 10 KiB in either build.
+/// 12 KiB in either build (10 KiB before it carried the vehicle state a
+/// board's source sets, ≈ 200 B of `f64`, and the flicker terms of the
+/// sensor profiles).
 #[test]
-fn size_of_the_chain_fits_the_10_kib_budget() {
+fn size_of_the_chain_fits_the_12_kib_budget() {
     let n = core::mem::size_of::<SignalChain>();
-    assert!(n <= 10 * 1024, "{n}");
+    assert!(n <= 12 * 1024, "{n}");
 }
 
 /// The neutral health reports accelerometer axes beyond their range too

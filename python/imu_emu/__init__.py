@@ -10,6 +10,10 @@ Standard library only. Three parts:
   :class:`Uart`, with one control socket addressing each.
 * :class:`Control` -- the control socket (pins, faults, link faults,
   ``status``), with events kept apart from replies.
+* :func:`read_profile` -- a sensor profile file (``--sensor-profile``).
+
+* :class:`FeedEmulator` -- an emulator moved by a live motion feed
+  (:mod:`imu_emu.feed`), in real time or in lockstep.
 
 A pytest fixture is in :mod:`imu_emu.pytest_plugin`.
 """
@@ -30,3 +34,5 @@ from .kernel import (  # noqa: F401
     stop,
 )
 from .emulator import Control, Emulator, Fleet, Uart, find_binary  # noqa: F401
+from .feed import Feed, FeedEmulator, encode_sample, text_row  # noqa: F401
+from .profile import ProfileError, read_profile  # noqa: F401

@@ -43,6 +43,26 @@ class CodecTest(unittest.TestCase):
         self.assertEqual(d["temp_c"], 25.3)
 
 
+class ProfileTest(unittest.TestCase):
+    def test_a_shown_builtin_profile_reads_with_its_datasheet_figures(self):
+        import subprocess
+        import tempfile
+        text = subprocess.run([imu_emu.find_binary(), "sensor-profile", "show", "IMX-5"],
+                              check=True, capture_output=True).stdout
+        with tempfile.TemporaryDirectory() as d:
+            path = Path(d) / "imx5.toml"
+            path.write_bytes(text)
+            p = imu_emu.read_profile(path)
+            self.assertEqual(p["gyro"]["range"], 4000.0)
+            self.assertAlmostEqual(p["gyro"]["datasheet"]["arw_deg_rt_h"], 0.16, places=6)
+            self.assertAlmostEqual(p["gyro"]["datasheet"]["bias_instability_deg_h"], 1.5, places=5)
+            self.assertAlmostEqual(p["acc"]["datasheet"]["vrw_m_s_rt_h"], 0.02, places=6)
+            self.assertAlmostEqual(p["acc"]["datasheet"]["bias_instability_ug"], 19.0, places=3)
+            path.write_bytes(text.replace(b"resolution", b"resolutoin", 1))
+            with self.assertRaisesRegex(imu_emu.ProfileError, "gyro.resolutoin"):
+                imu_emu.read_profile(path)
+
+
 class EmulatorTest(unittest.TestCase):
     def setUp(self):
         self.emu = imu_emu.Emulator(["--seed", "1"])

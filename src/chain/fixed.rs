@@ -173,7 +173,8 @@ impl Core {
             motion: BuiltinMotionFixed::new(Motion::default(), dt),
             mounting: MountingFixed::new(&mounting),
             cascade: CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantFixed::new(cfg.output_variant, dt, &x),
+            variant: VariantFixed::new(cfg.output_variant, dt, &x)
+                .with_sample_limit(cfg.instant_sample_limit()),
             attitude: AttitudeFixed::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
             temp_pending: 0,
             bias_fir: [0; 3],
@@ -237,10 +238,10 @@ impl Core {
                 self.mounting.to_sensor(&truth.force),
             ),
         };
-        let (g, over) = self.engines[0].measure(&rate, rng);
-        let (a, over_a) = self.engines[1].measure(&force, rng);
+        let (g, over) = self.engines[0].measure(&rate, &force, rng);
+        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
         let aux = if has_aux {
-            self.engines[2].measure(&force, rng).0
+            self.engines[2].measure(&force, &force, rng).0
         } else {
             [0; 3]
         };
@@ -299,7 +300,8 @@ impl Core {
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         self.mounting = MountingFixed::new(&mounting);
-        self.variant = VariantFixed::new(cfg.output_variant, dt, &last);
+        self.variant = VariantFixed::new(cfg.output_variant, dt, &last)
+            .with_sample_limit(cfg.instant_sample_limit());
     }
 
     /// Chooses a built-in motion.

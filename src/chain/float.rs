@@ -77,7 +77,7 @@ pub fn truth_of(t: &TruthF32) -> Truth {
     *t
 }
 
-/// The truth clamped to what the sensor model can take (±2048 °/s,
+/// The truth clamped to what the sensor model can take (±8192 °/s,
 /// ±128 g: [`TruthF32::bounded`]), so a value beyond `f32` saturates the
 /// sensor instead of turning into NaN.
 #[inline(always)]
@@ -125,7 +125,8 @@ impl Core {
             motion: BuiltinMotion::new(Motion::default(), dt),
             mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
             cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
+            variant: VariantAccumulator::new(cfg.output_variant, dt, &x)
+                .with_sample_limit(cfg.instant_sample_limit()),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
         };
         // A unit without the aux accelerometer does not filter its (zero)
@@ -182,10 +183,10 @@ impl Core {
                 self.mounting.to_sensor(&truth.specific_force_g),
             ),
         };
-        let (g, over) = self.engines[0].measure(&rate, rng);
-        let (a, over_a) = self.engines[1].measure(&force, rng);
+        let (g, over) = self.engines[0].measure(&rate, &force, rng);
+        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
         let aux = if has_aux {
-            self.engines[2].measure(&force, rng).0
+            self.engines[2].measure(&force, &force, rng).0
         } else {
             [0.0; 3]
         };
@@ -233,7 +234,8 @@ impl Core {
         self.cascade
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
         self.mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
-        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last);
+        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last)
+            .with_sample_limit(cfg.instant_sample_limit());
     }
 
     /// Chooses a built-in motion.

@@ -221,6 +221,7 @@ pub struct Cascade {
 /// Slot-major (each slot's nine channels contiguous: the section-by-section
 /// loop vectorises) except on ARM, where the channel-by-channel loop reads a
 /// channel's slots at small fixed offsets.
+// Fork by architecture: SIMD lanes on hosts, registers on ARM; bit-identical results.
 const SLOT_MAJOR: bool = !cfg!(target_arch = "arm");
 
 /// Index of slot `k`, channel `c` in [`Cascade`]'s state.
@@ -368,6 +369,7 @@ impl Cascade {
     /// operations on the same operands: bit-identical (a unit test pins it).
     #[inline(always)]
     fn run<const M: u8>(&mut self, x: &mut [f32; CHANNELS]) {
+        // Fork by architecture, as `SLOT_MAJOR`.
         if cfg!(target_arch = "arm") {
             self.run_by_channel::<M>(x)
         } else {

@@ -550,6 +550,7 @@ macro_rules! each_channel {
 /// Channels `N` and beyond are not filtered (they read 0): `N` <
 /// [`CHANNELS`] only for a unit without the aux accelerometer
 /// (`FirBank::set_aux_live`).
+// Fork by architecture: inlined on ARM, a row load takes one more instruction.
 #[cfg_attr(target_arch = "arm", inline(never))]
 #[cfg_attr(not(target_arch = "arm"), inline(always))]
 fn run_f32<const L: usize, const N: usize>(

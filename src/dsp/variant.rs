@@ -5,7 +5,11 @@
 //! channels; at an output tick [`VariantAccumulator::take`] gives, over the
 //! interval since the previous output:
 //!
-//! - **Instant**: the last tick's values.
+//! - **Instant**: the last tick's values — while the interval is at most
+//!   [`VariantAccumulator::with_sample_limit`] ticks (the FIR band-limits
+//!   the signal below the output's Nyquist frequency); over a longer
+//!   interval the mean of its ticks (the decimation's band limit:
+//!   [`crate::chain::ChainConfig::instant_sample_limit`]).
 //! - **Average**: the mean of the interval's ticks ("if the IMU's data rate is
 //!   500 Hz, … the mean of four values"; at the internal rate it is instant).
 //! - **Incremental**: the angle increment Δθ and the velocity increment Δv
@@ -67,6 +71,8 @@ pub struct VariantOutput {
 pub struct VariantAccumulator {
     variant: OutputVariant,
     dt: f32,
+    /// Instant: the longest interval (ticks) that is sampled, not averaged.
+    sample_limit: u32,
     n: u32,
     first: [f32; CHANNELS],
     first_f: [f32; CHANNELS],
@@ -91,6 +97,7 @@ impl VariantAccumulator {
         VariantAccumulator {
             variant,
             dt,
+            sample_limit: u32::MAX,
             n: 0,
             first: [0.0; CHANNELS],
             first_f: [0.0; CHANNELS],
@@ -103,6 +110,14 @@ impl VariantAccumulator {
             upsilon: [[0.0; 3]; 2],
             sculling: [[0.0; 3]; 2],
         }
+    }
+
+    /// Instant over an interval longer than `ticks` gives the interval's
+    /// mean of the main channels (the decimation's band limit); the
+    /// default samples at every interval.
+    pub fn with_sample_limit(mut self, ticks: u32) -> Self {
+        self.sample_limit = ticks.max(1);
+        self
     }
 
     /// The variant.
@@ -132,7 +147,14 @@ impl VariantAccumulator {
         self.last = *main;
         self.last_f = *filtered;
         if self.variant == OutputVariant::Instant {
+            // The main channels' sum, for an interval beyond the limit.
+            if self.n == 0 {
+                self.first = *main;
+            }
             self.n += 1;
+            for c in 0..CHANNELS {
+                self.sum[c] += main[c] - self.first[c];
+            }
             return;
         }
         if self.n == 0 {
@@ -181,6 +203,12 @@ impl VariantAccumulator {
             filtered: self.last_f,
             ticks: n.max(1),
         };
+        if self.variant == OutputVariant::Instant && n > self.sample_limit {
+            let inv = 1.0 / n as f32;
+            for c in 0..CHANNELS {
+                out.main[c] = self.first[c] + self.sum[c] * inv;
+            }
+        }
         if n > 0 && self.variant != OutputVariant::Instant {
             let inv = 1.0 / n as f32;
             for c in 0..CHANNELS {
@@ -248,6 +276,8 @@ pub struct VariantOutputFixed {
 #[derive(Debug, Clone)]
 pub struct VariantFixed {
     variant: OutputVariant,
+    /// Instant: the longest interval (ticks) that is sampled, not averaged.
+    sample_limit: u32,
     /// The block exponent s (LSB of C and S: 2^2s units²).
     shift: u8,
     /// ½·G.
@@ -300,6 +330,7 @@ impl VariantFixed {
     pub fn new(variant: OutputVariant, dt: f32, last: &[i32; CHANNELS]) -> Self {
         VariantFixed {
             variant,
+            sample_limit: u32::MAX,
             shift: 0,
             half_g: 0.5 * dt * DEG / 131_072.0,
             n: 0,
@@ -310,6 +341,12 @@ impl VariantFixed {
             coning: [0; 3],
             sculling: [[0; 3]; 2],
         }
+    }
+
+    /// [`VariantAccumulator::with_sample_limit`].
+    pub fn with_sample_limit(mut self, ticks: u32) -> Self {
+        self.sample_limit = ticks.max(1);
+        self
     }
 
     /// The variant.
@@ -338,6 +375,10 @@ impl VariantFixed {
         self.last = *main;
         self.last_f = *filtered;
         if self.variant == OutputVariant::Instant {
+            // The main channels' sum, for an interval beyond the limit.
+            for c in 0..CHANNELS {
+                self.sum[c] = self.sum[c].wrapping_add(i64::from(main[c]));
+            }
             self.n = self.n.saturating_add(1);
             return;
         }
@@ -389,6 +430,12 @@ impl VariantFixed {
             filtered: self.last_f,
             ticks: n.max(1),
         };
+        if self.variant == OutputVariant::Instant && n > self.sample_limit {
+            let r = Recip::new(n);
+            for c in 0..CHANNELS {
+                out.main[c] = r.div_round(self.sum[c]);
+            }
+        }
         if n > 0 && self.variant != OutputVariant::Instant {
             let r = Recip::new(n);
             for c in 0..CHANNELS {

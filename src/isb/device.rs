@@ -19,7 +19,10 @@
 //!   exactly the ticks since its previous packet (PIMU: coning- and
 //!   sculling-corrected Δθ, Δv, with `dt` that window; IMU and IMU_RAW: the
 //!   window's mean rate and specific force). The packet a GET sends at
-//!   once covers the last tick. Axes: the IMX's body frame is forward,
+//!   once covers the last whole source period (on the grid of periods
+//!   counted from power-on), a stream starts where it ended and sends on
+//!   that grid, so `time` is a multiple of the period and PIMU `dt` is
+//!   always `n ×` the period. Axes: the IMX's body frame is forward,
 //!   right, down; the chain's carrier frame is the KERNEL's (x, y, z up),
 //!   so the IMX reports `(x, −y, −z)` — at rest `acc = (0, 0, −g)`.
 //! - **SET_DATA** ([`message::apply_set`]): FLASH_CONFIG (checksum
@@ -28,15 +31,23 @@
 //!   apply after a reset: "system reset required" while they differ from
 //!   the running values), RMC (below), SYS_CMD (1 save persistent
 //!   messages, 97 save flash, 99 software reset, 5 zero motion: accepted,
-//!   no effect; ignored unless `invCommand == !command`), SYS_PARAMS
+//!   no effect; 1122334455 then 1357924680: factory reset of FLASH_CONFIG,
+//!   saved, then a reset; ignored unless `invCommand == !command`), SYS_PARAMS
 //!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
 //!   done, the result from the chain's BIT faults).
 //! - **RMC**: its bits stand for the streams of the data sets that have an
-//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW); a SET starts those whose
+//!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW and the navigation sets;
+//!   with `RMC_BITS_PRESET` the device picks the multiples, `docs/isb.md`); a SET starts those whose
 //!   bit is set (period multiple 1) and, without `OPTIONS_PRESERVE_CTRL`,
 //!   stops those whose bit is clear; `OPTIONS_PERSISTENT` then saves the
 //!   streams as persistent. The port mask is ignored (one port). A GET of
 //!   RMC reads the bits of the running streams.
+//! - **Navigation** (INS_1..4, GPS1_POS, GPS1_VEL, MAGNETOMETER,
+//!   BAROMETER, SYS_SENSORS, IMU_MAG, PIMU_MAG): built by
+//!   [`crate::isb::ins`] from [`crate::isb::nav::truth_of`], the INS and
+//!   GNSS models stepped every [`ins::STEP_MS`]; GPS time from
+//!   [`Isb::set_gps_time`]; faults from [`Isb::set_nav_faults`]
+//!   (`docs/isb.md` "Navigation").
 //! - **STROBE_IN_TIME** is sent on every rising EXTRIG edge while its
 //!   stream is on (a GET with `n > 0`, or its RMC bit), counting edges
 //!   since power-on, time of week = ms since power-on (no GPS).
@@ -54,13 +65,18 @@
 //!   (a packet dropped because the line was too slow) and the parse-error
 //!   count.
 
+use core::cell::Cell;
+
 use heapless::Vec;
 
 use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::did::{self, DataSet};
+use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
+use crate::isb::nav::{self, GpsTime, NavTruth};
+use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
@@ -71,8 +87,11 @@ use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
 
-/// Streams the device runs at once (one per DID; there are 10 data sets).
+/// Persistent streams the image holds (the first ten running streams are
+/// saved; the image layout is unchanged since the IMU-mode device).
 pub const MAX_STREAMS: usize = 10;
+/// Streams the device runs at once (one per served data set).
+pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// Bytes of one persistent-stream entry in the image: `u8 did, u8 0,
 /// u16 size, u16 offset, u16 period`.
 const ENTRY: usize = 8;
@@ -124,11 +143,17 @@ struct State {
     nav_dt_ms: u32,
     baud: u32,
     save_pending: bool,
-    streams: Vec<Stream, MAX_STREAMS>,
+    streams: Vec<Stream, MAX_RUNNING>,
     rmc_options: u32,
-    /// The integrals before the last tick (the window of a one-shot
-    /// IMU/PIMU: that tick).
-    prev: Integrals,
+    /// The integrals at the last two boundaries of the navigation period
+    /// and of the IMU sample period (ticks since power-on a multiple of
+    /// it): a one-shot IMU/PIMU covers the last whole period, a stream
+    /// starts at the last boundary (module doc).
+    nav_grid: [Integrals; 2],
+    imu_grid: [Integrals; 2],
+    /// The manufacturing unlock (SYS_CMD 1122334455) was the last command:
+    /// a factory reset may follow.
+    unlocked: bool,
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
@@ -137,6 +162,16 @@ struct State {
     tx_limited: bool,
     /// ISB candidates dropped (bad checksum, size) since power-on.
     parse_errors: u32,
+    /// `startupGPSDtMs` at boot.
+    gps_dt_ms: u32,
+    /// The navigation side: INS, GNSS, magnetometer, barometer.
+    nav: NavState,
+    /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
+    /// board: `Isb::set_gps_time`).
+    gps_ns_at_zero: u64,
+    /// The navigation truth of a tick (read once a tick however many
+    /// navigation packets go out: deriving it is `f64` work).
+    truth: Cell<Option<(u64, NavTruth)>>,
 }
 
 /// The ISB personality (module doc): an IMX-5 in IMU mode.
@@ -162,13 +197,19 @@ impl Personality for Isb {
                 save_pending: false,
                 streams: Vec::new(),
                 rmc_options: 0,
-                prev: Integrals::default(),
+                nav_grid: [Integrals::default(); 2],
+                imu_grid: [Integrals::default(); 2],
+                unlocked: false,
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
+                gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
+                nav: NavState::new(0),
+                gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
+                truth: Cell::new(None),
             },
         }
     }
@@ -199,13 +240,22 @@ impl Personality for Isb {
         st.save_pending = false;
         st.streams.clear();
         st.rmc_options = 0;
-        st.prev = cx.chain().integrals();
+        let at_boot = cx.chain().integrals();
+        st.nav_grid = [at_boot; 2];
+        st.imu_grid = [at_boot; 2];
+        st.unlocked = false;
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
         st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
+        st.gps_dt_ms = st.cfg.u32_at(flash::STARTUP_GPS_DT_MS).clamp(200, 60_000);
+        // Injected faults outlast a reset (the antenna is still cut).
+        let faults = st.nav.faults();
+        st.nav = NavState::new(cx.seed());
+        st.nav.set_faults(faults);
+        st.truth.set(None);
         let product = cx.product();
         cx.chain_mut().configure(&ChainConfig::defaults(&product));
         cx.set_line_rate(st.baud);
@@ -244,11 +294,9 @@ impl Personality for Isb {
         st.parse_errors = self.input.isb_errors();
     }
 
-    /// The integrals before this tick are kept (a one-shot IMU covers the
-    /// last tick); a packet or sentence cut short ([`RX_IDLE_ABANDON_NS`]
-    /// without a byte) is dropped.
+    /// A packet or sentence cut short ([`RX_IDLE_ABANDON_NS`] without a
+    /// byte) is dropped.
     fn before_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
-        self.st.prev = cx.chain().integrals();
         if self.input.has_partial() && now.since(cx.time().last_rx()) > RX_IDLE_ABANDON_NS {
             self.input.abandon();
             cx.time_mut().touch_rx(now);
@@ -256,9 +304,25 @@ impl Personality for Isb {
         }
     }
 
-    /// Pending flash writes happen; every periodic stream due sends.
+    /// The period grids advance; pending flash writes happen; every
+    /// periodic stream due sends.
     fn on_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
         let st = &mut self.st;
+        let (nav, imu) = (
+            st.grid_ticks(cx, st.nav_dt_ms),
+            st.grid_ticks(cx, st.imu_dt_ms),
+        );
+        let ticks = cx.time().ticks();
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+            let truth = st.truth(cx);
+            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
         if st.save_pending {
             st.save(cx);
         }
@@ -330,6 +394,24 @@ impl Isb {
         &self.st.cfg
     }
 
+    /// The navigation state (INS phases, errors, faults).
+    pub fn nav(&self) -> &NavState {
+        &self.st.nav
+    }
+
+    /// Injects or clears navigation faults (GPS outage, magnetic
+    /// disturbance, barometer failure); they outlast resets.
+    pub fn set_nav_faults(&mut self, f: NavFaults) {
+        self.st.nav.set_faults(f);
+    }
+
+    /// Sets the GPS time: `gps_ns_at_zero` GPS nanoseconds since
+    /// 1980-01-06 at device instant 0 (a host passes its clock or
+    /// `--gps-time`; firmware keeps [`nav::DEFAULT_GPS_S_AT_ZERO`]).
+    pub fn set_gps_time(&mut self, gps_ns_at_zero: u64) {
+        self.st.gps_ns_at_zero = gps_ns_at_zero;
+    }
+
     /// DIDs streaming now, in the order they were started.
     pub fn streams(&self) -> impl Iterator<Item = u8> + '_ {
         self.st.streams.iter().map(|s| s.did)
@@ -356,10 +438,12 @@ fn send_ack(cx: &mut impl Context<Integrals>, info: &AckInfo, nack: bool) {
     });
 }
 
-/// `(x, y, z)` of the chain's carrier frame in the IMX body frame
-/// (forward, right, down): a half turn about x (module doc).
+/// `(x, y, z)` of the chain's carrier frame (the KERNEL's housing axes:
+/// right, forward, up; ICD Figure 2.2) in the IMX body frame (forward,
+/// right, down), the vehicle's body frame ([`crate::vehicle::housing_to_body`]),
+/// so an IMX on a vehicle reads forward motion on its x axis.
 fn frd(v: [f64; 3]) -> [f32; 3] {
-    [v[0] as f32, -(v[1] as f32), -(v[2] as f32)]
+    crate::vehicle::housing_to_body(&v).map(|x| x as f32)
 }
 
 impl State {
@@ -369,8 +453,35 @@ impl State {
 
     /// Ticks per source period of `set` (at least 1).
     fn source_ticks(&self, rate_hz: u32, set: &DataSet) -> u32 {
-        let ms = set.source.period_ms(self.imu_dt_ms, self.nav_dt_ms);
+        let ms = set
+            .source
+            .period_ms(self.imu_dt_ms, self.nav_dt_ms, self.gps_dt_ms);
         (ms.saturating_mul(rate_hz) / 1000).max(1)
+    }
+
+    /// Ticks in `ms` (at least 1).
+    fn grid_ticks(&self, cx: &impl Context<Integrals>, ms: u32) -> u32 {
+        (ms.saturating_mul(rate(cx)) / 1000).max(1)
+    }
+
+    /// The period grid a windowed data set lives on: IMU_RAW the IMU
+    /// sample period's, the others the navigation period's.
+    fn grid(&self, did: u8) -> [Integrals; 2] {
+        if did == did::IMU_RAW {
+            self.imu_grid
+        } else {
+            self.nav_grid
+        }
+    }
+
+    /// Ticks of the period of [`Self::grid`]`(did)`.
+    fn window_ticks(&self, cx: &impl Context<Integrals>, did: u8) -> u32 {
+        let ms = if did == did::IMU_RAW {
+            self.imu_dt_ms
+        } else {
+            self.nav_dt_ms
+        };
+        self.grid_ticks(cx, ms)
     }
 
     /// Starts (or replaces) the stream of `set`.
@@ -388,14 +499,19 @@ impl State {
             self.source_ticks(cx.product().model.internal_rate_hz, set)
                 .saturating_mul(u32::from(period))
         };
+        // The first packet falls on the source period's grid (ticks since
+        // power-on a multiple of it) and a windowed one covers `period`
+        // whole source periods from the last boundary (module doc).
+        let src = self.source_ticks(rate(cx), set);
+        let phase = (cx.time().ticks() % u64::from(src)) as u32;
         let s = Stream {
             did: set.did,
             offset,
             size,
             period,
             every,
-            countdown: every,
-            start: cx.chain().integrals(),
+            countdown: every.saturating_sub(phase).max(1),
+            start: self.grid(set.did)[1],
         };
         match self.find(set.did) {
             Some(i) => self.streams[i] = s,
@@ -469,6 +585,11 @@ impl State {
             SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(cx, &info, true),
             SetOutcome::Silent => {}
             SetOutcome::AckOnly(info) => send_ack(cx, &info, false),
+            SetOutcome::Written { ack, .. }
+                if req.did == did::FLASH_CONFIG && !ins::flash_nav_valid(&image[..n]) =>
+            {
+                send_ack(cx, &ack, true)
+            }
             SetOutcome::Written { ack, .. } => {
                 // The ACK goes first: a software reset clears the queue
                 // only after it has been handed out.
@@ -494,10 +615,20 @@ impl State {
             did::SYS_CMD => {
                 let mut b = [0u8; sys_cmd::SIZE];
                 b.copy_from_slice(&image[..sys_cmd::SIZE]);
-                match SystemCommand::decode(&b).valid() {
+                let cmd = SystemCommand::decode(&b).valid();
+                let unlocked = core::mem::replace(&mut self.unlocked, false);
+                match cmd {
                     Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(cx),
                     Some(sys_cmd::SAVE_FLASH) => self.save(cx),
                     Some(sys_cmd::SOFTWARE_RESET) => cx.request_reset(),
+                    Some(sys_cmd::MANF_UNLOCK) => self.unlocked = true,
+                    // FLASH_CONFIG back to the factory defaults, saved, then
+                    // a reset (docs/isb.md); only right after the unlock.
+                    Some(sys_cmd::MANF_FACTORY_RESET) if unlocked => {
+                        self.cfg = FlashConfig::factory();
+                        self.save(cx);
+                        cx.request_reset();
+                    }
                     _ => {}
                 }
             }
@@ -514,10 +645,21 @@ impl State {
     /// An RMC write (module doc).
     fn rmc(&mut self, cx: &mut impl Context<Integrals>, r: &Rmc) {
         let preserve = r.options & rmc::OPTIONS_PRESERVE_CTRL != 0;
+        let preset = r.bits & rmc::BITS_PRESET != 0;
         for set in did::DATA_SETS.iter().filter(|s| s.rmc_bit != 0) {
             if r.bits & set.rmc_bit != 0 {
-                if self.find(set.did).is_none() {
-                    self.start_stream(cx, set, 0, set.size, 1);
+                // A preset chooses the period multiples (docs/isb.md): in
+                // a PPD preset INS_2 every 100 ms, everything else at its
+                // source period.
+                let ppd = preset && r.bits & rmc_nav::BITS_INTERNAL_PPD != 0;
+                let n = if ppd && set.did == did::INS_2 {
+                    (rmc_nav::PPD_NAV_PERIOD_MS / self.nav_dt_ms).max(1) as u16
+                } else {
+                    1
+                };
+                let same = self.find(set.did).map(|i| self.streams[i].period);
+                if same.is_none() || (preset && same != Some(n)) {
+                    self.start_stream(cx, set, 0, set.size, n);
                 }
             } else if !preserve {
                 self.stop_stream(set.did);
@@ -623,17 +765,133 @@ impl State {
             .encode()),
             did::SYS_CMD => put(&SystemCommand::default().encode()),
             did::BIT => put(&self.bit.encode()),
-            did::STROBE_IN_TIME => put(&StrobeInTime {
-                week: 0,
-                time_of_week_ms: ms_since(cx, now),
-                pin: 0,
-                count: self.strobe_count,
+            did::STROBE_IN_TIME => {
+                // GPS time of the edge once GPS time is known.
+                let (week, time_of_week_ms) = if self.nav.gps_time_valid() {
+                    let since = now.since(cx.time().powered_at());
+                    let t = GpsTime::of_ns(self.gps_ns_at_zero + cx.time().powered_at().0 + since);
+                    (t.week, t.tow_ms())
+                } else {
+                    (0, ms_since(cx, now))
+                };
+                put(&StrobeInTime {
+                    week,
+                    time_of_week_ms,
+                    pin: 0,
+                    count: self.strobe_count,
+                }
+                .encode())
             }
-            .encode()),
-            did::IMU | did::IMU_RAW | did::PIMU => {
-                let w = integrals::window(&self.prev, &cx.chain().integrals(), rate(cx));
-                let n = windowed_len(did);
-                put(&self.windowed(cx, did, &w, now)[..n])
+            did::INS_1
+            | did::INS_2
+            | did::INS_3
+            | did::INS_4
+            | did::GPS1_POS
+            | did::GPS1_VEL
+            | did::MAGNETOMETER
+            | did::BAROMETER => {
+                let hdw = self.sys_params(cx, now).hdw_status;
+                self.nav_image(cx, did, hdw, out)
+            }
+            did::SYS_SENSORS => put(&self.sys_sensors(cx).encode()),
+            d if is_windowed(d) => {
+                let [a, b] = self.grid(did);
+                let w = integrals::window(&a, &b, rate(cx));
+                let end =
+                    cx.time().ticks() - cx.time().ticks() % u64::from(self.window_ticks(cx, did));
+                self.windowed(cx, did, &w, end, out)
+            }
+            _ => 0,
+        }
+    }
+
+    /// The navigation truth at the last tick ([`nav::truth_of`], once a
+    /// tick).
+    fn truth(&self, cx: &impl Context<Integrals>) -> NavTruth {
+        let tick = cx.time().ticks();
+        match self.truth.get() {
+            Some((t, truth)) if t == tick => truth,
+            _ => {
+                let truth = nav::truth_of(cx.chain());
+                self.truth.set(Some((tick, truth)));
+                truth
+            }
+        }
+    }
+
+    /// `(since boot, GPS time)` at the last tick (on the sample grid).
+    fn gps_time(&self, cx: &impl Context<Integrals>) -> (u64, GpsTime) {
+        let since_boot = cx.time().ticks() * (1_000_000_000 / u64::from(rate(cx)));
+        let gps = self.gps_ns_at_zero + cx.time().powered_at().0 + since_boot;
+        (since_boot, GpsTime::of_ns(gps))
+    }
+
+    /// The FLASH_CONFIG fields the navigation uses.
+    fn nav_config(&self) -> NavConfig {
+        let b = &self.cfg.0;
+        let f64x3 = |off: usize| [0, 8, 16].map(|k| le::f64(b, off + k));
+        NavConfig {
+            ref_lla: f64x3(flash::REF_LLA),
+            last_lla: f64x3(flash::LAST_LLA),
+            ins_rotation: le::f32x3(b, flash::INS_ROTATION),
+            ins_offset: le::f32x3(b, flash::INS_OFFSET),
+            gps1_ant_offset: le::f32x3(b, flash::GPS1_ANT_OFFSET),
+        }
+    }
+
+    /// The bytes of a navigation data set now (`docs/isb.md`
+    /// "Navigation").
+    fn nav_image(
+        &self,
+        cx: &impl Context<Integrals>,
+        did: u8,
+        hdw: u32,
+        out: &mut [u8; flash::SIZE],
+    ) -> usize {
+        let mut put = |b: &[u8]| {
+            out[..b.len()].copy_from_slice(b);
+            b.len()
+        };
+        let truth = self.truth(cx);
+        let cfg = self.nav_config();
+        let (since_ns, gps) = self.gps_time(cx);
+        let since_s = since_ns as f64 / 1e9;
+        let valid = self.nav.gps_time_valid();
+        let h = InsHeader {
+            week: if valid { gps.week } else { 0 },
+            time_of_week: if valid { gps.tow_s() } else { since_s },
+            ins_status: self.nav.ins_status(),
+            hdw_status: hdw,
+        };
+        // The receiver's last epoch (GPS time a multiple of its period).
+        let gps_dt_ns = u64::from(self.gps_dt_ms) * 1_000_000;
+        let epoch = if valid {
+            GpsTime {
+                week: gps.week,
+                tow_ns: gps.tow_ns - gps.tow_ns % gps_dt_ns,
+            }
+        } else {
+            GpsTime {
+                week: 0,
+                tow_ns: since_ns - since_ns % gps_dt_ns,
+            }
+        };
+        let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
+        let fix = self.nav.gnss(&truth, &cfg);
+        let tick = cx.time().ticks();
+        match did {
+            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
+            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
+            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::MAGNETOMETER => {
+                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
+            }
+            did::BAROMETER => {
+                let p = self.nav.pressure_kpa(&truth, tick);
+                put(&ins::barometer(since_s, p, cx.chain().temperature()).encode())
             }
             _ => 0,
         }
@@ -646,21 +904,24 @@ impl State {
             .fold(0, |b, set| b | set.rmc_bit)
     }
 
-    /// IMU / IMU_RAW / PIMU of the window `w` (module doc); 40 bytes used
-    /// at most.
+    /// IMU / IMU_RAW / PIMU (and IMU_MAG / PIMU_MAG: the same then the
+    /// magnetometer at the window's end) of the window `w` into `image`
+    /// (module doc); its size.
     fn windowed(
         &self,
         cx: &impl Context<Integrals>,
         did: u8,
         w: &Increment,
-        now: Instant,
-    ) -> [u8; sets::pimu::SIZE] {
+        end_tick: u64,
+        image: &mut [u8; flash::SIZE],
+    ) -> usize {
         let h = cx.chain().health();
         let status = imu_status_of(&h);
-        let time = now.since(cx.time().powered_at()) as f64 / 1e9;
+        // On the sample grid: the tick that ends the window.
+        let time = end_tick as f64 / f64::from(rate(cx));
         let dt = w.samples as f64 / f64::from(rate(cx));
         let mut out = [0u8; sets::pimu::SIZE];
-        if did == did::PIMU {
+        let base = if matches!(did, did::PIMU | did::PIMU_MAG) {
             out.copy_from_slice(
                 &Pimu {
                     time,
@@ -671,6 +932,7 @@ impl State {
                 }
                 .encode(),
             );
+            sets::pimu::SIZE
         } else {
             let inv = if dt > 0.0 { 1.0 / dt } else { 0.0 };
             let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
@@ -683,8 +945,43 @@ impl State {
                 }
                 .encode(),
             );
+            sets::imu::SIZE
+        };
+        image[..base].copy_from_slice(&out[..base]);
+        if !matches!(did, did::IMU_MAG | did::PIMU_MAG) {
+            return base;
         }
-        out
+        let truth = self.truth(cx);
+        let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
+        image[base..base + m.len()].copy_from_slice(&m);
+        base + m.len()
+    }
+
+    /// SYS_SENSORS now: the last measurement (body axes), the magnetometer
+    /// and barometer, the temperatures; supply 5 V, analog inputs 0.
+    fn sys_sensors(&self, cx: &impl Context<Integrals>) -> SysSensors {
+        let tick = cx.time().ticks();
+        let time = tick as f64 / f64::from(rate(cx));
+        let truth = self.truth(cx);
+        let [g, a, _] = cx.chain().last_sensor();
+        let g = frd(g.map(|x| f64::from(x).to_radians()));
+        let a = frd(a.map(|x| f64::from(x) * f64::from(crate::math::G)));
+        let temp = cx.chain().temperature();
+        let bar = self.nav.pressure_kpa(&truth, tick);
+        let b = ins::barometer(time, bar, temp);
+        SysSensors {
+            time,
+            temp,
+            pqr: g,
+            acc: a,
+            mag: self.nav.magnetometer(&truth, tick),
+            bar,
+            bar_temp: temp,
+            msl_bar: b.msl_bar,
+            humidity: b.humidity,
+            vin: 5.0,
+            ana: [0.0; 3],
+        }
     }
 
     /// One DATA packet of `set` now (the GET's reply).
@@ -706,14 +1003,11 @@ impl State {
         let s = self.streams[i];
         let mut image = [0u8; flash::SIZE];
         let n = match s.did {
-            did::IMU | did::IMU_RAW | did::PIMU => {
+            d if is_windowed(d) => {
                 let end = cx.chain().integrals();
                 let w = integrals::window(&s.start, &end, rate(cx));
                 self.streams[i].start = end;
-                let b = self.windowed(cx, s.did, &w, now);
-                let n = windowed_len(s.did);
-                image[..n].copy_from_slice(&b[..n]);
-                n
+                self.windowed(cx, s.did, &w, cx.time().ticks(), &mut image)
             }
             _ => self.image_of(cx, s.did, &mut image, now),
         };
@@ -753,12 +1047,18 @@ impl State {
         if cx.tx_dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;
         }
+        hdw |= self.nav.hdw_bits();
         hdw = hdw_status::with_parse_errors(hdw, self.parse_errors);
         let t = cx.chain().temperature();
         let up = now.since(cx.time().powered_at()) as f64 / 1e9;
+        let time_of_week_ms = if self.nav.gps_time_valid() {
+            self.gps_time(cx).1.tow_ms()
+        } else {
+            ms_since(cx, now)
+        };
         SysParams {
-            time_of_week_ms: ms_since(cx, now),
-            ins_status: 0,
+            time_of_week_ms,
+            ins_status: self.nav.ins_status(),
             hdw_status: hdw,
             imu_temp: t,
             baro_temp: t,
@@ -782,13 +1082,13 @@ fn send_data(cx: &mut impl Context<Integrals>, did: u8, image: &[u8], offset: u1
     push(cx, n, |f| message::encode_data(did, image, offset, size, f));
 }
 
-/// Bytes of a windowed data set: `pimu_t` or `imu_t`.
-fn windowed_len(did: u8) -> usize {
-    if did == did::PIMU {
-        sets::pimu::SIZE
-    } else {
-        sets::imu::SIZE
-    }
+/// Whether `did` is a window of the integrals (IMU, IMU_RAW, PIMU and
+/// their `_MAG` forms).
+fn is_windowed(did: u8) -> bool {
+    matches!(
+        did,
+        did::IMU | did::IMU_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
+    )
 }
 
 fn rate(cx: &impl Context<Integrals>) -> u32 {
@@ -823,8 +1123,8 @@ fn dev_info_of(cx: &impl Context<Integrals>) -> DevInfo {
         hdw_run_state: dev_info::RUN_STATE_APP,
         serial_number: 10_000_000 + (cx.seed() % 90_000_000) as u32,
         hardware_ver: [5, 0, 0, 0],
-        firmware_ver: [2, 1, 0, 0],
-        build_number: 1,
+        firmware_ver: dev_info::FIRMWARE_2_7_1,
+        build_number: dev_info::BUILD_NUMBER_2_7_1,
         protocol_ver: dev_info::PROTOCOL_2_1,
         repo_revision: 0,
         manufacturer: sets::str24("Inertial Sense Inc"),
@@ -835,8 +1135,6 @@ fn dev_info_of(cx: &impl Context<Integrals>) -> DevInfo {
     }
 }
 
-/// The ISB personality against a fake context: what it asks of the shell,
-/// with no shell (ARCHITECTURE.md "Shell and personalities").
 #[cfg(test)]
 mod tests {
     use std::vec::Vec;

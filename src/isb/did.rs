@@ -8,6 +8,10 @@
 //! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
 //! DID 95, silence for any other DID the table does not hold.
 
+use super::nav_sets::{
+    barometer, gps_pos, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag, rmc_nav,
+    sys_sensors,
+};
 use super::sets;
 
 /// Count of DIDs (including the null DID 0): `DID_COUNT` in `data_sets.h`.
@@ -22,23 +26,35 @@ pub const DEV_INFO: u8 = 1;
 pub const SYS_FAULT: u8 = 2;
 /// `pimu_t`: preintegrated IMU (coning and sculling integrals).
 pub const PIMU: u8 = 3;
-/// `ins_1_t`: INS output, Euler (not served in IMU mode).
+/// `ins_1_t`: INS output, Euler attitude and NED offset.
 pub const INS_1: u8 = 4;
-/// `ins_2_t`: INS output, quaternion (not served in IMU mode).
+/// `ins_2_t`: INS output, quaternion attitude.
 pub const INS_2: u8 = 5;
+/// `ins_3_t`: INS output, quaternion attitude and MSL height.
+pub const INS_3: u8 = 65;
+/// `ins_4_t`: INS output, ECEF.
+pub const INS_4: u8 = 66;
+/// `gps_pos_t`: GNSS position (the better of GPS1_RCVR_POS / RTK).
+pub const GPS1_POS: u8 = 13;
+/// `gps_vel_t`: GNSS velocity.
+pub const GPS1_VEL: u8 = 30;
+/// `imu_mag_t`: IMU and magnetometer.
+pub const IMU_MAG: u8 = 85;
+/// `pimu_mag_t`: PIMU and magnetometer.
+pub const PIMU_MAG: u8 = 86;
 /// `system_command_t`: system commands.
 pub const SYS_CMD: u8 = 7;
 /// `rmc_t`: realtime message controller.
 pub const RMC: u8 = 9;
 /// `sys_params_t`: system parameters.
 pub const SYS_PARAMS: u8 = 10;
-/// `sys_sensors_t`: system sensors (not served).
+/// `sys_sensors_t`: system sensors.
 pub const SYS_SENSORS: u8 = 11;
 /// `nvm_flash_cfg_t`: flash configuration.
 pub const FLASH_CONFIG: u8 = 12;
-/// `magnetometer_t` (not served: no magnetometer in the model).
+/// `magnetometer_t`: magnetometer.
 pub const MAGNETOMETER: u8 = 52;
-/// `barometer_t` (not served: no barometer in the model).
+/// `barometer_t`: barometer.
 pub const BAROMETER: u8 = 53;
 /// `imu3_t` uncalibrated triple IMU (not served).
 pub const IMU3_UNCAL: u8 = 57;
@@ -73,18 +89,31 @@ pub enum Source {
     /// `data_sets.h` describes as the IMU data for periods faster than the
     /// navigation period.
     ImuDt,
+    /// `FLASH_CONFIG.startupGPSDtMs` (default 200 ms): GPS1_POS, GPS1_VEL
+    /// (SDK 2.7.1 `RMC_BITS_GPS1_*` comments).
+    GpsDt,
+    /// A fixed sensor period, ms: MAGNETOMETER 10, BAROMETER 8 (SDK 2.7.1
+    /// `RMC_BITS_*` comments: "~10 ms", "~8 ms").
+    Fixed(u32),
     /// 1 ms: every other DID (ISB page, "All other DIDs 1ms").
     Millisecond,
 }
 
 impl Source {
     /// The source period in ms for these FLASH_CONFIG values
-    /// (`startupImuDtMs`, `startupNavDtMs`); a stream with period multiple
-    /// `n` sends every `n ×` this.
-    pub const fn period_ms(self, startup_imu_dt_ms: u32, startup_nav_dt_ms: u32) -> u32 {
+    /// (`startupImuDtMs`, `startupNavDtMs`, `startupGPSDtMs`); a stream
+    /// with period multiple `n` sends every `n ×` this.
+    pub const fn period_ms(
+        self,
+        startup_imu_dt_ms: u32,
+        startup_nav_dt_ms: u32,
+        startup_gps_dt_ms: u32,
+    ) -> u32 {
         match self {
             Source::NavDt => startup_nav_dt_ms,
             Source::ImuDt => startup_imu_dt_ms,
+            Source::GpsDt => startup_gps_dt_ms,
+            Source::Fixed(ms) => ms,
             Source::Millisecond => 1,
         }
     }
@@ -157,8 +186,21 @@ const FLASH_W: &[Range] = &[Range::new(
 /// BIT: the `command` byte starts a test; the rest is the result.
 const BIT_W: &[Range] = &[Range::new(0, 1)];
 
-/// The data sets of the emulated IMX-5 in IMU mode, by DID.
-pub const DATA_SETS: [DataSet; 10] = [
+/// A read-only navigation data set (`docs/isb-data-sets.md` "Navigation
+/// data sets").
+const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: u64) -> DataSet {
+    DataSet {
+        did,
+        name,
+        size: size as u16,
+        source,
+        writable: NONE,
+        rmc_bit,
+    }
+}
+
+/// The data sets of the emulated IMX-5, by DID.
+pub const DATA_SETS: [DataSet; 21] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -239,6 +281,83 @@ pub const DATA_SETS: [DataSet; 10] = [
         writable: NONE,
         rmc_bit: sets::rmc::BITS_IMU_RAW,
     },
+    nav(
+        INS_1,
+        "ins_1_t",
+        ins1::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS1,
+    ),
+    nav(
+        INS_2,
+        "ins_2_t",
+        ins2::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS2,
+    ),
+    nav(
+        INS_3,
+        "ins_3_t",
+        ins3::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS3,
+    ),
+    nav(
+        INS_4,
+        "ins_4_t",
+        ins4::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INS4,
+    ),
+    nav(
+        GPS1_POS,
+        "gps_pos_t",
+        gps_pos::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_POS,
+    ),
+    nav(
+        GPS1_VEL,
+        "gps_vel_t",
+        gps_vel::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_VEL,
+    ),
+    nav(
+        MAGNETOMETER,
+        "magnetometer_t",
+        magnetometer::SIZE,
+        Source::Fixed(10),
+        rmc_nav::BITS_MAGNETOMETER,
+    ),
+    nav(
+        BAROMETER,
+        "barometer_t",
+        barometer::SIZE,
+        Source::Fixed(8),
+        rmc_nav::BITS_BAROMETER,
+    ),
+    nav(
+        SYS_SENSORS,
+        "sys_sensors_t",
+        sys_sensors::SIZE,
+        Source::Millisecond,
+        0,
+    ),
+    nav(
+        IMU_MAG,
+        "imu_mag_t",
+        imu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_IMU_MAG,
+    ),
+    nav(
+        PIMU_MAG,
+        "pimu_mag_t",
+        pimu_mag::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_PIMU_MAG,
+    ),
 ];
 
 /// The table row of `did`, if the emulated IMX serves it.

@@ -16,7 +16,11 @@
 
 pub mod device;
 pub mod did;
+pub mod ins;
+pub mod layout;
 pub mod message;
+pub mod nav;
+pub mod nav_sets;
 pub mod nmea;
 pub mod packet;
 pub mod sets;

@@ -103,6 +103,13 @@ pub mod dev_info {
     /// Protocol version 2.1.0.0 (protocol-facts.md: the SDK 2.7.1 speaks it and
     /// accepts a device only with `protocolVer[0] == 2`).
     pub const PROTOCOL_2_1: [u8; 4] = [2, 1, 0, 0];
+    /// Firmware 2.7.1.0: the IMX-5 firmware released with SDK 2.7.1 (each
+    /// SDK release ships the IMX-5 firmware of its own version,
+    /// `IS_IMX-5_vX.Y.Z…hex`: the SDK's release page; docs/isb.md).
+    pub const FIRMWARE_2_7_1: [u8; 4] = [2, 7, 1, 0];
+    /// `buildNumber` reported with it (the 2.7.1 build number is not
+    /// public; the emulator's choice, docs/isb.md).
+    pub const BUILD_NUMBER_2_7_1: u32 = 1;
 }
 
 /// `dev_info_t` ([`dev_info`]).
@@ -208,105 +215,35 @@ pub fn str24(s: &str) -> [u8; 24] {
     out
 }
 
-/// `imu_t`, 36 bytes (protocol-facts.md "ISB"): DID_IMU and DID_IMU_RAW.
-pub mod imu {
-    /// Struct size.
-    pub const SIZE: usize = 36;
-    /// `f64 time`: seconds since boot.
-    pub const TIME: usize = 0;
-    /// `u32 status` ([`super::imu_status`]).
-    pub const STATUS: usize = 8;
-    /// `f32 pqr[3]`: angular rate, rad/s.
-    pub const PQR: usize = 12;
-    /// `f32 acc[3]`: specific force, m/s².
-    pub const ACC: usize = 24;
-}
-
-/// `imu_t` ([`imu`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Imu {
-    /// Seconds since boot.
-    pub time: f64,
-    /// [`imu_status`] bits.
-    pub status: u32,
-    /// Angular rate, rad/s.
-    pub pqr: [f32; 3],
-    /// Specific force, m/s².
-    pub acc: [f32; 3],
-}
-
-impl Imu {
-    /// The image.
-    pub fn encode(&self) -> [u8; imu::SIZE] {
-        let mut b = [0u8; imu::SIZE];
-        le::put(&mut b, imu::TIME, &self.time.to_le_bytes());
-        le::put(&mut b, imu::STATUS, &self.status.to_le_bytes());
-        le::put_f32x3(&mut b, imu::PQR, self.pqr);
-        le::put_f32x3(&mut b, imu::ACC, self.acc);
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; imu::SIZE]) -> Self {
-        Imu {
-            time: le::f64(b, imu::TIME),
-            status: le::u32(b, imu::STATUS),
-            pqr: le::f32x3(b, imu::PQR),
-            acc: le::f32x3(b, imu::ACC),
-        }
+crate::data_set! {
+    /// `imu_t`, 36 bytes (protocol-facts.md "ISB"): DID_IMU and DID_IMU_RAW.
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Imu in mod imu, 36 bytes {
+        /// Seconds since boot.
+        time: f64 = TIME @ 0,
+        /// [`imu_status`] bits.
+        status: u32 = STATUS @ 8,
+        /// Angular rate, rad/s.
+        pqr: [f32; 3] = PQR @ 12,
+        /// Specific force, m/s².
+        acc: [f32; 3] = ACC @ 24,
     }
 }
 
-/// `pimu_t`, 40 bytes (protocol-facts.md "ISB").
-pub mod pimu {
-    /// Struct size.
-    pub const SIZE: usize = 40;
-    /// `f64 time`: seconds since boot, end of the integration period.
-    pub const TIME: usize = 0;
-    /// `f32 dt`: integration period, s (= `startupNavDtMs`).
-    pub const DT: usize = 8;
-    /// `u32 status` ([`super::imu_status`]).
-    pub const STATUS: usize = 12;
-    /// `f32 theta[3]`: Δθ, rad.
-    pub const THETA: usize = 16;
-    /// `f32 vel[3]`: Δv, m/s.
-    pub const VEL: usize = 28;
-}
-
-/// `pimu_t` ([`pimu`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Pimu {
-    /// Seconds since boot.
-    pub time: f64,
-    /// Integration period, s.
-    pub dt: f32,
-    /// [`imu_status`] bits.
-    pub status: u32,
-    /// Δθ, rad.
-    pub theta: [f32; 3],
-    /// Δv, m/s.
-    pub vel: [f32; 3],
-}
-
-impl Pimu {
-    /// The image.
-    pub fn encode(&self) -> [u8; pimu::SIZE] {
-        let mut b = [0u8; pimu::SIZE];
-        le::put(&mut b, pimu::TIME, &self.time.to_le_bytes());
-        le::put(&mut b, pimu::DT, &self.dt.to_le_bytes());
-        le::put(&mut b, pimu::STATUS, &self.status.to_le_bytes());
-        le::put_f32x3(&mut b, pimu::THETA, self.theta);
-        le::put_f32x3(&mut b, pimu::VEL, self.vel);
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; pimu::SIZE]) -> Self {
-        Pimu {
-            time: le::f64(b, pimu::TIME),
-            dt: le::f32(b, pimu::DT),
-            status: le::u32(b, pimu::STATUS),
-            theta: le::f32x3(b, pimu::THETA),
-            vel: le::f32x3(b, pimu::VEL),
-        }
+crate::data_set! {
+    /// `pimu_t`, 40 bytes (protocol-facts.md "ISB").
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Pimu in mod pimu, 40 bytes {
+        /// Seconds since boot, end of the integration period.
+        time: f64 = TIME @ 0,
+        /// Integration period, s (= `startupNavDtMs`).
+        dt: f32 = DT @ 8,
+        /// [`imu_status`] bits.
+        status: u32 = STATUS @ 12,
+        /// Δθ, rad.
+        theta: [f32; 3] = THETA @ 16,
+        /// Δv, m/s.
+        vel: [f32; 3] = VEL @ 28,
     }
 }
 
@@ -392,15 +329,16 @@ pub mod hdw_status {
     }
 }
 
-/// `rmc_t`, 12 bytes, and its bits and options (protocol-facts.md "ISB";
-/// `data_sets.h` `RMC_BITS_*`, `RMC_OPTIONS_*`).
-pub mod rmc {
-    /// Struct size.
-    pub const SIZE: usize = 12;
-    /// `u64 bits`.
-    pub const BITS: usize = 0;
-    /// `u32 options`.
-    pub const OPTIONS: usize = 8;
+crate::data_set! {
+    /// `rmc_t`, 12 bytes, and its bits and options (protocol-facts.md "ISB";
+    /// `data_sets.h` `RMC_BITS_*`, `RMC_OPTIONS_*`).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct Rmc in mod rmc, 12 bytes {
+        /// Stream enable bits.
+        bits: u64 = BITS @ 0,
+        /// Port mask and options.
+        options: u32 = OPTIONS @ 8,
+    }
     /// DID_IMU stream.
     pub const BITS_IMU: u64 = 0x10;
     /// DID_PIMU stream.
@@ -432,41 +370,16 @@ pub mod rmc {
     pub const OPTIONS_PERSISTENT: u32 = 0x200;
 }
 
-/// `rmc_t` ([`rmc`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Rmc {
-    /// Stream enable bits.
-    pub bits: u64,
-    /// Port mask and options.
-    pub options: u32,
-}
-
-impl Rmc {
-    /// The image.
-    pub fn encode(&self) -> [u8; rmc::SIZE] {
-        let mut b = [0u8; rmc::SIZE];
-        le::put(&mut b, rmc::BITS, &self.bits.to_le_bytes());
-        le::put(&mut b, rmc::OPTIONS, &self.options.to_le_bytes());
-        b
+crate::data_set! {
+    /// `system_command_t`, 8 bytes, and its command codes (protocol-facts.md
+    /// "ISB"; `data_sets.h` `eSystemCommand`).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct SystemCommand in mod sys_cmd, 8 bytes {
+        /// Command code.
+        command: u32 = COMMAND @ 0,
+        /// Bitwise inverse of `command` for the command to take effect.
+        inv_command: u32 = INV_COMMAND @ 4,
     }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; rmc::SIZE]) -> Self {
-        Rmc {
-            bits: le::u64(b, rmc::BITS),
-            options: le::u32(b, rmc::OPTIONS),
-        }
-    }
-}
-
-/// `system_command_t`, 8 bytes, and its command codes (protocol-facts.md "ISB";
-/// `data_sets.h` `eSystemCommand`).
-pub mod sys_cmd {
-    /// Struct size.
-    pub const SIZE: usize = 8;
-    /// `u32 command`.
-    pub const COMMAND: usize = 0;
-    /// `u32 invCommand` (must be `!command`).
-    pub const INV_COMMAND: usize = 4;
     /// Save the running streams as persistent.
     pub const SAVE_PERSISTENT_MESSAGES: u32 = 1;
     /// Zero-motion command.
@@ -475,15 +388,11 @@ pub mod sys_cmd {
     pub const SAVE_FLASH: u32 = 97;
     /// Software reset.
     pub const SOFTWARE_RESET: u32 = 99;
-}
-
-/// `system_command_t` ([`sys_cmd`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct SystemCommand {
-    /// Command code.
-    pub command: u32,
-    /// Bitwise inverse of `command` for the command to take effect.
-    pub inv_command: u32,
+    /// Manufacturing unlock (`SYS_CMD_MANF_UNLOCK`): must come right before
+    /// a manufacturing command.
+    pub const MANF_UNLOCK: u32 = 1_122_334_455;
+    /// Factory reset (`SYS_CMD_MANF_FACTORY_RESET`), after the unlock.
+    pub const MANF_FACTORY_RESET: u32 = 1_357_924_680;
 }
 
 impl SystemCommand {
@@ -503,205 +412,55 @@ impl SystemCommand {
             None
         }
     }
-    /// The image.
-    pub fn encode(&self) -> [u8; sys_cmd::SIZE] {
-        let mut b = [0u8; sys_cmd::SIZE];
-        le::put(&mut b, sys_cmd::COMMAND, &self.command.to_le_bytes());
-        le::put(
-            &mut b,
-            sys_cmd::INV_COMMAND,
-            &self.inv_command.to_le_bytes(),
-        );
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; sys_cmd::SIZE]) -> Self {
-        SystemCommand {
-            command: le::u32(b, sys_cmd::COMMAND),
-            inv_command: le::u32(b, sys_cmd::INV_COMMAND),
-        }
+}
+
+crate::data_set! {
+    /// `strobe_in_time_t`, 12 bytes (protocol-facts.md "ISB").
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct StrobeInTime in mod strobe, 12 bytes {
+        /// GPS week (0 without GPS time).
+        week: u32 = WEEK @ 0,
+        /// Time of week (or since boot without GPS), ms.
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 4,
+        /// The strobe input pin.
+        pin: u16 = PIN @ 8,
+        /// Serial number of the event.
+        count: u16 = COUNT @ 10,
     }
 }
 
-/// `strobe_in_time_t`, 12 bytes (protocol-facts.md "ISB").
-pub mod strobe {
-    /// Struct size.
-    pub const SIZE: usize = 12;
-    /// `u32 week`: GPS week (0 without GPS time).
-    pub const WEEK: usize = 0;
-    /// `u32 timeOfWeekMs`.
-    pub const TIME_OF_WEEK_MS: usize = 4;
-    /// `u16 pin`: the strobe input pin.
-    pub const PIN: usize = 8;
-    /// `u16 count`: serial number of the event.
-    pub const COUNT: usize = 10;
-}
-
-/// `strobe_in_time_t` ([`strobe`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct StrobeInTime {
-    /// GPS week.
-    pub week: u32,
-    /// Time of week (or since boot without GPS), ms.
-    pub time_of_week_ms: u32,
-    /// Input pin.
-    pub pin: u16,
-    /// Event count.
-    pub count: u16,
-}
-
-impl StrobeInTime {
-    /// The image.
-    pub fn encode(&self) -> [u8; strobe::SIZE] {
-        let mut b = [0u8; strobe::SIZE];
-        le::put(&mut b, strobe::WEEK, &self.week.to_le_bytes());
-        le::put(
-            &mut b,
-            strobe::TIME_OF_WEEK_MS,
-            &self.time_of_week_ms.to_le_bytes(),
-        );
-        le::put(&mut b, strobe::PIN, &self.pin.to_le_bytes());
-        le::put(&mut b, strobe::COUNT, &self.count.to_le_bytes());
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; strobe::SIZE]) -> Self {
-        StrobeInTime {
-            week: le::u32(b, strobe::WEEK),
-            time_of_week_ms: le::u32(b, strobe::TIME_OF_WEEK_MS),
-            pin: le::u16(b, strobe::PIN),
-            count: le::u16(b, strobe::COUNT),
-        }
-    }
-}
-
-/// `sys_params_t`, 64 bytes (protocol-facts.md "ISB").
-pub mod sys_params {
-    /// Struct size.
-    pub const SIZE: usize = 64;
-    /// `u32 timeOfWeekMs`.
-    pub const TIME_OF_WEEK_MS: usize = 0;
-    /// `u32 insStatus`.
-    pub const INS_STATUS: usize = 4;
-    /// `u32 hdwStatus` ([`super::hdw_status`]).
-    pub const HDW_STATUS: usize = 8;
-    /// `f32 imuTemp`, °C.
-    pub const IMU_TEMP: usize = 12;
-    /// `f32 baroTemp`, °C.
-    pub const BARO_TEMP: usize = 16;
-    /// `f32 mcuTemp`, °C.
-    pub const MCU_TEMP: usize = 20;
-    /// `u32 sysStatus`.
-    pub const SYS_STATUS: usize = 24;
-    /// `u32 imuSamplePeriodMs`.
-    pub const IMU_SAMPLE_PERIOD_MS: usize = 28;
-    /// `u32 navOutputPeriodMs`.
-    pub const NAV_OUTPUT_PERIOD_MS: usize = 32;
-    /// `f64 sensorTruePeriod`, s.
-    pub const SENSOR_TRUE_PERIOD: usize = 36;
-    /// `u32 flashCfgChecksum` (= FLASH_CONFIG `checksum`).
-    pub const FLASH_CFG_CHECKSUM: usize = 44;
-    /// `u32 navUpdatePeriodMs`.
-    pub const NAV_UPDATE_PERIOD_MS: usize = 48;
-    /// `u32 genFaultCode` (writable: set to 0 to reset).
-    pub const GEN_FAULT_CODE: usize = 52;
-    /// `f64 upTime`, s.
-    pub const UP_TIME: usize = 56;
-}
-
-/// `sys_params_t` ([`sys_params`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct SysParams {
-    /// Time of week (since boot without GPS), ms.
-    pub time_of_week_ms: u32,
-    /// INS status (0 in IMU mode).
-    pub ins_status: u32,
-    /// [`hdw_status`] bits.
-    pub hdw_status: u32,
-    /// IMU temperature, °C.
-    pub imu_temp: f32,
-    /// Barometer temperature, °C.
-    pub baro_temp: f32,
-    /// MCU temperature, °C.
-    pub mcu_temp: f32,
-    /// System status bits.
-    pub sys_status: u32,
-    /// IMU sample period, ms.
-    pub imu_sample_period_ms: u32,
-    /// PIMU integration and output period, ms.
-    pub nav_output_period_ms: u32,
-    /// Measured sample period, s.
-    pub sensor_true_period: f64,
-    /// FLASH_CONFIG checksum.
-    pub flash_cfg_checksum: u32,
-    /// Filter update period, ms.
-    pub nav_update_period_ms: u32,
-    /// General fault code.
-    pub gen_fault_code: u32,
-    /// Up time, s.
-    pub up_time: f64,
-}
-
-impl SysParams {
-    /// The image.
-    pub fn encode(&self) -> [u8; sys_params::SIZE] {
-        use sys_params::*;
-        let mut b = [0u8; SIZE];
-        le::put(&mut b, TIME_OF_WEEK_MS, &self.time_of_week_ms.to_le_bytes());
-        le::put(&mut b, INS_STATUS, &self.ins_status.to_le_bytes());
-        le::put(&mut b, HDW_STATUS, &self.hdw_status.to_le_bytes());
-        le::put(&mut b, IMU_TEMP, &self.imu_temp.to_le_bytes());
-        le::put(&mut b, BARO_TEMP, &self.baro_temp.to_le_bytes());
-        le::put(&mut b, MCU_TEMP, &self.mcu_temp.to_le_bytes());
-        le::put(&mut b, SYS_STATUS, &self.sys_status.to_le_bytes());
-        le::put(
-            &mut b,
-            IMU_SAMPLE_PERIOD_MS,
-            &self.imu_sample_period_ms.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            NAV_OUTPUT_PERIOD_MS,
-            &self.nav_output_period_ms.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            SENSOR_TRUE_PERIOD,
-            &self.sensor_true_period.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            FLASH_CFG_CHECKSUM,
-            &self.flash_cfg_checksum.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            NAV_UPDATE_PERIOD_MS,
-            &self.nav_update_period_ms.to_le_bytes(),
-        );
-        le::put(&mut b, GEN_FAULT_CODE, &self.gen_fault_code.to_le_bytes());
-        le::put(&mut b, UP_TIME, &self.up_time.to_le_bytes());
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; sys_params::SIZE]) -> Self {
-        use sys_params::*;
-        SysParams {
-            time_of_week_ms: le::u32(b, TIME_OF_WEEK_MS),
-            ins_status: le::u32(b, INS_STATUS),
-            hdw_status: le::u32(b, HDW_STATUS),
-            imu_temp: le::f32(b, IMU_TEMP),
-            baro_temp: le::f32(b, BARO_TEMP),
-            mcu_temp: le::f32(b, MCU_TEMP),
-            sys_status: le::u32(b, SYS_STATUS),
-            imu_sample_period_ms: le::u32(b, IMU_SAMPLE_PERIOD_MS),
-            nav_output_period_ms: le::u32(b, NAV_OUTPUT_PERIOD_MS),
-            sensor_true_period: le::f64(b, SENSOR_TRUE_PERIOD),
-            flash_cfg_checksum: le::u32(b, FLASH_CFG_CHECKSUM),
-            nav_update_period_ms: le::u32(b, NAV_UPDATE_PERIOD_MS),
-            gen_fault_code: le::u32(b, GEN_FAULT_CODE),
-            up_time: le::f64(b, UP_TIME),
-        }
+crate::data_set! {
+    /// `sys_params_t`, 64 bytes (protocol-facts.md "ISB").
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct SysParams in mod sys_params, 64 bytes {
+        /// Time of week (since boot without GPS), ms.
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        /// INS status (`eInsStatusFlags`).
+        ins_status: u32 = INS_STATUS @ 4,
+        /// [`hdw_status`] bits.
+        hdw_status: u32 = HDW_STATUS @ 8,
+        /// IMU temperature, °C.
+        imu_temp: f32 = IMU_TEMP @ 12,
+        /// Barometer temperature, °C.
+        baro_temp: f32 = BARO_TEMP @ 16,
+        /// MCU temperature, °C.
+        mcu_temp: f32 = MCU_TEMP @ 20,
+        /// System status bits.
+        sys_status: u32 = SYS_STATUS @ 24,
+        /// IMU sample period, ms.
+        imu_sample_period_ms: u32 = IMU_SAMPLE_PERIOD_MS @ 28,
+        /// PIMU integration and output period, ms.
+        nav_output_period_ms: u32 = NAV_OUTPUT_PERIOD_MS @ 32,
+        /// Measured sample period, s.
+        sensor_true_period: f64 = SENSOR_TRUE_PERIOD @ 36,
+        /// FLASH_CONFIG checksum (= FLASH_CONFIG `checksum`).
+        flash_cfg_checksum: u32 = FLASH_CFG_CHECKSUM @ 44,
+        /// Filter update period, ms.
+        nav_update_period_ms: u32 = NAV_UPDATE_PERIOD_MS @ 48,
+        /// General fault code (writable: set to 0 to reset).
+        gen_fault_code: u32 = GEN_FAULT_CODE @ 52,
+        /// Up time, s.
+        up_time: f64 = UP_TIME @ 56,
     }
 }
 

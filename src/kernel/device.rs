@@ -284,19 +284,16 @@ fn queue_frame(
     })
 }
 
-/// The fields of `layout` written into `out`: host builds write a fixed
-/// format by its own writer ([`formats::write_payload`], the same bytes as
-/// the loop over its fields); UDD and firmware take the loop.
+/// The fields of `layout` written into `out`: a fixed format by its own
+/// writer ([`formats::write_payload`], the same bytes as the loop over its
+/// fields); UDD by the loop.
 #[inline(always)]
 fn write_payload(code: u8, layout: &Layout, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
-    #[cfg(not(target_os = "none"))]
     if layout.header.is_empty() {
         if let Some(n) = formats::write_payload(code, ctx, out) {
             return Some(n);
         }
     }
-    #[cfg(target_os = "none")]
-    let _ = code;
     fields::write_all(&layout.fields, ctx, out)
 }
 

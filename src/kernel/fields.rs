@@ -177,7 +177,6 @@ fn fast_magnitude(_x: f32, _k: u32) -> Option<u32> {
 }
 
 /// Scales below this take [`sat_signed`]'s `f64` path on hosts.
-#[cfg(not(target_os = "none"))]
 const F64_SCALE_LIMIT: u32 = 1 << 28;
 
 /// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
@@ -190,12 +189,14 @@ const F64_SCALE_LIMIT: u32 = 1 << 28;
 /// (Rust's saturating casts), which the limits then clip: the same
 /// results as the integer path, which larger scales take
 /// (`scale_round_is_exact`, `the_f64_path_is_the_integer_path`).
-#[cfg(not(target_os = "none"))]
+/// Firmware takes the integer path (with the M4F's `f32` fast path) for
+/// every scale.
 #[inline(always)]
 fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
     // Scales 0 and 1 too: the integer path saturates every |x| ≥ 2^30,
     // which for them is not beyond every field.
-    if !(2..F64_SCALE_LIMIT).contains(&k) {
+    // Fork: no f64 FPU on firmware; the f64 path measured M4F on_tick 5 080 → 20 040 (largest UDD).
+    if cfg!(target_os = "none") || !(2..F64_SCALE_LIMIT).contains(&k) {
         return sat_signed_int(x, k, lo_limit, hi_limit);
     }
     let m = (f64::from(x.abs()) * f64::from(k) + 0.5) as i64;
@@ -208,16 +209,11 @@ fn sat_signed(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
     (r ^ neg).wrapping_sub(neg)
 }
 
-// Firmware (the M4F's FPU is single precision, the RP2040 has none): the
-// integer path (with the M4F's f32 fast path) is `sat_signed` itself.
-#[cfg(target_os = "none")]
-use self::sat_signed_int as sat_signed;
-
 /// `|x| · k` (see [`scale_round`]) with the sign of `x`, saturated at
 /// `-lo_limit` and `hi_limit`: the callers' saturation without 64-bit
 /// signed compares, by [`fast_magnitude`] and [`scaled_magnitude`]
-/// (firmware's `sat_signed`; on hosts for the scales beyond the `f64`
-/// path).
+/// (on firmware for every scale; on hosts for the scales beyond the
+/// `f64` path).
 #[cfg_attr(feature = "fixed-point", inline(never))]
 #[cfg_attr(not(feature = "fixed-point"), inline(always))]
 fn sat_signed_int(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
@@ -264,8 +260,8 @@ pub(crate) fn heading_0_360(h: f32) -> f32 {
 }
 
 /// Three [`sat_i32`] values (the saturation inlined: one call a triad;
-/// in line on hosts, where the fixed formats' writers fold `out`'s length).
-#[cfg_attr(not(target_os = "none"), inline(always))]
+/// in line, where the fixed formats' writers fold `out`'s length).
+#[inline(always)]
 fn put3_i32(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(4).zip(v) {
         c.copy_from_slice(&sat_signed(x, k, 1 << 31, i32::MAX as u32).to_le_bytes());
@@ -273,8 +269,8 @@ fn put3_i32(out: &mut [u8], v: &[f32; 3], k: u32) {
 }
 
 /// Three [`sat_i16`] values (the saturation inlined: one call a triad;
-/// in line on hosts, as [`put3_i32`]).
-#[cfg_attr(not(target_os = "none"), inline(always))]
+/// in line, as [`put3_i32`]).
+#[inline(always)]
 fn put3_i16(out: &mut [u8], v: &[f32; 3], k: u32) {
     for (c, &x) in out.chunks_exact_mut(2).zip(v) {
         let y = sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16;
@@ -337,9 +333,8 @@ impl Field {
     }
 
     /// [`Field::write`] inlined: with a constant field (the fixed formats'
-    /// writers of host builds, [`crate::kernel::formats`]) the dispatch
-    /// and the scales fold away.
-    #[cfg(not(target_os = "none"))]
+    /// writers, [`crate::kernel::formats`]) the dispatch and the scales
+    /// fold away.
     #[inline(always)]
     pub(crate) fn write_inline(self, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
         let n = self.size();
@@ -422,18 +417,8 @@ pub fn payload_len(fields: &[Field]) -> usize {
 pub fn write_all(fields: &[Field], ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
     let mut at = 0;
     for f in fields {
-        // Hosts: the writer in line, one dispatch a field (UDD); firmware
-        // calls the one out-of-line copy (flash).
-        #[cfg(not(target_os = "none"))]
-        {
-            at += f.write_inline(ctx, out.get_mut(at..)?)?;
-        }
-        #[cfg(target_os = "none")]
-        {
-            let n = f.size();
-            f.write_exact(ctx, out.get_mut(at..at + n)?);
-            at += n;
-        }
+        // The writer in line, one dispatch a field (UDD).
+        at += f.write_inline(ctx, out.get_mut(at..)?)?;
     }
     Some(at)
 }
@@ -651,7 +636,6 @@ mod tests {
     /// result for every exponent (subnormals, ∞ and NaN included), both
     /// signs, the mantissas next to the rounding ties, and every scale a
     /// field uses plus the largest the path takes.
-    #[cfg(not(target_os = "none"))]
     #[test]
     fn the_f64_path_is_the_integer_path() {
         let scales = [

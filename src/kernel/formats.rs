@@ -2,7 +2,6 @@
 //! row each — and the acknowledgement/announcement messages.
 
 use super::fields::Field::{self, *};
-#[cfg(not(target_os = "none"))]
 use super::fields::OutputCtx;
 
 /// Data command code of User Defined Data (Table 5.16).
@@ -30,13 +29,11 @@ macro_rules! fixed_formats {
             fields: &[$($field),*],
         }),*];
 
-        /// Host builds: the payload of fixed format `code` written into
+        /// The payload of fixed format `code` written into
         /// `out` as [`super::fields::write_all`] of its [`FormatSpec::fields`]
         /// writes it (the same bytes), by one writer per format with its
-        /// fields in line: no dispatch per field, the scales constant
-        /// (firmware keeps the one loop: flash). `None` if `code` is no
-        /// fixed format or `out` is too short.
-        #[cfg(not(target_os = "none"))]
+        /// fields in line: no dispatch per field, the scales constant.
+        /// `None` if `code` is no fixed format or `out` is too short.
         pub(crate) fn write_payload(code: u8, ctx: &OutputCtx<'_>, out: &mut [u8]) -> Option<usize> {
             match code {
                 $($code => {
@@ -123,7 +120,6 @@ mod tests {
     /// The host's writer of each fixed format gives the bytes of the loop
     /// over its fields, for samples with every kind of value (signs,
     /// ties, saturation, NaN, ∞), and refuses a short buffer as it does.
-    #[cfg(not(target_os = "none"))]
     #[test]
     fn each_format_writer_writes_what_the_field_loop_writes() {
         use crate::kernel::fields::{write_all, OutputCtx};

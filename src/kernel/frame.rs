@@ -24,21 +24,18 @@ pub const TYPE_DATA: u8 = 0x01;
 /// lanes (folded before a lane can carry) — on 64-bit hosts four lanes of
 /// a `u64`, eight bytes a step, on the 32-bit firmware two lanes of a
 /// `u32` (no 64-bit arithmetic on a Cortex-M); a third to a sixth of the
-/// instructions of a byte loop. (The host's [`Decoder`] checks the frames
-/// it finds in its input in 64-byte blocks instead: `sum_from_header`.)
+/// instructions of a byte loop. (The [`Decoder`] checks the frames it
+/// finds in its input in 64-byte blocks instead: `sum_from_header`.)
 pub fn checksum(bytes: &[u8]) -> u16 {
-    #[cfg(target_pointer_width = "64")]
-    {
+    // Fork by word size: 64-bit arithmetic is two instructions a step on a Cortex-M.
+    if cfg!(target_pointer_width = "64") {
         checksum_u64(bytes)
-    }
-    #[cfg(not(target_pointer_width = "64"))]
-    {
+    } else {
         checksum_u32(bytes)
     }
 }
 
 /// [`checksum`] in the 16-bit lanes of a `u32`: folded every 128 words.
-#[cfg_attr(target_pointer_width = "64", allow(dead_code))]
 fn checksum_u32(bytes: &[u8]) -> u16 {
     let mut total = 0u32;
     for block in bytes.chunks(512) {
@@ -59,7 +56,6 @@ fn checksum_u32(bytes: &[u8]) -> u16 {
 /// [`checksum`] in the 16-bit lanes of `u64`s, the even bytes in one,
 /// the odd in the other (folded every 128 words: a lane takes at most 255
 /// a word, two lanes summed 510), the tail (< 8 bytes) a byte at a time.
-#[cfg_attr(not(target_pointer_width = "64"), allow(dead_code))]
 fn checksum_u64(bytes: &[u8]) -> u16 {
     const EVEN: u64 = 0x00FF_00FF_00FF_00FF;
     let mut total = 0u64;
@@ -84,7 +80,6 @@ fn checksum_u64(bytes: &[u8]) -> u16 {
 
 /// 64 bytes `0xFF` then 64 bytes `0`: the 64 bytes from `64 - n` keep the
 /// first `n` bytes of a block ([`sum_from_header`]).
-#[cfg(target_pointer_width = "64")]
 static KEEP: [u8; 128] = {
     let mut m = [0u8; 128];
     let mut i = 0;
@@ -96,7 +91,6 @@ static KEEP: [u8; 128] = {
 };
 
 /// Sum of a 64-byte block's bytes (on x86-64, four SSE2 `PSADBW`).
-#[cfg(target_pointer_width = "64")]
 #[inline(always)]
 fn block_sum(block: &[u8; 64]) -> u32 {
     block.iter().map(|&b| u32::from(b)).sum()
@@ -106,12 +100,11 @@ fn block_sum(block: &[u8; 64]) -> u32 {
 /// must have if its body — header through last payload byte — is
 /// `avail[..n]` (Table 5.2: the 16-bit sum of `avail[2..n]`), or `None`
 /// when fewer than 64 bytes follow the last whole 64-byte block of the
-/// body. For the host's [`Scanner`], which finds frames in the input: no
+/// body. For the [`Scanner`], which finds frames in the input: no
 /// byte loop and no loop at all for a body of up to 64 bytes — 64-byte
 /// blocks summed whole, the last one with the bytes past the body masked
 /// off (so it reads up to 63 bytes past the body, which the input holds:
 /// the next frames), the header's `0xAA + 0x55` subtracted.
-#[cfg(target_pointer_width = "64")]
 #[inline]
 fn sum_from_header(avail: &[u8], n: usize) -> Option<u16> {
     let mut total = 0u32;
@@ -181,10 +174,9 @@ impl Framing for Kernel {
         checksum(&packet[2..n - 2]) == u16::from_le_bytes([packet[n - 2], packet[n - 1]])
     }
 
-    /// On hosts, the checksum summed in 64-byte blocks, the bytes of
+    /// The checksum summed in 64-byte blocks, the bytes of
     /// `avail` after the frame read and masked off; a frame too close to
     /// the end of `avail` for that, [`Kernel::check`].
-    #[cfg(target_pointer_width = "64")]
     #[inline(always)]
     fn check_in(avail: &[u8], total: usize) -> bool {
         // Shorter than header and checksum: no frame (the scanner only
@@ -215,7 +207,7 @@ impl<const CAP: usize> Scanner<Kernel, CAP> {
     /// Feeds bytes from `input` (advancing it past what was taken) and
     /// returns the next complete, valid frame, if any. Call in a loop until
     /// it returns `None`; then all of `input` has been taken.
-    #[cfg_attr(target_pointer_width = "64", inline(always))]
+    #[inline(always)]
     pub fn next_frame<'r, 's: 'r, 'i: 'r>(&'s mut self, input: &mut &'i [u8]) -> Option<Frame<'r>> {
         let b = self.next_raw(input)?;
         let n = b.len();
@@ -257,11 +249,10 @@ mod tests {
         assert_eq!(checksum_u64(&ff), want);
     }
 
-    /// The host's masked-block sum is the byte sum at every start
+    /// The masked-block sum is the byte sum at every start
     /// alignment, every body length up to past two blocks and the fold
     /// limit, with no, few and many bytes after the body (`None` exactly
     /// when fewer than 64 bytes follow its last whole block).
-    #[cfg(target_pointer_width = "64")]
     #[test]
     fn the_masked_block_sum_is_the_byte_sum() {
         let mut x = 0x9E37_79B9_7F4A_7C15u64;
@@ -297,10 +288,9 @@ mod tests {
         }
     }
 
-    /// The host's check of a frame in place gives the byte-wise check's
+    /// The check of a frame in place gives the byte-wise check's
     /// answer for good and corrupted frames (a payload, type or length byte
     /// changed, the checksum), at every distance from the end of the input.
-    #[cfg(target_pointer_width = "64")]
     #[test]
     fn the_in_place_check_is_the_byte_wise_check() {
         let mut x = 0x2545_F491_4F6C_DD1Du64;
@@ -349,7 +339,6 @@ mod tests {
     /// A frame cut between two inputs is completed in the buffer with only
     /// the bytes it lacks; the frames after it are found in the input in
     /// place (returned borrowing it), as before the cut.
-    #[cfg(target_pointer_width = "64")]
     #[test]
     fn after_a_cut_frame_the_scan_is_back_in_the_input() {
         let mut stream = std::vec::Vec::new();

@@ -31,6 +31,7 @@
 /// native product — the same value — on 64-bit hosts).
 #[inline(always)]
 pub fn mul64(a: i32, b: i32) -> i64 {
+    // Fork by word size: ARMv6-M has no 32 × 32 → 64 multiply (a library call).
     if cfg!(target_pointer_width = "64") {
         i64::from(a) * i64::from(b)
     } else {
@@ -354,6 +355,7 @@ pub fn mulhi_u32_low(a: u32, b: u32) -> u32 {
 /// targets, the native product on 64-bit hosts).
 #[inline(always)]
 pub fn mulu64(a: u32, b: u32) -> u64 {
+    // Fork by word size, as in `mul64`.
     if cfg!(target_pointer_width = "64") {
         u64::from(a) * u64::from(b)
     } else {
@@ -373,7 +375,7 @@ pub fn mulu64_parts(a: u32, b: u32) -> u64 {
 /// Division by a fixed `n` through its reciprocal: one software division
 /// when made, then a few 32 × 32 products per quotient (ARMv6-M has no
 /// divide instruction; a library `i64 / u32` costs ~250 instructions).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Recip {
     n: u32,
     /// ⌊(2³² − 1)/n⌋.

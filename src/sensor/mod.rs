@@ -8,11 +8,14 @@
 
 pub mod errors;
 pub mod motion;
+pub mod profile;
+pub mod profiles;
 pub mod rng;
 pub mod temperature;
 
-pub use errors::{AxisErrors, ErrorModel, ErrorSpec, SensorErrors, SensorSpec};
+pub use errors::{AxisErrors, ErrorModel, SensorErrors};
 pub use motion::{Motion, MotionSource, Truth, TruthFrame};
+pub use profile::{SensorProfile, SensorSpec, TemperatureSpec};
 
 /// One sample of everything the output formats carry, in physical units and
 /// carrier axes (ICD 5.2 notes: X lateral, Y longitudinal, Z vertical), after

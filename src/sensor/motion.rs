@@ -56,9 +56,12 @@ pub struct Truth {
     pub temperature_c: Option<f32>,
 }
 
-/// Largest angular rate handed to the sensor model, °/s: 2048, beyond every
-/// gyro range (the float counterpart of the fixed-point `TRUTH_LIMIT`).
-pub const TRUTH_RATE_LIMIT_DPS: f32 = 2048.0;
+/// Largest angular rate handed to the sensor model, °/s: 8192, beyond every
+/// gyro range (the IMX-5's ±4000 °/s included, so its over-range flag sees
+/// a rate beyond it). The fixed-point build's truth stops at ±2048 °/s
+/// (`TRUTH_LIMIT`: its attitude holds 0.03 rad a tick), so there a rate
+/// beyond 2048 °/s reads 2048 °/s on the IMX-5 without the flag.
+pub const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
 /// Largest specific force handed to the sensor model, g: 128, beyond every
 /// accelerometer range.
 pub const TRUTH_FORCE_LIMIT_G: f32 = 128.0;
@@ -277,14 +280,9 @@ pub struct BuiltinMotion {
     state: State,
 }
 
-/// Latitude and heading of a motion's site, degrees (for a
-/// [`Motion::Sample`]: the default site, heading 0).
-pub fn site_of(motion: &Motion) -> (f32, f32) {
-    site(motion)
-}
-
-/// Latitude and heading of a motion's site, degrees.
-fn site(motion: &Motion) -> (f32, f32) {
+/// Latitude and heading of a motion's site, degrees (a replayed sample:
+/// [`DEFAULT_LATITUDE_DEG`], heading 0).
+pub fn site(motion: &Motion) -> (f32, f32) {
     match *motion {
         Motion::Static {
             lat_deg,

@@ -10,6 +10,7 @@
 //! `fixed-point` chain then updates the error model's temperature terms one
 //! sensor axis a tick, over the next nine ticks.)
 
+use super::profile::TemperatureSpec;
 use libm::expf;
 
 /// The model is advanced once every this many ticks.
@@ -46,6 +47,16 @@ impl Default for TemperatureModel {
 }
 
 impl TemperatureModel {
+    /// The model of a profile's [`TemperatureSpec`] (cold: at ambient).
+    pub fn from_spec(spec: &TemperatureSpec) -> Self {
+        TemperatureModel {
+            ambient_c: spec.ambient_c,
+            self_heating_c: spec.self_heating_c,
+            time_constant_s: spec.time_constant_s,
+            ..TemperatureModel::default()
+        }
+    }
+
     /// The modelled temperature now, °C.
     pub fn temperature_c(&self) -> f32 {
         self.ambient_c + self.rise

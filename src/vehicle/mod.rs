@@ -182,7 +182,7 @@ pub fn builtin_state(
     truth: &Truth,
     time_s: f64,
 ) -> VehicleState {
-    let (lat_deg, heading_deg) = crate::sensor::motion::site_of(motion);
+    let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
     let lat = f64::from(lat_deg).to_radians();
     let q_nb = match attitude {
         Some(q) => housing_enu_to_body_ned(&q.map(f64::from)),

@@ -748,3 +748,36 @@ fn stream_udd_at_2_mbaud(d: &mut Dut, types: &[u8], payload: usize) {
     let f = d.c.frame_with_id(UDD);
     assert_eq!(f.payload().len(), payload);
 }
+
+/// The live motion feed (docs/feed.md; host: `--motion-feed`, firmware:
+/// the bridge UART): binary samples of a rotation about Z show in the GA
+/// frames; 100 ms of silence sets USW bit 1 (sensor communication
+/// failure, ICD Table 5.26) with the rotation held; a sample clears it.
+pub fn a_fed_rotation_shows_in_the_ga_frames_and_silence_is_a_fault(kind: Kind) {
+    let mut d = Dut::start(kind, Opts::default());
+    start_ga(&mut d.c);
+    for k in 0..5 {
+        d.feed(&crate::support::feed_sample(
+            0xFFFF,
+            f64::from(k) * 0.01,
+            [0.0, 0.0, 90.0],
+        ));
+    }
+    let z = |p: &[u8]| f64::from(u32_at(p, 8) as i32) * 1e-5;
+    let usw = |p: &[u8]| u16_at(p, 26);
+    let end = Instant::now() + crate::support::TIMEOUT;
+    let wait = |d: &mut Dut, what: &str, ok: &dyn Fn(&[u8]) -> bool| loop {
+        assert!(Instant::now() < end, "no GA frame with {what}");
+        let f = ga_frame(&mut d.c);
+        if ok(f.payload()) {
+            return f;
+        }
+    };
+    wait(&mut d, "Z = 90 °/s", &|p| (z(p) - 90.0).abs() < 0.5);
+    let f = wait(&mut d, "USW bit 1", &|p| usw(p) & 2 != 0);
+    assert!((z(f.payload()) - 90.0).abs() < 0.5, "the rotation holds");
+    d.feed(&crate::support::feed_sample(0xFFFF, 1.0, [0.0, 0.0, 0.0]));
+    wait(&mut d, "USW bit 1 clear and Z = 0", &|p| {
+        usw(p) & 2 == 0 && z(p).abs() < 0.5
+    });
+}

@@ -8,6 +8,8 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 use imu_emu::isb::message::{self, GetRequest};
+use imu_emu::isb::nav;
+use imu_emu::isb::nav_sets::{ins_status, Barometer, GpsPos, Ins2, Ins4, Magnetometer};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 
 use crate::support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, TIMEOUT};
@@ -227,4 +229,99 @@ pub fn bad_checksum_then_a_good_packet_is_answered(kind: Kind) {
         Duration::from_millis(100),
         "only the good packet answered",
     );
+}
+
+/// The navigation streams on their own time fields (INS_2 every 25 nav
+/// periods = 100 ms, GPS1_POS every 200 ms, MAGNETOMETER every 10 × 10 ms,
+/// BAROMETER every 25 × 8 ms) in the first seconds after power-on: the INS
+/// aligning (solution 1), no fix yet (GPS1_POS status 0, local time), the
+/// pressure with the SDK's mslBar of it, a unit-length field; INS_4's ECEF is INS_2's LLA.
+pub fn navigation_streams_on_device_time_while_aligning(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&isb_get(did::INS_2, 25));
+    d.c.send(&isb_get(did::GPS1_POS, 1));
+    d.c.send(&isb_get(did::MAGNETOMETER, 10));
+    d.c.send(&isb_get(did::BAROMETER, 25));
+    let (mut ins, mut gps, mut mag, mut baro) = (vec![], vec![], vec![], vec![]);
+    let deadline = Instant::now() + 4 * TIMEOUT;
+    while ins.len() < 12 || gps.len() < 6 || mag.len() < 12 || baro.len() < 6 {
+        assert!(Instant::now() < deadline, "streams too slow");
+        let p = isb_packet(&mut d.c);
+        let b = p.payload;
+        match p.did {
+            did::INS_2 => ins.push(Ins2::decode(&b.try_into().unwrap())),
+            did::GPS1_POS => gps.push(GpsPos::decode(&b.try_into().unwrap())),
+            did::MAGNETOMETER => mag.push(Magnetometer::decode(&b.try_into().unwrap())),
+            did::BAROMETER => baro.push(Barometer::decode(&b.try_into().unwrap())),
+            other => panic!("unexpected DID {other}"),
+        }
+    }
+    // The first packet of each answers its GET; the streams follow.
+    for w in ins[1..].windows(2) {
+        assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-9);
+        assert_eq!(ins_status::solution(w[1].header.ins_status), 1, "aligning");
+    }
+    for w in gps[1..].windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+        assert_eq!((w[1].status, w[1].week), (0, 0), "no fix yet");
+    }
+    for w in mag[1..].windows(2) {
+        assert!((w[1].time - w[0].time - 0.1).abs() < 1e-9);
+    }
+    for w in baro[1..].windows(2) {
+        assert!((w[1].time - w[0].time - 0.2).abs() < 1e-9);
+    }
+    let m = mag.last().unwrap().mag.map(f64::from);
+    assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);
+    // A pressure of the troposphere and mslBar the SDK's baro2msl of it.
+    let b = baro.last().unwrap();
+    let sdk = -8434.668 * (f64::from(b.bar) / 101.325).ln();
+    assert!((50.0..130.0).contains(&b.bar), "{b:?}");
+    assert!((f64::from(b.msl_bar) - sdk).abs() < 0.01, "{b:?}");
+    d.c.send(&isb_get(did::INS_4, 0));
+    let i4 = Ins4::decode(
+        &isb_packet_of(&mut d.c, did::INS_4)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    let e = nav::ecef_of(&ins.last().unwrap().lla);
+    assert!(i4.ecef.iter().zip(e).all(|(a, b)| (a - b).abs() < 1e-6));
+}
+
+/// The live motion feed (docs/feed.md; host: `--motion-feed`, firmware:
+/// the bridge UART): a rotation of 90 °/s about the feed's Z (up) shows in
+/// the IMU packets as −π/2 rad/s about the IMX's Z (down), with the status
+/// all OK while samples are fresh.
+pub fn a_fed_rotation_shows_in_the_imu_packets(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&isb_get(did::IMU, 1));
+    isb_packet_of(&mut d.c, did::IMU);
+    let end = Instant::now() + TIMEOUT;
+    let mut t = 0.0;
+    let mut last = None;
+    loop {
+        assert!(
+            Instant::now() < end,
+            "no IMU packet with the rotation: {last:?}"
+        );
+        d.feed(&crate::support::feed_sample(0xFFFF, t, [0.0, 0.0, 90.0]));
+        t += 0.01;
+        let m = Imu::decode(
+            &isb_packet_of(&mut d.c, did::IMU)
+                .payload
+                .try_into()
+                .unwrap(),
+        );
+        last = Some(m);
+        // The IMX reports in its own axes, Z down: the feed's +Z (up)
+        // is its −Z (the specific force at rest reads −9.8 m/s² there).
+        if (m.pqr[2] + core::f32::consts::FRAC_PI_2).abs() < 0.01 {
+            assert_eq!(
+                m.status & imu_emu::isb::sets::imu_status::ALL_OK,
+                imu_emu::isb::sets::imu_status::ALL_OK
+            );
+            break;
+        }
+    }
 }

@@ -53,4 +53,6 @@ both!(
     stop_all_is_acked_with_the_sdks_bytes,
     get_of_did_132_is_nacked,
     bad_checksum_then_a_good_packet_is_answered,
+    navigation_streams_on_device_time_while_aligning,
+    a_fed_rotation_shows_in_the_imu_packets,
 );

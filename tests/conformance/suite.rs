@@ -72,4 +72,5 @@ both!(
     tov_pulses_high_then_low_for_every_frame,
     boot_asserted_at_power_on_silences_the_device,
     replies_and_frames_leave_without_delay,
+    a_fed_rotation_shows_in_the_ga_frames_and_silence_is_a_fault,
 );

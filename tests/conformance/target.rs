@@ -1,7 +1,7 @@
 //! The device under test, on either target, behind one interface:
 //!
 //! * [`Kind::Host`] — the `imu-emu` binary (`--tcp 127.0.0.1:0`, `--flash`,
-//!   `--control` for the pins);
+//!   `--control` for the pins, `--motion-feed` for [`Dut::feed`]);
 //! * [`Kind::Qemu`] — the `boards/qemu-mps2` firmware in
 //!   `qemu-system-arm -machine mps2-an386`, UART0 on a TCP port, the pin
 //!   bridge (UART1) on another, the flash file through semihosting.
@@ -120,7 +120,12 @@ pub struct Dut {
 }
 
 enum Proc {
-    Host { emu: Emu, ctl: HostControl },
+    Host {
+        emu: Emu,
+        ctl: HostControl,
+        /// `--motion-feed`'s address, and the connection once used.
+        feed: (SocketAddr, Option<TcpStream>),
+    },
     Qemu(Qemu),
 }
 
@@ -154,7 +159,7 @@ impl Dut {
     /// acknowledgement leaves).
     pub fn stop(&mut self) {
         match self.proc.take() {
-            Some(Proc::Host { mut emu, ctl }) => {
+            Some(Proc::Host { mut emu, ctl, .. }) => {
                 drop(ctl);
                 let status = emu.terminate();
                 assert!(status.success(), "exit status {status}");
@@ -169,6 +174,19 @@ impl Dut {
         match self.proc.as_mut().expect("running") {
             Proc::Host { ctl, .. } => ctl,
             Proc::Qemu(q) => &mut q.bridge,
+        }
+    }
+
+    /// Sends live motion feed bytes (docs/feed.md): the host runner's
+    /// `--motion-feed` socket, the firmware's bridge UART.
+    pub fn feed(&mut self, bytes: &[u8]) {
+        match self.proc.as_mut().expect("running") {
+            Proc::Host { feed, .. } => feed
+                .1
+                .get_or_insert_with(|| TcpStream::connect(feed.0).expect("feed connect"))
+                .write_all(bytes)
+                .expect("feed send"),
+            Proc::Qemu(q) => q.bridge.send(bytes),
         }
     }
 
@@ -217,10 +235,24 @@ fn launch(kind: Kind, opts: &Opts, flash: &Path) -> (Proc, Conn) {
                 flash.to_str().unwrap(),
                 "--control",
                 &ctl_addr,
+                "--motion-feed",
+                "127.0.0.1:0",
             ]);
+            let feed = emu.more_lines(2)[1]
+                .strip_prefix("feed on tcp ")
+                .expect("the feed's line")
+                .parse()
+                .unwrap();
             let c = emu.connect();
             let ctl = HostControl::connect(&ctl_addr);
-            (Proc::Host { emu, ctl }, c)
+            (
+                Proc::Host {
+                    emu,
+                    ctl,
+                    feed: (feed, None),
+                },
+                c,
+            )
         }
         Kind::Qemu => {
             let (q, c) = Qemu::start(opts, flash);

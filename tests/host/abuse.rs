@@ -215,6 +215,7 @@ fn a_line_without_a_newline_does_not_grow_memory() {
     let emu = Emu::tcp(&["--model", "K110", "--control", &addr]);
     let _uart = emu.connect(); // powers the device on
     let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
     assert_eq!(ctl.cmd("pps"), "ok");
     let (_, hwm0) = rss_kb(emu.pid());
 

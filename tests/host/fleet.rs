@@ -46,18 +46,8 @@ fn start(n: usize, flash: &Path, extra: &[&str]) -> (Emu, Vec<SocketAddr>, Strin
     ];
     args.extend_from_slice(extra);
     let emu = Emu::start(&args);
-    let mut places = vec![format!("listening on {}", emu.listening)];
-    places.extend(emu.more_lines(n));
-    let addrs: Vec<SocketAddr> = places[..n]
-        .iter()
-        .map(|l| {
-            l.strip_prefix("listening on tcp ")
-                .unwrap_or_else(|| panic!("{l:?}"))
-                .parse()
-                .unwrap()
-        })
-        .collect();
-    assert_eq!(places[n], format!("control on tcp {ctl}"));
+    let addrs: Vec<SocketAddr> = emu.tcp_addrs(n);
+    assert_eq!(emu.more_lines(n)[n - 1], format!("control on tcp {ctl}"));
     (emu, addrs, ctl)
 }
 

@@ -10,8 +10,9 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 
+use imu_emu::isb::nav_sets::{ins_status, GpsPos, GpsVel, Ins1, Ins2};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
-use support::{hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Emu};
+use support::{free_port, hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Control, Emu};
 
 fn isb(args: &[&str]) -> Emu {
     let mut all = vec!["--protocol", "isb"];
@@ -186,4 +187,259 @@ fn dev_info_over_a_pty() {
     let p = isb_packet(&mut c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
     assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());
+}
+
+/// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the
+/// fix after the cold start carries GPS week 2400 (2026-01-04 is a
+/// Sunday, the first of week 2400), INS_1 navigates with its NED offset
+/// from the default `refLla` (0, 0, 0): north ≈ 45° × 111 120 m.
+#[test]
+fn navigation_over_a_pty() {
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--speed",
+        "20",
+        "--gps-time",
+        "2026-01-04",
+    ]);
+    let mut c = Conn::serial(&emu.pty_path());
+    c.send(&isb_get(did::GPS1_POS, 5));
+    let g = loop {
+        let g = GpsPos::decode(
+            &isb_packet_of(&mut c, did::GPS1_POS)
+                .payload
+                .try_into()
+                .unwrap(),
+        );
+        if g.status != 0 {
+            break g;
+        }
+    };
+    assert_eq!((g.week, g.status), (2400, 0x0001_030C));
+    // Midnight + 18 leap seconds + the 30 s cold start (within a second).
+    assert!((48_000..49_200).contains(&g.time_of_week_ms), "{g:?}");
+    c.send(&isb_get(did::INS_1, 0));
+    let i = Ins1::decode(
+        &isb_packet_of(&mut c, did::INS_1)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    assert_eq!(i.header.ins_status, 0x0103_5970);
+    assert!((f64::from(i.ned[0]) - 45f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
+}
+
+/// The INS_2 and GPS1_POS of `--gps-time` over TCP at `--speed 20`: no
+/// fix for the 30 s cold start, then GPS1_POS every 200 ms of GPS time
+/// (week 2408 for 2026-03-01), INS_2 every 100 ms by its own time fields
+/// and NAV status; `fault gps off` on the control socket drops the fix and
+/// INS_2 reports dead reckoning; `fault gps on` brings both back.
+#[test]
+fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&[
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+        "--gps-time",
+        "2026-03-01T12:00:00Z",
+    ]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    c.send(&isb_get(did::GPS1_POS, 1));
+    c.send(&isb_get(did::INS_2, 25));
+    let pos = |p: support::IsbPacket| GpsPos::decode(&p.payload.try_into().unwrap());
+    let ins = |p: support::IsbPacket| Ins2::decode(&p.payload.try_into().unwrap());
+    // Until the fix: status 0, week 0 (GPS time unknown).
+    let mut fixes = Vec::new();
+    let mut ins2 = Vec::new();
+    for _ in 0..2000 {
+        let p = isb_packet(&mut c);
+        match p.did {
+            did::GPS1_POS => {
+                let g = pos(p);
+                if g.status != 0 {
+                    fixes.push(g);
+                }
+            }
+            did::INS_2 => ins2.push(ins(p)),
+            d => panic!("unexpected DID {d}"),
+        }
+        if fixes.len() == 20 {
+            break;
+        }
+    }
+    assert_eq!(fixes.len(), 20, "a fix after the cold start");
+    for w in fixes.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+    }
+    let g = fixes[0];
+    assert_eq!((g.week, g.status, g.leap_s), (2408, 0x0001_030C, 18));
+    // 12:00:00 UTC on a Sunday + 18 s + the 30 s cold start.
+    assert!(
+        (43_248_000..43_251_000).contains(&g.time_of_week_ms),
+        "{g:?}"
+    );
+    let navigating: Vec<&Ins2> = ins2.iter().filter(|i| i.header.week == 2408).collect();
+    assert!(navigating.len() > 5);
+    for w in navigating.windows(2) {
+        assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-6);
+    }
+    let last = navigating.last().unwrap();
+    assert_eq!(
+        last.header.ins_status, 0x0103_5970,
+        "{:#x}",
+        last.header.ins_status
+    );
+    // The navigation-period grid sits on GPS time: whole 4 ms steps of a
+    // GPS second (the epoch is a whole second, so 1PPS edges fall on GPS
+    // seconds).
+    let steps = last.header.time_of_week * 250.0;
+    assert!(
+        (steps - steps.round()).abs() < 1e-6,
+        "{}",
+        last.header.time_of_week
+    );
+    assert!((last.lla[0] - 45.0).abs() < 1e-4);
+
+    assert!(ctl.cmd("fault gps off").starts_with("ok"));
+    let mut dr = None;
+    for _ in 0..200 {
+        let p = isb_packet(&mut c);
+        if p.did == did::INS_2 {
+            let i = ins(p);
+            if ins_status::dead_reckoning(i.header.ins_status) {
+                dr = Some(i);
+                break;
+            }
+        }
+    }
+    let dr = dr.expect("dead reckoning after the outage");
+    assert_eq!(dr.header.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+    assert!(ctl.cmd("fault gps on").starts_with("ok"));
+    let mut back = false;
+    for _ in 0..200 {
+        let p = isb_packet(&mut c);
+        if p.did == did::INS_2 && ins(p).header.ins_status == 0x0103_5970 {
+            back = true;
+            break;
+        }
+    }
+    assert!(back, "NAV again once the fix is back");
+    assert!(ctl.cmd("fault mag on").starts_with("ok"));
+}
+
+/// The vendor tool's `-presetINS` bytes (RMC {0x8000000000000402, 0x100})
+/// over TCP: INS_2 every 4 ms and GPS1_POS every 200 ms by their own time
+/// fields; `$PERS` then `$SRST`: both resume unasked after the reset.
+#[test]
+fn the_ins_preset_persists_across_a_reset() {
+    let emu = isb(&["--speed", "5"]);
+    let mut c = emu.connect();
+    c.send(&hex(
+        "ef 49 05 09 0c 00 02 04 00 00 00 00 00 80 00 01 00 00 d9 ed",
+    ));
+    let ack = isb_packet(&mut c);
+    assert_eq!((ack.flags, ack.payload[1]), (1, did::RMC));
+    let collect = |c: &mut Conn| {
+        let (mut ins, mut gps) = (Vec::new(), Vec::new());
+        while gps.len() < 4 {
+            let p = isb_packet(c);
+            match p.did {
+                did::INS_2 => ins.push(Ins2::decode(&p.payload.try_into().unwrap())),
+                did::GPS1_POS => gps.push(GpsPos::decode(&p.payload.try_into().unwrap())),
+                d => panic!("unexpected DID {d}"),
+            }
+        }
+        (ins, gps)
+    };
+    let check = |ins: &[Ins2], gps: &[GpsPos]| {
+        for w in ins.windows(2) {
+            assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.004).abs() < 1e-9);
+        }
+        for w in gps.windows(2) {
+            assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 200);
+        }
+        assert!(ins.len() >= 100, "{}", ins.len());
+    };
+    let (ins, gps) = collect(&mut c);
+    check(&ins, &gps);
+    c.send(b"$PERS*14\r\n");
+    c.send(b"$SRST*06\r\n");
+    // After the reset time since boot starts again.
+    let mut ins = Vec::new();
+    loop {
+        let p = isb_packet(&mut c);
+        if p.did == did::INS_2 {
+            let i = Ins2::decode(&p.payload.try_into().unwrap());
+            if i.header.time_of_week < 0.1 {
+                ins.push(i);
+                break;
+            }
+        }
+    }
+    let (more, gps) = collect(&mut c);
+    ins.extend(more);
+    check(&ins, &gps);
+}
+
+/// A manoeuvre script (`--motion`): heading north at 50 m/s from 45.5° N,
+/// 7.25° E, 300 m. Once the fix is there INS_1 moves north at 50 m/s by its
+/// own time fields and positions, reads yaw 0° (the IMX's body is the
+/// vehicle's: docs/isb.md) and the velocity (50, 0, 0) in its body axes;
+/// GPS1_VEL's ECEF speed is 50 m/s within the receiver's error.
+#[test]
+fn a_manoeuvre_script_moves_the_ins() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("north.txt");
+    std::fs::write(&path, "start 45.5 7.25 300 0 50\nhold 1000\n").unwrap();
+    let emu = isb(&["--motion", path.to_str().unwrap(), "--speed", "20"]);
+    let mut c = emu.connect();
+    c.send(&isb_get(did::INS_1, 250));
+    c.send(&isb_get(did::GPS1_VEL, 5));
+    let mut ins = Vec::new();
+    let mut vel = None;
+    while ins.len() < 4 || vel.is_none() {
+        let p = isb_packet(&mut c);
+        match p.did {
+            did::INS_1 => {
+                let i = Ins1::decode(&p.payload.try_into().unwrap());
+                if i.header.ins_status == 0x0103_5970 {
+                    ins.push(i);
+                }
+            }
+            did::GPS1_VEL => {
+                let v = GpsVel::decode(&p.payload.try_into().unwrap());
+                if v.status != 0 {
+                    vel = Some(v);
+                }
+            }
+            d => panic!("unexpected DID {d}"),
+        }
+    }
+    for w in ins.windows(2) {
+        let dt = w[1].header.time_of_week - w[0].header.time_of_week;
+        assert!((dt - 1.0).abs() < 1e-6, "{dt}");
+        // 50 m a second north: 50 / 111 120 m a degree (within the INS's
+        // velocity error and the Earth's curvature at 45°).
+        let dlat = (w[1].lla[0] - w[0].lla[0]) * 111_132.0;
+        assert!((dlat - 50.0).abs() < 1.5, "{dlat}");
+        assert!((w[1].lla[1] - 7.25).abs() < 1e-4);
+    }
+    let i = ins.last().unwrap();
+    let yaw = f64::from(i.theta[2]).to_degrees();
+    assert!(yaw.abs() < 1.5, "{:?}", i.theta);
+    assert!(
+        (i.uvw[0] - 50.0).abs() < 0.5 && i.uvw[1].abs() < 0.5,
+        "{:?}",
+        i.uvw
+    );
+    let v = vel.unwrap().vel.map(f64::from);
+    let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    assert!((speed - 50.0).abs() < 0.5, "{speed}");
 }

@@ -434,6 +434,22 @@ impl Emu {
         Emu::start(&all)
     }
 
+    /// The TCP addresses of the first `n` devices (`listening on tcp …`
+    /// lines: the first and `n − 1` more), in order.
+    pub fn tcp_addrs(&self, n: usize) -> Vec<SocketAddr> {
+        let mut places = vec![format!("listening on {}", self.listening)];
+        places.extend(self.more_lines(n - 1));
+        places
+            .iter()
+            .map(|l| {
+                l.strip_prefix("listening on tcp ")
+                    .unwrap_or_else(|| panic!("{l:?}"))
+                    .parse()
+                    .unwrap()
+            })
+            .collect()
+    }
+
     /// The first `n` stdout lines after the first, waiting (bounded) for
     /// them.
     pub fn more_lines(&self, n: usize) -> Vec<String> {
@@ -568,6 +584,17 @@ impl Control {
         let mut l = String::new();
         self.r.read_line(&mut l).expect("control line");
         l.trim().to_owned()
+    }
+
+    /// Waits (bounded) until the device is on: a client's connection
+    /// powers it on when the runner's next pass sees it, which on a loaded
+    /// host may come after a control command sent right behind it.
+    pub fn wait_powered(&mut self) {
+        let deadline = Instant::now() + TIMEOUT;
+        while self.cmd("status").starts_with("ok mode=off") {
+            assert!(Instant::now() < deadline, "the device never powered on");
+            std::thread::sleep(Duration::from_millis(5));
+        }
     }
 
     /// Sends a command and returns its answer, skipping events.
@@ -720,6 +747,23 @@ fn gcd(a: u64, b: u64) -> u64 {
     } else {
         gcd(b, a % b)
     }
+}
+
+/// A live motion feed sample in the binary form (docs/feed.md, kind 1):
+/// rates in °/s for `device`, specific force +1 g up.
+pub fn feed_sample(device: u16, time_s: f64, rate_dps: [f32; 3]) -> Vec<u8> {
+    let s = imu_emu::feed::RateSample {
+        device,
+        time_ns: (time_s * 1e9) as u64,
+        truth: imu_emu::sensor::Truth {
+            rate_dps,
+            specific_force_g: [0.0, 0.0, 1.0],
+            temperature_c: None,
+        },
+    };
+    let mut f = [0u8; imu_emu::feed::MAX_FRAME];
+    let n = imu_emu::feed::encode(&s, &mut f);
+    f[..n].to_vec()
 }
 
 /// The master of a pty pair as the far end of a serial line (the test's

@@ -41,6 +41,7 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod feed;
 #[cfg(feature = "defmt")]
 pub mod panic;
 
@@ -485,6 +486,29 @@ impl<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource, P: Personalit
     /// Device time now (ns since power-on).
     pub fn now(&mut self) -> u64 {
         self.io.now()
+    }
+
+    /// Takes what the feed UART received ([`feed`]; at most
+    /// [`feed::MAX_FEED_BYTES`]) and applies the newest sample and the
+    /// feed's fault to the device: call right before [`Shell::service`].
+    pub fn feed(&mut self, feed: &mut feed::FeedIn, rx: &mut impl feed::ByteSource) {
+        let now = self.io.now();
+        let mut buf = [0u8; feed::MAX_FEED_BYTES];
+        let mut n = 0;
+        while n < buf.len() {
+            let Some(b) = rx.pop() else { break };
+            buf[n] = b;
+            n += 1;
+        }
+        if n > 0 {
+            feed.on_bytes(&buf[..n], now);
+        }
+        let (truth, lost) = feed.at(now);
+        let chain = self.dev.chain_mut();
+        if let Some(t) = truth {
+            chain.set_motion(imu_emu::sensor::Motion::Sample(t));
+        }
+        chain.faults_mut().motion_feed_lost = lost;
     }
 
     /// The tick service: call from the tick interrupt (see the crate docs).

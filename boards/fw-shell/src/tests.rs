@@ -487,3 +487,87 @@ fn isb_imu_streams_every_4_ms_on_the_fake_clock() {
     assert_eq!(s.device().mode(), imu_emu::device::Mode::Continuous);
     assert_eq!(s.device().output_rate(), Some(250));
 }
+
+/// GA frames (Table 5.7) in `tx` from byte `skip`: gyro X in 1e-5 °/s and
+/// the USW of each.
+fn ga_x_and_usw(tx: &[(u64, u8)], skip: usize) -> Vec<(f64, u16)> {
+    let bytes: Vec<u8> = tx.iter().map(|&(_, x)| x).collect();
+    bytes[skip..]
+        .chunks_exact(40)
+        .map(|f| {
+            let p = &f[6..38];
+            let x = i32::from_le_bytes([p[0], p[1], p[2], p[3]]);
+            (f64::from(x) * 1e-5, u16::from_le_bytes([p[26], p[27]]))
+        })
+        .collect()
+}
+
+/// The feed UART: binary samples (split anywhere) move the gyros from the
+/// next service; silence beyond the timeout sets USW bit 1 (sensor
+/// communication failure), the last sample holding; a sample clears it.
+#[test]
+fn feed_samples_move_the_gyros_and_silence_is_a_sensor_fault() {
+    use imu_emu::feed::{encode, RateSample, MAX_FRAME, OWN_DEVICE};
+    use imu_emu::sensor::Truth;
+    let (mut s, b) = shell();
+    b.borrow_mut().rx = frame(&[0x8F]);
+    b.borrow_mut().room = 1000;
+    let mut feed = feed::FeedIn::default();
+    let mut q: heapless::spsc::Queue<u8, 256> = heapless::spsc::Queue::new();
+    let (mut tx, mut rx) = q.split();
+    let sample = |t: u64, x: f32| {
+        let mut f = [0u8; MAX_FRAME];
+        let n = encode(
+            &RateSample {
+                device: OWN_DEVICE,
+                time_ns: t,
+                truth: Truth {
+                    rate_dps: [x, 0.0, 0.0],
+                    specific_force_g: [0.0, 0.0, 1.0],
+                    temperature_c: None,
+                },
+            },
+            &mut f,
+        );
+        f[..n].to_vec()
+    };
+    let mut step = |s: &mut TestShell, rx: &mut heapless::spsc::Consumer<'_, u8>, until: u64| loop {
+        let now = b.borrow().now;
+        if now >= until {
+            break;
+        }
+        b.borrow_mut().now = now + 500_000;
+        b.borrow_mut().fifo = 0;
+        s.feed(&mut feed, rx);
+        s.service();
+    };
+    let t0 = 1_000_000;
+    step(&mut s, &mut rx, t0 + 50_000_000);
+    for &byte in &sample(0, 100.0)[..20] {
+        tx.enqueue(byte).unwrap();
+    }
+    step(&mut s, &mut rx, t0 + 51_000_000);
+    for &byte in &sample(0, 100.0)[20..] {
+        tx.enqueue(byte).unwrap();
+    }
+    step(&mut s, &mut rx, t0 + 150_000_000);
+    let ack = 10;
+    let before = ga_x_and_usw(&b.borrow().tx, ack);
+    let n = before.len();
+    assert!(before[..4].iter().all(|&(x, u)| x.abs() < 1.0 && u == 0));
+    assert!((before[n - 1].0 - 100.0).abs() < 1.0, "{before:?}");
+    assert_eq!(before[n - 1].1 & 2, 0);
+    // Silent for more than 100 ms: the fault, the rate held.
+    step(&mut s, &mut rx, t0 + 300_000_000);
+    let silent = ga_x_and_usw(&b.borrow().tx, ack);
+    let &(x, usw) = silent.last().unwrap();
+    assert!((x - 100.0).abs() < 1.0 && usw & 2 == 2, "{silent:?}");
+    for byte in sample(1, -20.0) {
+        tx.enqueue(byte).unwrap();
+    }
+    step(&mut s, &mut rx, t0 + 350_000_000);
+    let back = ga_x_and_usw(&b.borrow().tx, ack);
+    let &(x, usw) = back.last().unwrap();
+    assert!((x + 20.0).abs() < 1.0 && usw & 2 == 0, "{back:?}");
+    assert_eq!(feed.counts().samples, 2);
+}

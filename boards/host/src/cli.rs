@@ -2,8 +2,11 @@
 //!
 //! ```text
 //! imu-emu [--protocol kernel|isb] [--model K110] [--tcp 127.0.0.1:7000 | --pty [--link PATH]]
-//!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N] …
+//!         [--flash FILE] [--control ADDR] [--allow-remote] [--seed N]
+//!         [--sensor-profile [K=]FILE]… …
 //! imu-emu client (--tcp HOST:PORT | --serial DEV [--baud N]) SUBCOMMAND …
+//! imu-emu sensor-profile (show NAME | check FILE)
+//! imu-emu allan [--model K110 | --input CSV] [--hours H] [--png F] [--svg F] …
 //! ```
 //!
 //! The first stdout line tells where the device listens —
@@ -110,6 +113,34 @@ pub struct Args {
     #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
     pub motion: Option<PathBuf>,
 
+    /// Take the motion live from a simulator or HIL rig: TCP `HOST:PORT`
+    /// or UDP `udp:HOST:PORT` (port 0 picks a free port; loopback only
+    /// without --allow-remote). Text rows in the --trajectory format or
+    /// binary samples (docs/feed.md). The address is a stdout line `feed
+    /// on tcp ADDR`; with --count, device K's feed is on port + K.
+    #[arg(long, value_name = "ADDR", conflicts_with_all = ["trajectory", "motion"])]
+    pub motion_feed: Option<String>,
+
+    /// With --motion-feed: device time advances only as samples arrive,
+    /// to each sample's time (interpolated between samples); with
+    /// `--speed max` as fast as the feed, otherwise no faster than
+    /// --speed either.
+    #[arg(long, requires = "motion_feed")]
+    pub lockstep: bool,
+
+    /// With --motion-feed (real time): after this many seconds without a
+    /// sample the unit reports a sensor fault (KERNEL USW bit 1, IMX IMU
+    /// status), the last sample holding; cleared by the next sample.
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::feed::DEFAULT_TIMEOUT_S,
+          requires = "motion_feed", value_parser = parse_timeout)]
+    pub feed_timeout: f64,
+
+    /// With --count and --motion-feed: one feed for every device (at ADDR
+    /// itself), each binary sample naming its device (text rows, which
+    /// name none, are rejected).
+    #[arg(long, requires = "motion_feed")]
+    pub feed_shared: bool,
+
     /// Allow --tcp / --control on a non-loopback address (`0.0.0.0`, `[::]`, a
     /// LAN address). Whoever reaches the port can then save parameters,
     /// power-cycle the device and inject faults: the program says so on
@@ -123,6 +154,14 @@ pub struct Args {
     /// client connects is lost, as on a real line).
     #[arg(long, value_name = "WHEN", value_enum, default_value_t = PowerOnAt::Connect)]
     pub power_on: PowerOnAt,
+
+    /// GPS time at power-on (ISB): an RFC 3339 date and time
+    /// (`2026-03-01T12:00:00Z`) or a date (`2026-03-01`, midnight UTC),
+    /// truncated to the second so that 1PPS edges (`--pps`) fall on GPS
+    /// seconds; default: the host clock at power-on. It then advances with
+    /// device time (`--speed`).
+    #[arg(long, value_name = "DATE", value_parser = parse_gps_time)]
+    pub gps_time: Option<u64>,
 
     /// Seed of the device's random processes (sensor noise, …); with
     /// --count, device K's seed is N + K.
@@ -158,6 +197,17 @@ pub struct Args {
     #[arg(short, long)]
     pub quiet: bool,
 
+    /// Use the sensor profile in FILE (TOML; `imu-emu sensor-profile show
+    /// K110` prints a built-in one to start from) instead of the model's
+    /// built-in one. With --count, `K=FILE` is for device K only (and wins
+    /// over a plain FILE, which is for every device); repeatable.
+    #[arg(long = "sensor-profile", value_name = "[K=]FILE", value_parser = crate::profile_file::parse_arg)]
+    pub sensor_profile: Vec<crate::profile_file::ProfileArg>,
+
+    /// The profiles of `--sensor-profile`, loaded at start (one a device).
+    #[arg(skip)]
+    pub profiles: Vec<Option<&'static imu_emu::sensor::SensorProfile>>,
+
     /// A subcommand instead of the emulator (`imu-emu client --help`).
     #[command(subcommand)]
     pub command: Option<Sub>,
@@ -170,6 +220,49 @@ pub enum Sub {
     /// port: info, bit, start, stop, get, set, commit-baud, udd, record,
     /// decode, plot.
     Client(crate::client::ClientArgs),
+    /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
+    /// IMX-5) as a file to start from; `check FILE` reads one.
+    #[command(name = "sensor-profile", subcommand)]
+    SensorProfile(ProfileSub),
+    /// The Allan deviation of a unit run in process (or of a `client
+    /// record` CSV): the fitted ARW/VRW, bias instability and rate random
+    /// walk beside the profile's, and a log-log plot (PNG, SVG).
+    Allan(crate::allan::AllanArgs),
+}
+
+/// `imu-emu sensor-profile …`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum ProfileSub {
+    /// Print the built-in profile NAME (K100 K102 K108 K110 K110M K120
+    /// K201 K210 K220 IMX-5) as a TOML file.
+    Show {
+        /// Model name.
+        name: String,
+    },
+    /// Read FILE and print it back as the emulator understood it (or the
+    /// error, naming the key and its allowed range).
+    Check {
+        /// The profile file.
+        file: PathBuf,
+    },
+}
+
+/// Runs `imu-emu sensor-profile …`.
+fn sensor_profile(sub: &ProfileSub) -> anyhow::Result<()> {
+    let text = match sub {
+        ProfileSub::Show { name } => {
+            let b = crate::profile_file::builtin(name)?;
+            crate::profile_file::to_toml(b.profile, b.name, b.source)
+        }
+        ProfileSub::Check { file } => {
+            let p = crate::profile_file::load(file)?;
+            crate::profile_file::to_toml(&p, &file.display().to_string(), "this file")
+        }
+    };
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
+    Ok(())
 }
 
 /// Sets up the `tracing` log on stderr at the level `-v`/`-q` ask for
@@ -239,6 +332,39 @@ pub fn check_local(option: &str, addr: &str, allow_remote: bool) -> anyhow::Resu
     Ok(remote)
 }
 
+fn parse_timeout(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 && t <= 3600.0 => Ok(t),
+        _ => Err(format!("a feed timeout is seconds in (0, 3600], not {s:?}")),
+    }
+}
+
+/// The feed's clock and timeout from the arguments, if there is a feed.
+fn feed_config(args: &Args) -> Option<crate::feed::FeedConfig> {
+    args.motion_feed.as_ref()?;
+    Some(crate::feed::FeedConfig {
+        lockstep: args.lockstep,
+        timeout_ns: (args.feed_timeout * 1e9) as u64,
+    })
+}
+
+/// `addr` with its port moved on by `k` (port 0 stays 0: a free port
+/// each), for device K of a `--count` run.
+fn port_plus(option: &str, addr: &str, k: usize, count: u16) -> anyhow::Result<String> {
+    let sock: std::net::SocketAddr = addr
+        .parse()
+        .map_err(|_| UsageError(format!("{option} {addr}: expected IP:PORT with --count")))?;
+    let port = match sock.port() {
+        0 => 0,
+        p => u16::try_from(usize::from(p) + k).map_err(|_| {
+            UsageError(format!(
+                "{option} {addr} --count {count}: ports beyond 65535"
+            ))
+        })?,
+    };
+    Ok(std::net::SocketAddr::new(sock.ip(), port).to_string())
+}
+
 /// Checks the listening addresses before anything is opened; warns loudly
 /// on stderr about each remote one `--allow-remote` lets through.
 fn check_addresses(args: &Args) -> anyhow::Result<()> {
@@ -248,6 +374,17 @@ fn check_addresses(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(c) = &args.control {
         wanted.push(("--control", c.as_str()));
+    }
+    if let Some(f) = &args.motion_feed {
+        wanted.push((
+            "--motion-feed",
+            f.strip_prefix("udp:")
+                .or(f.strip_prefix("tcp:"))
+                .unwrap_or(f),
+        ));
+    }
+    if args.feed_shared && args.count < 2 {
+        return Err(UsageError("--feed-shared goes with --count N (N > 1)".into()).into());
     }
     for (option, addr) in wanted {
         if check_local(option, addr, args.allow_remote)? {
@@ -294,12 +431,17 @@ pub fn one_line_panics() {
 
 /// Runs the program: sets up signals, the flash and the transport, powers
 /// the device on and serves it until SIGINT/SIGTERM.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(mut args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
-    if let Some(Sub::Client(c)) = args.command {
-        return crate::client::run(c);
+    match args.command {
+        Some(Sub::Client(c)) => return crate::client::run(c),
+        Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
+        Some(Sub::Allan(a)) => return crate::allan::run(&a),
+        None => {}
     }
     check_addresses(&args)?;
+    // A bad profile file stops the program before anything listens.
+    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -333,14 +475,33 @@ fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
     }
     let n = usize::from(args.count);
     open_files_for(n);
+    let started = std::cell::Cell::new(false);
     match &args.flash {
         Some(path) => {
-            let flashes = (0..n)
-                .map(|k| FileNor::open(&numbered(path, k)))
-                .collect::<anyhow::Result<Vec<_>>>()?;
-            many_with(flashes, args, stop)
+            let files: Vec<PathBuf> = (0..n).map(|k| numbered(path, k)).collect();
+            let new: Vec<&PathBuf> = files
+                .iter()
+                .filter(|p| std::fs::symlink_metadata(p).is_err())
+                .collect();
+            let r = files
+                .iter()
+                .map(|p| FileNor::open(p))
+                .collect::<anyhow::Result<Vec<_>>>()
+                .and_then(|flashes| many_with(flashes, args, stop, &started));
+            if r.is_err() && !started.get() {
+                // A start that failed leaves no FILE.K it created.
+                for p in new {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+            r
         }
-        None => many_with((0..n).map(|_| MemNor::new()).collect(), args, stop),
+        None => many_with(
+            (0..n).map(|_| MemNor::new()).collect(),
+            args,
+            stop,
+            &started,
+        ),
     }
 }
 
@@ -369,10 +530,16 @@ fn open_files_for(n: usize) {
     }
 }
 
-fn many_with<F: NorFlash>(flashes: Vec<F>, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
+/// `started` is set once every device is set up and the fleet runs.
+fn many_with<F: NorFlash>(
+    flashes: Vec<F>,
+    args: &Args,
+    stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
+) -> anyhow::Result<()> {
     match args.protocol {
-        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop),
-        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop),
+        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop, started),
+        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop, started),
     }
 }
 
@@ -380,6 +547,7 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
     flashes: Vec<F>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let rate = factory_rate(args.protocol);
     if args.pty {
@@ -388,27 +556,15 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
             let link = args.link.as_deref().map(|p| numbered(p, k));
             parts.push((f, PtyTransport::open(rate, link.as_deref())?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     } else {
         let addr = args.tcp.as_deref().unwrap_or(DEFAULT_TCP);
-        let sock: std::net::SocketAddr = addr
-            .parse()
-            .map_err(|_| UsageError(format!("--tcp {addr}: expected IP:PORT with --count")))?;
         let mut parts = Vec::with_capacity(flashes.len());
         for (k, f) in flashes.into_iter().enumerate() {
-            let port = match sock.port() {
-                0 => 0,
-                p => u16::try_from(usize::from(p) + k).map_err(|_| {
-                    UsageError(format!(
-                        "--tcp {addr} --count {}: ports beyond 65535",
-                        args.count
-                    ))
-                })?,
-            };
-            let a = std::net::SocketAddr::new(sock.ip(), port).to_string();
+            let a = port_plus("--tcp", addr, k, args.count)?;
             parts.push((f, TcpTransport::bind(&a)?));
         }
-        serve_many::<F, _, P>(parts, args, stop)
+        serve_many::<F, _, P>(parts, args, stop, started)
     }
 }
 
@@ -426,6 +582,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     parts: Vec<(F, T)>,
     args: &Args,
     stop: &AtomicBool,
+    started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let trajectory = match &args.trajectory {
         Some(path) => Some(crate::trajectory::Trajectory::load(
@@ -439,12 +596,24 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let mut feeds = Vec::new();
+    if let Some(f) = &args.motion_feed {
+        let addr = crate::feed::FeedAddr::parse(f);
+        let n = if args.feed_shared { 1 } else { parts.len() };
+        for k in 0..n {
+            let a = addr.with(port_plus("--motion-feed", addr.host_port(), k, args.count)?);
+            feeds.push(crate::feed::FeedSocket::bind(&a)?);
+        }
+    }
     let mut out = std::io::stdout().lock();
     for (_, t) in &parts {
         writeln!(out, "listening on {}", t.describe())?;
     }
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    for f in &feeds {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -454,10 +623,13 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         name,
         speed: args.speed,
         seed: args.seed,
+        profiles: args.profiles.clone(),
         pps: args.pps,
         trajectory,
         vehicle,
         power_on_now: args.power_on == PowerOnAt::Now,
+        gps_time: args.gps_time,
+        feed: feed_config(args),
     };
     eprintln!(
         "imu-emu: {} devices ({}), flash {}; each powers on {}",
@@ -473,7 +645,10 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
             "when its first client connects"
         }
     );
-    let mut fleet = crate::fleet::Fleet::<F, T, P>::new(parts, setup, control);
+    let shared = args.feed_shared;
+    let mut fleet =
+        crate::fleet::Fleet::<F, T, P>::new(parts, setup, control).with_feeds(feeds, shared);
+    started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
@@ -545,10 +720,19 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         Some(addr) => Some(crate::control::Control::bind(addr)?),
         None => None,
     };
+    let feed = match &args.motion_feed {
+        Some(a) => Some(crate::feed::FeedSocket::bind(
+            &crate::feed::FeedAddr::parse(a),
+        )?),
+        None => None,
+    };
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {
         writeln!(out, "control on tcp {}", c.local_addr()?)?;
+    }
+    if let Some(f) = &feed {
+        writeln!(out, "feed on {}", f.describe())?;
     }
     out.flush()?;
     drop(out);
@@ -587,7 +771,10 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         boot: None,
         seed: args.seed,
     };
-    let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+    let profile = args.profiles.first().copied().flatten();
+    let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
+    dev.personality_mut()
+        .set_gps_time(gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
@@ -614,9 +801,43 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     if let Some(v) = vehicle {
         runner = runner.with_vehicle(v);
     }
+    if let (Some(cfg), Some(sock)) = (feed_config(args), feed) {
+        let state = crate::feed::FeedState::new(cfg, 0, true, "");
+        runner = runner.with_feed(state, Some(sock));
+    }
     runner.run(stop)?;
     eprintln!("imu-emu: stopped");
     Ok(())
+}
+
+/// `--gps-time`: Unix seconds (UTC) of an RFC 3339 date and time or a
+/// date (midnight UTC), truncated to the second.
+fn parse_gps_time(s: &str) -> Result<u64, String> {
+    let full = if s.len() == 10 {
+        format!("{s}T00:00:00Z")
+    } else {
+        s.to_owned()
+    };
+    let t = humantime::parse_rfc3339_weak(&full).map_err(|e| format!("{s}: {e}"))?;
+    let unix = t
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_err(|_| format!("{s}: before 1970"))?
+        .as_secs();
+    if unix < imu_emu::isb::nav::GPS_EPOCH_UNIX_S {
+        return Err(format!("{s}: before the GPS epoch 1980-01-06"));
+    }
+    Ok(unix)
+}
+
+/// GPS seconds at device instant 0: `--gps-time` (Unix seconds, UTC) or the
+/// host clock now, as GPS time (+18 leap seconds).
+pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
+    let unix = gps_time.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs())
+    });
+    imu_emu::isb::nav::gps_s_of_unix(unix)
 }
 
 #[cfg(test)]

@@ -52,6 +52,8 @@ pub enum Command {
     PowerCycle(Option<Level>),
     /// Change the injected faults.
     Fault(FaultChange),
+    /// A navigation fault (ISB): `fault gps off|on`, `fault mag|baro on|off`.
+    NavFault(NavFault),
     /// Change the motion the unit undergoes.
     Motion(Motion),
     /// Fly a manoeuvre script from now (`motion script …`).
@@ -68,6 +70,17 @@ pub enum Command {
     Help,
     /// List the devices and where each listens (`ok count=N dev0=…`).
     Devices,
+}
+
+/// A navigation fault of the ISB personality (`docs/isb.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NavFault {
+    /// GPS fix available (`fault gps on`) or lost (`fault gps off`).
+    Gps(bool),
+    /// Magnetic disturbance on/off.
+    Mag(bool),
+    /// Barometer failure on/off.
+    Baro(bool),
 }
 
 /// One change to [`Faults`].
@@ -196,6 +209,17 @@ pub const COMMANDS: &[Form] = &[
         [] => Some(Ok(Command::PowerCycle(None))),
         ["boot=high"] => Some(Ok(Command::PowerCycle(Some(Level::High)))),
         ["boot=low"] => Some(Ok(Command::PowerCycle(Some(Level::Low)))),
+        _ => None,
+    }),
+    // Before the sensor faults' row, whose parser takes any `fault <word>
+    // <state>`.
+    form("fault gps off|on", true, |w| match w {
+        ["gps", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Gps(on)))),
+        _ => None,
+    }),
+    form("fault mag|baro on|off", true, |w| match w {
+        ["mag", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Mag(on)))),
+        ["baro", s] => Some(on_off(s).map(|on| Command::NavFault(NavFault::Baro(on)))),
         _ => None,
     }),
     form(
@@ -816,6 +840,15 @@ mod tests {
             Ok(Command::Fault(FaultChange::Temperature(None)))
         );
         assert!(parse("fault comm maybe").is_err());
+        assert_eq!(
+            parse("fault gps off"),
+            Ok(Command::NavFault(NavFault::Gps(false)))
+        );
+        assert_eq!(
+            parse("fault baro on"),
+            Ok(Command::NavFault(NavFault::Baro(true)))
+        );
+        assert!(parse("fault gps maybe").is_err());
         assert!(parse("fault temperature NaN").is_err());
         assert!(matches!(
             parse("motion rotate 0 600 0"),
@@ -877,6 +910,7 @@ mod tests {
         assert_eq!(
             help(),
             "commands: help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
+             | fault gps off|on | fault mag|baro on|off \
              | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
              | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \
              | motion script <statement>; … | motion file <path> | truth \
@@ -886,7 +920,10 @@ mod tests {
         );
         assert_eq!(
             usage("fault").as_deref(),
-            Some("fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off")
+            Some(
+                "fault gps off|on, fault mag|baro on|off, fault comm|config|gyro-bit|accel-bit|flash \
+                 on|off, or fault temperature <degC>|off"
+            )
         );
         assert_eq!(
             usage("motion").as_deref(),
@@ -905,8 +942,8 @@ mod tests {
         assert_eq!(
             parse("fault comm"),
             Err(
-                "bad syntax: fault comm; expected fault comm|config|gyro-bit|accel-bit|flash \
-                 on|off, or fault temperature <degC>|off"
+                "bad syntax: fault comm; expected fault gps off|on, fault mag|baro on|off, \
+                 fault comm|config|gyro-bit|accel-bit|flash on|off, or fault temperature <degC>|off"
                     .to_owned()
             )
         );

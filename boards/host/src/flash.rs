@@ -69,6 +69,10 @@ pub struct FileNor {
     nor: MemNor,
     file: File,
     path: PathBuf,
+    /// Writes to the file that failed so far, and when that was last said
+    /// on stderr (at most once a second: a full disk fails every save).
+    failed_writes: u64,
+    reported_at: Option<std::time::Instant>,
 }
 
 impl FileNor {
@@ -133,6 +137,8 @@ impl FileNor {
             nor,
             file,
             path: path.to_owned(),
+            failed_writes: 0,
+            reported_at: None,
         })
     }
 
@@ -155,7 +161,18 @@ impl FileNor {
         self.file
             .write_all_at(&self.nor.image()[from..to], from as u64)
             .map_err(|e| {
-                eprintln!("imu-emu: {}: {e}", self.path.display());
+                self.failed_writes += 1;
+                let due = self
+                    .reported_at
+                    .is_none_or(|t| t.elapsed() >= std::time::Duration::from_secs(1));
+                if due {
+                    self.reported_at = Some(std::time::Instant::now());
+                    eprintln!(
+                        "imu-emu: {}: {e} ({} failed writes so far; said at most once a second)",
+                        self.path.display(),
+                        self.failed_writes
+                    );
+                }
                 FileNorError::Io(e)
             })
     }

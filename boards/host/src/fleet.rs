@@ -35,6 +35,7 @@ use imu_emu::time::Instant;
 
 use crate::clock::Speed;
 use crate::control::{Command, Control};
+use crate::feed::{FeedConfig, FeedSocket, FeedState};
 use crate::runner::{HostPersonality, Runner, IDLE_WAKE};
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
@@ -56,6 +57,9 @@ pub struct Setup {
     pub speed: Speed,
     /// Device K's seed is `seed + K`.
     pub seed: u64,
+    /// Device K's sensor profile (`--sensor-profile`; `None` or missing:
+    /// the model's built-in one).
+    pub profiles: Vec<Option<&'static imu_emu::sensor::SensorProfile>>,
     /// A 1PPS edge every device second.
     pub pps: bool,
     /// The motion each device replays, if any (each from its start).
@@ -65,6 +69,10 @@ pub struct Setup {
     pub vehicle: Option<crate::vehicle::VehicleSource>,
     /// Power on at start instead of at the first client.
     pub power_on_now: bool,
+    /// `--gps-time` (Unix seconds, UTC), else the host clock at power-on.
+    pub gps_time: Option<u64>,
+    /// The live motion feed's clock and timeout, if there is a feed.
+    pub feed: Option<FeedConfig>,
 }
 
 /// One device: off (waiting for its first client) or running.
@@ -82,6 +90,13 @@ pub struct Fleet<F: NorFlash, T: Transport, P: HostPersonality> {
     origin: HostInstant,
     /// Where each device listens (`tcp 127.0.0.1:7000`).
     places: Vec<String>,
+    /// Device K's own feed socket until it powers on ([`Fleet::with_feeds`]).
+    feeds: Vec<Option<FeedSocket>>,
+    /// One feed for all devices, its samples routed by their device index.
+    shared_feed: Option<FeedSocket>,
+    /// The shared feed's outcomes no device took: decoder rejections and
+    /// samples for a device that is off or does not exist.
+    shared_counts: imu_emu::feed::Counts,
 }
 
 impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
@@ -98,7 +113,66 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             control,
             origin: HostInstant::now(),
             places,
+            feeds: Vec::new(),
+            shared_feed: None,
+            shared_counts: imu_emu::feed::Counts::default(),
         }
+    }
+
+    /// Live motion feeds ([`Setup::feed`]): one socket per device (device
+    /// K's at index K), or with `shared` one socket whose samples name
+    /// their device.
+    pub fn with_feeds(mut self, mut sockets: Vec<FeedSocket>, shared: bool) -> Self {
+        if shared {
+            self.shared_feed = sockets.pop();
+        } else {
+            for (k, s) in sockets.iter_mut().enumerate() {
+                s.set_label(&format!("dev {k}: "));
+            }
+            self.feeds = sockets.into_iter().map(Some).collect();
+        }
+        self
+    }
+
+    /// Whether a running device's lockstep queue is full.
+    fn shared_feed_full(&self) -> bool {
+        self.slots.iter().flatten().any(|s| match s {
+            Slot::On(r) => !r.feed_wants_more(),
+            Slot::Off { .. } => false,
+        })
+    }
+
+    /// Reads the shared feed, handing each sample to the device it names;
+    /// not while a device's lockstep queue is full (the socket's buffer
+    /// then holds the simulator back).
+    fn read_shared_feed(&mut self) -> anyhow::Result<()> {
+        if self.shared_feed_full() {
+            return Ok(());
+        }
+        let Some(mut sock) = self.shared_feed.take() else {
+            return Ok(());
+        };
+        let slots = &mut self.slots;
+        let counts = &mut self.shared_counts;
+        let r = sock.read(&mut |r| {
+            let k = r.as_ref().map(|s| usize::from(s.device()));
+            match (k, r) {
+                (Ok(k), r) => match slots.get_mut(k) {
+                    Some(Some(Slot::On(runner))) => runner.feed_offer(r),
+                    _ => {
+                        tracing::info!("motion feed: sample for dev {k}, which is off or absent");
+                        counts.note(Err(imu_emu::feed::Reject::WrongDevice));
+                    }
+                },
+                (Err(_), Err(e)) => {
+                    tracing::info!("motion feed sample rejected: {}", e.name());
+                    counts.note(Err(e));
+                }
+                (Err(_), Ok(_)) => {}
+            }
+        });
+        self.shared_feed = Some(sock);
+        r
     }
 
     /// How many devices.
@@ -140,7 +214,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
             boot: None,
             seed: self.setup.seed.wrapping_add(k as u64),
         };
-        let dev = Device::<F, P>::new(cfg, flash, Instant::ZERO);
+        let profile = self.setup.profiles.get(k).copied().flatten();
+        let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
+        dev.personality_mut()
+            .set_gps_time(crate::cli::gps_s_at_power_on(self.setup.gps_time));
         transport.set_line_rate(dev.line_rate())?;
         eprintln!(
             "imu-emu: dev {k}: {} powered on at {} bit/s, seed {}",
@@ -162,6 +239,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         if let Some(v) = &self.setup.vehicle {
             runner = runner.with_vehicle(v.clone());
         }
+        if let Some(cfg) = self.setup.feed {
+            let own = self.feeds.get_mut(k).and_then(Option::take);
+            let state = FeedState::new(cfg, k as u16, own.is_some(), &format!("dev {k}: "));
+            runner = runner.with_feed(state, own);
+        }
         self.slots[k] = Some(Slot::On(Box::new(runner)));
         Ok(())
     }
@@ -169,7 +251,16 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
     /// One control command for device `k` (or for the run).
     fn command(&mut self, k: Option<usize>, cmd: Command) -> Result<String, String> {
         if cmd == Command::Devices {
-            return Ok(crate::control::devices_reply(&self.places));
+            let mut s = crate::control::devices_reply(&self.places);
+            if let Some(f) = &self.shared_feed {
+                let c = &self.shared_counts;
+                s.push_str(&format!(
+                    " feed={} feed-unrouted={}",
+                    f.describe().replacen(' ', ":", 1),
+                    c.rejected_total()
+                ));
+            }
+            return Ok(s);
         }
         let n = self.slots.len();
         let Some(k) = k else {
@@ -207,6 +298,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
     /// control commands; how long the loop may then wait.
     pub fn round(&mut self) -> anyhow::Result<Duration> {
         let mut timeout = IDLE_WAKE;
+        self.read_shared_feed()?;
         for k in 0..self.slots.len() {
             let off = match &mut self.slots[k] {
                 Some(Slot::Off { transport, .. }) => transport.poll_client()?,
@@ -244,7 +336,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
                 Slot::On(r) => r.transport_mut().prepare_wait()?,
             }
         }
-        let (revents, counts) = {
+        let (revents, mut counts) = {
             let mut fds = Vec::with_capacity(2 * self.slots.len() + 2);
             let mut counts = Vec::with_capacity(self.slots.len());
             for slot in self.slots.iter().flatten() {
@@ -255,15 +347,33 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
                 }
                 counts.push(fds.len() - before);
             }
+            let mine: usize = counts.iter().sum();
             if let Some(ctl) = &self.control {
                 ctl.interest(&mut fds);
             }
+            let ctl_n = fds.len() - mine;
+            // Feeds last: they are read every round, only their wake-up
+            // matters.
+            for slot in self.slots.iter().flatten() {
+                if let Slot::On(r) = slot {
+                    r.feed_interest(&mut fds);
+                }
+            }
+            if let Some(f) = self
+                .shared_feed
+                .as_ref()
+                .filter(|_| !self.shared_feed_full())
+            {
+                f.interest(&mut fds);
+            }
+            counts.push(ctl_n);
             crate::transport::poll_fds(&mut fds, timeout)?;
             (crate::transport::revents(&fds), counts)
         };
+        let ctl_n = counts.pop().unwrap_or(0);
         let mine: usize = counts.iter().sum();
         if let Some(ctl) = self.control.as_mut() {
-            ctl.polled(&revents[mine..]);
+            ctl.polled(&revents[mine..mine + ctl_n]);
         }
         let mut at = 0;
         for (slot, n) in self.slots.iter_mut().flatten().zip(counts) {

@@ -19,6 +19,8 @@
 //! * [`monitor`] — the device's input decoded on the host side: logs and
 //!   the reasons frames are rejected;
 //! * [`trajectory`] — `--trajectory FILE`: motion replayed from CSV;
+//! * [`feed`] — `--motion-feed ADDR`: live motion samples (real time or
+//!   lockstep);
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
@@ -30,16 +32,20 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod allan;
+pub mod allan_plot;
 pub mod backlog;
 pub mod cli;
 pub mod client;
 pub mod clock;
 pub mod control;
 pub mod error;
+pub mod feed;
 pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod profile_file;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;

@@ -21,6 +21,18 @@
 //! * **Visible loss**: a frame the device's TX queue could not take is
 //!   dropped whole by the core ([`Device::tx_dropped`]); the runner logs it
 //!   (at most once a second) and counts it in [`Stats::tx_dropped`].
+//! * **Input at the line rate**: whatever the transport delivers at once
+//!   (a 70 KB burst of commands in one TCP write, a pty or serial buffer
+//!   full), the device gets its input no faster than its UART would at
+//!   the line rate: a host-side [`Pacer`] at the device's line rate, in
+//!   device time, bounds what each pass reads; the rest waits in the
+//!   transport (the kernel's buffers, then the peer: TCP flow control),
+//!   whose wait does not wake for input meanwhile
+//!   ([`Transport::hold_input`]) but when a burst of credit is there. So
+//!   the replies to a burst of commands, each shorter than its command,
+//!   always fit the line and the device's TX queue, as on a real UART.
+//!   (The firmware's UART delivers at the line rate by itself: this is
+//!   the host board's part, not the core schedule's.)
 //! * **A status line** on stdout once a second when it is a terminal
 //!   (mode, format, rates, frames sent, frames rejected).
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
@@ -41,7 +53,9 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
+use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
+use imu_emu::line::Pacer;
 use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
@@ -49,6 +63,7 @@ use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
+use crate::feed::{FeedSocket, FeedState};
 use crate::link::Link;
 use crate::monitor::Monitor;
 use crate::trajectory::Trajectory;
@@ -61,6 +76,17 @@ pub trait HostPersonality: Personality {
     /// monitor's reasons (`-v`); `None` where the protocol has no such
     /// parameters.
     fn param(&self, id: u16) -> Option<&[u8]>;
+
+    /// Sets GPS time: `gps_s` GPS seconds since 1980-01-06 at device
+    /// instant 0 (`--gps-time`, or the host clock at power-on); nothing
+    /// where the protocol has no GPS.
+    fn set_gps_time(&mut self, _gps_s: u64) {}
+
+    /// A navigation fault (`fault gps|mag|baro on|off`); an error where the
+    /// protocol has no navigation side.
+    fn nav_fault(&mut self, _change: control::NavFault) -> Result<(), String> {
+        Err("no GPS, magnetometer or barometer on this protocol (--protocol isb has them)".into())
+    }
 }
 
 impl HostPersonality for Kernel {
@@ -72,6 +98,21 @@ impl HostPersonality for Kernel {
 impl HostPersonality for imu_emu::isb::Isb {
     fn param(&self, _id: u16) -> Option<&[u8]> {
         None
+    }
+
+    fn set_gps_time(&mut self, gps_s: u64) {
+        Isb::set_gps_time(self, gps_s.saturating_mul(1_000_000_000));
+    }
+
+    fn nav_fault(&mut self, change: control::NavFault) -> Result<(), String> {
+        let mut f = self.nav().faults();
+        match change {
+            control::NavFault::Gps(on) => f.gps_off = !on,
+            control::NavFault::Mag(on) => f.mag_disturbed = on,
+            control::NavFault::Baro(on) => f.baro_failed = on,
+        }
+        self.set_nav_faults(f);
+        Ok(())
     }
 }
 
@@ -94,6 +135,16 @@ const LIMITS: Limits = Limits {
     max_ticks: MAX_TICKS_PER_PASS,
     max_rx: MAX_RX_PER_PASS,
     early_ns: 0,
+};
+/// Most ticks a pass runs while input is held back at the line rate:
+/// 2–4 ms of device time, so that input, fed after a pass's ticks, stays
+/// interleaved with them even when the host is behind (a command cut
+/// between two passes is not abandoned by the device's 100 ms RX idle
+/// rule because the ticks of a host stall ran in between).
+pub const HELD_RX_TICKS: u32 = 8;
+const HELD: Limits = Limits {
+    max_ticks: HELD_RX_TICKS,
+    ..LIMITS
 };
 /// The passes of a `--speed max` round after its first: no input read.
 const NO_RX: Limits = Limits {
@@ -136,6 +187,9 @@ pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
     /// When the terminal status line was last drawn (`None`: stdout is
     /// not a terminal, no status line).
     status_at: Option<std::time::Instant>,
+    /// Lockstep at a `--speed` factor: device time does not run ahead of
+    /// this clock either.
+    pace: Option<Clock>,
 }
 
 /// What the schedule drives on this board: the transport, the control
@@ -150,12 +204,28 @@ struct HostPort<T: Transport> {
     trajectory: Option<Trajectory>,
     /// The vehicle source (`--motion`, `motion script|file`), if any.
     vehicle: Option<VehicleSource>,
+    /// The live motion feed's state (`--motion-feed`), if any.
+    feed: Option<FeedState>,
+    /// The feed's socket, unless the feed is shared by a fleet.
+    feed_socket: Option<FeedSocket>,
     /// Faults between the device's UART and the transport (`link …`).
     link: Link,
     /// The device's input decoded on the host side (logs, `status`).
     monitor: Monitor,
     /// Input past the faults that did not fit the device's read yet.
     rx_carry: std::collections::VecDeque<u8>,
+    /// Input credit at the line rate (device time): what the device's
+    /// UART could have received by now.
+    rx_pacer: Pacer,
+    /// The last read was bounded by the credit (more input may wait in
+    /// the transport, which is not waited on for input meanwhile).
+    rx_held: bool,
+    /// Deadline of the last tick run, ns, and the tick period: input is
+    /// credited up to the schedule's time, never past the next tick (the
+    /// clock's `now` runs ahead while ticks are behind, and goes back when
+    /// the clock is held back).
+    tick_ns: u64,
+    period_ns: u64,
     /// Device time of the current pass, ns.
     now_ns: u64,
     /// Bytes the line carried (before link faults).
@@ -176,6 +246,12 @@ struct HostPort<T: Transport> {
 }
 
 impl<T: Transport> HostPort<T> {
+    /// Device time input is credited up to: the pass's time, but no later
+    /// than the tick after the last one run.
+    fn rx_time(&self) -> u64 {
+        self.now_ns.min(self.tick_ns.saturating_add(self.period_ns))
+    }
+
     /// Hands the transport what a stall released, if it is over.
     fn release(&mut self) -> anyhow::Result<()> {
         let mut out = Vec::new();
@@ -203,7 +279,7 @@ impl<T: Transport> HostPort<T> {
                 Motion::Sample(_) => "sample",
             }
         };
-        crate::vehicle::truth_words(&dev.vehicle(), source, chain.temperature(), prefix)
+        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
     }
 
     /// `status`: the device, the line and the link in `key=value` words.
@@ -251,6 +327,9 @@ impl<T: Transport> HostPort<T> {
             l.cut,
             l.stall_dropped
         ));
+        if let Some(f) = &self.feed {
+            s.push_str(&f.status(self.now_ns));
+        }
         s
     }
 }
@@ -279,15 +358,22 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 
     fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
         eprintln!("imu-emu: {}line rate {bps} bit/s", self.label);
+        self.rx_pacer.set_rate(bps, self.rx_time());
         self.transport.set_line_rate(bps)
     }
 
     fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
+        // No more than the line could have carried by now.
+        self.rx_pacer.advance(self.rx_time());
+        let limit = buf.len().min(self.rx_pacer.available());
+        let buf = &mut buf[..limit];
         // Input the faults made longer than the last read could take first.
         let mut n = self.rx_carry.len().min(buf.len());
         for (b, c) in buf.iter_mut().zip(self.rx_carry.drain(..n)) {
             *b = c;
         }
+        // Called even for 0 bytes: the transport also accepts and notices
+        // hang-ups there.
         let mut raw = Vec::new();
         self.transport
             .receive(buf.len() - n, &mut |bytes| raw.extend_from_slice(bytes))?;
@@ -299,6 +385,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             self.rx_carry.extend(&got[k..]);
             n += k;
         }
+        self.rx_pacer.consume(n);
+        self.rx_held = n == limit;
+        self.transport.hold_input(self.rx_held);
         if !self.fw_update {
             self.monitor.feed(&buf[..n]);
         }
@@ -329,12 +418,20 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         let secs = deadline.as_nanos() as f64 * 1e-9;
         if let Some(t) = self.trajectory.as_mut() {
             let (state, truth) = t.vehicle_at(secs);
-            dev.set_vehicle(state, truth);
+            dev.chain_mut().set_vehicle(state, truth);
         } else if let Some(v) = self.vehicle.as_mut() {
             let state = v.at(secs);
-            dev.set_vehicle(state, state.truth());
+            dev.chain_mut().set_vehicle(state, state.truth());
+        }
+        if let Some(f) = self.feed.as_mut() {
+            let (truth, lost) = f.at(deadline.as_nanos());
+            if let Some(truth) = truth {
+                dev.chain_mut().set_motion(Motion::Sample(truth));
+            }
+            dev.chain_mut().faults_mut().motion_feed_lost = lost;
         }
         dev.on_tick(deadline);
+        self.tick_ns = deadline.as_nanos();
         self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
         Ok(())
     }
@@ -359,7 +456,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 impl<T: Transport> HostPort<T> {
     /// Carries out one control command at device time `at`; the answer
     /// for the control client (`Ok` text after `ok`, `Err` after `error`).
-    fn apply<F: NorFlash, P: Personality>(
+    fn apply<F: NorFlash, P: HostPersonality>(
         &mut self,
         dev: &mut Device<F, P>,
         cmd: control::Command,
@@ -379,10 +476,11 @@ impl<T: Transport> HostPort<T> {
                 }
             }
             control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
+            control::Command::NavFault(change) => dev.personality_mut().nav_fault(change)?,
             control::Command::Motion(m) => {
                 self.trajectory = None;
                 self.vehicle = None;
-                dev.set_motion(m);
+                dev.chain_mut().set_motion(m);
             }
             control::Command::Script(s) => {
                 self.trajectory = None;
@@ -419,6 +517,8 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
         let sched = Box::new(Schedule::new(&dev));
+        let rx_pacer = Pacer::new(dev.line_rate(), 0);
+        let period_ns = sched.period_ns();
         Runner {
             dev,
             sched,
@@ -428,9 +528,15 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 next_pps_ns: None,
                 trajectory: None,
                 vehicle: None,
+                feed: None,
+                feed_socket: None,
                 link: Link::new(0),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
+                rx_pacer,
+                rx_held: false,
+                tick_ns: 0,
+                period_ns,
                 now_ns: 0,
                 line_bytes: 0,
                 held_back_ns: 0,
@@ -446,7 +552,124 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             reported_at: None,
             status_at: std::io::IsTerminal::is_terminal(&std::io::stdout())
                 .then(std::time::Instant::now),
+            pace: None,
         }
+    }
+
+    /// Drives the motion from a live feed ([`crate::feed`]): `socket` is
+    /// its own (`None`: samples come through [`Runner::feed_offer`], a
+    /// fleet's shared feed). In lockstep, device time then moves only
+    /// with the samples (at a `--speed` factor, no faster than that
+    /// either): call after [`Runner::with_speed`].
+    pub fn with_feed(mut self, state: FeedState, socket: Option<FeedSocket>) -> Self {
+        if state.lockstep() {
+            let epoch = self.clock.epoch();
+            self.pace = match self.clock.speed() {
+                Speed::Factor(_) => Some(self.clock.clone()),
+                Speed::Max => None,
+            };
+            self.clock = Clock::new(epoch, Speed::Max);
+        }
+        self.io.feed = Some(state);
+        self.io.feed_socket = socket;
+        self
+    }
+
+    /// Hands the device a sample of a shared feed (or its rejection).
+    pub fn feed_offer(&mut self, r: Result<imu_emu::feed::Sample, imu_emu::feed::Reject>) {
+        let now = self.clock.now_ns();
+        if let Some(f) = self.io.feed.as_mut() {
+            f.offer(r, now);
+        }
+    }
+
+    /// Whether the device's feed takes more samples now.
+    pub fn feed_wants_more(&self) -> bool {
+        self.io.feed.as_ref().is_some_and(FeedState::wants_more)
+    }
+
+    /// Appends the feed socket's descriptors to wait on (none while the
+    /// lockstep queue is full: the socket is not read then).
+    pub fn feed_interest<'a>(&'a self, fds: &mut Vec<nix::poll::PollFd<'a>>) {
+        if let Some(s) = &self.io.feed_socket {
+            if self.feed_wants_more() {
+                s.interest(fds);
+            }
+        }
+    }
+
+    /// Reads the device's own feed socket (real time: stamped `now`).
+    fn read_feed(&mut self, now: u64) -> anyhow::Result<()> {
+        let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
+        else {
+            return Ok(());
+        };
+        if !state.wants_more() {
+            return Ok(());
+        }
+        sock.read(&mut |r| state.offer(r, now))
+    }
+
+    /// A lockstep turn: device time moves on to each queued sample's
+    /// time in order (bounded work a turn), waiting for the client when
+    /// [`MAX_BACKLOG`] bytes wait for it; input and control are served
+    /// every turn.
+    fn lockstep_turn(&mut self) -> anyhow::Result<Duration> {
+        self.read_feed(self.clock.now_ns())?;
+        let mut ticks = 0u64;
+        let mut wait = IDLE_WAKE;
+        loop {
+            if self.io.transport.backlog_len() >= MAX_BACKLOG {
+                wait = BUSY_WAKE;
+                break;
+            }
+            if self.sched.next_deadline() > self.clock.now_ns() {
+                let Some(feed) = self.io.feed.as_mut() else {
+                    break;
+                };
+                let Some(t) = feed.next_time() else {
+                    break;
+                };
+                if let Some(p) = &self.pace {
+                    let host = p.now_ns();
+                    if t > host {
+                        wait = p.host_wait(t - host);
+                        break;
+                    }
+                }
+                feed.advance();
+                self.clock.advance_to(t);
+            }
+            let pass = self.step()?;
+            ticks += u64::from(pass.ticks);
+            if ticks >= MAX_ROUND_TICKS {
+                wait = Duration::ZERO;
+                break;
+            }
+        }
+        if ticks == 0 {
+            // No sample moved time: still serve input and control.
+            self.step()?;
+        }
+        Ok(wait)
+    }
+
+    /// Waits on the transport and the feed socket together.
+    fn wait(&mut self, timeout: Duration) -> anyhow::Result<()> {
+        if self.io.feed_socket.is_none() {
+            return self.io.transport.wait(timeout);
+        }
+        self.io.transport.prepare_wait()?;
+        let (revents, n) = {
+            let mut fds = Vec::with_capacity(4);
+            self.io.transport.interest(&mut fds);
+            let n = fds.len();
+            self.feed_interest(&mut fds);
+            crate::transport::poll_fds(&mut fds, timeout)?;
+            (crate::transport::revents(&fds), n)
+        };
+        self.io.transport.polled(&revents[..n]);
+        Ok(())
     }
 
     /// Replays `t` as the motion the device measures: before each tick the
@@ -563,7 +786,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     pub fn run(&mut self, stop: &AtomicBool) -> anyhow::Result<()> {
         while !stop.load(Ordering::Relaxed) {
             let timeout = self.turn()?;
-            self.io.transport.wait(timeout)?;
+            self.wait(timeout)?;
         }
         if self.status_at.is_some() {
             // End the status line before the last messages.
@@ -576,6 +799,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// round), the reports; how long the transport may then be waited on
     /// (host time) before the next turn.
     pub fn turn(&mut self) -> anyhow::Result<Duration> {
+        if self.io.feed.as_ref().is_some_and(FeedState::lockstep) {
+            let wait = self.lockstep_turn()?;
+            self.report();
+            self.status_line();
+            return Ok(wait);
+        }
         let max = self.clock.speed() == Speed::Max;
         // Nobody to read (output would be dropped): time waits.
         let client_keeps_up =
@@ -617,6 +846,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             .map_or(idle_until, |t| t.max(batch).min(idle_until));
         if self.io.transport.backlog_len() > 0 {
             wake = wake.min(busy_until);
+        }
+        if self.io.rx_held {
+            // Input may wait in the transport: read again when a burst of
+            // it can reach the device.
+            wake = wake.min(self.io.rx_pacer.ready_at(usize::MAX));
         }
         if let Some(pps) = self.io.next_pps_ns {
             // Delivered before the first tick at or after it.
@@ -707,6 +941,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             let to = (self.sched.ticks() + MAX_BATCH_TICKS).saturating_mul(period);
             self.clock.advance_to(to);
             let now = self.now_ns();
+            self.io.now_ns = now;
             let limits = if first { &LIMITS } else { &NO_RX };
             first = false;
             let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
@@ -735,7 +970,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.io.now_ns = now;
         self.io.held_back_ns = self.clock.held_back_ns();
         self.io.release()?;
-        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, &LIMITS)?;
+        let limits = if self.io.rx_held { &HELD } else { &LIMITS };
+        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
+        if !self.io.feed.as_ref().is_some_and(FeedState::lockstep) {
+            // Applies from the next pass's ticks (deadlines after `now`).
+            self.read_feed(now)?;
+        }
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;
         self.stats.tx_bytes += pass.tx as u64;

@@ -33,13 +33,6 @@ pub struct Trajectory {
     vehicle: Option<(Strapdown, f64)>,
 }
 
-/// `a + (b − a)·w` in `f64`: between two finite `f32`s it never overflows
-/// (`f32::MAX − (−f32::MAX)` would, giving ∞ and then ∞·0 = NaN).
-fn lerp(a: f32, b: f32, w: f32) -> f32 {
-    let (a, b) = (f64::from(a), f64::from(b));
-    (a + (b - a) * f64::from(w)) as f32
-}
-
 /// A file value as `f32`, saturated at ±`f32::MAX` (3.5e38 would become
 /// ∞; the sensor model then saturates it at its range like any value
 /// beyond it).
@@ -158,22 +151,7 @@ impl Trajectory {
         }
         let (t0, a) = self.rows[self.cursor];
         let (t1, b) = self.rows[self.cursor + 1];
-        let w = ((t - t0) / (t1 - t0)) as f32;
-        let mix = |x: [f32; 3], y: [f32; 3]| {
-            [
-                lerp(x[0], y[0], w),
-                lerp(x[1], y[1], w),
-                lerp(x[2], y[2], w),
-            ]
-        };
-        Truth {
-            rate_dps: mix(a.rate_dps, b.rate_dps),
-            specific_force_g: mix(a.specific_force_g, b.specific_force_g),
-            temperature_c: match (a.temperature_c, b.temperature_c) {
-                (Some(x), Some(y)) => Some(lerp(x, y, w)),
-                (x, y) => x.or(y),
-            },
-        }
+        imu_emu::feed::lerp_truth(&a, &b, ((t - t0) / (t1 - t0)) as f32)
     }
 }
 

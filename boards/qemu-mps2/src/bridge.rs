@@ -18,6 +18,12 @@
 //! dropped=… stack=… stack_init=…\n` — the fields of `fw_shell::Stats`
 //! (`stack` = the running firmware's stack high-water mark in bytes,
 //! `stack_init` = what power-on used). Other bytes are ignored.
+//!
+//! The same UART carries the live motion feed's binary samples
+//! (docs/feed.md): a byte `F5` (never a command) starts a sample, and the
+//! sample's bytes — its length is in its fifth byte — go to the feed
+//! queue instead of being read as commands ([`Split`]). The tick decodes
+//! them ([`fw_shell::Shell::feed`]).
 
 use fw_shell::Edge;
 use heapless::spsc::{Consumer, Producer};
@@ -27,6 +33,39 @@ use crate::app::BoardShell;
 use crate::board;
 use crate::mps2::UART1;
 use crate::semi;
+
+/// Where a byte of the bridge UART goes: commands and edges, or a feed
+/// sample (ISR side).
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Split {
+    /// Between samples: bytes are commands (or start a sample).
+    #[default]
+    Commands,
+    /// Inside a sample's header: bytes left of sync, version, kind, length.
+    Head(u8),
+    /// Inside a sample's body and checksum: bytes left.
+    Body(u8),
+}
+
+impl Split {
+    /// Whether `b` belongs to a feed sample (then it goes to the feed
+    /// queue); updates the state.
+    pub fn feed_byte(&mut self, b: u8) -> bool {
+        use imu_emu::feed::{CRC_LEN, HEAD, MAX_BODY, SYNC};
+        *self = match *self {
+            Split::Commands if b == SYNC[0] => Split::Head(HEAD as u8 - 1),
+            Split::Commands => return false,
+            // Not a sample after all: the decoder drops it, commands go on.
+            Split::Head(4) if b != SYNC[1] => Split::Commands,
+            Split::Head(1) if b > MAX_BODY => Split::Commands,
+            Split::Head(1) => Split::Body(b + CRC_LEN as u8),
+            Split::Head(n) => Split::Head(n - 1),
+            Split::Body(1) | Split::Body(0) => Split::Commands,
+            Split::Body(n) => Split::Body(n - 1),
+        };
+        true
+    }
+}
 
 /// ISR side: stamps edges, forwards commands.
 pub fn on_byte(b: u8, edges: &mut Producer<'static, Edge>, cmds: &mut Producer<'static, u8>) {

@@ -5,7 +5,8 @@
 //!   bit/s);
 //! * UART1 is the pin bridge (see [`bridge`] and this board's README): the host
 //!   injects 1PPS/EXTRIG edges, BOOT level and power cycles, reads TOV edges
-//!   and the tick's timing figures;
+//!   and the tick's timing figures, and sends live motion samples
+//!   (docs/feed.md, [`fw_shell::feed`]);
 //! * TIMER0 interrupts at the internal rate (2 kHz; 4 kHz on the K201) and
 //!   runs [`fw_shell::Shell::service`]; TIMER1 free-runs at 25 MHz as the
 //!   time base;
@@ -52,6 +53,7 @@ core::arch::global_asm!(
 mod app {
     use core::mem::MaybeUninit;
 
+    use fw_shell::feed::FeedIn;
     use fw_shell::{Edge, Shell};
     use heapless::spsc::{Consumer, Producer, Queue};
     use imu_emu::device::{Device, PowerOn};
@@ -92,6 +94,10 @@ mod app {
         rx_in: Producer<'static, u8>,
         edges_in: Producer<'static, Edge>,
         cmds_in: Producer<'static, u8>,
+        feed: FeedIn,
+        feed_in: Producer<'static, u8>,
+        feed_out: Consumer<'static, u8>,
+        split: bridge::Split,
     }
 
     #[init(local = [
@@ -100,6 +106,7 @@ mod app {
         rxq: Queue<u8, 1024> = Queue::new(),
         edgeq: Queue<Edge, 64> = Queue::new(),
         cmdq: Queue<u8, 32> = Queue::new(),
+        feedq: Queue<u8, 512> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let mut line = [0u8; 512];
@@ -126,6 +133,7 @@ mod app {
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (edges_in, edges_out) = cx.local.edgeq.split();
         let (cmds_in, cmds_out) = cx.local.cmdq.split();
+        let (feed_in, feed_out) = cx.local.feedq.split();
 
         board::start_clock();
         UART0.init(115_200);
@@ -170,6 +178,10 @@ mod app {
                 rx_in,
                 edges_in,
                 cmds_in,
+                feed: FeedIn::default(),
+                feed_in,
+                feed_out,
+                split: bridge::Split::default(),
             },
         )
     }
@@ -194,21 +206,29 @@ mod app {
     }
 
     /// The tick: the device's only owner.
-    #[task(binds = TIMER0, priority = 3, local = [shell, persist, bridge])]
+    #[task(binds = TIMER0, priority = 3, local = [shell, persist, bridge, feed, feed_out])]
     fn tick(cx: tick::Context) {
         TIMER0_REGS.clear_irq();
         let shell = cx.local.shell;
+        shell.feed(cx.local.feed, cx.local.feed_out);
         let persist = cx.local.persist;
         shell.service_with(|dev| persist.check(dev.flash()));
         cx.local.bridge.serve(shell);
     }
 
-    /// Pin bridge RX: edges are stamped here, commands go to the tick.
-    #[task(binds = UART1RX, priority = 2, local = [edges_in, cmds_in])]
+    /// Pin bridge RX: edges are stamped here, commands go to the tick,
+    /// feed samples to the tick's feed queue.
+    #[task(binds = UART1RX, priority = 2, local = [edges_in, cmds_in, feed_in, split])]
     fn bridge_rx(cx: bridge_rx::Context) {
         UART1.clear_rx_irq();
         while let Some(b) = UART1.get() {
-            bridge::on_byte(b, cx.local.edges_in, cx.local.cmds_in);
+            if cx.local.split.feed_byte(b) {
+                // A full queue drops the byte (an overrun): the decoder
+                // rejects the torn sample and resyncs.
+                let _ = cx.local.feed_in.enqueue(b);
+            } else {
+                bridge::on_byte(b, cx.local.edges_in, cx.local.cmds_in);
+            }
         }
     }
 

@@ -118,16 +118,30 @@ pub struct Uart0 {
 impl Uart0 {
     /// RX interrupt at ¼ full plus the receive timeout.
     pub fn enable_rx_irq() {
-        wr(IFLS, 0b001 << 3); // RX FIFO ≥ 1/4 (8 bytes)
-        wr(IMSC, 1 << 4 | 1 << 6); // RXIM, RTIM
+        enable_rx_irq(UART0);
     }
 }
 
-/// RX interrupt side: drains the FIFO into `out`.
+/// UART1 (the live motion feed, docs/feed.md): its registers are UART0's
+/// moved by 0x4000.
+pub const UART1: usize = 0x4003_8000;
+
+/// RX interrupt of the PL011 at `base` at ¼ full plus the receive timeout.
+pub fn enable_rx_irq(base: usize) {
+    wr(base + (IFLS - UART0), 0b001 << 3); // RX FIFO ≥ 1/4 (8 bytes)
+    wr(base + (IMSC - UART0), 1 << 4 | 1 << 6); // RXIM, RTIM
+}
+
+/// RX interrupt side: drains UART0's FIFO into `out`.
 pub fn uart0_rx(out: &mut heapless::spsc::Producer<'static, u8>) {
-    wr(ICR, 1 << 4 | 1 << 6);
-    while rd(FR) & FR_RXFE == 0 {
-        let b = rd(DR) as u8;
+    uart_rx(UART0, out);
+}
+
+/// RX interrupt side: drains the FIFO of the PL011 at `base` into `out`.
+pub fn uart_rx(base: usize, out: &mut heapless::spsc::Producer<'static, u8>) {
+    wr(base + (ICR - UART0), 1 << 4 | 1 << 6);
+    while rd(base + (FR - UART0)) & FR_RXFE == 0 {
+        let b = rd(base + (DR - UART0)) as u8;
         // A full ring (the tick stalled) drops the byte, like an overrun.
         let _ = out.enqueue(b);
     }

@@ -9,6 +9,7 @@
 //! | GP3 | EXTRIG input (likewise) |
 //! | GP4 | TOV output |
 //! | GP5 | BOOT input, sampled at reset (driven high / low / floating) |
+//! | GP9 (GP8) | UART1 RX (TX unused), 921 600 bit/s 8N1: the live motion feed (docs/feed.md) |
 //!
 //! Clocks: 12 MHz crystal → 125 MHz system and `clk_peri`. TIMER ALARM0
 //! interrupts at the internal rate (2 kHz; 4 kHz on the K201) and runs the
@@ -43,6 +44,7 @@ mod app {
     use core::mem::MaybeUninit;
 
     use embedded_hal::digital::{InputPin, OutputPin};
+    use fw_shell::feed::FeedIn;
     use fw_shell::{Edge, Shell, TovPin};
     use heapless::spsc::{Consumer, Producer, Queue};
     use imu_emu::device::{Device, Level, Pin, PowerOn};
@@ -104,6 +106,9 @@ mod app {
         edges_in: Producer<'static, Edge>,
         pps: PpsGpio,
         extrig: ExtrigGpio,
+        feed: FeedIn,
+        feed_in: Producer<'static, u8>,
+        feed_out: Consumer<'static, u8>,
     }
 
     #[init(local = [
@@ -111,6 +116,7 @@ mod app {
         boot2: [u32; 64] = [0; 64],
         rxq: Queue<u8, RXQ> = Queue::new(),
         edgeq: Queue<Edge, 32> = Queue::new(),
+        feedq: Queue<u8, 256> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let mut pac = cx.device;
@@ -161,6 +167,18 @@ mod app {
             )
             .unwrap_or_else(|_| panic!("uart setup"));
         Uart0::enable_rx_irq();
+        let feed_pins = (
+            pins.gpio8.into_function::<FunctionUart>(),
+            pins.gpio9.into_function::<FunctionUart>(),
+        );
+        let _feed_uart = UartPeripheral::new(pac.UART1, feed_pins, &mut pac.RESETS)
+            .enable(
+                UartConfig::new(921_600.Hz(), DataBits::Eight, None, StopBits::One),
+                clocks.peripheral_clock.freq(),
+            )
+            .unwrap_or_else(|_| panic!("feed uart setup"));
+        hw::enable_rx_irq(hw::UART1);
+        let (feed_in, feed_out) = cx.local.feedq.split();
 
         let pps = pins.gpio2.into_pull_down_input();
         let extrig = pins.gpio3.into_pull_down_input();
@@ -209,6 +227,9 @@ mod app {
                 edges_in,
                 pps,
                 extrig,
+                feed: FeedIn::default(),
+                feed_in,
+                feed_out,
             },
         )
     }
@@ -221,10 +242,18 @@ mod app {
     }
 
     /// The tick: the device's only owner.
-    #[task(binds = TIMER_IRQ_0, priority = 3, local = [shell, tick])]
+    #[task(binds = TIMER_IRQ_0, priority = 3, local = [shell, tick, feed, feed_out])]
     fn tick(cx: tick::Context) {
         cx.local.tick.rearm();
-        cx.local.shell.service();
+        let shell = cx.local.shell;
+        shell.feed(cx.local.feed, cx.local.feed_out);
+        shell.service();
+    }
+
+    /// Motion feed RX (UART1): the FIFO into the tick's feed queue.
+    #[task(binds = UART1_IRQ, priority = 1, local = [feed_in])]
+    fn feed_rx(cx: feed_rx::Context) {
+        hw::uart_rx(hw::UART1, cx.local.feed_in);
     }
 
     /// KERNEL UART RX: the FIFO into the tick's ring.

@@ -279,6 +279,30 @@ impl Uart for Usart1Dma {
     }
 }
 
+// ----- USART2: the live motion feed (RX only, interrupt per byte) -----
+
+const USART2: usize = 0x4000_4400;
+/// The feed's line rate, bit/s (docs/feed.md).
+pub const FEED_BAUD: u32 = 921_600;
+
+/// Sets up USART2 (8N1 at [`FEED_BAUD`], receiver only, RXNE interrupt);
+/// PA3 must be in AF7 already. APB1 runs at half the system clock.
+pub fn start_feed_uart() {
+    modify(RCC_APB1ENR, |v| v | 1 << 17); // USART2EN
+    let _ = rd(RCC_APB1ENR);
+    wr(USART2 + 0x0C, 0);
+    wr(USART2 + 0x08, (SYSCLK_HZ / 2 + FEED_BAUD / 2) / FEED_BAUD);
+    wr(USART2 + 0x0C, 1 << 13 | 1 << 5 | 1 << 2); // UE, RXNEIE, RE
+}
+
+/// A byte USART2 received, if any (reading DR also clears an overrun).
+pub fn feed_byte() -> Option<u8> {
+    let sr = rd(USART2);
+    // RXNE, or ORE (an overrun: the byte in DR is still read, the lost
+    // ones make a torn sample the decoder rejects).
+    (sr & (1 << 5 | 1 << 3) != 0).then(|| rd(USART2 + 0x04) as u8)
+}
+
 // ----- TOV -----
 
 /// TOV on PB0.

@@ -10,6 +10,7 @@
 //! | pin | function |
 //! |---|---|
 //! | PA9 / PA10 | USART1 TX / RX (AF7): the KERNEL UART, to an RS-422 transceiver |
+//! | PA3 | USART2 RX (AF7), 921 600 bit/s 8N1: the live motion feed (docs/feed.md; on the Nucleo the ST-LINK's virtual COM port) |
 //! | PA0 | 1PPS input, TIM2_CH1 capture (both edges) |
 //! | PA1 | EXTRIG input, TIM2_CH2 capture (both edges) |
 //! | PB0 | TOV output |
@@ -49,6 +50,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 mod app {
     use core::mem::MaybeUninit;
 
+    use fw_shell::feed::FeedIn;
     use fw_shell::{Edge, Shell};
     use heapless::spsc::{Consumer, Producer, Queue};
     use imu_emu::device::{Device, Level, Pin, PowerOn};
@@ -83,6 +85,9 @@ mod app {
     struct Local {
         shell: BoardShell,
         edges_in: Producer<'static, Edge>,
+        feed: FeedIn,
+        feed_in: Producer<'static, u8>,
+        feed_out: Consumer<'static, u8>,
     }
 
     #[init(local = [
@@ -90,6 +95,7 @@ mod app {
         rx: [u8; RX_LEN] = [0; RX_LEN],
         tx: [u8; TX_LEN] = [0; TX_LEN],
         edgeq: Queue<Edge, 32> = Queue::new(),
+        feedq: Queue<u8, 256> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let dp = cx.device;
@@ -111,6 +117,7 @@ mod app {
         let _rx = gpioa.pa10.into_alternate::<7>();
         let _pps = gpioa.pa0.into_alternate::<1>();
         let _extrig = gpioa.pa1.into_alternate::<1>();
+        let _feed_rx = gpioa.pa3.into_alternate::<7>();
         let tov = TovPb0(gpiob.pb0.into_push_pull_output());
 
         // BOOT: pulled up and then down; a driven pin reads the same both
@@ -151,6 +158,8 @@ mod app {
         hw::start_time_base();
         let uart = Usart1Dma::new(cx.local.rx, cx.local.tx, dev.line_rate());
         let (edges_in, edges_out) = cx.local.edgeq.split();
+        let (feed_in, feed_out) = cx.local.feedq.split();
+        hw::start_feed_uart();
         let shell = Shell::new(dev, uart, Tim2Clock, tov, edges_out);
         hw::start_tick(shell.tick_hz());
         defmt::info!(
@@ -164,7 +173,16 @@ mod app {
             },
             shell.tick_hz()
         );
-        (Shared {}, Local { shell, edges_in })
+        (
+            Shared {},
+            Local {
+                shell,
+                edges_in,
+                feed: FeedIn::default(),
+                feed_in,
+                feed_out,
+            },
+        )
     }
 
     #[idle]
@@ -175,10 +193,21 @@ mod app {
     }
 
     /// The tick: the device's only owner.
-    #[task(binds = TIM3, priority = 3, local = [shell])]
+    #[task(binds = TIM3, priority = 3, local = [shell, feed, feed_out])]
     fn tick(cx: tick::Context) {
         hw::clear_tick();
-        cx.local.shell.service();
+        let shell = cx.local.shell;
+        shell.feed(cx.local.feed, cx.local.feed_out);
+        shell.service();
+    }
+
+    /// The motion feed's bytes (USART2 RX) into the tick's queue; a full
+    /// queue drops the byte, as an overrun would.
+    #[task(binds = USART2, priority = 1, local = [feed_in])]
+    fn feed_rx(cx: feed_rx::Context) {
+        while let Some(b) = hw::feed_byte() {
+            let _ = cx.local.feed_in.enqueue(b);
+        }
     }
 
     /// 1PPS / EXTRIG edges: the time comes from the capture register; the

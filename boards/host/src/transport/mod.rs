@@ -69,6 +69,12 @@ pub trait Transport {
     /// of ticks go out in one write). Never blocks.
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()>;
 
+    /// Whether input is held back (the runner paces what it reads at the
+    /// line rate, [`crate::runner`]): while held, a wait does not wake for
+    /// input (it would at once, for ever, with input pending), only for
+    /// output room, hang-ups and its timeout. Not held at first.
+    fn hold_input(&mut self, hold: bool);
+
     /// Writes backlog bytes the peer takes now. Never blocks.
     fn flush(&mut self) -> anyhow::Result<()>;
 

@@ -63,6 +63,8 @@ pub struct PtyTransport {
     /// wait ran since the last `receive`. Otherwise `receive` does not
     /// read (one syscall less a pass).
     readable: bool,
+    /// Input held back ([`Transport::hold_input`]).
+    hold: bool,
 }
 
 /// How often the client's termios speed is read while it has the port
@@ -102,6 +104,7 @@ impl PtyTransport {
             checked_at: None,
             recheck: true,
             readable: true,
+            hold: false,
         })
     }
 
@@ -242,7 +245,11 @@ impl Transport for PtyTransport {
             // instead (a signal still wakes it), looking again afterwards.
             return;
         }
-        let mut ev = PollFlags::POLLIN;
+        let mut ev = if self.hold {
+            PollFlags::empty()
+        } else {
+            PollFlags::POLLIN
+        };
         if !self.backlog.is_empty() {
             ev |= PollFlags::POLLOUT;
         }
@@ -304,6 +311,10 @@ impl Transport for PtyTransport {
             }
         }
         Ok(())
+    }
+
+    fn hold_input(&mut self, hold: bool) {
+        self.hold = hold;
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {

@@ -56,6 +56,8 @@ pub struct SerialTransport {
     backlog: Backlog,
     /// When the path of a hung-up port was last tried.
     tried_at: std::time::Instant,
+    /// Input held back ([`Transport::hold_input`]).
+    hold: bool,
 }
 
 impl std::fmt::Debug for SerialTransport {
@@ -76,6 +78,7 @@ impl SerialTransport {
             bps,
             backlog: Backlog::default(),
             tried_at: std::time::Instant::now(),
+            hold: false,
         };
         t.open_port()?;
         Ok(t)
@@ -180,7 +183,11 @@ impl Transport for SerialTransport {
         // A hung-up port is not polled (it would report POLLHUP at once,
         // for ever): the wait is the runner's timeout.
         if let Some(o) = &self.open {
-            let mut ev = PollFlags::POLLIN;
+            let mut ev = if self.hold {
+                PollFlags::empty()
+            } else {
+                PollFlags::POLLIN
+            };
             if !self.backlog.is_empty() {
                 ev |= PollFlags::POLLOUT;
             }
@@ -228,6 +235,10 @@ impl Transport for SerialTransport {
             self.backlog.push(bytes);
         }
         Ok(())
+    }
+
+    fn hold_input(&mut self, hold: bool) {
+        self.hold = hold;
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {

@@ -41,6 +41,8 @@ pub struct TcpTransport {
     read_closed: bool,
     /// Since when a client that closed its sending side was sent nothing.
     quiet_since: std::time::Instant,
+    /// Input held back ([`Transport::hold_input`]).
+    hold: bool,
     /// The last [`Transport::wait`] saw the client's socket hang up.
     hung_up: bool,
     accept: AcceptGuard,
@@ -68,6 +70,7 @@ impl TcpTransport {
             client: None,
             read_closed: false,
             quiet_since: std::time::Instant::now(),
+            hold: false,
             hung_up: false,
             accept: AcceptGuard::new("tcp"),
             backlog: Backlog::default(),
@@ -149,7 +152,7 @@ impl Transport for TcpTransport {
         if let Some((stream, _)) = &self.client {
             // A half-closed client stays readable (end of file) for ever:
             // only its output and hang-ups matter then.
-            let mut ev = if self.read_closed {
+            let mut ev = if self.read_closed || self.hold {
                 PollFlags::empty()
             } else {
                 PollFlags::POLLIN
@@ -232,6 +235,10 @@ impl Transport for TcpTransport {
             }
         }
         Ok(())
+    }
+
+    fn hold_input(&mut self, hold: bool) {
+        self.hold = hold;
     }
 
     fn flush(&mut self) -> anyhow::Result<()> {

@@ -1,0 +1,640 @@
+//! `imu-emu allan`: the overlapping Allan deviation of each axis of a
+//! unit's output, the noise terms fitted to it beside its profile's, and a
+//! log-log plot (docs/sensors.md).
+//!
+//! The data come either from a unit run **in process** as fast as the host
+//! computes (no TCP): a KERNEL `Device` streaming GA frames at `--rate`
+//! (the frames decoded with the core's typed decoder, `client::decode`),
+//! or, for `--model IMX-5`, its signal chain averaged over each output
+//! interval (what its IMU message carries); or from a recording
+//! (`--input FILE`, the CSV of `imu-emu client record`).
+//!
+//! **Allan deviation.** The phase `x_k = Σ y_i·τ₀` of each axis is kept
+//! every `S`-th sample (S chosen so that at most 2²⁰ values are kept:
+//! 24 h at 100 Hz keeps every 9th); σ²(τ = m·τ₀) = Σ (x_{i+2m} − 2x_{i+m} +
+//! x_i)² / (2τ²(n − 2m)) over the kept phases with m a multiple of S, ten
+//! τ a decade from S·τ₀ to a quarter of the run: the overlapping estimator
+//! (IEEE 952 / IEEE 1554) with overlap steps of S samples.
+//!
+//! **Fit.** Weighted least squares of σ²(τ) = N²/τ + F² + K²·τ/3 over τ up
+//! to a tenth of the run (weights: the estimate's degrees of freedom,
+//! ≈ n/m, over σ⁴), a negative term dropped and the rest refitted: N is the
+//! white noise (ARW °/√h = 60·N, VRW m/s/√h = 60·g·N), F the flicker floor
+//! (bias instability B = F / 0.6643), K the rate random walk. The
+//! datasheet reading (the curve's minimum / 0.6643, over τ up to a
+//! hundredth of the run, where each estimate averages ≥ 100 intervals) is
+//! printed beside it.
+//!
+//! The unit is held at its warmed-up temperature unless `--warming`
+//! (datasheet figures are taken at a steady temperature; the warm-up
+//! drift through the temperature coefficients would otherwise dominate
+//! the long τ).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _};
+use imu_emu::chain::{ChainConfig, SignalChain};
+use imu_emu::device::{Device, PowerOn};
+use imu_emu::dsp::variant::OutputVariant;
+use imu_emu::kernel::Kernel;
+use imu_emu::model::Product;
+use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile};
+use imu_emu::sensor::profiles;
+use imu_emu::time::Instant;
+
+use crate::flash::MemNor;
+
+/// Flicker floor / B: √(2 ln 2/π) (IEEE 952).
+pub const FLICKER_FLOOR: f64 = 0.664_282;
+/// Phases kept per axis at most.
+const KEEP: usize = 1 << 20;
+/// Channels: gyro X Y Z (°/s), acc X Y Z (g).
+pub const AXES: [&str; 6] = ["gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"];
+
+/// `imu-emu allan …`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct AllanArgs {
+    /// The unit to run: K100 … K220 (a KERNEL streaming GA frames) or
+    /// IMX-5.
+    #[arg(long, default_value = "K110")]
+    pub model: String,
+    /// Seed of the unit's random processes.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Run this profile (TOML, `imu-emu sensor-profile show`) instead of
+    /// the model's built-in one.
+    #[arg(long = "sensor-profile", value_name = "FILE")]
+    pub sensor_profile: Option<PathBuf>,
+    /// Device time to run, hours.
+    #[arg(long, default_value_t = 24.0, conflicts_with = "seconds")]
+    pub hours: f64,
+    /// Device time to run, seconds (instead of --hours).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Let the sensor temperature follow the profile's warm-up model (its
+    /// bias drifts with it: the temperature coefficients). By default the
+    /// unit is held at its warmed-up temperature (ambient + self-heating),
+    /// as a datasheet's Allan figures are taken at a steady temperature.
+    #[arg(long)]
+    pub warming: bool,
+    /// Output rate, Hz (a divisor of the internal rate; KERNEL Data_Rate).
+    #[arg(long, default_value_t = 100)]
+    pub rate: u32,
+    /// Analyse this recording (`imu-emu client record` CSV: gyro_* and
+    /// acc_* columns) instead of running a unit; its rate is --rate unless
+    /// it has an `imu_time_ns` or `host_time_s` column.
+    #[arg(long, value_name = "CSV")]
+    pub input: Option<PathBuf>,
+    /// Plot to this PNG file.
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<PathBuf>,
+    /// Plot to this SVG file.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
+    /// Write the Allan deviations (τ and σ of each axis) to this CSV.
+    #[arg(long, value_name = "FILE")]
+    pub table: Option<PathBuf>,
+}
+
+/// Phases of the six axes, kept every `stride` samples.
+struct Phases {
+    tau0: f64,
+    stride: usize,
+    n: usize,
+    acc: [f64; 6],
+    first: Option<[f64; 6]>,
+    kept: [Vec<f64>; 6],
+}
+
+impl Phases {
+    fn new(tau0: f64, expected: usize) -> Self {
+        let stride = expected.div_ceil(KEEP).max(1);
+        let mut p = Phases {
+            tau0,
+            stride,
+            n: 0,
+            acc: [0.0; 6],
+            first: None,
+            kept: Default::default(),
+        };
+        for k in &mut p.kept {
+            k.reserve(expected / stride + 2);
+            k.push(0.0);
+        }
+        p
+    }
+
+    fn push(&mut self, y: [f64; 6]) {
+        // Relative to the first sample: the phases stay small (the Allan
+        // deviation ignores a constant).
+        let y0 = *self.first.get_or_insert(y);
+        for c in 0..6 {
+            self.acc[c] += (y[c] - y0[c]) * self.tau0;
+        }
+        self.n += 1;
+        if self.n.is_multiple_of(self.stride) {
+            for c in 0..6 {
+                self.kept[c].push(self.acc[c]);
+            }
+        }
+    }
+}
+
+/// One axis's Allan deviation: (τ s, σ, samples n/m) points.
+#[derive(Debug, Clone)]
+pub struct Curve {
+    /// (τ, σ(τ), n/m).
+    pub points: Vec<(f64, f64, f64)>,
+}
+
+fn curves(p: &Phases) -> Vec<Curve> {
+    let kept = p.kept[0].len();
+    let max_k = (kept.saturating_sub(1)) / 4;
+    let mut ks: Vec<usize> = Vec::new();
+    let mut e = 0.0f64;
+    while 10f64.powf(e / 10.0) <= max_k as f64 {
+        let k = 10f64.powf(e / 10.0).round() as usize;
+        if ks.last() != Some(&k) {
+            ks.push(k);
+        }
+        e += 1.0;
+    }
+    p.kept
+        .iter()
+        .map(|x| {
+            let points = ks
+                .iter()
+                .map(|&k| {
+                    let m = k * p.stride;
+                    let tau = m as f64 * p.tau0;
+                    let terms = x.len() - 2 * k;
+                    let s: f64 = (0..terms)
+                        .map(|i| {
+                            let d = x[i + 2 * k] - 2.0 * x[i + k] + x[i];
+                            d * d
+                        })
+                        .sum();
+                    let var = s / (2.0 * tau * tau * terms as f64);
+                    (tau, var.sqrt(), p.n as f64 / m as f64)
+                })
+                .collect();
+            Curve { points }
+        })
+        .collect()
+}
+
+/// Fitted terms of one axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fit {
+    /// White-noise density, unit/√Hz.
+    pub n: f64,
+    /// Bias instability B = floor / 0.6643, unit.
+    pub b: f64,
+    /// Rate random walk, unit/√s.
+    pub k: f64,
+    /// The datasheet reading: min σ / 0.6643 over τ ≤ `tau_min_max`
+    /// (where each estimate averages ≥ 100 intervals: the minimum of a
+    /// noisier estimate reads low), unit.
+    pub b_min: f64,
+}
+
+/// Weighted least squares of the curve (module doc) over τ ≤ `tau_max`;
+/// the datasheet reading over τ ≤ `tau_min_max`.
+pub fn fit(c: &Curve, tau_max: f64, tau_min_max: f64) -> Fit {
+    let pts: Vec<&(f64, f64, f64)> = c
+        .points
+        .iter()
+        .filter(|p| p.0 <= tau_max && p.1 > 0.0)
+        .collect();
+    let mut on = [true; 3];
+    let mut x = [0.0f64; 3];
+    for _ in 0..3 {
+        let idx: Vec<usize> = (0..3).filter(|&i| on[i]).collect();
+        let n = idx.len();
+        let mut a = vec![vec![0.0f64; n]; n];
+        let mut b = vec![0.0f64; n];
+        for &&(tau, sigma, dof) in &pts {
+            let v = sigma * sigma;
+            let f = [1.0 / tau, 1.0, tau / 3.0];
+            let w = dof / (v * v);
+            for (r, &i) in idx.iter().enumerate() {
+                b[r] += w * f[i] * v;
+                for (s, &j) in idx.iter().enumerate() {
+                    a[r][s] += w * f[i] * f[j];
+                }
+            }
+        }
+        let sol = solve(a, b);
+        x = [0.0; 3];
+        for (r, &i) in idx.iter().enumerate() {
+            x[i] = sol[r];
+        }
+        match (0..3).find(|&i| on[i] && x[i] < 0.0) {
+            Some(i) => on[i] = false,
+            None => break,
+        }
+    }
+    let x = x.map(|v| v.max(0.0));
+    let b_min = pts
+        .iter()
+        .filter(|p| p.0 <= tau_min_max)
+        .map(|p| p.1)
+        .fold(f64::INFINITY, f64::min)
+        / FLICKER_FLOOR;
+    Fit {
+        n: x[0].sqrt(),
+        b: x[1].sqrt() / FLICKER_FLOOR,
+        k: x[2].sqrt(),
+        b_min,
+    }
+}
+
+/// Gaussian elimination with partial pivoting (n ≤ 3).
+#[allow(clippy::needless_range_loop)] // rows and columns by index
+fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+    let n = b.len();
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+            .unwrap_or(c);
+        a.swap(c, p);
+        b.swap(c, p);
+        if a[c][c] == 0.0 {
+            continue;
+        }
+        for r in c + 1..n {
+            let k = a[r][c] / a[c][c];
+            for j in c..n {
+                a[r][j] -= k * a[c][j];
+            }
+            b[r] -= k * b[c];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for c in (0..n).rev() {
+        let s: f64 = (c + 1..n).map(|j| a[c][j] * x[j]).sum();
+        x[c] = if a[c][c] == 0.0 {
+            0.0
+        } else {
+            (b[c] - s) / a[c][c]
+        };
+    }
+    x
+}
+
+/// What was analysed, for the report.
+struct Source {
+    title: String,
+    profile: Option<SensorProfile>,
+    phases: Phases,
+}
+
+/// Runs a unit in process (module doc).
+fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
+    let seconds = a.seconds.unwrap_or(a.hours * 3600.0);
+    if seconds.is_nan() || seconds <= 0.0 {
+        return Err(
+            crate::error::UsageError("allan: the run must last more than 0 s".into()).into(),
+        );
+    }
+    let profile: Option<&'static SensorProfile> = match &a.sensor_profile {
+        Some(path) => Some(Box::leak(Box::new(crate::profile_file::load(path)?))),
+        None => None,
+    };
+    let imx = a.model.eq_ignore_ascii_case("IMX-5") || a.model.eq_ignore_ascii_case("IMX5");
+    let product = if imx {
+        Product::imx5()
+    } else {
+        Product::parse(&a.model).map_err(|e| {
+            crate::error::UsageError(format!("allan --model {}: {e} (or IMX-5)", a.model))
+        })?
+    };
+    let internal = product.model.internal_rate_hz;
+    if a.rate == 0 || !internal.is_multiple_of(a.rate) {
+        return Err(crate::error::UsageError(format!(
+            "allan --rate {}: must divide the internal rate {internal} Hz",
+            a.rate
+        ))
+        .into());
+    }
+    let outputs = (seconds * f64::from(a.rate)).round() as usize;
+    let mut phases = Phases::new(1.0 / f64::from(a.rate), outputs);
+    let used = profile
+        .copied()
+        .unwrap_or_else(|| profiles::for_product(&product));
+    let title;
+    if imx {
+        title = format!("IMX-5, seed {}, chain averaged at {} Hz", a.seed, a.rate);
+        let mut chain = SignalChain::new(product, a.seed);
+        chain.set_profile(profile);
+        chain.reset(product, a.seed);
+        chain.faults_mut().temperature_c = steady(&used, a.warming);
+        let mut cfg = ChainConfig::defaults(&product);
+        cfg.output_variant = OutputVariant::Average;
+        chain.configure(&cfg);
+        let every = internal / a.rate;
+        let dt_ns = 1_000_000_000 / u64::from(internal);
+        let mut t = 0u64;
+        for _ in 0..outputs {
+            for _ in 0..every {
+                t += dt_ns;
+                chain.tick(Instant::from_nanos(t));
+            }
+            let s = chain.output_with(false);
+            let g = s.gyro.map(f64::from);
+            let f = s.acc.map(f64::from);
+            phases.push([g[0], g[1], g[2], f[0], f[1], f[2]]);
+        }
+    } else {
+        title = format!(
+            "{}, seed {}, GA frames at {} Hz",
+            product.code(),
+            a.seed,
+            a.rate
+        );
+        run_kernel(
+            product,
+            a,
+            profile,
+            steady(&used, a.warming),
+            outputs,
+            &mut phases,
+        )?;
+    }
+    Ok(Source {
+        title,
+        profile: Some(used),
+        phases,
+    })
+}
+
+/// The temperature the unit is held at: its warmed-up one, unless
+/// `--warming`.
+fn steady(p: &SensorProfile, warming: bool) -> Option<f32> {
+    (!warming).then_some(p.temperature.ambient_c + p.temperature.self_heating_c)
+}
+
+/// A KERNEL device streaming GA at `a.rate`: `outputs` frames decoded.
+fn run_kernel(
+    product: Product,
+    a: &AllanArgs,
+    profile: Option<&'static SensorProfile>,
+    temperature: Option<f32>,
+    outputs: usize,
+    phases: &mut Phases,
+) -> anyhow::Result<()> {
+    use imu_emu::kernel::command::Command;
+    use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
+    let cfg = PowerOn {
+        product,
+        boot: None,
+        seed: a.seed,
+    };
+    let mut dev =
+        Device::<MemNor, Kernel>::with_profile(cfg, profile, MemNor::new(), Instant::ZERO);
+    dev.chain_mut().faults_mut().temperature_c = temperature;
+    let period = dev.tick_period_ns();
+    let mut now = 0u64;
+    // Data_Rate (Table 5.24 ID 0x0012), then GA (0x8F): the rate applies
+    // at the data command (5.3.1). In process the line is not paced (that
+    // is a board's job), so any rate fits.
+    let rate = u16::try_from(a.rate).context("allan --rate: at most 65535")?;
+    let mut cmd = [0u8; 64];
+    for c in [
+        Command::SaveFlash {
+            id: 0x0012,
+            len: 2,
+            value: &rate.to_le_bytes(),
+        },
+        Command::Data(0x8F),
+    ] {
+        let n = c.encode(&mut cmd).context("encoding a command")?;
+        dev.on_rx(&cmd[..n], Instant::from_nanos(now));
+    }
+    let mut buf = vec![0u8; 4096];
+    let mut rx = Box::new(Decoder::<512>::new());
+    let mut got = 0usize;
+    while got < outputs {
+        now += period;
+        dev.on_tick(Instant::from_nanos(now));
+        loop {
+            let n = dev.poll_tx(&mut buf);
+            if n == 0 {
+                break;
+            }
+            let mut input = &buf[..n];
+            while let Some(f) = rx.next_frame(&mut input) {
+                if f.msg_type != TYPE_DATA || f.id != 0x8F || got == outputs {
+                    continue;
+                }
+                let Some(d) = crate::client::decode::decode(f.id, f.payload, &product) else {
+                    continue;
+                };
+                let mut y = [0.0; 6];
+                for (c, name) in AXES.iter().enumerate() {
+                    y[c] = d.get(name).unwrap_or(0.0);
+                }
+                phases.push(y);
+                got += 1;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads a `client record` CSV.
+fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("allan {}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .with_context(|| format!("allan {}: empty file", path.display()))?
+        .split(',')
+        .collect();
+    let col = |name: &str| header.iter().position(|h| h.trim() == name);
+    let cols: Vec<usize> = AXES
+        .iter()
+        .map(|a| {
+            col(a).with_context(|| {
+                format!(
+                    "allan {}: no {a} column (a `client record` CSV of GA, GAm or UDD with \
+                     gyro and acc?)",
+                    path.display()
+                )
+            })
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let rows: Vec<Vec<f64>> = lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.trim().parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    // The sample period from the unit's time or the host's, else --rate.
+    let median_step = |c: usize, scale: f64| -> Option<f64> {
+        let mut d: Vec<f64> = rows
+            .windows(2)
+            .filter_map(|w| Some((w[1].get(c)? - w[0].get(c)?) * scale))
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d.get(d.len() / 2).copied()
+    };
+    let tau0 = col("imu_time_ns")
+        .and_then(|c| median_step(c, 1e-9))
+        .or_else(|| col("host_time_s").and_then(|c| median_step(c, 1.0)))
+        .unwrap_or(1.0 / f64::from(rate.max(1)));
+    let mut phases = Phases::new(tau0, rows.len());
+    for r in &rows {
+        let mut y = [0.0; 6];
+        for (c, &i) in cols.iter().enumerate() {
+            y[c] = r.get(i).copied().unwrap_or(f64::NAN);
+        }
+        if y.iter().all(|v| v.is_finite()) {
+            phases.push(y);
+        }
+    }
+    if phases.n < 100 {
+        bail!(
+            "allan {}: {} usable rows (need 100 or more)",
+            path.display(),
+            phases.n
+        );
+    }
+    Ok(Source {
+        title: format!("{} ({:.0} Hz)", path.display(), 1.0 / tau0),
+        profile: None,
+        phases,
+    })
+}
+
+/// The report: per axis the fitted terms beside the profile's.
+fn report(src: &Source, fits: &[Fit], seconds: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "imu-emu allan: {}: {:.2} h, {} samples",
+        src.title,
+        seconds / 3600.0,
+        src.phases.n
+    );
+    let _ = writeln!(
+        s,
+        "axis    white (fit)     profile   bias instability (fit, min/0.664)  profile   RRW (fit)"
+    );
+    for (c, f) in fits.iter().enumerate() {
+        let gyro = c < 3;
+        let spec = src.profile.map(|p| if gyro { p.gyro } else { p.acc });
+        let (white, white_p, unit_w) = if gyro {
+            (
+                density_to_arw(f.n as f32),
+                spec.map(|s| density_to_arw(s.noise_density)),
+                "°/√h",
+            )
+        } else {
+            (
+                density_to_vrw(f.n as f32),
+                spec.map(|s| density_to_vrw(s.noise_density)),
+                "m/s/√h",
+            )
+        };
+        let (k, unit_b) = if gyro { (3600.0, "°/h") } else { (1e6, "µg") };
+        let bi = f.b * k;
+        let bi_min = f.b_min * k;
+        let bi_p = spec.map(|s| f64::from(s.bias_instability) * k);
+        let opt = |v: Option<f64>| v.map_or("—".to_owned(), |v| format!("{v:.4}"));
+        let _ = writeln!(
+            s,
+            "{:<7} {:>8.4} {:<7} {:>8}   {:>9.4} {:<4} ({:>9.4})          {:>8}   {:.3e}",
+            AXES[c],
+            white,
+            unit_w,
+            opt(white_p.map(f64::from)),
+            bi,
+            unit_b,
+            bi_min,
+            opt(bi_p),
+            f.k,
+        );
+    }
+    s
+}
+
+/// Runs `imu-emu allan`.
+pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
+    let started = std::time::Instant::now();
+    let src = match &a.input {
+        Some(path) => read_csv(path, a.rate)?,
+        None => run_unit(a)?,
+    };
+    let seconds = src.phases.n as f64 * src.phases.tau0;
+    let cs = curves(&src.phases);
+    let fits: Vec<Fit> = cs
+        .iter()
+        .map(|c| fit(c, seconds / 10.0, seconds / 100.0))
+        .collect();
+    let mut out = report(&src, &fits, seconds);
+    let _ = writeln!(
+        out,
+        "(white: ARW °/√h, VRW m/s/√h; bias instability °/h, µg; RRW unit/√s; \
+         {:.1} s of host time)",
+        started.elapsed().as_secs_f64()
+    );
+    print!("{out}");
+    if let Some(path) = &a.table {
+        let mut t = String::from("tau_s");
+        for ax in AXES {
+            let _ = write!(t, ",{ax}");
+        }
+        t.push('\n');
+        for (i, p) in cs[0].points.iter().enumerate() {
+            let _ = write!(t, "{}", p.0);
+            for c in &cs {
+                let _ = write!(t, ",{}", c.points[i].1);
+            }
+            t.push('\n');
+        }
+        std::fs::write(path, t).with_context(|| format!("allan --table {}", path.display()))?;
+    }
+    if a.png.is_some() || a.svg.is_some() {
+        let plot = crate::allan_plot::Plot {
+            title: &src.title,
+            curves: &cs,
+            fits: &fits,
+            profile: src.profile.as_ref(),
+        };
+        if let Some(p) = &a.png {
+            plot.png(p)?;
+        }
+        if let Some(p) = &a.svg {
+            plot.svg(p)?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// White noise of known density: the fit reads it (and no floor).
+    #[test]
+    fn the_fit_reads_white_noise() {
+        let mut rng = imu_emu::sensor::rng::Rng::new(3);
+        let n = 0.01;
+        let rate = 100.0;
+        let mut p = Phases::new(1.0 / rate, 200_000);
+        for _ in 0..200_000 {
+            let w = f64::from(rng.gaussian()) * n * rate.sqrt();
+            p.push([w, w, w, w, w, w]);
+        }
+        let c = curves(&p);
+        let f = fit(&c[0], 200.0, 20.0);
+        assert!((f.n / n - 1.0).abs() < 0.03, "{f:?}");
+        assert!(f.b < 0.1 * n, "{f:?}");
+    }
+}

@@ -1,0 +1,464 @@
+//! The live motion feed (`--motion-feed ADDR`): samples from a simulator or
+//! a HIL rig over TCP (`HOST:PORT`) or UDP (`udp:HOST:PORT`), decoded by
+//! the core's [`imu_emu::feed::Decoder`] (text rows in the `--trajectory`
+//! format and binary samples, mixed), applied to the device's ticks.
+//!
+//! Two clocks (`docs/feed.md`):
+//!
+//! * **Real time** (default): a sample applies from its arrival — from the
+//!   first tick whose deadline is at or after the device time it was read
+//!   at — and holds until the next. Silence longer than `--feed-timeout`
+//!   (device time) raises [`Faults::motion_feed_lost`], which the KERNEL
+//!   reports as USW bit 1 and the IMX as a sensor fault; the next sample
+//!   clears it.
+//! * **Lockstep** (`--lockstep`): device time advances only as samples
+//!   arrive, to each sample's time, with the values interpolated between
+//!   the last two ([`imu_emu::feed::Track`]); nothing else moves it.
+//!   The same feed and seed give the same output bytes.
+//!
+//! A TCP feed takes one client at a time (a new one replaces the old, with
+//! a fresh decoder); UDP takes each datagram as a whole (a `\n` is added
+//! after one that does not end a line). Every sample and rejection is
+//! counted ([`FeedState::status`]); a rejection is logged at `-v`.
+//!
+//! [`Faults::motion_feed_lost`]: imu_emu::chain::Faults::motion_feed_lost
+
+use std::collections::VecDeque;
+use std::io::{self, Read};
+use std::net::{SocketAddr, TcpListener, TcpStream, UdpSocket};
+use std::os::fd::AsFd;
+
+use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, OWN_DEVICE};
+use imu_emu::sensor::Truth;
+use nix::poll::{PollFd, PollFlags};
+
+/// Default `--feed-timeout`, s.
+pub const DEFAULT_TIMEOUT_S: f64 = 0.1;
+/// Most samples waiting for lockstep: the socket is not read beyond
+/// (its own buffer then holds the simulator back).
+pub const MAX_PENDING: usize = 256;
+/// Most bytes read from a feed a pass.
+pub const MAX_READ: usize = 64 * 1024;
+
+/// Where a feed listens.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FeedAddr {
+    /// `HOST:PORT`.
+    Tcp(String),
+    /// `udp:HOST:PORT`.
+    Udp(String),
+}
+
+impl FeedAddr {
+    /// `udp:HOST:PORT` or `HOST:PORT` (TCP; `tcp:` may be written).
+    pub fn parse(s: &str) -> Self {
+        match s.strip_prefix("udp:") {
+            Some(a) => FeedAddr::Udp(a.to_owned()),
+            None => FeedAddr::Tcp(s.strip_prefix("tcp:").unwrap_or(s).to_owned()),
+        }
+    }
+
+    /// The `HOST:PORT` part.
+    pub fn host_port(&self) -> &str {
+        match self {
+            FeedAddr::Tcp(a) | FeedAddr::Udp(a) => a,
+        }
+    }
+
+    /// The same kind of address at `addr`.
+    pub fn with(&self, addr: String) -> Self {
+        match self {
+            FeedAddr::Tcp(_) => FeedAddr::Tcp(addr),
+            FeedAddr::Udp(_) => FeedAddr::Udp(addr),
+        }
+    }
+}
+
+enum Socket {
+    Tcp {
+        listener: TcpListener,
+        client: Option<(TcpStream, SocketAddr)>,
+    },
+    Udp(UdpSocket),
+}
+
+/// A feed's socket and its decoder.
+pub struct FeedSocket {
+    socket: Socket,
+    local: SocketAddr,
+    decoder: Decoder,
+    /// The label of messages (`dev 3: ` or empty).
+    label: String,
+}
+
+impl FeedSocket {
+    /// Binds `addr` (port 0 picks a free port).
+    pub fn bind(addr: &FeedAddr) -> anyhow::Result<Self> {
+        let a = addr.host_port();
+        let err = |e| crate::error::bind_error(e, "--motion-feed", a);
+        let (socket, local) = match addr {
+            FeedAddr::Tcp(_) => {
+                let l = TcpListener::bind(a).map_err(err)?;
+                l.set_nonblocking(true)?;
+                let local = l.local_addr()?;
+                (
+                    Socket::Tcp {
+                        listener: l,
+                        client: None,
+                    },
+                    local,
+                )
+            }
+            FeedAddr::Udp(_) => {
+                let u = UdpSocket::bind(a).map_err(err)?;
+                u.set_nonblocking(true)?;
+                let local = u.local_addr()?;
+                (Socket::Udp(u), local)
+            }
+        };
+        Ok(FeedSocket {
+            socket,
+            local,
+            decoder: Decoder::new(),
+            label: String::new(),
+        })
+    }
+
+    /// Names the device in messages.
+    pub fn set_label(&mut self, label: &str) {
+        self.label = label.to_owned();
+    }
+
+    /// `tcp 127.0.0.1:9000` / `udp 127.0.0.1:9000`.
+    pub fn describe(&self) -> String {
+        match self.socket {
+            Socket::Tcp { .. } => format!("tcp {}", self.local),
+            Socket::Udp(_) => format!("udp {}", self.local),
+        }
+    }
+
+    /// The descriptors to wait on for input.
+    pub fn interest<'a>(&'a self, fds: &mut Vec<PollFd<'a>>) {
+        match &self.socket {
+            Socket::Tcp { listener, client } => {
+                fds.push(PollFd::new(listener.as_fd(), PollFlags::POLLIN));
+                if let Some((s, _)) = client {
+                    fds.push(PollFd::new(s.as_fd(), PollFlags::POLLIN));
+                }
+            }
+            Socket::Udp(u) => fds.push(PollFd::new(u.as_fd(), PollFlags::POLLIN)),
+        }
+    }
+
+    /// Reads what is there (at most [`MAX_READ`] bytes) and hands each
+    /// decoded outcome to `each`. Never blocks.
+    pub fn read(&mut self, each: &mut dyn FnMut(Result<Sample, Reject>)) -> anyhow::Result<()> {
+        let mut buf = [0u8; 4096];
+        let mut got = 0;
+        match &mut self.socket {
+            Socket::Tcp { listener, client } => {
+                loop {
+                    match listener.accept() {
+                        Ok((s, peer)) => {
+                            s.set_nonblocking(true)?;
+                            eprintln!(
+                                "imu-emu: {}motion feed client {peer} connected to {}",
+                                self.label, self.local
+                            );
+                            *client = Some((s, peer));
+                            self.decoder = Decoder::new();
+                        }
+                        Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                        Err(e) if crate::transport::is_transient_accept_error(&e) => break,
+                        Err(e) => return Err(anyhow::Error::new(e).context("motion feed accept")),
+                    }
+                }
+                while let Some((s, peer)) = client.as_mut() {
+                    if got >= MAX_READ {
+                        break;
+                    }
+                    match s.read(&mut buf) {
+                        Ok(0) => {
+                            eprintln!("imu-emu: {}motion feed client {peer} closed", self.label);
+                            *client = None;
+                        }
+                        Ok(n) => {
+                            got += n;
+                            self.decoder.decode(&buf[..n], each);
+                        }
+                        Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                        Err(e) => {
+                            eprintln!("imu-emu: {}motion feed client {peer}: {e}", self.label);
+                            *client = None;
+                        }
+                    }
+                }
+            }
+            Socket::Udp(u) => {
+                let mut d = [0u8; 65536];
+                while got < MAX_READ {
+                    match u.recv(&mut d) {
+                        Ok(n) => {
+                            got += n.max(1);
+                            self.decoder.decode(&d[..n], each);
+                            if n > 0 && d[n - 1] != b'\n' {
+                                self.decoder.decode(b"\n", each);
+                            }
+                        }
+                        Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                        // ICMP errors of earlier sends and the like.
+                        Err(_) => break,
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How the feed drives the device.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeedConfig {
+    /// Lockstep (`--lockstep`) instead of real time.
+    pub lockstep: bool,
+    /// Silence after which the fault is raised, ns of device time.
+    pub timeout_ns: u64,
+}
+
+/// One device's feed: its samples, counters and fault (module docs).
+#[derive(Debug, Clone)]
+pub struct FeedState {
+    cfg: FeedConfig,
+    /// The device index samples must name (or [`OWN_DEVICE`]).
+    device: u16,
+    /// Whether samples naming no device ([`OWN_DEVICE`]) are this
+    /// device's (its own feed) or rejected (a shared feed).
+    own: bool,
+    /// Lockstep: the newest two samples the device reached.
+    track: Track,
+    /// Real time: the samples as they arrive, the fault.
+    live: Live,
+    counts: Counts,
+    /// Samples waiting for the device to reach their time (lockstep).
+    pending: VecDeque<(u64, Truth)>,
+    /// Host time of the newest sample (status in lockstep).
+    last_host: Option<std::time::Instant>,
+    label: String,
+}
+
+impl FeedState {
+    /// The feed of device `device`; `own`: samples naming no device are
+    /// its own.
+    pub fn new(cfg: FeedConfig, device: u16, own: bool, label: &str) -> Self {
+        FeedState {
+            cfg,
+            device,
+            own,
+            track: Track::new(),
+            live: Live::new(cfg.timeout_ns),
+            counts: Counts::default(),
+            pending: VecDeque::new(),
+            last_host: None,
+            label: label.to_owned(),
+        }
+    }
+
+    /// Lockstep or real time.
+    pub fn lockstep(&self) -> bool {
+        self.cfg.lockstep
+    }
+
+    /// Whether another sample may be read (lockstep queue not full).
+    pub fn wants_more(&self) -> bool {
+        self.pending.len() < MAX_PENDING
+    }
+
+    /// Counters so far.
+    pub fn counts(&self) -> &Counts {
+        &self.counts
+    }
+
+    /// Takes a decoded outcome at device time `now_ns`.
+    pub fn offer(&mut self, r: Result<Sample, Reject>, now_ns: u64) {
+        let r = r.and_then(|s| {
+            let d = s.device();
+            let mine = if d == OWN_DEVICE {
+                self.own
+            } else {
+                d == self.device
+            };
+            if !mine {
+                return Err(Reject::WrongDevice);
+            }
+            match s {
+                Sample::Rates(s) => Ok((s.time_ns, s.truth)),
+                // Future kinds (the full state) are not decoded yet.
+                #[allow(unreachable_patterns)]
+                _ => Err(Reject::UnsupportedKind),
+            }
+        });
+        let r = match r {
+            Ok((t, truth)) if self.cfg.lockstep => {
+                // Checked against the newest queued time, taken in order.
+                let newest = self
+                    .pending
+                    .back()
+                    .map(|p| p.0)
+                    .or(self.track.last().map(|l| l.0));
+                if newest.is_some_and(|n| t <= n) {
+                    Err(Reject::NonIncreasing)
+                } else {
+                    self.pending.push_back((t, truth));
+                    Ok(())
+                }
+            }
+            Ok((t, truth)) => self.live.offer(t, truth, now_ns),
+            Err(e) => Err(e),
+        };
+        match r {
+            Ok(()) => self.last_host = Some(std::time::Instant::now()),
+            Err(e) => tracing::info!("{}motion feed sample rejected: {}", self.label, e.name()),
+        }
+        self.counts.note(r);
+    }
+
+    /// Lockstep: the time of the next queued sample, if any.
+    pub fn next_time(&self) -> Option<u64> {
+        self.pending.front().map(|p| p.0)
+    }
+
+    /// Lockstep: makes the next queued sample the newest; its time.
+    pub fn advance(&mut self) -> Option<u64> {
+        let (t, truth) = self.pending.pop_front()?;
+        // Queued in increasing order: accepted.
+        let _ = self.track.accept(t, truth);
+        Some(t)
+    }
+
+    /// The truth of the tick at `deadline_ns` (`None`: no sample yet, the
+    /// device's own motion goes on), and whether the feed is lost then.
+    pub fn at(&mut self, deadline_ns: u64) -> (Option<Truth>, bool) {
+        if self.cfg.lockstep {
+            return (self.track.at(deadline_ns), false);
+        }
+        let was = self.live.lost();
+        let (truth, lost) = self.live.at(deadline_ns);
+        if lost != was {
+            if lost {
+                eprintln!(
+                    "imu-emu: {}motion feed silent for more than {} ms: sensor fault reported, \
+                     the last sample holds",
+                    self.label,
+                    self.cfg.timeout_ns / 1_000_000
+                );
+            } else {
+                eprintln!(
+                    "imu-emu: {}motion feed back: sensor fault cleared",
+                    self.label
+                );
+            }
+        }
+        (truth, lost)
+    }
+
+    /// `status` words: `feed-clock`, `feed-samples`, `feed-age-ms`
+    /// (device time since the newest sample arrived; in lockstep host
+    /// time), `feed-lost`, `feed-rejected` and one `feed-rejected-<why>`
+    /// per reason seen.
+    pub fn status(&self, now_ns: u64) -> String {
+        let age = if self.cfg.lockstep {
+            self.last_host
+                .map(|h| (h.elapsed().as_millis() as u64).to_string())
+        } else {
+            self.live
+                .age_ns(now_ns)
+                .map(|a| (a / 1_000_000).to_string())
+        };
+        let mut s = format!(
+            " feed-clock={} feed-samples={} feed-age-ms={} feed-lost={} feed-rejected={}",
+            if self.cfg.lockstep {
+                "lockstep"
+            } else {
+                "realtime"
+            },
+            self.counts.samples,
+            age.as_deref().unwrap_or("never"),
+            u8::from(self.live.lost()),
+            self.counts.rejected_total(),
+        );
+        for r in Reject::ALL {
+            let n = self.counts.rejected[r as usize];
+            if n > 0 {
+                s.push_str(&format!(" feed-rejected-{}={n}", r.name()));
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use imu_emu::feed::RateSample;
+
+    fn sample(device: u16, t: u64, w: f32) -> Result<Sample, Reject> {
+        Ok(Sample::Rates(RateSample {
+            device,
+            time_ns: t,
+            truth: Truth {
+                rate_dps: [w, 0.0, 0.0],
+                specific_force_g: [0.0, 0.0, 1.0],
+                temperature_c: None,
+            },
+        }))
+    }
+
+    #[test]
+    fn real_time_applies_from_arrival_holds_and_times_out() {
+        let cfg = FeedConfig {
+            lockstep: false,
+            timeout_ns: 1_000_000,
+        };
+        let mut f = FeedState::new(cfg, 0, true, "");
+        assert_eq!(f.at(0), (None, false));
+        f.offer(sample(OWN_DEVICE, 5, 1.0), 1_000);
+        assert_eq!(f.at(500).0, None);
+        assert_eq!(f.at(1_000).0.unwrap().rate_dps[0], 1.0);
+        f.offer(sample(0, 6, 2.0), 1_500);
+        assert_eq!(f.at(1_400).0.unwrap().rate_dps[0], 1.0);
+        assert_eq!(f.at(2_000), (f.at(2_000).0, false));
+        assert!(f.at(2_600_000).1);
+        assert_eq!(f.at(2_600_000).0.unwrap().rate_dps[0], 2.0);
+        f.offer(sample(0, 6, 3.0), 2_600_000);
+        f.offer(sample(1, 7, 3.0), 2_600_000);
+        assert_eq!(f.counts().rejected[Reject::NonIncreasing as usize], 1);
+        assert_eq!(f.counts().rejected[Reject::WrongDevice as usize], 1);
+        f.offer(sample(0, 8, 3.0), 2_700_000);
+        assert!(!f.at(2_700_000).1);
+        assert!(f
+            .status(3_000_000)
+            .contains("feed-samples=3 feed-age-ms=0 feed-lost=0"));
+    }
+
+    #[test]
+    fn lockstep_queues_and_interpolates() {
+        let cfg = FeedConfig {
+            lockstep: true,
+            timeout_ns: 1,
+        };
+        let mut f = FeedState::new(cfg, 2, false, "");
+        f.offer(sample(OWN_DEVICE, 0, 0.0), 0);
+        f.offer(sample(2, 1_000, 0.0), 0);
+        f.offer(sample(2, 2_000, 10.0), 0);
+        f.offer(sample(2, 2_000, 10.0), 0);
+        assert_eq!(f.counts().samples, 2);
+        assert_eq!(f.advance(), Some(1_000));
+        assert_eq!(f.next_time(), Some(2_000));
+        assert_eq!(f.advance(), Some(2_000));
+        assert_eq!(f.at(1_500).0.unwrap().rate_dps[0], 5.0);
+        assert!(!f.at(1_500).1);
+        assert_eq!(f.advance(), None);
+    }
+}

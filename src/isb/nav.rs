@@ -1,0 +1,313 @@
+//! The navigation truth the IMX-5's INS and GNSS outputs start from, and
+//! the frames, quaternions and GPS time they are written in (Inertial
+//! Sense SDK 2.7.1 conventions: `docs/protocol-facts.md` "ISB navigation
+//! (SDK 2.7.1)").
+//!
+//! [`truth_of`] is the one place the truth is read: the unit's vehicle
+//! ([`crate::vehicle`]), whatever its source.
+
+use libm::{asin, atan2, cos, sin, sqrt};
+
+use crate::chain::SignalChain;
+use crate::dsp::integrals::Integrate;
+
+/// Longitude of the built-in site, degrees east (the motions carry only a
+/// latitude; the emulator's choice, `docs/isb.md`).
+pub const DEFAULT_LON_DEG: f64 = 0.0;
+/// Height of the built-in site above the WGS84 ellipsoid, m.
+pub const DEFAULT_HEIGHT_M: f64 = 0.0;
+/// Geoid height (ellipsoid − MSL) the emulator uses everywhere: it has no
+/// geoid model (neither has the SDK), so MSL = ellipsoid height.
+pub const GEOID_SEPARATION_M: f64 = 0.0;
+
+/// WGS84 semi-major axis, m.
+pub const WGS84_A: f64 = 6_378_137.0;
+/// WGS84 first eccentricity squared.
+pub const WGS84_E2: f64 = 0.006_694_379_990_141;
+/// The SDK's flat-earth radius for INS_1.ned (111 120 m per degree).
+pub const NED_RADIUS_M: f64 = 6_366_707.019_5;
+/// Seconds in a GPS week.
+pub const WEEK_S: u64 = 604_800;
+/// GPS − UTC, s (`C_GPS_LEAP_SECONDS`).
+pub const LEAP_SECONDS: u8 = 18;
+/// Unix time of the GPS epoch 1980-01-06 00:00:00.
+pub const GPS_EPOCH_UNIX_S: u64 = 315_964_800;
+/// GPS time at device instant 0 when a board sets none: 2026-01-01
+/// 00:00:00 UTC (Unix 1 767 225 600) as GPS seconds (+18 leap seconds).
+pub const DEFAULT_GPS_S_AT_ZERO: u64 = 1_767_225_600 - GPS_EPOCH_UNIX_S + LEAP_SECONDS as u64;
+
+/// What the navigation outputs are built from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavTruth {
+    /// Latitude, degrees north.
+    pub lat_deg: f64,
+    /// Longitude, degrees east.
+    pub lon_deg: f64,
+    /// Height above the WGS84 ellipsoid, m.
+    pub h_m: f64,
+    /// Velocity, north, east, down, m/s.
+    pub v_ned: [f64; 3],
+    /// Attitude: rotating a body (forward, right, down) vector by it gives
+    /// NED (W, X, Y, Z; Hamilton).
+    pub q_nb: [f64; 4],
+}
+
+/// The navigation truth of `chain` now: the unit's vehicle
+/// ([`SignalChain::vehicle`]: a board's vehicle source — manoeuvre script,
+/// full-state rows, live feed — or the built-in motion's site and
+/// attitude). Its body frame (forward, right, down) is the IMX's. A
+/// built-in motion's site is placed at longitude [`DEFAULT_LON_DEG`] and
+/// height [`DEFAULT_HEIGHT_M`]: the vehicle puts it where normal gravity is
+/// the ICD's 1 g (≈ 1.4 km below the ellipsoid at 45° N, so the KERNEL at
+/// rest reads exactly 1 g), which is no place to report an INS at.
+pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
+    let (v, builtin) = match chain.vehicle_source() {
+        Some(v) => (*v, false),
+        None => (chain.vehicle(), true),
+    };
+    NavTruth {
+        lat_deg: v.lat_rad.to_degrees(),
+        lon_deg: if builtin {
+            DEFAULT_LON_DEG
+        } else {
+            v.lon_rad.to_degrees()
+        },
+        h_m: if builtin {
+            DEFAULT_HEIGHT_M
+        } else {
+            v.height_m
+        },
+        v_ned: v.vel_ned,
+        q_nb: v.q_nb,
+    }
+}
+
+/// A 3×3 matrix, row-major.
+pub type Mat = [[f64; 3]; 3];
+
+/// The quaternion of a rotation matrix (`v_ref = C · v_body` ⇔ `v_ref = q ⊗
+/// v ⊗ q*`), W ≥ 0.
+pub fn quat_from_dcm(c: &Mat) -> [f64; 4] {
+    let tr = c[0][0] + c[1][1] + c[2][2];
+    let q = if tr > 0.0 {
+        let s = sqrt(tr + 1.0) * 2.0;
+        [
+            0.25 * s,
+            (c[2][1] - c[1][2]) / s,
+            (c[0][2] - c[2][0]) / s,
+            (c[1][0] - c[0][1]) / s,
+        ]
+    } else if c[0][0] > c[1][1] && c[0][0] > c[2][2] {
+        let s = sqrt(1.0 + c[0][0] - c[1][1] - c[2][2]) * 2.0;
+        [
+            (c[2][1] - c[1][2]) / s,
+            0.25 * s,
+            (c[0][1] + c[1][0]) / s,
+            (c[0][2] + c[2][0]) / s,
+        ]
+    } else if c[1][1] > c[2][2] {
+        let s = sqrt(1.0 + c[1][1] - c[0][0] - c[2][2]) * 2.0;
+        [
+            (c[0][2] - c[2][0]) / s,
+            (c[0][1] + c[1][0]) / s,
+            0.25 * s,
+            (c[1][2] + c[2][1]) / s,
+        ]
+    } else {
+        let s = sqrt(1.0 + c[2][2] - c[0][0] - c[1][1]) * 2.0;
+        [
+            (c[1][0] - c[0][1]) / s,
+            (c[0][2] + c[2][0]) / s,
+            (c[1][2] + c[2][1]) / s,
+            0.25 * s,
+        ]
+    };
+    let n = sqrt(q.iter().map(|x| x * x).sum::<f64>());
+    let sign = if q[0] < 0.0 { -1.0 } else { 1.0 };
+    [
+        q[0] * sign / n,
+        q[1] * sign / n,
+        q[2] * sign / n,
+        q[3] * sign / n,
+    ]
+}
+
+/// The rotation matrix of a quaternion (`v_ref = C · v_body`).
+pub fn dcm_of(q: &[f64; 4]) -> Mat {
+    let [w, x, y, z] = *q;
+    [
+        [
+            w * w + x * x - y * y - z * z,
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            w * w - x * x + y * y - z * z,
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            w * w - x * x - y * y + z * z,
+        ],
+    ]
+}
+
+/// Hamilton product `a ⊗ b`.
+pub fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// `C · v`.
+pub fn rotate(c: &Mat, v: &[f64; 3]) -> [f64; 3] {
+    [
+        c[0][0] * v[0] + c[0][1] * v[1] + c[0][2] * v[2],
+        c[1][0] * v[0] + c[1][1] * v[1] + c[1][2] * v[2],
+        c[2][0] * v[0] + c[2][1] * v[1] + c[2][2] * v[2],
+    ]
+}
+
+/// `Cᵀ · v`.
+pub fn rotate_inv(c: &Mat, v: &[f64; 3]) -> [f64; 3] {
+    [
+        c[0][0] * v[0] + c[1][0] * v[1] + c[2][0] * v[2],
+        c[0][1] * v[0] + c[1][1] * v[1] + c[2][1] * v[2],
+        c[0][2] * v[0] + c[1][2] * v[1] + c[2][2] * v[2],
+    ]
+}
+
+/// The SDK's Euler rule (roll φ, pitch θ, yaw ψ, rad; 3-2-1 from NED to
+/// body) as a quaternion.
+pub fn quat_from_euler(e: &[f64; 3]) -> [f64; 4] {
+    let (sr, cr) = (sin(e[0] / 2.0), cos(e[0] / 2.0));
+    let (sp, cp) = (sin(e[1] / 2.0), cos(e[1] / 2.0));
+    let (sy, cy) = (sin(e[2] / 2.0), cos(e[2] / 2.0));
+    [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ]
+}
+
+/// Roll, pitch, yaw (rad) of a body → NED quaternion (3-2-1).
+pub fn euler_of(q: &[f64; 4]) -> [f64; 3] {
+    let c = dcm_of(q);
+    [
+        atan2(c[2][1], c[2][2]),
+        asin((-c[2][0]).clamp(-1.0, 1.0)),
+        atan2(c[1][0], c[0][0]),
+    ]
+}
+
+/// qe2n: the NED frame's attitude in ECEF (roll 0, pitch −(lat + 90°), yaw
+/// lon).
+pub fn quat_e2n(lat_deg: f64, lon_deg: f64) -> [f64; 4] {
+    quat_from_euler(&[0.0, -(lat_deg + 90.0).to_radians(), lon_deg.to_radians()])
+}
+
+/// WGS84 latitude (deg), longitude (deg), height (m) → ECEF (m).
+pub fn ecef_of(lla: &[f64; 3]) -> [f64; 3] {
+    let (lat, lon) = (lla[0].to_radians(), lla[1].to_radians());
+    let n = WGS84_A / sqrt(1.0 - WGS84_E2 * sin(lat) * sin(lat));
+    [
+        (n + lla[2]) * cos(lat) * cos(lon),
+        (n + lla[2]) * cos(lat) * sin(lon),
+        (n * (1.0 - WGS84_E2) + lla[2]) * sin(lat),
+    ]
+}
+
+/// A small NED displacement (m) added to a position (deg, deg, m), with
+/// the WGS84 radii of curvature.
+pub fn lla_plus_ned(lla: &[f64; 3], d: &[f64; 3]) -> [f64; 3] {
+    let lat = lla[0].to_radians();
+    let s2 = sin(lat) * sin(lat);
+    let rn = WGS84_A / sqrt(1.0 - WGS84_E2 * s2);
+    let rm = rn * (1.0 - WGS84_E2) / (1.0 - WGS84_E2 * s2);
+    [
+        lla[0] + (d[0] / (rm + lla[2])).to_degrees(),
+        lla[1] + (d[1] / ((rn + lla[2]) * cos(lat))).to_degrees(),
+        lla[2] - d[2],
+    ]
+}
+
+/// INS_1.ned: the SDK's flat-earth offset of `lla` from `ref_lla`.
+pub fn ned_from_ref(lla: &[f64; 3], ref_lla: &[f64; 3]) -> [f64; 3] {
+    [
+        (lla[0] - ref_lla[0]).to_radians() * NED_RADIUS_M,
+        (lla[1] - ref_lla[1]).to_radians() * NED_RADIUS_M * cos(ref_lla[0].to_radians()),
+        -(lla[2] - ref_lla[2]),
+    ]
+}
+
+/// GPS time as week and time of week, from GPS nanoseconds since the GPS
+/// epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GpsTime {
+    /// Whole weeks since 1980-01-06.
+    pub week: u32,
+    /// Nanoseconds since the start of the week.
+    pub tow_ns: u64,
+}
+
+impl GpsTime {
+    /// Of `ns` GPS nanoseconds since the epoch.
+    pub const fn of_ns(ns: u64) -> Self {
+        let week_ns = WEEK_S * 1_000_000_000;
+        GpsTime {
+            week: (ns / week_ns) as u32,
+            tow_ns: ns % week_ns,
+        }
+    }
+    /// Time of week, s.
+    pub fn tow_s(&self) -> f64 {
+        self.tow_ns as f64 / 1e9
+    }
+    /// Time of week, ms (truncated: the epoch of the ms it falls in).
+    pub const fn tow_ms(&self) -> u32 {
+        (self.tow_ns / 1_000_000) as u32
+    }
+}
+
+/// GPS seconds since the GPS epoch of a UTC Unix time (`leap` = GPS − UTC).
+pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
+    unix_s.saturating_sub(GPS_EPOCH_UNIX_S) + LEAP_SECONDS as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sdk_frame_rules() {
+        // Level, yaw 30°: body X → NED (0.866, 0.5, 0).
+        let q = quat_from_euler(&[0.0, 0.0, 30f64.to_radians()]);
+        let v = rotate(&dcm_of(&q), &[1.0, 0.0, 0.0]);
+        assert!((v[0] - 0.866_025).abs() < 1e-6 && (v[1] - 0.5).abs() < 1e-9);
+        let e = [0.1, -0.2, 2.5];
+        let back = euler_of(&quat_from_euler(&e));
+        for k in 0..3 {
+            assert!((back[k] - e[k]).abs() < 1e-12, "{back:?}");
+        }
+        assert!((quat_from_dcm(&dcm_of(&q))[3] - q[3]).abs() < 1e-12);
+        // ECEF of 0°, 0°, 0 m and of the pole.
+        assert_eq!(ecef_of(&[0.0, 0.0, 0.0]), [WGS84_A, 0.0, 0.0]);
+        assert!((ecef_of(&[90.0, 0.0, 0.0])[2] - 6_356_752.314).abs() < 1e-3);
+        // qe2n maps NED down to −(ECEF position direction) at 0°, 0°.
+        let down = rotate(&dcm_of(&quat_e2n(0.0, 0.0)), &[0.0, 0.0, 1.0]);
+        assert!((down[0] + 1.0).abs() < 1e-12, "{down:?}");
+        // Flat-earth NED: 111 120 m a degree.
+        let n = ned_from_ref(&[46.0, 0.0, 10.0], &[45.0, 0.0, 0.0]);
+        assert!((n[0] - 111_120.0).abs() < 0.01 && n[2] == -10.0);
+        // GPS time: 2026-01-01 00:00:00 UTC is week 2399.
+        let t = GpsTime::of_ns(DEFAULT_GPS_S_AT_ZERO * 1_000_000_000);
+        assert_eq!(t.week, 2399);
+        assert_eq!(t.tow_ms(), (4 * 86_400 + 18) * 1000);
+    }
+}
