@@ -389,13 +389,12 @@ fn rate_rows_integrate_back_to_their_state() {
 }
 
 /// How far, m, the integration of a built-in motion's truth may end from
-/// its site after 10 minutes: their truth is the `f32` or fixed-point
-/// value the chain has always taken (bytes unchanged), whose resolution
-/// leaves a constant rate error up to half a unit in the last place —
-/// 1.7e-8 rad/s for the fixed point's 2⁻¹⁹ °/s, or for an `f32` rate near
-/// 10 °/s — which tilts the integration by δω·t and moves it
-/// g·δω·t³/6 = 5.9 m in 600 s (docs/motion.md, "Precision").
-const BUILT_IN_METRES: f64 = 6.0;
+/// its site after 10 minutes: 1 m as for every source, but 1.2 m for the
+/// float build's constant rotation, whose attitude advances by an `f32`
+/// step angle a tick (ω·dt ≈ 9e-5 rad, rounded to 7e-12 rad: a rate error
+/// of ≈ 7e-9 rad/s against the truth it reports, kept since its bytes
+/// are; g·δω·t³/6 = 1.1 m in 600 s; docs/motion.md, "Precision").
+const BUILT_IN_METRES: f64 = 1.2;
 
 /// The built-in motions rotate (and cone) in place at their site: their
 /// truth integrates back to a vehicle at rest there with their attitude,

@@ -621,8 +621,19 @@ impl PhasorFixed {
 /// The per-motion state of [`BuiltinMotionFixed`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum FixedKind {
-    /// Static and Sample: the truth never changes; the (Q30) attitude.
-    Constant { truth: TruthFixed, base: QuatQ30 },
+    /// Static and Sample: the truth never changes but for the dither of
+    /// its rate; the (Q30) attitude. `floor` is the rate rounded down,
+    /// `frac` the rest in 2⁻³² of its unit and `acc` their running sum: the
+    /// rate is `floor + 1` at the ticks where `acc` wraps, so its mean is
+    /// the exact rate (docs/motion.md, "Precision"). A sample's `frac` is
+    /// 0 (its truth is new every tick).
+    Constant {
+        truth: TruthFixed,
+        base: QuatQ30,
+        floor: [i32; 3],
+        frac: [u32; 3],
+        acc: [u32; 3],
+    },
     /// Constant rotation: the attitude, the rotation of one tick (Q36 rad)
     /// and the body rate (scaled).
     Rotation {
@@ -682,19 +693,43 @@ impl BuiltinMotionFixed {
         let kind = match motion {
             Motion::Static { .. } => {
                 let (w, f) = earth_and_gravity(&base_f, &earth_f);
+                let truth = TruthFixed::from_truth(&Truth {
+                    rate_dps: w,
+                    specific_force_g: f,
+                    temperature_c: None,
+                });
+                // The Earth rate rounded to 2⁻¹⁹ °/s would hold an error of
+                // up to half a unit for ever (an integration of a unit at
+                // rest then drifts up to 6 m in 10 minutes): dithered
+                // instead, exact on average.
+                let scale = crate::math::exp2i(GYRO_BITS as i32);
+                let exact = w.map(|v| f64::from(v) * scale);
+                let floor = exact.map(|x| libm::floor(x) as i32);
+                let frac = core::array::from_fn(|i| {
+                    let r = exact[i] - f64::from(floor[i]);
+                    libm::round(r * 4_294_967_296.0).min(4_294_967_295.0) as u32
+                });
                 FixedKind::Constant {
-                    truth: TruthFixed::from_truth(&Truth {
-                        rate_dps: w,
-                        specific_force_g: f,
-                        temperature_c: None,
-                    }),
+                    truth: TruthFixed {
+                        rate: floor,
+                        ..truth
+                    },
                     base,
+                    floor,
+                    frac,
+                    acc: [1 << 31; 3],
                 }
             }
-            Motion::Sample(t) => FixedKind::Constant {
-                truth: TruthFixed::from_truth(&t),
-                base,
-            },
+            Motion::Sample(t) => {
+                let truth = TruthFixed::from_truth(&t);
+                FixedKind::Constant {
+                    truth,
+                    base,
+                    floor: truth.rate,
+                    frac: [0; 3],
+                    acc: [0; 3],
+                }
+            }
             Motion::ConstantRotation { rate_dps, .. } => FixedKind::Rotation {
                 q,
                 step: rate_dps.map(tick_rad),
@@ -823,7 +858,19 @@ impl BuiltinMotionFixed {
     #[inline]
     fn advance(&mut self) {
         match &mut self.kind {
-            FixedKind::Constant { .. } => {}
+            FixedKind::Constant {
+                truth,
+                floor,
+                frac,
+                acc,
+                ..
+            } => {
+                for i in 0..3 {
+                    let (a, carry) = acc[i].overflowing_add(frac[i]);
+                    acc[i] = a;
+                    truth.rate[i] = floor[i] + i32::from(carry);
+                }
+            }
             FixedKind::Rotation { q, step, .. } => q.rotate(step),
             FixedKind::Vibration {
                 q, phasor, step, ..
