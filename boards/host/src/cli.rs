@@ -119,7 +119,7 @@ pub struct Args {
     /// The vehicle the unit rides on, from a file: a manoeuvre script
     /// (first statement `start lat lon height heading speed`) or a
     /// full-state CSV (header `time,lat,lon,height,vn,ve,vd,roll,pitch,yaw`
-    /// [`,wx,wy,wz,fx,fy,fz`][`,temp`]); docs/motion.md.
+    /// then optionally `,wx,wy,wz,fx,fy,fz` and `,temp`); docs/motion.md.
     #[arg(long, value_name = "FILE", conflicts_with = "trajectory")]
     pub motion: Option<PathBuf>,
 

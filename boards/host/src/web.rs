@@ -9,7 +9,7 @@
 //!   bounded ring, and, at most every [`PUBLISH_EVERY`], the control
 //!   socket's `status` words, the device time and the truth attitude. Each
 //!   of these takes its lock with `try_lock`: when the web thread holds it,
-//!   the bytes are counted as lost to the view ([`Slot::lost`]) and the
+//!   the bytes are counted as lost to the view (`Slot::lost`) and the
 //!   loop goes on. A closed or slow tab therefore costs the device nothing.
 //! - **The web thread** drains the ring, decodes the frames (the client's
 //!   decoders: [`crate::client::decode`], [`crate::client::isb`]), keeps
