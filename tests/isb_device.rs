@@ -795,13 +795,13 @@ fn the_navigation_data_sets_agree() {
     assert!((f64::from(i1.ned[0]) - 0.1f64.to_radians() * 6_366_707.019_5).abs() < 5.0);
     assert_eq!(i1.lla, i2.lla);
     close(&i4.ecef, &nav::ecef_of(&i2.lla), 1e-6);
-    let q = nav::quat_mul(
+    let q = imu_emu::math::double::quat_mul(
         &nav::quat_e2n(i2.lla[0], i2.lla[1]),
         &i2.qn2b.map(f64::from),
     );
     close(&i4.qe2b.map(f64::from), &q, 1e-6);
     // Euler of INS_1 = the quaternion of INS_2.
-    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    let e = imu_emu::math::double::euler_from_quat(&i2.qn2b.map(f64::from));
     close(&i1.theta.map(f64::from), &e, 1e-5);
     // GPS vs INS: within 4σ of the two errors combined.
     let d = nav::ned_from_ref(&g.lla, &i2.lla);
@@ -1168,6 +1168,6 @@ fn the_ins_reports_the_vehicle_it_rides_on() {
     );
     assert!(f64::from(i2.uvw[1]).abs() < 0.5, "{i2:?}");
     // Heading east (90°) within a degree.
-    let e = nav::euler_of(&i2.qn2b.map(f64::from));
+    let e = imu_emu::math::double::euler_from_quat(&i2.qn2b.map(f64::from));
     assert!((e[2].to_degrees() - 90.0).abs() < 1.0, "{e:?}");
 }

@@ -13,12 +13,15 @@
 use libm::{exp, log, pow, sqrt};
 
 use super::nav::{
-    dcm_of, ecef_of, euler_of, lla_plus_ned, ned_from_ref, quat_e2n, quat_from_euler, quat_mul,
-    rotate, rotate_inv, GpsTime, NavTruth, GEOID_SEPARATION_M, LEAP_SECONDS,
+    ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, GEOID_SEPARATION_M,
+    LEAP_SECONDS,
 };
 use super::nav_sets::{
     gps_status, hdw_nav, ins_status, Barometer, GpsPos, GpsVel, Ins1, Ins2, Ins3, Ins4, InsHeader,
     Magnetometer,
+};
+use crate::math::double::{
+    euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
 };
 use crate::sensor::rng::Rng;
 
@@ -340,7 +343,8 @@ impl NavState {
     pub fn solution(&self, truth: &NavTruth, cfg: &NavConfig) -> Solution {
         let e = self.ins_att;
         let err = [1.0, e[0] / 2.0, e[1] / 2.0, e[2] / 2.0];
-        let q_rot = quat_from_euler(&cfg.ins_rotation.map(f64::from));
+        let [r, p, y] = cfg.ins_rotation.map(f64::from);
+        let q_rot = quat_from_euler(r, p, y);
         let q_nb = normalize(&quat_mul(&quat_mul(&err, &truth.q_nb), &q_rot));
         if self.t_s < ALIGN_S {
             return Solution {
@@ -356,7 +360,7 @@ impl NavState {
                 q_nb,
             };
         }
-        let lever = rotate(&dcm_of(&q_nb), &cfg.ins_offset.map(f64::from));
+        let lever = rotate(&(q_nb), &cfg.ins_offset.map(f64::from));
         let mut d = [0.0; 3];
         let mut v = [0.0; 3];
         for k in 0..3 {
@@ -376,7 +380,7 @@ impl NavState {
         if !self.fixed {
             return None;
         }
-        let ant = rotate(&dcm_of(&truth.q_nb), &cfg.gps1_ant_offset.map(f64::from));
+        let ant = rotate(&(truth.q_nb), &cfg.gps1_ant_offset.map(f64::from));
         let mut d = [0.0; 3];
         let mut v = [0.0; 3];
         for k in 0..3 {
@@ -409,7 +413,7 @@ impl NavState {
                 *x += d;
             }
         }
-        let b = rotate_inv(&dcm_of(&truth.q_nb), &f);
+        let b = rotate_inv(&(truth.q_nb), &f);
         [0, 1, 2].map(|k| (b[k] + MAG_NOISE * self.noise(tick, k as u64)) as f32)
     }
 
@@ -452,22 +456,16 @@ pub fn flash_nav_valid(image: &[u8]) -> bool {
     lla_ok(flash::REF_LLA) && lla_ok(flash::LAST_LLA) && (200..=60_000).contains(&gps)
 }
 
-fn normalize(q: &[f64; 4]) -> [f64; 4] {
-    let n = sqrt(q.iter().map(|x| x * x).sum::<f64>());
-    let s = if q[0] < 0.0 { -1.0 / n } else { 1.0 / n };
-    q.map(|x| x * s)
-}
-
 fn f32s<const N: usize>(v: [f64; N]) -> [f32; N] {
     v.map(|x| x as f32)
 }
 
 /// INS_1 of `s`.
 pub fn ins1(h: &InsHeader, s: &Solution, cfg: &NavConfig) -> Ins1 {
-    let uvw = rotate_inv(&dcm_of(&s.q_nb), &s.v_ned);
+    let uvw = rotate_inv(&s.q_nb, &s.v_ned);
     Ins1 {
         header: *h,
-        theta: f32s(euler_of(&s.q_nb)),
+        theta: f32s(euler_from_quat(&s.q_nb)),
         uvw: f32s(uvw),
         lla: s.lla,
         ned: f32s(ned_from_ref(&s.lla, &cfg.ref_lla)),
@@ -479,7 +477,7 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
     Ins2 {
         header: *h,
         qn2b: f32s(s.q_nb),
-        uvw: f32s(rotate_inv(&dcm_of(&s.q_nb), &s.v_ned)),
+        uvw: f32s(rotate_inv(&s.q_nb, &s.v_ned)),
         lla: s.lla,
     }
 }
@@ -498,7 +496,7 @@ pub fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
     Ins4 {
         header: *h,
         qe2b: f32s(quat_mul(&qe2n, &s.q_nb)),
-        ve: f32s(rotate(&dcm_of(&qe2n), &s.v_ned)),
+        ve: f32s(rotate(&(qe2n), &s.v_ned)),
         ecef: ecef_of(&s.lla),
     }
 }
@@ -543,7 +541,7 @@ pub fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
     match fix {
         Some((lla, v)) => GpsVel {
             time_of_week_ms: t.tow_ms(),
-            vel: f32s(rotate(&dcm_of(&quat_e2n(lla[0], lla[1])), &v)),
+            vel: f32s(rotate(&(quat_e2n(lla[0], lla[1])), &v)),
             s_acc: S_ACC_MPS,
             status: p.status,
         },

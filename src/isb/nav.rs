@@ -6,10 +6,11 @@
 //! [`truth_of`] is the one place the truth is read: the unit's vehicle
 //! ([`crate::vehicle`]), whatever its source.
 
-use libm::{asin, atan2, cos, sin, sqrt};
+use libm::{cos, sin, sqrt};
 
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
+use crate::math::double::quat_from_euler;
 
 /// Longitude of the built-in site, degrees east (the motions carry only a
 /// latitude; the emulator's choice, `docs/isb.md`).
@@ -82,134 +83,10 @@ pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
     }
 }
 
-/// A 3×3 matrix, row-major.
-pub type Mat = [[f64; 3]; 3];
-
-/// The quaternion of a rotation matrix (`v_ref = C · v_body` ⇔ `v_ref = q ⊗
-/// v ⊗ q*`), W ≥ 0.
-pub fn quat_from_dcm(c: &Mat) -> [f64; 4] {
-    let tr = c[0][0] + c[1][1] + c[2][2];
-    let q = if tr > 0.0 {
-        let s = sqrt(tr + 1.0) * 2.0;
-        [
-            0.25 * s,
-            (c[2][1] - c[1][2]) / s,
-            (c[0][2] - c[2][0]) / s,
-            (c[1][0] - c[0][1]) / s,
-        ]
-    } else if c[0][0] > c[1][1] && c[0][0] > c[2][2] {
-        let s = sqrt(1.0 + c[0][0] - c[1][1] - c[2][2]) * 2.0;
-        [
-            (c[2][1] - c[1][2]) / s,
-            0.25 * s,
-            (c[0][1] + c[1][0]) / s,
-            (c[0][2] + c[2][0]) / s,
-        ]
-    } else if c[1][1] > c[2][2] {
-        let s = sqrt(1.0 + c[1][1] - c[0][0] - c[2][2]) * 2.0;
-        [
-            (c[0][2] - c[2][0]) / s,
-            (c[0][1] + c[1][0]) / s,
-            0.25 * s,
-            (c[1][2] + c[2][1]) / s,
-        ]
-    } else {
-        let s = sqrt(1.0 + c[2][2] - c[0][0] - c[1][1]) * 2.0;
-        [
-            (c[1][0] - c[0][1]) / s,
-            (c[0][2] + c[2][0]) / s,
-            (c[1][2] + c[2][1]) / s,
-            0.25 * s,
-        ]
-    };
-    let n = sqrt(q.iter().map(|x| x * x).sum::<f64>());
-    let sign = if q[0] < 0.0 { -1.0 } else { 1.0 };
-    [
-        q[0] * sign / n,
-        q[1] * sign / n,
-        q[2] * sign / n,
-        q[3] * sign / n,
-    ]
-}
-
-/// The rotation matrix of a quaternion (`v_ref = C · v_body`).
-pub fn dcm_of(q: &[f64; 4]) -> Mat {
-    let [w, x, y, z] = *q;
-    [
-        [
-            w * w + x * x - y * y - z * z,
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            w * w - x * x + y * y - z * z,
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            w * w - x * x - y * y + z * z,
-        ],
-    ]
-}
-
-/// Hamilton product `a ⊗ b`.
-pub fn quat_mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
-    [
-        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
-    ]
-}
-
-/// `C · v`.
-pub fn rotate(c: &Mat, v: &[f64; 3]) -> [f64; 3] {
-    [
-        c[0][0] * v[0] + c[0][1] * v[1] + c[0][2] * v[2],
-        c[1][0] * v[0] + c[1][1] * v[1] + c[1][2] * v[2],
-        c[2][0] * v[0] + c[2][1] * v[1] + c[2][2] * v[2],
-    ]
-}
-
-/// `Cᵀ · v`.
-pub fn rotate_inv(c: &Mat, v: &[f64; 3]) -> [f64; 3] {
-    [
-        c[0][0] * v[0] + c[1][0] * v[1] + c[2][0] * v[2],
-        c[0][1] * v[0] + c[1][1] * v[1] + c[2][1] * v[2],
-        c[0][2] * v[0] + c[1][2] * v[1] + c[2][2] * v[2],
-    ]
-}
-
-/// The SDK's Euler rule (roll φ, pitch θ, yaw ψ, rad; 3-2-1 from NED to
-/// body) as a quaternion.
-pub fn quat_from_euler(e: &[f64; 3]) -> [f64; 4] {
-    let (sr, cr) = (sin(e[0] / 2.0), cos(e[0] / 2.0));
-    let (sp, cp) = (sin(e[1] / 2.0), cos(e[1] / 2.0));
-    let (sy, cy) = (sin(e[2] / 2.0), cos(e[2] / 2.0));
-    [
-        cr * cp * cy + sr * sp * sy,
-        sr * cp * cy - cr * sp * sy,
-        cr * sp * cy + sr * cp * sy,
-        cr * cp * sy - sr * sp * cy,
-    ]
-}
-
-/// Roll, pitch, yaw (rad) of a body → NED quaternion (3-2-1).
-pub fn euler_of(q: &[f64; 4]) -> [f64; 3] {
-    let c = dcm_of(q);
-    [
-        atan2(c[2][1], c[2][2]),
-        asin((-c[2][0]).clamp(-1.0, 1.0)),
-        atan2(c[1][0], c[0][0]),
-    ]
-}
-
 /// qe2n: the NED frame's attitude in ECEF (roll 0, pitch −(lat + 90°), yaw
 /// lon).
 pub fn quat_e2n(lat_deg: f64, lon_deg: f64) -> [f64; 4] {
-    quat_from_euler(&[0.0, -(lat_deg + 90.0).to_radians(), lon_deg.to_radians()])
+    quat_from_euler(0.0, -(lat_deg + 90.0).to_radians(), lon_deg.to_radians())
 }
 
 /// WGS84 latitude (deg), longitude (deg), height (m) → ECEF (m).
@@ -283,24 +160,25 @@ pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::double::{dcm_from_quat, euler_from_quat, quat_from_dcm, rotate};
 
     #[test]
     fn the_sdk_frame_rules() {
         // Level, yaw 30°: body X → NED (0.866, 0.5, 0).
-        let q = quat_from_euler(&[0.0, 0.0, 30f64.to_radians()]);
-        let v = rotate(&dcm_of(&q), &[1.0, 0.0, 0.0]);
+        let q = quat_from_euler(0.0, 0.0, 30f64.to_radians());
+        let v = rotate(&q, &[1.0, 0.0, 0.0]);
         assert!((v[0] - 0.866_025).abs() < 1e-6 && (v[1] - 0.5).abs() < 1e-9);
         let e = [0.1, -0.2, 2.5];
-        let back = euler_of(&quat_from_euler(&e));
+        let back = euler_from_quat(&quat_from_euler(e[0], e[1], e[2]));
         for k in 0..3 {
             assert!((back[k] - e[k]).abs() < 1e-12, "{back:?}");
         }
-        assert!((quat_from_dcm(&dcm_of(&q))[3] - q[3]).abs() < 1e-12);
+        assert!((quat_from_dcm(&dcm_from_quat(&q))[3] - q[3]).abs() < 1e-12);
         // ECEF of 0°, 0°, 0 m and of the pole.
         assert_eq!(ecef_of(&[0.0, 0.0, 0.0]), [WGS84_A, 0.0, 0.0]);
         assert!((ecef_of(&[90.0, 0.0, 0.0])[2] - 6_356_752.314).abs() < 1e-3);
         // qe2n maps NED down to −(ECEF position direction) at 0°, 0°.
-        let down = rotate(&dcm_of(&quat_e2n(0.0, 0.0)), &[0.0, 0.0, 1.0]);
+        let down = rotate(&quat_e2n(0.0, 0.0), &[0.0, 0.0, 1.0]);
         assert!((down[0] + 1.0).abs() < 1e-12, "{down:?}");
         // Flat-earth NED: 111 120 m a degree.
         let n = ned_from_ref(&[46.0, 0.0, 10.0], &[45.0, 0.0, 0.0]);

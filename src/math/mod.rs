@@ -9,7 +9,10 @@
 //!   of ICD Appendix C and their conversions, in `f32` and in Q30.
 //! - [`fixed`]: the Q-format integer arithmetic of the `fixed-point` build.
 //! - [`units`]: g and the fixed-point scales of the sensor signals.
+//! - [`double`]: `f64` vectors, quaternions and rotation matrices of the
+//!   vehicle truth and the navigation outputs.
 
+pub mod double;
 pub mod fixed;
 pub mod rotation;
 pub mod trig;
