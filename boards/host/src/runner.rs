@@ -32,7 +32,9 @@
 //!   the replies to a burst of commands, each shorter than its command,
 //!   always fit the line and the device's TX queue, as on a real UART.
 //!   (The firmware's UART delivers at the line rate by itself: this is
-//!   the host board's part, not the core schedule's.)
+//!   the host board's part, not the core schedule's.) Not in lockstep
+//!   (`--lockstep`), where device time moves only with the feed's
+//!   samples: there input goes in as it comes.
 //! * **A status line** on stdout once a second when it is a terminal
 //!   (mode, format, rates, frames sent, frames rejected).
 //! * **Sleeping**: until [`Schedule::poll_at`] (the next tick that produces
@@ -368,9 +370,16 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 
     fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        // No more than the line could have carried by now.
+        // No more than the line could have carried by now; in lockstep
+        // the simulator owns device time (it stands still between samples,
+        // so a command sent before the first one would never arrive): the
+        // input goes in as it comes, at the device time of the next pass.
         self.rx_pacer.advance(self.rx_time());
-        let limit = buf.len().min(self.rx_pacer.available());
+        let limit = if self.feed.as_ref().is_some_and(FeedState::lockstep) {
+            buf.len()
+        } else {
+            buf.len().min(self.rx_pacer.available())
+        };
         let buf = &mut buf[..limit];
         // Input the faults made longer than the last read could take first.
         let mut n = self.rx_carry.len().min(buf.len());
