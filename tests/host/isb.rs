@@ -51,9 +51,12 @@ fn the_vendor_tools_connection_sequence_with_its_deadlines() {
         assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
         assert!(DevInfo::decode(&p.payload.try_into().unwrap()).accepted_by_sdk());
     }
-    // Reported, and asserted well inside the tool's ~10 ms.
+    // Reported, and asserted inside the tool's ~10 ms (about 1 ms on a
+    // quiet host; the device answers at its next tick, so what exceeds that
+    // is the host's scheduling, up to 9 ms seen on a 2-core VM at a load of
+    // 14 while other suites ran).
     eprintln!("DEV_INFO round trip: worst {worst:?} of 20");
-    assert!(worst < Duration::from_millis(5), "{worst:?}");
+    assert!(worst < Duration::from_millis(10), "{worst:?}");
     c.send(&isb_get(did::SYS_PARAMS, 0));
     let sp = SysParams::decode(&isb_packet(&mut c).payload.try_into().unwrap());
     c.send(&isb_get(did::FLASH_CONFIG, 0));
