@@ -623,3 +623,37 @@ pub fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
         humidity: HUMIDITY,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// GPS1_SAT is a function of the seed (and the fix) only: the same
+    /// seed gives the same records, another seed another bearing; none
+    /// before the fix.
+    #[test]
+    fn the_constellation_comes_from_the_seed() {
+        let truth = NavTruth {
+            lat_deg: 45.0,
+            lon_deg: 0.0,
+            h_m: 0.0,
+            v_ned: [0.0; 3],
+            q_nb: [1.0, 0.0, 0.0, 0.0],
+        };
+        let t = GpsTime {
+            week: 2399,
+            tow_ns: 1_000_000_000,
+        };
+        let fixed = |seed| {
+            let mut n = NavState::new(seed);
+            assert_eq!(n.gps_sat(&t).num_sats, 0);
+            n.step(COLD_START_S + 1.0, &truth);
+            n.gps_sat(&t)
+        };
+        let (a, b, c) = (fixed(11), fixed(11), fixed(12));
+        assert_eq!(a, b);
+        assert_eq!(a.num_sats, u32::from(SATS));
+        assert_ne!(a.sat[0].azim, c.sat[0].azim);
+        assert_eq!((a.time_of_week_ms, a.sat[0].sv_id), (1000, SAT_PRNS[0]));
+    }
+}
