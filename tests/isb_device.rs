@@ -8,8 +8,8 @@ use imu_emu::isb::ins::{self, NavFaults};
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::nav;
 use imu_emu::isb::nav_sets::{
-    hdw_nav, ins_status, rmc_nav, Barometer, GpsPos, ImuMag, Ins1, Ins2, Ins4, Magnetometer,
-    PimuMag, SysSensors,
+    hdw_nav, ins_status, rmc_nav, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, ImuMag, Ins1,
+    Ins2, Ins4, Magnetometer, PimuMag, SysSensors,
 };
 use imu_emu::isb::packet::{self, Decoder};
 use imu_emu::isb::sets::{
@@ -857,6 +857,66 @@ fn a_gps_outage_and_its_recovery() {
     assert!(h(back) < 0.05 * h(e22), "{back:?}");
 }
 
+/// GPS1_SAT every 1 s by its own `timeOfWeekMs` (on the receiver's
+/// 200 ms epochs): no satellites before the cold-start fix, then the 12
+/// GPS1_POS counts as used (numSats = satsUsed, mean C/N0 = cnoMean, each
+/// above 10° elevation, "used in solution"), the same constellation at
+/// every epoch; none during `fault gps off`.
+#[test]
+fn gps1_sat_follows_the_fix() {
+    let mut b = Bench::new();
+    b.send(&get(did::GPS1_SAT, 1));
+    let r = b.run_ticks(64_000);
+    let sats: Vec<GpsSat> = of_did(&r, did::GPS1_SAT)
+        .iter()
+        .map(|p| GpsSat::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(sats.len(), 32);
+    assert_eq!(sats[0].num_sats, 0, "no fix yet");
+    assert!(sats[0].sat.iter().all(|s| *s == GpsSatSv::default()));
+    let fixed: Vec<&GpsSat> = sats.iter().filter(|s| s.num_sats > 0).collect();
+    assert!(fixed.len() >= 2, "{}", fixed.len());
+    for w in fixed.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 1000);
+        assert_eq!(w[1].time_of_week_ms % 200, 0);
+        assert_eq!(w[1].sat, w[0].sat, "a fixed constellation");
+    }
+    let s = b.get_once(did::GPS1_SAT);
+    let g = GpsPos::decode(&b.get_once(did::GPS1_POS).try_into().unwrap());
+    let s = GpsSat::decode(&s.try_into().unwrap());
+    assert_eq!(s.time_of_week_ms, g.time_of_week_ms);
+    assert_eq!(s.num_sats, u32::from(g.sats_used));
+    let used = &s.sat[..s.num_sats as usize];
+    let mean = used.iter().map(|v| f32::from(v.cno)).sum::<f32>() / used.len() as f32;
+    assert_eq!(mean, g.cno_mean);
+    let mut azims: Vec<i16> = used.iter().map(|v| v.azim).collect();
+    azims.sort_unstable();
+    azims.dedup();
+    assert_eq!(azims.len(), used.len());
+    for v in used {
+        // GPS, carrier locked (7), used in solution (0x8), healthy (0x10).
+        assert_eq!((v.gnss_id, v.status), (1, 0x001F));
+        assert_ne!(v.status & sat_status::USED_IN_SOLUTION, 0);
+        assert!(v.elev > 10 && (-180..=180).contains(&v.azim), "{v:?}");
+        assert!((f32::from(v.cno) - g.cno_mean).abs() <= 4.0, "{v:?}");
+    }
+    assert!(s.sat[used.len()..]
+        .iter()
+        .all(|v| *v == GpsSatSv::default()));
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        gps_off: true,
+        ..NavFaults::default()
+    });
+    let r = b.run_ticks(4000);
+    for p in of_did(&r, did::GPS1_SAT) {
+        let s = GpsSat::decode(&p.payload.try_into().unwrap());
+        assert_eq!(s.num_sats, 0);
+        assert!(s.sat.iter().all(|v| *v == GpsSatSv::default()));
+    }
+    let s = GpsSat::decode(&b.get_once(did::GPS1_SAT).try_into().unwrap());
+    assert_eq!(s.num_sats, 0);
+}
+
 /// MAGNETOMETER every 10 ms and BAROMETER every 8 ms by their time fields;
 /// the field's inclination at 45° N is the dipole's atan(2) = 63.4°; the
 /// pressure is the ISA's at 0 m; a magnetic disturbance and a barometer
@@ -966,6 +1026,7 @@ fn bad_navigation_input() {
         did::INS_4,
         did::GPS1_POS,
         did::GPS1_VEL,
+        did::GPS1_SAT,
         did::MAGNETOMETER,
         did::BAROMETER,
         did::SYS_SENSORS,

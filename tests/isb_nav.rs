@@ -202,3 +202,62 @@ fn rmc_bits_and_presets() {
     assert!(ins_status::dead_reckoning(0x40));
     assert!(!ins_status::dead_reckoning(0x140));
 }
+
+/// `gps_sat_t` (408 bytes: time of week, numSats, 50 × `gps_sat_sv_t` of 8
+/// bytes) and its RMC bit (SDK 2.7.1 `data_sets.h`): offsets, golden bytes
+/// of one record at its place in the array, round trip.
+#[test]
+fn gps_sat_layout_and_golden_bytes() {
+    use imu_emu::isb::did;
+    assert_eq!(
+        [
+            gps_sat::SIZE,
+            gps_sat::TIME_OF_WEEK_MS,
+            gps_sat::NUM_SATS,
+            gps_sat::SAT
+        ],
+        [408, 0, 4, 8]
+    );
+    assert_eq!(MAX_NUM_SATELLITES, 50);
+    assert_eq!(
+        [
+            gps_sat_sv::SIZE,
+            gps_sat_sv::GNSS_ID,
+            gps_sat_sv::SV_ID,
+            gps_sat_sv::ELEV,
+            gps_sat_sv::AZIM,
+            gps_sat_sv::CNO,
+            gps_sat_sv::STATUS
+        ],
+        [8, 0, 1, 2, 3, 5, 6]
+    );
+    let set = did::lookup(15).unwrap();
+    assert_eq!(
+        (set.did, set.size, set.rmc_bit),
+        (did::GPS1_SAT, 408, 0x4000)
+    );
+    assert_eq!(set.source, did::Source::Fixed(1000));
+    assert_eq!(rmc_nav::BITS_GPS1_SAT, 0x4000);
+
+    let mut sat = [GpsSatSv::default(); MAX_NUM_SATELLITES];
+    sat[1] = GpsSatSv {
+        gnss_id: 1,
+        sv_id: 27,
+        elev: -5,
+        azim: -170,
+        cno: 44,
+        status: 0x001F,
+    };
+    let s = GpsSat {
+        time_of_week_ms: 345_601_000,
+        num_sats: 2,
+        sat,
+    };
+    let b = s.encode();
+    assert_eq!(&b[0..4], &345_601_000u32.to_le_bytes());
+    assert_eq!(&b[4..8], &[2, 0, 0, 0]);
+    // Record 1 at 8 + 8: gnssId, svId, elev, azim (i16, unaligned), cno, status.
+    assert_eq!(&b[16..24], &[1, 27, 0xFB, 0x56, 0xFF, 44, 0x1F, 0x00]);
+    assert!(b[8..16].iter().chain(&b[24..]).all(|&x| x == 0));
+    assert_eq!(GpsSat::decode(&b), s);
+}

@@ -42,7 +42,7 @@
 //!   stops those whose bit is clear; `OPTIONS_PERSISTENT` then saves the
 //!   streams as persistent. The port mask is ignored (one port). A GET of
 //!   RMC reads the bits of the running streams.
-//! - **Navigation** (INS_1..4, GPS1_POS, GPS1_VEL, MAGNETOMETER,
+//! - **Navigation** (INS_1..4, GPS1_POS, GPS1_VEL, GPS1_SAT, MAGNETOMETER,
 //!   BAROMETER, SYS_SENSORS, IMU_MAG, PIMU_MAG): built by
 //!   [`crate::isb::ins`] from [`crate::isb::nav::truth_of`], the INS and
 //!   GNSS models stepped every [`ins::STEP_MS`]; GPS time from
@@ -578,7 +578,7 @@ impl State {
         req: &message::SetRequest<'_>,
         now: Instant,
     ) {
-        let mut image = [0u8; flash::SIZE];
+        let mut image = [0u8; did::MAX_SIZE];
         let n = self.image_of(cx, req.did, &mut image, now);
         let outcome = message::apply_set(req, &mut image[..n]);
         match outcome {
@@ -747,7 +747,7 @@ impl State {
         &self,
         cx: &mut impl Context<Integrals>,
         did: u8,
-        out: &mut [u8; flash::SIZE],
+        out: &mut [u8; did::MAX_SIZE],
         now: Instant,
     ) -> usize {
         let mut put = |b: &[u8]| {
@@ -788,6 +788,7 @@ impl State {
             | did::INS_4
             | did::GPS1_POS
             | did::GPS1_VEL
+            | did::GPS1_SAT
             | did::MAGNETOMETER
             | did::BAROMETER => {
                 let hdw = self.sys_params(cx, now).hdw_status;
@@ -846,7 +847,7 @@ impl State {
         cx: &impl Context<Integrals>,
         did: u8,
         hdw: u32,
-        out: &mut [u8; flash::SIZE],
+        out: &mut [u8; did::MAX_SIZE],
     ) -> usize {
         let mut put = |b: &[u8]| {
             out[..b.len()].copy_from_slice(b);
@@ -886,6 +887,7 @@ impl State {
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
             did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             did::MAGNETOMETER => {
                 put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
             }
@@ -913,7 +915,7 @@ impl State {
         did: u8,
         w: &Increment,
         end_tick: u64,
-        image: &mut [u8; flash::SIZE],
+        image: &mut [u8; did::MAX_SIZE],
     ) -> usize {
         let h = cx.chain().health();
         let status = imu_status_of(&h);
@@ -993,7 +995,7 @@ impl State {
         size: u16,
         now: Instant,
     ) {
-        let mut image = [0u8; flash::SIZE];
+        let mut image = [0u8; did::MAX_SIZE];
         let n = self.image_of(cx, set.did, &mut image, now);
         send_data(cx, set.did, &image[..n], offset, size);
     }
@@ -1001,7 +1003,7 @@ impl State {
     /// The packet of stream `i` at `now`; its window restarts.
     fn send_stream(&mut self, cx: &mut impl Context<Integrals>, i: usize, now: Instant) {
         let s = self.streams[i];
-        let mut image = [0u8; flash::SIZE];
+        let mut image = [0u8; did::MAX_SIZE];
         let n = match s.did {
             d if is_windowed(d) => {
                 let end = cx.chain().integrals();

@@ -9,8 +9,8 @@
 //! DID 95, silence for any other DID the table does not hold.
 
 use super::nav_sets::{
-    barometer, gps_pos, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag, rmc_nav,
-    sys_sensors,
+    barometer, gps_pos, gps_sat, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag,
+    rmc_nav, sys_sensors,
 };
 use super::sets;
 
@@ -36,6 +36,8 @@ pub const INS_3: u8 = 65;
 pub const INS_4: u8 = 66;
 /// `gps_pos_t`: GNSS position (the better of GPS1_RCVR_POS / RTK).
 pub const GPS1_POS: u8 = 13;
+/// `gps_sat_t`: the satellites the receiver tracks.
+pub const GPS1_SAT: u8 = 15;
 /// `gps_vel_t`: GNSS velocity.
 pub const GPS1_VEL: u8 = 30;
 /// `imu_mag_t`: IMU and magnetometer.
@@ -92,8 +94,10 @@ pub enum Source {
     /// `FLASH_CONFIG.startupGPSDtMs` (default 200 ms): GPS1_POS, GPS1_VEL
     /// (SDK 2.7.1 `RMC_BITS_GPS1_*` comments).
     GpsDt,
-    /// A fixed sensor period, ms: MAGNETOMETER 10, BAROMETER 8 (SDK 2.7.1
-    /// `RMC_BITS_*` comments: "~10 ms", "~8 ms").
+    /// A fixed period, ms: MAGNETOMETER 10, BAROMETER 8, GPS1_SAT 1000
+    /// (SDK 2.7.1 `RMC_BITS_*` comments: "~10 ms", "~8 ms", "1 s"; the
+    /// ISB page puts every GPS DID at `startupGPSDtMs`, the SDK's comment
+    /// is followed, `docs/isb.md`).
     Fixed(u32),
     /// 1 ms: every other DID (ISB page, "All other DIDs 1ms").
     Millisecond,
@@ -200,7 +204,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 21] = [
+pub const DATA_SETS: [DataSet; 22] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -324,6 +328,13 @@ pub const DATA_SETS: [DataSet; 21] = [
         rmc_nav::BITS_GPS1_VEL,
     ),
     nav(
+        GPS1_SAT,
+        "gps_sat_t",
+        gps_sat::SIZE,
+        Source::Fixed(1000),
+        rmc_nav::BITS_GPS1_SAT,
+    ),
+    nav(
         MAGNETOMETER,
         "magnetometer_t",
         magnetometer::SIZE,
@@ -359,6 +370,20 @@ pub const DATA_SETS: [DataSet; 21] = [
         rmc_nav::BITS_PIMU_MAG,
     ),
 ];
+
+/// The largest data set served, bytes (GPS1_SAT's 408): what an image
+/// buffer of the device and the TX queue's largest frame must hold.
+pub const MAX_SIZE: usize = {
+    let mut max = 0;
+    let mut i = 0;
+    while i < DATA_SETS.len() {
+        if DATA_SETS[i].size as usize > max {
+            max = DATA_SETS[i].size as usize;
+        }
+        i += 1;
+    }
+    max
+};
 
 /// The table row of `did`, if the emulated IMX serves it.
 pub fn lookup(did: u16) -> Option<&'static DataSet> {

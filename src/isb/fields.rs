@@ -372,6 +372,22 @@ const GPS_VEL: &[FieldSpec] = &[
     f("status", nav::gps_vel::STATUS, U32, ""),
 ];
 
+/// `gps_sat_t`: the header; the `sat` records (8 bytes each from
+/// [`nav::gps_sat::SAT`], [`nav::gps_sat_sv`]) are an array the table has
+/// no kind for, so only the first satellite's fields are named.
+const GPS_SAT: &[FieldSpec] = &[
+    f("timeOfWeekMs", nav::gps_sat::TIME_OF_WEEK_MS, U32, "ms"),
+    f("numSats", nav::gps_sat::NUM_SATS, U32, ""),
+    f(
+        "gnssId",
+        nav::gps_sat::SAT + nav::gps_sat_sv::GNSS_ID,
+        U8,
+        "",
+    ),
+    f("svId", nav::gps_sat::SAT + nav::gps_sat_sv::SV_ID, U8, ""),
+    f("cno", nav::gps_sat::SAT + nav::gps_sat_sv::CNO, U8, "dBHz"),
+];
+
 const MAGNETOMETER: &[FieldSpec] = &[
     f("time", nav::magnetometer::TIME, F64, "s"),
     f("mag", nav::magnetometer::MAG, F32x3, "normalized"),
@@ -446,7 +462,7 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 21] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 22] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
@@ -463,6 +479,7 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 21] = [
     (did::INS_4, "INS_4", INS_4),
     (did::GPS1_POS, "GPS1_POS", GPS_POS),
     (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
+    (did::GPS1_SAT, "GPS1_SAT", GPS_SAT),
     (did::MAGNETOMETER, "MAGNETOMETER", MAGNETOMETER),
     (did::BAROMETER, "BAROMETER", BAROMETER),
     (did::IMU_MAG, "IMU_MAG", IMU_MAG),
@@ -534,8 +551,8 @@ pub fn read(spec: &FieldSpec, b: &[u8]) -> Value {
 
 /// The device time a data set carries, in seconds: `time` (s since boot)
 /// of IMU, IMU_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER and
-/// SYS_SENSORS; the GPS time of week of INS_1..4 (`timeOfWeek`), GPS1_POS
-/// and GPS1_VEL (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
+/// SYS_SENSORS; the GPS time of week of INS_1..4 (`timeOfWeek`), GPS1_POS,
+/// GPS1_VEL and GPS1_SAT (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
 /// SYS_PARAMS. `None` for the others.
 pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
     match did {
@@ -551,6 +568,7 @@ pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
         did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => Some(le::f64(b, 4)),
         did::GPS1_POS => Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3),
         did::GPS1_VEL => Some(f64::from(le::u32(b, nav::gps_vel::TIME_OF_WEEK_MS)) / 1e3),
+        did::GPS1_SAT => Some(f64::from(le::u32(b, nav::gps_sat::TIME_OF_WEEK_MS)) / 1e3),
         did::STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),
         did::SYS_PARAMS => Some(f64::from(le::u32(b, sets::sys_params::TIME_OF_WEEK_MS)) / 1e3),
         _ => None,

@@ -17,8 +17,8 @@ use super::nav::{
     LEAP_SECONDS,
 };
 use super::nav_sets::{
-    gps_status, hdw_nav, ins_status, Barometer, GpsPos, GpsVel, Ins1, Ins2, Ins3, Ins4, InsHeader,
-    Magnetometer,
+    gps_status, hdw_nav, ins_status, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, GpsVel, Ins1,
+    Ins2, Ins3, Ins4, InsHeader, Magnetometer, MAX_NUM_SATELLITES,
 };
 use crate::math::double::{
     euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
@@ -111,6 +111,22 @@ pub const S_ACC_MPS: f32 = 0.09;
 pub const P_DOP: f32 = 1.2;
 /// Mean C/N0, dBHz.
 pub const CNO_MEAN: f32 = 42.0;
+/// The GPS satellites (PRNs) of the constellation model: the [`SATS`]
+/// GPS1_SAT lists while the receiver has a fix (`docs/isb.md` "GPS1_SAT").
+pub const SAT_PRNS: [u8; SATS as usize] = [2, 5, 7, 9, 13, 15, 18, 20, 24, 27, 29, 30];
+/// Their elevations, degrees (all above a receiver's 10° mask).
+pub const SAT_ELEV_DEG: [i8; SATS as usize] = [15, 72, 38, 22, 63, 46, 30, 80, 55, 25, 41, 58];
+/// Azimuths: the seed's bearing of the first satellite plus this spacing
+/// per satellite, degrees.
+pub const SAT_AZIM_STEP_DEG: i16 = 30;
+/// Largest C/N0 spread of a satellite from [`CNO_MEAN`], dBHz (drawn from
+/// the seed in ± pairs, so the mean is exactly [`CNO_MEAN`]).
+pub const SAT_CNO_SPREAD: i32 = 4;
+/// `gps_sat_sv_t.status` of a satellite in the solution: carrier locked,
+/// used, healthy.
+pub const SAT_STATUS_USED: u16 =
+    sat_status::QUALITY_CARRIER_LOCKED | sat_status::USED_IN_SOLUTION | sat_status::HEALTH_GOOD;
+
 /// A magnetic disturbance adds this field (normalized units, NED).
 pub const MAG_DISTURBANCE: [f64; 3] = [0.6, -0.4, 0.3];
 
@@ -393,6 +409,45 @@ impl NavState {
         ))
     }
 
+    /// GPS1_SAT of a receiver epoch `t` (`docs/isb.md` "GPS1_SAT"): with a
+    /// fix, the [`SATS`] satellites GPS1_POS counts as used, at fixed
+    /// elevations ([`SAT_ELEV_DEG`]), azimuths [`SAT_AZIM_STEP_DEG`] apart
+    /// from a bearing drawn from the seed, C/N0 [`CNO_MEAN`] ± a seed-drawn
+    /// pair offset (mean exactly [`CNO_MEAN`]); without a fix (before the
+    /// first, during an outage) no satellites.
+    pub fn gps_sat(&self, t: &GpsTime) -> GpsSat {
+        let mut sat = [GpsSatSv::default(); MAX_NUM_SATELLITES];
+        let n = if self.fixed { usize::from(SATS) } else { 0 };
+        let mut r = Rng::new(self.seed ^ 0x4753_4154);
+        let base = (r.uniform() * 360.0) as i16;
+        let mut spread = [0i32; SATS as usize / 2];
+        for d in &mut spread {
+            *d = (r.uniform() * (2 * SAT_CNO_SPREAD + 1) as f32) as i32 - SAT_CNO_SPREAD;
+        }
+        let half = spread.len();
+        for (i, sv) in sat.iter_mut().take(n).enumerate() {
+            let d = if i < half {
+                spread[i]
+            } else {
+                -spread[i - half]
+            };
+            let azim = (base + SAT_AZIM_STEP_DEG * i as i16) % 360;
+            *sv = GpsSatSv {
+                gnss_id: 1,
+                sv_id: SAT_PRNS[i],
+                elev: SAT_ELEV_DEG[i],
+                azim: if azim > 180 { azim - 360 } else { azim },
+                cno: (CNO_MEAN as i32 + d) as u8,
+                status: SAT_STATUS_USED,
+            };
+        }
+        GpsSat {
+            time_of_week_ms: t.tow_ms(),
+            num_sats: n as u32,
+            sat,
+        }
+    }
+
     /// White noise for sample `tick`, channel `ch`: the same whatever is
     /// streamed.
     fn noise(&self, tick: u64, ch: u64) -> f64 {
@@ -566,5 +621,39 @@ pub fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
         msl_bar: (-8434.668 * log(f64::from(p) / 101.325)) as f32,
         bar_temp: temp,
         humidity: HUMIDITY,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// GPS1_SAT is a function of the seed (and the fix) only: the same
+    /// seed gives the same records, another seed another bearing; none
+    /// before the fix.
+    #[test]
+    fn the_constellation_comes_from_the_seed() {
+        let truth = NavTruth {
+            lat_deg: 45.0,
+            lon_deg: 0.0,
+            h_m: 0.0,
+            v_ned: [0.0; 3],
+            q_nb: [1.0, 0.0, 0.0, 0.0],
+        };
+        let t = GpsTime {
+            week: 2399,
+            tow_ns: 1_000_000_000,
+        };
+        let fixed = |seed| {
+            let mut n = NavState::new(seed);
+            assert_eq!(n.gps_sat(&t).num_sats, 0);
+            n.step(COLD_START_S + 1.0, &truth);
+            n.gps_sat(&t)
+        };
+        let (a, b, c) = (fixed(11), fixed(11), fixed(12));
+        assert_eq!(a, b);
+        assert_eq!(a.num_sats, u32::from(SATS));
+        assert_ne!(a.sat[0].azim, c.sat[0].azim);
+        assert_eq!((a.time_of_week_ms, a.sat[0].sv_id), (1000, SAT_PRNS[0]));
     }
 }

@@ -135,6 +135,43 @@ crate::data_set! {
 }
 
 crate::data_set! {
+    /// `gps_sat_sv_t`, 8 bytes: one satellite of DID_GPS1_SAT.
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct GpsSatSv in mod gps_sat_sv, 8 bytes {
+        /// Constellation (`eSatSvGnssId`: 1 GPS, 2 SBAS, 3 Galileo, 4
+        /// BeiDou, 5 QZSS, 6 GLONASS, 7 NavIC, 8 IMES).
+        gnss_id: u8 = GNSS_ID @ 0,
+        /// Satellite number within the constellation.
+        sv_id: u8 = SV_ID @ 1,
+        /// Elevation, degrees (±90).
+        elev: i8 = ELEV @ 2,
+        /// Azimuth, degrees (±180).
+        azim: i16 = AZIM @ 3,
+        /// Carrier-to-noise density, dBHz.
+        cno: u8 = CNO @ 5,
+        /// [`sat_status`] bits (`eSatSvStatus`).
+        status: u16 = STATUS @ 6,
+    }
+}
+
+/// `MAX_NUM_SATELLITES`: entries of `gps_sat_t.sat`.
+pub const MAX_NUM_SATELLITES: usize = 50;
+
+crate::data_set! {
+    /// `gps_sat_t`, 408 bytes: DID_GPS1_SAT, the satellites the receiver
+    /// tracks (the first `num_sats` entries of `sat`; the rest zeros).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct GpsSat in mod gps_sat, 408 bytes {
+        /// GPS time of week of the receiver's epoch, ms.
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        /// Entries of `sat` in use.
+        num_sats: u32 = NUM_SATS @ 4,
+        /// The satellites.
+        sat: [GpsSatSv; MAX_NUM_SATELLITES] = SAT @ 8,
+    }
+}
+
+crate::data_set! {
     /// `magnetometer_t`, 20 bytes.
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Magnetometer in mod magnetometer, 20 bytes {
@@ -308,6 +345,23 @@ pub mod gps_status {
     pub const TIME_PPS_SYNC: u32 = 0x1000_0000;
 }
 
+/// `gps_sat_sv_t.status` (`eSatSvStatus`).
+pub mod sat_status {
+    /// Signal quality field (`eSatSigQuality`: 4 code locked, 5-7 code
+    /// and carrier locked).
+    pub const QUALITY_MASK: u16 = 0x0007;
+    /// Quality 7: code and carrier locked (the highest of 5-7).
+    pub const QUALITY_CARRIER_LOCKED: u16 = 7;
+    /// Used in the solution.
+    pub const USED_IN_SOLUTION: u16 = 0x0008;
+    /// Health field mask.
+    pub const HEALTH_MASK: u16 = 0x0030;
+    /// Health: good.
+    pub const HEALTH_GOOD: u16 = 0x0010;
+    /// Health: bad.
+    pub const HEALTH_BAD: u16 = 0x0020;
+}
+
 /// RMC bits and presets of the navigation data sets (`data_sets.h`
 /// `RMC_BITS_*`, `RMC_PRESET_*`).
 pub mod rmc_nav {
@@ -325,6 +379,8 @@ pub mod rmc_nav {
     pub const BITS_MAGNETOMETER: u64 = 0x80;
     /// DID_GPS1_POS.
     pub const BITS_GPS1_POS: u64 = 0x400;
+    /// DID_GPS1_SAT.
+    pub const BITS_GPS1_SAT: u64 = 0x4000;
     /// DID_GPS1_VEL.
     pub const BITS_GPS1_VEL: u64 = 0x10_0000;
     /// DID_IMU_MAG.

@@ -7,11 +7,11 @@ use crate::time::Instant;
 /// whole, as a device whose line is too slow would.
 pub const TX_CAP: usize = 2048;
 
-/// Largest frame a personality writes into the queue in one piece: an ISB
-/// FLASH_CONFIG packet with an offset (288 + 2 payload bytes + 8 of
-/// framing); the KERNEL's largest, a UDD frame, is 217 bytes (ICD Table
-/// 5.13), the ISB `$INFO` sentence at most 200.
-pub const MAX_FRAME: usize = 288 + 2 + 8;
+/// Largest frame a personality writes into the queue in one piece: the
+/// largest ISB data set (GPS1_SAT, 408 bytes) with an offset (+ 2 payload
+/// bytes + 8 of framing); the KERNEL's largest, a UDD frame, is 217 bytes
+/// (ICD Table 5.13), the ISB `$INFO` sentence at most 200.
+pub const MAX_FRAME: usize = crate::isb::did::MAX_SIZE + 2 + 8;
 
 /// The UART transmit queue: [`TX_CAP`] bytes (what [`TxRing::free`]
 /// counts) in a buffer [`MAX_FRAME`] bytes longer, so that a frame is always

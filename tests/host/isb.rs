@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use imu_emu::isb::did;
 
-use imu_emu::isb::nav_sets::{ins_status, GpsPos, GpsVel, Ins1, Ins2};
+use imu_emu::isb::nav_sets::{ins_status, GpsPos, GpsSat, GpsVel, Ins1, Ins2};
 use imu_emu::isb::sets::{flash, hdw_status, DevInfo, Imu, Pimu, SysParams};
 use support::{free_port, hex, isb_get, isb_packet, isb_packet_of, isb_set, Conn, Control, Emu};
 
@@ -445,4 +445,44 @@ fn a_manoeuvre_script_moves_the_ins() {
     let v = vel.unwrap().vel.map(f64::from);
     let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     assert!((speed - 50.0).abs() < 0.5, "{speed}");
+}
+
+/// GPS1_SAT over TCP at `--speed 20` (the real binary, its control
+/// socket): no satellites during the 30 s cold start, then the 12 used
+/// satellites every 1 s of GPS time; `fault gps off` empties the list.
+#[test]
+fn gps1_sat_over_tcp_with_an_outage() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&["--control", &addr, "--speed", "20"]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    c.send(&isb_get(did::GPS1_SAT, 1));
+    let sat =
+        |c: &mut Conn| GpsSat::decode(&isb_packet_of(c, did::GPS1_SAT).payload.try_into().unwrap());
+    let first = sat(&mut c);
+    assert_eq!(first.num_sats, 0, "no fix at power-on");
+    let mut fixed = Vec::new();
+    for _ in 0..60 {
+        let s = sat(&mut c);
+        if s.num_sats > 0 {
+            fixed.push(s);
+            if fixed.len() == 3 {
+                break;
+            }
+        }
+    }
+    assert_eq!(fixed.len(), 3, "satellites after the cold start");
+    for w in fixed.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 1000);
+    }
+    assert_eq!(fixed[2].num_sats, 12);
+    assert!(ctl.cmd("fault gps off").starts_with("ok"));
+    let mut empty = false;
+    for _ in 0..5 {
+        if sat(&mut c).num_sats == 0 {
+            empty = true;
+            break;
+        }
+    }
+    assert!(empty, "no satellites during the outage");
 }
