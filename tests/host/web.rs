@@ -360,7 +360,8 @@ fn ins_has_fix(status: u32) -> bool {
 /// (and hides them for KERNEL), each plot gets points and the INS plot
 /// advances in device time; the manoeuvre buttons and the `motion file`
 /// form are answered `ok`; "GPS outage" pressed on the page turns INS_2
-/// to dead reckoning and GPS1_POS to no fix on the wire (then the page's
+/// to dead reckoning at its next output (100 ms of device time after the
+/// last with a fix) and GPS1_POS to no fix on the wire (then the page's
 /// own GPS panel says so), and "GPS back" restores the fix.
 #[test]
 fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
@@ -431,19 +432,34 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
 
     // "GPS outage" on the page: on the wire INS_2 falls back to dead
     // reckoning and GPS1_POS reports no fix.
+    // Where that happens is fixed by device time: the first INS_2 in dead
+    // reckoning directly follows (one 100 ms output period later, by its
+    // own time fields) the last one with a fix: no stale fix is sent after
+    // the outage began.
     page.press("fault gps off");
-    let (mut dr, mut lost) = (false, false);
+    let (mut dr, mut lost) = (None, false);
+    let mut last_fix: Option<f64> = None;
     let deadline = Instant::now() + TIMEOUT;
-    while !(dr && lost) {
+    while dr.is_none() || !lost {
         assert!(
             Instant::now() < deadline,
             "the outage never reached the wire"
         );
         let p = isb_packet(&mut uart);
         match p.did {
-            did::INS_2 => {
-                let s = ins2(&p).header.ins_status;
-                dr |= ins_status::dead_reckoning(s) && s & ins_status::GPS_NAV_FIX_MASK == 0;
+            did::INS_2 if dr.is_none() => {
+                let h = ins2(&p).header;
+                if ins_has_fix(h.ins_status) {
+                    last_fix = Some(h.time_of_week);
+                } else {
+                    assert!(
+                        ins_status::dead_reckoning(h.ins_status),
+                        "{:#x}",
+                        h.ins_status
+                    );
+                    assert_eq!(h.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+                    dr = Some(h.time_of_week);
+                }
             }
             did::GPS1_POS => {
                 let g = GpsPos::decode(&p.payload.try_into().unwrap());
@@ -453,6 +469,8 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
             _ => {}
         }
     }
+    let (dr, last_fix) = (dr.unwrap(), last_fix.expect("an INS_2 with a fix first"));
+    assert!((dr - last_fix - 0.1).abs() < 1e-6, "{last_fix} then {dr}");
     page.wait_for("window.imuEmu.nav.gpsFix === 0");
     page.press("fault gps on");
     let deadline = Instant::now() + TIMEOUT;
