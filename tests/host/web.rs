@@ -359,7 +359,7 @@ fn ins_has_fix(status: u32) -> bool {
 /// magnetometer and the barometer: the page shows the navigation panels
 /// (and hides them for KERNEL), each plot gets points and the INS plot
 /// advances in device time; the manoeuvre buttons and the `motion file`
-/// form are answered `ok`; "GPS outage" pressed on the page turns INS_2
+/// form are answered `ok` and the truth plot climbs with the file; "GPS outage" pressed on the page turns INS_2
 /// to dead reckoning at its next output (100 ms of device time after the
 /// last with a fix) and GPS1_POS to no fix on the wire (then the page's
 /// own GPS panel says so), and "GPS back" restores the fix.
@@ -429,6 +429,11 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
         "window.imuEmu.lastReply === {}",
         json!(format!("motion file {} → ok", file.display()))
     ));
+    // The truth plot follows the file's climb: 6° of pitch 5 s + 2 s of
+    // device time after it started.
+    page.wait_for(
+        "(t => t.length > 0 && Math.abs(t[t.length - 1].pitch - 6) < 0.01)(window.imuEmu.truth)",
+    );
 
     // "GPS outage" on the page: on the wire INS_2 falls back to dead
     // reckoning and GPS1_POS reports no fix.
