@@ -2,10 +2,13 @@
 //! Debian's `chromium`, driven over the Chrome DevTools protocol. The page
 //! loads, its plot advances in device time, a fault button pressed on the
 //! page shows in the unit's status word on the wire, and a malformed
-//! command gets an HTTP error. `.ci/run` installs chromium when missing;
-//! without it this test fails (it never skips).
+//! command gets an HTTP error. For the IMX (`--protocol isb`) the
+//! navigation plots advance and the page's "GPS outage" shows in INS_2 and
+//! GPS1_POS on the wire. `.ci/run` installs chromium when missing; without
+//! it these tests fail (they never skip).
 //!
-//! `IMU_EMU_WEB_SCREENSHOT=docs/web-view.png` also saves a screenshot.
+//! `IMU_EMU_WEB_SCREENSHOT=docs/web-view.png` and
+//! `IMU_EMU_WEB_SCREENSHOT_IMX=docs/web-view-imx.png` also save screenshots.
 
 // Shared with the other host suites; not every helper is used here.
 #[allow(dead_code)]
@@ -16,8 +19,10 @@ use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use imu_emu::isb::did;
+use imu_emu::isb::nav_sets::{gps_status, ins_status, GpsPos, Ins2};
 use serde_json::{json, Value};
-use support::{Conn, Emu};
+use support::{isb_get, isb_packet, Conn, Emu};
 
 const TIMEOUT: Duration = Duration::from_secs(20);
 
@@ -226,6 +231,44 @@ fn base64(s: &str) -> Vec<u8> {
     out
 }
 
+/// The `web on URL` line among the emulator's first stdout lines.
+fn web_url(emu: &Emu, lines: usize) -> String {
+    let lines = emu.more_lines(lines);
+    lines
+        .iter()
+        .find_map(|l| l.strip_prefix("web on "))
+        .unwrap_or_else(|| panic!("no web line: {lines:?}"))
+        .to_owned()
+}
+
+/// A headless chromium showing `url`, once the page has decoded output.
+fn open(url: &str) -> (Browser, Page) {
+    let browser = Browser::start();
+    let mut page = browser.page();
+    page.call("Page.enable", json!({}));
+    page.call("Page.navigate", json!({"url": url}));
+    page.wait_for("typeof window.imuEmu === 'object' && window.imuEmu.lastT !== null");
+    (browser, page)
+}
+
+impl Page {
+    /// Clicks the button sending `cmd`; waits for the device's `ok`.
+    fn press(&mut self, cmd: &str) {
+        self.eval(&format!(
+            "document.querySelector('button[data-cmd=\"{cmd}\"]').click()"
+        ));
+        self.wait_for(&format!("window.imuEmu.lastReply === '{cmd} → ok'"));
+    }
+
+    /// Saves a PNG of the page to the path in `var`, if it is set.
+    fn screenshot_to(&mut self, var: &str) {
+        if let Ok(path) = std::env::var(var) {
+            let shot = self.call("Page.captureScreenshot", json!({"format": "png"}));
+            std::fs::write(&path, base64(shot["data"].as_str().unwrap())).unwrap();
+        }
+    }
+}
+
 /// The USW of a GA frame (ICD Table 5.7: payload bytes 26..28).
 fn usw(f: &support::Frame) -> u16 {
     u16::from_le_bytes([f.payload()[26], f.payload()[27]])
@@ -243,11 +286,7 @@ fn the_page_plots_the_output_and_its_fault_button_reaches_the_wire() {
         "--control",
         "127.0.0.1:0",
     ]);
-    let lines = emu.more_lines(2);
-    let web = lines[1]
-        .strip_prefix("web on ")
-        .unwrap_or_else(|| panic!("no web line: {lines:?}"))
-        .to_owned();
+    let web = web_url(&emu, 2);
     // A client on the UART: GA at 100 Hz, no fault yet.
     let mut uart = Conn::tcp(emu.addr());
     uart.send(&support::command(0x8F));
@@ -255,17 +294,18 @@ fn the_page_plots_the_output_and_its_fault_button_reaches_the_wire() {
     assert_eq!(first.payload().len(), 2, "the acknowledgement");
     assert_eq!(usw(&uart.frame_with_id(0x8F)), 0);
 
-    let browser = Browser::start();
-    let mut page = browser.page();
-    page.call("Page.enable", json!({}));
-    page.call("Page.navigate", json!({"url": web}));
-    page.wait_for("typeof window.imuEmu === 'object' && window.imuEmu.lastT !== null");
+    let (_browser, mut page) = open(&web);
     assert_eq!(
         page.eval("document.getElementById('identity').textContent"),
         Value::String(format!(
             "KERNEL-110-G2000-A40 · KERNEL · tcp {}",
             emu.addr()
         ))
+    );
+    // No IMX panels for a KERNEL unit.
+    assert_eq!(
+        page.eval("document.getElementById('nav').hidden"),
+        Value::Bool(true)
     );
     // The plot advances in device time.
     let t0 = page.eval("window.imuEmu.lastT").as_f64().unwrap();
@@ -300,17 +340,166 @@ fn the_page_plots_the_output_and_its_fault_button_reaches_the_wire() {
         Value::String("bad".into())
     );
 
-    if let Ok(path) = std::env::var("IMU_EMU_WEB_SCREENSHOT") {
+    if std::env::var("IMU_EMU_WEB_SCREENSHOT").is_ok() {
         // The fault off, some motion for the plots, then the picture.
         for cmd in ["fault comm off", "motion rotate 0 0 30"] {
-            page.eval(&format!(
-                "document.querySelector('button[data-cmd=\"{cmd}\"]').click()"
-            ));
-            page.wait_for(&format!("window.imuEmu.lastReply === '{cmd} → ok'"));
+            page.press(cmd);
         }
         std::thread::sleep(Duration::from_secs(4));
-        let shot = page.call("Page.captureScreenshot", json!({"format": "png"}));
-        let png = base64(shot["data"].as_str().unwrap());
-        std::fs::write(&path, png).unwrap();
+        page.screenshot_to("IMU_EMU_WEB_SCREENSHOT");
     }
+}
+
+/// The INS_2 insStatus has a GPS fix in it (NAV mode, `docs/isb.md`).
+fn ins_has_fix(status: u32) -> bool {
+    status & ins_status::GPS_NAV_FIX_MASK != 0 && !ins_status::dead_reckoning(status)
+}
+
+/// The IMX at `--speed 20` with a client streaming INS_2, GPS1_POS, the
+/// magnetometer and the barometer: the page shows the navigation panels
+/// (and hides them for KERNEL), each plot gets points and the INS plot
+/// advances in device time; the manoeuvre buttons and the `motion file`
+/// form are answered `ok` and the truth plot climbs with the file; "GPS outage" pressed on the page turns INS_2
+/// to dead reckoning at its next output (100 ms of device time after the
+/// last with a fix) and GPS1_POS to no fix on the wire (then the page's
+/// own GPS panel says so), and "GPS back" restores the fix.
+#[test]
+fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
+    let emu = Emu::tcp(&[
+        "--protocol",
+        "isb",
+        "--web",
+        "127.0.0.1:0",
+        "--seed",
+        "1",
+        "--speed",
+        "20",
+    ]);
+    let web = web_url(&emu, 1);
+    let mut uart = Conn::tcp(emu.addr());
+    // INS_2 every 100 ms, GPS1_POS every 200 ms, MAGNETOMETER and
+    // BAROMETER at 25 of their periods (docs/isb.md).
+    for (d, period) in [
+        (did::INS_2, 25),
+        (did::GPS1_POS, 1),
+        (did::MAGNETOMETER, 25),
+        (did::BAROMETER, 25),
+    ] {
+        uart.send(&isb_get(d, period));
+    }
+    // Past the 30 s cold start (device time): INS_2 navigates on a fix.
+    let mut navigating = false;
+    for _ in 0..5000 {
+        let p = isb_packet(&mut uart);
+        if p.did == did::INS_2 && ins_has_fix(ins2(&p).header.ins_status) {
+            navigating = true;
+            break;
+        }
+    }
+    assert!(navigating, "no INS_2 with a GPS fix");
+
+    let (_browser, mut page) = open(&web);
+    assert_eq!(
+        page.eval("document.getElementById('nav').hidden"),
+        Value::Bool(false)
+    );
+    assert_eq!(
+        page.eval("document.getElementById('identity').textContent.includes(' · ISB · tcp ')"),
+        Value::Bool(true)
+    );
+    page.wait_for(
+        "(n => n && n.ins > 0 && n.gps > 0 && n.mag > 0 && n.baro > 0 && n.gpsFix === 3)\
+         (window.imuEmu.nav)",
+    );
+    // The INS plot advances in device time (GPS seconds of the week).
+    let t0 = page.eval("window.imuEmu.nav.insT").as_f64().unwrap();
+    page.wait_for(&format!("window.imuEmu.nav.insT > {t0} + 1"));
+
+    // Manoeuvres through the page: a preset script and a script file.
+    page.press("motion script start 45 0 300 0 60; hold 5; coord-turn 3 60; hold 30");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("climb.txt");
+    std::fs::write(&file, "start 45 0 300 0 60\nhold 5\nclimb 6 30\n").unwrap();
+    page.eval(&format!(
+        "document.getElementById('motion-file').value = {}; \
+         document.querySelector('#file-form button').click()",
+        json!(file.to_str().unwrap())
+    ));
+    page.wait_for(&format!(
+        "window.imuEmu.lastReply === {}",
+        json!(format!("motion file {} → ok", file.display()))
+    ));
+    // The truth plot follows the file's climb: 6° of pitch 5 s + 2 s of
+    // device time after it started.
+    page.wait_for(
+        "(t => t.length > 0 && Math.abs(t[t.length - 1].pitch - 6) < 0.01)(window.imuEmu.truth)",
+    );
+
+    // "GPS outage" on the page: on the wire INS_2 falls back to dead
+    // reckoning and GPS1_POS reports no fix.
+    // Where that happens is fixed by device time: the first INS_2 in dead
+    // reckoning directly follows (one 100 ms output period later, by its
+    // own time fields) the last one with a fix: no stale fix is sent after
+    // the outage began.
+    page.press("fault gps off");
+    let (mut dr, mut lost) = (None, false);
+    let mut last_fix: Option<f64> = None;
+    let deadline = Instant::now() + TIMEOUT;
+    while dr.is_none() || !lost {
+        assert!(
+            Instant::now() < deadline,
+            "the outage never reached the wire"
+        );
+        let p = isb_packet(&mut uart);
+        match p.did {
+            did::INS_2 if dr.is_none() => {
+                let h = ins2(&p).header;
+                if ins_has_fix(h.ins_status) {
+                    last_fix = Some(h.time_of_week);
+                } else {
+                    assert!(
+                        ins_status::dead_reckoning(h.ins_status),
+                        "{:#x}",
+                        h.ins_status
+                    );
+                    assert_eq!(h.ins_status & ins_status::GPS_NAV_FIX_MASK, 0);
+                    dr = Some(h.time_of_week);
+                }
+            }
+            did::GPS1_POS => {
+                let g = GpsPos::decode(&p.payload.try_into().unwrap());
+                lost |= (g.status & gps_status::FIX_MASK) >> gps_status::FIX_SHIFT
+                    == gps_status::FIX_NONE;
+            }
+            _ => {}
+        }
+    }
+    let (dr, last_fix) = (dr.unwrap(), last_fix.expect("an INS_2 with a fix first"));
+    assert!((dr - last_fix - 0.1).abs() < 1e-6, "{last_fix} then {dr}");
+    page.wait_for("window.imuEmu.nav.gpsFix === 0");
+    page.press("fault gps on");
+    let deadline = Instant::now() + TIMEOUT;
+    loop {
+        assert!(Instant::now() < deadline, "the fix never came back");
+        let p = isb_packet(&mut uart);
+        if p.did == did::INS_2 && ins_has_fix(ins2(&p).header.ins_status) {
+            break;
+        }
+    }
+    page.wait_for("window.imuEmu.nav.gpsFix === 3");
+
+    if std::env::var("IMU_EMU_WEB_SCREENSHOT_IMX").is_ok() {
+        page.press("motion script start 45 0 300 0 60; hold 5; coord-turn 3 60; hold 30");
+        std::thread::sleep(Duration::from_secs(3));
+        // Tall enough for the navigation panels below the IMU plots.
+        page.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({"width": 1500, "height": 2150, "deviceScaleFactor": 1, "mobile": false}),
+        );
+        page.screenshot_to("IMU_EMU_WEB_SCREENSHOT_IMX");
+    }
+}
+
+fn ins2(p: &support::IsbPacket) -> Ins2 {
+    Ins2::decode(&p.payload.clone().try_into().unwrap())
 }

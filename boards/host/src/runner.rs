@@ -461,10 +461,19 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                 p.run(|cmd| self.apply(dev, cmd, at));
             }
             if w.publish_due() {
-                let truth = dev
-                    .chain()
-                    .truth_attitude()
-                    .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees));
+                // Heading, pitch, roll (deg): the vehicle's when a script,
+                // file, trajectory or feed plays (heading in [0, 360) like
+                // the built-in motion's), else the built-in motion's.
+                let truth = match dev.chain().vehicle_source() {
+                    Some(v) => {
+                        let [roll, pitch, yaw] = v.euler_rad().map(f64::to_degrees);
+                        Some([yaw.rem_euclid(360.0), pitch, roll].map(|x| x as f32))
+                    }
+                    None => dev
+                        .chain()
+                        .truth_attitude()
+                        .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
+                };
                 w.publish(self.status(dev), at.as_nanos(), truth);
             }
             self.web = Some(w);

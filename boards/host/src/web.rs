@@ -13,8 +13,9 @@
 //!   loop goes on. A closed or slow tab therefore costs the device nothing.
 //! - **The web thread** drains the ring, decodes the frames (the client's
 //!   decoders: [`crate::client::decode`], [`crate::client::isb`]), keeps
-//!   the last [`KEEP_POINTS`] points per device with their device time, and
-//!   answers the page's polls.
+//!   the last [`KEEP_POINTS`] points per device with their device time
+//!   (and, for ISB, their data set's name: field names repeat across sets),
+//!   and answers the page's polls.
 //! - **Commands**: `POST /api/command?dev=K` carries one control-socket
 //!   line. It is parsed here with the control socket's own parser
 //!   ([`control::parse`]): a malformed line gets HTTP 400 with the parser's
@@ -200,11 +201,13 @@ impl Tap {
     }
 }
 
-/// One decoded output frame: its sequence number, device time (s) and
-/// named values.
+/// One decoded output frame: its sequence number, device time (s), the
+/// ISB data set it came from (fields of several sets share names:
+/// `lla` is in INS_1..3 and GPS1_POS) and named values.
 struct Point {
     seq: u64,
     t: f64,
+    set: Option<&'static str>,
     values: Vec<(String, f64)>,
 }
 
@@ -277,7 +280,7 @@ impl View {
                         .iter()
                         .map(|(k, v)| ((*k).to_owned(), *v))
                         .collect();
-                    self.push(t, values);
+                    self.push(t, None, values);
                 }
             }
             Protocol::Isb => {
@@ -294,19 +297,21 @@ impl View {
                         continue;
                     };
                     let values = client::isb::numbers(did, b);
-                    self.push(t, values);
+                    let set = imu_emu::isb::fields::set(did).map(|(name, _)| name);
+                    self.push(t, set, values);
                 }
             }
         }
         (status, device_ns, on)
     }
 
-    fn push(&mut self, t: f64, values: Vec<(String, f64)>) {
+    fn push(&mut self, t: f64, set: Option<&'static str>, values: Vec<(String, f64)>) {
         self.seq += 1;
         self.frames += 1;
         self.points.push_back(Point {
             seq: self.seq,
             t,
+            set,
             values,
         });
         while self.points.len() > KEEP_POINTS {
@@ -608,17 +613,19 @@ fn state_json(protocol: Protocol, v: &mut View, since: u64, truth_since: u64) ->
     let points: Vec<String> = new[skip..]
         .iter()
         .map(|p| {
-            let vals: Vec<String> = p
-                .values
-                .iter()
-                .map(|(k, x)| format!("{}:{}", json_str(k), json_num(*x)))
-                .collect();
-            format!(
-                "{{\"seq\":{},\"t\":{},{}}}",
-                p.seq,
-                json_num(p.t),
-                vals.join(",")
-            )
+            // seq, t, the set (ISB), then the values: one list, so that a
+            // point with no values is still well-formed JSON.
+            let mut fields = vec![
+                format!("\"seq\":{}", p.seq),
+                format!("\"t\":{}", json_num(p.t)),
+            ];
+            fields.extend(p.set.map(|s| format!("\"set\":{}", json_str(s))));
+            fields.extend(
+                p.values
+                    .iter()
+                    .map(|(k, x)| format!("{}:{}", json_str(k), json_num(*x))),
+            );
+            format!("{{{}}}", fields.join(","))
         })
         .collect();
     let truth: Vec<String> = v
@@ -690,6 +697,23 @@ mod tests {
         assert!(h.slots[0].commands.lock().unwrap().is_empty());
         let r = call(&h, Post, "/api/command", true, "help");
         assert_eq!((r.0, r.2.starts_with("ok commands: help")), (200, true));
+    }
+
+    #[test]
+    fn isb_points_name_their_set_and_stay_json_without_values() {
+        let h = hub();
+        let mut v = View::new(Arc::clone(&h.slots[0]));
+        v.push(1.5, Some("INS_2"), vec![("lla_x".to_owned(), 45.0)]);
+        v.push(2.0, None, Vec::new());
+        let s: serde_json::Value =
+            serde_json::from_str(&state_json(Protocol::Isb, &mut v, 0, 0)).unwrap();
+        assert_eq!(
+            s["points"],
+            serde_json::json!([
+                {"seq": 1, "t": 1.5, "set": "INS_2", "lla_x": 45},
+                {"seq": 2, "t": 2}
+            ])
+        );
     }
 
     #[test]

@@ -19,6 +19,7 @@ const state = {
   lastT: null,
   lastReply: "",
   status: {},
+  nav: null, // IMX: counts of the navigation points held, last INS status and GPS fix
 };
 window.imuEmu = state;
 
@@ -100,7 +101,8 @@ function tick(y, step) {
   return y.toFixed(decimals);
 }
 
-function plot(canvas, title, yLabel, series, t1) {
+// `empty`: what the plot says when none of its series has a point.
+function plot(canvas, title, yLabel, series, t1, empty) {
   const ctx = canvas.getContext("2d");
   const W = canvas.width, H = canvas.height;
   const L = 64, R = 90, T = 24, B = 34;
@@ -132,6 +134,11 @@ function plot(canvas, title, yLabel, series, t1) {
     if (t >= 0) ctx.fillText(String(t), X(t), H - B + 14);
   }
   ctx.fillText("device time (s)", L + (W - L - R) / 2, H - 4);
+  if (empty && series.every((s) => !s.pts.length)) {
+    ctx.fillStyle = "#888";
+    ctx.fillText(empty, L + (W - L - R) / 2, T + (H - T - B) / 2);
+    ctx.fillStyle = "#222";
+  }
   ctx.save(); ctx.translate(12, T + (H - T - B) / 2); ctx.rotate(-Math.PI / 2); ctx.fillText(yLabel, 0, 0); ctx.restore();
   series.forEach((s, i) => {
     ctx.strokeStyle = COLORS[i % COLORS.length]; ctx.lineWidth = 1.5;
@@ -168,16 +175,83 @@ function draw() {
   const accs = series(state.points, xyz(u.acc[0]), ["X", "Y", "Z"]);
   // KERNEL: heading, pitch, roll (deg); IMX INS_1: theta = roll, pitch, yaw (rad).
   const att = state.protocol === "isb"
-    ? series(state.points.filter((p) => "theta_x" in p && "lla_x" in p).map((p) => ({
-        t: p.t, heading: p.theta_z * 180 / Math.PI, pitch: p.theta_y * 180 / Math.PI, roll: p.theta_x * 180 / Math.PI,
-      })), ["heading", "pitch", "roll"], ["yaw", "pitch", "roll"])
+    ? series(insEuler(state.points), ["heading", "pitch", "roll"], ["yaw", "pitch", "roll"])
     : series(state.points, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]);
   const truth = series(state.truth, ["heading", "pitch", "roll"], ["heading", "pitch", "roll"]);
-  plot($("plot-rate"), "Angular rate (sent)", "angular rate (" + u.rate[1] + ")", rates, lastOf(rates));
-  plot($("plot-acc"), "Acceleration (sent)", "specific force (" + u.acc[1] + ")", accs, lastOf(accs));
-  plot($("plot-att"), state.protocol === "isb" ? "Attitude (sent, INS_1)" : "Attitude (sent)", "angle (deg)", att, lastOf(att));
+  const imu = state.protocol === "isb" ? "not streamed: a client asks for IMU or IMU_RAW" : undefined;
+  plot($("plot-rate"), "Angular rate (sent)", "angular rate (" + u.rate[1] + ")", rates, lastOf(rates), imu);
+  plot($("plot-acc"), "Acceleration (sent)", "specific force (" + u.acc[1] + ")", accs, lastOf(accs), imu);
+  plot($("plot-att"), state.protocol === "isb" ? "Attitude (sent, INS_1/2/3)" : "Attitude (sent)", "angle (deg)", att, lastOf(att),
+    state.protocol === "isb" ? "not streamed: a client asks for INS_1, INS_2 or INS_3" : undefined);
   plot($("plot-truth"), "Attitude (truth)", "angle (deg)", truth, lastOf(truth));
+  if (state.protocol === "isb") drawNav();
   state.drawn += 1;
+}
+
+// IMX navigation sets (ISB, docs/isb.md; field names of data_sets.h).
+const DEG = 180 / Math.PI;
+const INS = new Set(["INS_1", "INS_2", "INS_3"]);
+const of = (sets) => state.points.filter((p) => sets.has(p.set));
+
+// Yaw, pitch, roll (deg) of INS_1's theta (roll, pitch, yaw, rad) or of
+// INS_2/3's qn2b (w, x, y, z: NED to body; ZYX Euler angles).
+function insEuler(points) {
+  return points.filter((p) => INS.has(p.set)).map((p) => {
+    if ("theta_x" in p) return { t: p.t, heading: p.theta_z * DEG, pitch: p.theta_y * DEG, roll: p.theta_x * DEG };
+    const [w, x, y, z] = [p.qn2b_w, p.qn2b_x, p.qn2b_y, p.qn2b_z];
+    return {
+      t: p.t,
+      heading: Math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * DEG,
+      pitch: Math.asin(Math.max(-1, Math.min(1, 2 * (w * y - z * x)))) * DEG,
+      roll: Math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * DEG,
+    };
+  });
+}
+
+// North, east, up (m) of lla_* from the first point of the plot's window
+// (the last WINDOW_S seconds; a local flat Earth, enough for a bench plot).
+function neu(all) {
+  if (!all.length) return [];
+  const t0 = all[all.length - 1].t - WINDOW_S;
+  const points = all.filter((p) => p.t >= t0);
+  const [lat0, lon0, h0] = [points[0].lla_x, points[0].lla_y, points[0].lla_z];
+  const mLat = 111132.954, mLon = 111319.49 * Math.cos(lat0 / DEG);
+  return points.map((p) => ({ t: p.t, n: (p.lla_x - lat0) * mLat, e: (p.lla_y - lon0) * mLon, u: p.lla_z - h0 }));
+}
+
+const hex = (x) => "0x" + (x >>> 0).toString(16).padStart(8, "0");
+const FIX = ["none", "dead reckoning", "2D", "3D", "GPS + DR", "time only"];
+
+function drawNav() {
+  const ins = of(INS);
+  const gps = of(new Set(["GPS1_POS"]));
+  const fixed = gps.filter((p) => ((p.status >>> 8) & 0x1f) !== 0);
+  const mag = of(new Set(["MAGNETOMETER", "IMU_MAG", "PIMU_MAG"]));
+  const baro = of(new Set(["BAROMETER"]));
+  const ask = (sets) => "not streamed: a client asks for " + sets;
+  const pos = series(neu(ins), ["n", "e", "u"], ["north", "east", "up"]);
+  plot($("plot-ins-pos"), "INS position (from the left edge)", "offset (m)", pos, lastOf(pos), ask("INS_1, INS_2 or INS_3"));
+  const vel = series(ins, ["uvw_x", "uvw_y", "uvw_z"], ["u (fwd)", "v (right)", "w (down)"]);
+  plot($("plot-ins-vel"), "INS velocity (body axes)", "velocity (m/s)", vel, lastOf(vel), ask("INS_1, INS_2 or INS_3"));
+  const gpos = series(neu(fixed), ["n", "e", "u"], ["north", "east", "up"]);
+  plot($("plot-gps-pos"), "GPS1 position (from the left edge)", "offset (m)", gpos, lastOf(gpos),
+    gps.length ? "no fix" : ask("GPS1_POS"));
+  const sats = series(gps.map((p) => ({ t: p.t, sats: p.satsUsed, fix: (p.status >>> 8) & 0x1f })), ["sats", "fix"], ["satellites", "fix type"]);
+  plot($("plot-gps-fix"), "GPS1 fix", "count / fix type", sats, lastOf(sats), ask("GPS1_POS"));
+  const m = series(mag, ["mag_x", "mag_y", "mag_z"], ["X", "Y", "Z"]);
+  plot($("plot-mag"), "Magnetometer", "field (normalized)", m, lastOf(m), ask("MAGNETOMETER"));
+  const bp = series(baro, ["bar"], ["pressure"]);
+  plot($("plot-baro-p"), "Barometer pressure", "pressure (kPa)", bp, lastOf(bp), ask("BAROMETER"));
+  const ba = series(baro, ["mslBar"], ["altitude"]);
+  plot($("plot-baro-alt"), "Barometer altitude (MSL)", "altitude (m)", ba, lastOf(ba), ask("BAROMETER"));
+  const t = $("nav-status");
+  t.replaceChildren();
+  const li = ins[ins.length - 1], lg = gps[gps.length - 1];
+  row(t, "INS status (insStatus)", li ? hex(li.insStatus) : "—");
+  const fix = lg ? (lg.status >>> 8) & 0x1f : null;
+  row(t, "GPS1 fix, satellites", lg ? (FIX[fix] || String(fix)) + ", " + lg.satsUsed : "—", lg && fix === 0);
+  state.nav = { ins: ins.length, gps: gps.length, gpsFix: fix, insStatus: li ? li.insStatus : null, mag: mag.length, baro: baro.length,
+    insT: li ? li.t : null };
 }
 
 // The newest points only (by count: sets of one unit may count time
@@ -215,6 +289,7 @@ async function start() {
   const r = await api("/api/devices");
   const d = JSON.parse(r.text);
   state.protocol = d.protocol;
+  $("nav").hidden = $("nav-controls").hidden = d.protocol !== "isb";
   $("help").textContent = "control commands: " + d.help;
   const sel = $("device");
   for (const x of d.devices) {
@@ -234,6 +309,7 @@ async function start() {
     ident();
   };
   for (const b of document.querySelectorAll("button[data-cmd]")) b.onclick = () => send(b.dataset.cmd);
+  $("file-form").onsubmit = (e) => { e.preventDefault(); const v = $("motion-file").value.trim(); if (v) send("motion file " + v); };
   $("cmd-form").onsubmit = (e) => { e.preventDefault(); const v = $("cmd").value.trim(); if (v) send(v); };
   poll();
 }
