@@ -8,6 +8,7 @@ import tempfile
 import time
 import unittest
 from importlib import metadata
+from pathlib import Path
 
 import imu_emu
 from imu_emu import isb, kernel
