@@ -136,10 +136,8 @@ impl FullStateRow {
             if n == layout.columns() {
                 return Err(RowError::WrongCount);
             }
-            v[n] = cell
-                .trim()
-                .parse::<f64>()
-                .ok()
+            // The feed's number parser: no `str::parse` tables in firmware.
+            v[n] = crate::math::decimal::parse(cell.trim())
                 .filter(|x| x.is_finite())
                 .ok_or(RowError::NotANumber)?;
             n += 1;
