@@ -8,7 +8,8 @@
 //! * **Text**: one sample a line in the `--trajectory` row format,
 //!   `time_s, wx, wy, wz, fx, fy, fz[, temp_c]` (s, °/s, g — at rest +1 g
 //!   along up, ICD 5.2.1 — and °C), `\n` ended. Blank lines, `#` comments
-//!   and a header naming the columns (`time,wx,…`) are skipped.
+//!   and a header naming the columns (`time,wx,…`) are skipped. After a
+//!   full-state header, full-state rows (below).
 //! * **Binary** ([`SYNC`], [`VERSION`], a kind, a body length, a device
 //!   index, time in ns, six or seven `f32`, a CRC-16/CCITT-FALSE): 41 or
 //!   45 bytes, for 2 kHz feeds over a UART.

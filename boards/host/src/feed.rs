@@ -249,7 +249,7 @@ enum Item {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FeedMotion {
     /// Rates and forces: the chain measures them
-    /// ([`imu_emu::chain::Motion::Sample`]).
+    /// ([`imu_emu::sensor::Motion::Sample`]).
     Rates(Truth),
     /// The vehicle: the chain measures its `truth()` and reports it.
     Vehicle(VehicleState),
