@@ -330,6 +330,45 @@ fn a_lockstep_full_state_feed_moves_the_vehicle_truth_and_the_ga_frames() {
     }
 }
 
+#[test]
+fn real_time_full_state_rows_hold_the_newest_state_until_rates_take_over() {
+    let (_emu, _c, mut ctl, feed) = start(&["--motion-feed", "127.0.0.1:0"]);
+    let mut f = TcpStream::connect(feed.strip_prefix("tcp ").unwrap()).unwrap();
+    f.write_all(
+        b"time,lat,lon,height,vn,ve,vd,roll,pitch,yaw,wx,wy,wz,fx,fy,fz\n\
+          0,45,7,300,10,0,0,0,0,0,0,0,20,0,0,-9.8\n\
+          1,45.0001,7,300,10,0,0,0,0,90,0,0,20,0,0,-9.8\n",
+    )
+    .unwrap();
+    let end = Instant::now() + TIMEOUT;
+    let t = loop {
+        let t = ctl.cmd("truth");
+        if word(&t, "source") == "feed" && word(&t, "yaw") != "0.000000" {
+            break t;
+        }
+        assert!(Instant::now() < end, "the second row did not apply: {t}");
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    // The newest row holds, with its own rates and forces.
+    assert!((num(&t, "lat") - 45.0001).abs() < 1e-9, "{t}");
+    assert!((num(&t, "vn") - 10.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "yaw") - 90.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "wz") - 20.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "fz") + 9.8).abs() < 1e-6, "{t}");
+    std::thread::sleep(Duration::from_millis(50));
+    assert!((num(&ctl.cmd("truth"), "lat") - 45.0001).abs() < 1e-9);
+    // A rate header, a rate row: rates and forces again.
+    f.write_all(b"time,wx,wy,wz,fx,fy,fz\n2,0,0,5,0,0,1\n")
+        .unwrap();
+    wait_status(&mut ctl, "feed-samples", "3");
+    let end = Instant::now() + TIMEOUT;
+    while word(&ctl.cmd("truth"), "source") != "sample" {
+        assert!(Instant::now() < end, "the rate row did not take over");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(word(&ctl.cmd("status"), "feed-rejected"), "0");
+}
+
 /// One lockstep run: GA started, then 400 samples 1 ms apart (a ramp of
 /// X), all sent at once; every byte the UART sends until it is quiet.
 fn lockstep_run() -> Vec<u8> {
