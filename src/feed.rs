@@ -51,8 +51,10 @@ pub const SYNC: [u8; 2] = [0xF5, 0xED];
 pub const VERSION: u8 = 1;
 /// The device index meaning "the device this feed belongs to".
 pub const OWN_DEVICE: u16 = 0xFFFF;
-/// Longest text line, bytes (without its `\n`).
-pub const MAX_LINE: usize = 160;
+/// Longest text line, bytes (without its `\n`): room for a 17-column
+/// full-state row (below the decoder's 256-byte buffer: a line is
+/// decided within it).
+pub const MAX_LINE: usize = 240;
 /// Largest binary body (byte 4), bytes: room for a full-state kind.
 pub const MAX_BODY: u8 = 128;
 /// Bytes before the body: sync, version, kind, body length.
@@ -990,8 +992,17 @@ mod tests {
         // vehicle module's.
         assert_eq!(&v[7..], [Err(OutOfRange), Err(OutOfRange)]);
         assert!(d.layout().is_some_and(|l| l.rates_forces && l.temperature));
+        // A long row of that layout still fits a line.
+        let long = "9.123456789,-45.123456789012,-170.123456789012,1234.5678901,\
+                    -10.1234567,20.1234567,-1.12345678,-1.12345678,2.12345678,\
+                    -179.123456,-12.3456789,23.4567891,-34.5678912,1.23456789,\
+                    -2.34567891,-9.80665432,25.125";
+        assert!(long.len() > 200 && long.len() <= MAX_LINE, "{}", long.len());
+        let mut w = Vec::new();
+        d.decode(format!("{long}\n").as_bytes(), &mut |r| w.push(r));
+        assert!(matches!(w[..], [Ok(Sample::FullState(_))]), "{w:?}");
         let c = d.counts();
-        assert_eq!((c.samples, c.rejected_total()), (4, 5));
+        assert_eq!((c.samples, c.rejected_total()), (5, 5));
         assert_eq!(c.rejected[Malformed as usize], 2);
     }
 
