@@ -110,7 +110,7 @@ fn a_tcp_feed_moves_the_gyros_and_bad_samples_are_counted_by_reason() {
     f.write_all(b"garbage\n").unwrap();
     f.write_all(&bad).unwrap();
     // After a bad frame the decoder skips to a line end or a sync.
-    f.write_all(b"\n0.005,0,0,0,0,0,1\n0.03,5000,0,0,0,0,1\n")
+    f.write_all(b"\n0.005,0,0,0,0,0,1\n0.03,9000,0,0,0,0,1\n")
         .unwrap();
     f.write_all(&sample(7, 0.04, [0.0, 0.0, 0.0])).unwrap();
     f.write_all(b"0.05, 0, 0, 20, 0, 0, 1, 30\n").unwrap();
