@@ -154,6 +154,12 @@ def main():
     bad[20] ^= 1
     write("feed", "mixed", seed + b"0.0,1,1,1,0,0,1\n0.0001,1" + feed.encode_sample(0.0002, (0, 0, 9), (0, 0, 1))
           + bytes(bad) + b"\ngarbage\n")
+    write("feed", "full_state", seed + b"time,lat,lon,height,vn,ve,vd,roll,pitch,yaw\n"
+          + b"0.0,45,7,300,10,0,0,0,30,0\n0.01,45.0000009,7,300,10,0,0,0,30,0.1\n"
+          + b"0.02,95,7,300,10,0,0,0,30,0.2\n0.03,45,7\n"
+          + b"time,lat,lon,height,vn,ve,vd,roll,pitch,yaw,wx,wy,wz,fx,fy,fz,temp\n"
+          + b"0.04,45,7,300,10,0,0,0,30,0.4,0,0,10,0,0,-9.8,25\n"
+          + b"time,wx,wy,wz,fx,fy,fz\n0.05,1,2,3,0,0,1\n")
 
 
 if __name__ == "__main__":

@@ -8,7 +8,8 @@
 //! * **Text**: one sample a line in the `--trajectory` row format,
 //!   `time_s, wx, wy, wz, fx, fy, fz[, temp_c]` (s, °/s, g — at rest +1 g
 //!   along up, ICD 5.2.1 — and °C), `\n` ended. Blank lines, `#` comments
-//!   and a header naming the columns (`time,wx,…`) are skipped.
+//!   and a header naming the columns (`time,wx,…`) are skipped. After a
+//!   full-state header, full-state rows (below).
 //! * **Binary** ([`SYNC`], [`VERSION`], a kind, a body length, a device
 //!   index, time in ns, six or seven `f32`, a CRC-16/CCITT-FALSE): 41 or
 //!   45 bytes, for 2 kHz feeds over a UART.
@@ -28,19 +29,21 @@
 //! and interpolates linearly between the two (what lockstep needs: device
 //! time never passes the newest sample's time).
 //!
-//! **Extension point (full state).** [`Sample`] is an enum so that a
-//! full-state sample (position, velocity, attitude: the vehicle truth)
-//! can be added as a variant beside [`Sample::Rates`] without changing
-//! the rate path: binary kind [`kind::FULL_STATE`] and a text header whose
-//! columns name `lat` are reserved for it and rejected today as
-//! [`Reject::UnsupportedKind`]. Adding it: a variant, its body length in
-//! [`body_len`], its decoding in `decode_binary` / a text mode set by its
-//! header, and a consumer in the boards.
+//! **Full-state rows.** A text header naming the full-state columns
+//! (`time,lat,lon,height,vn,ve,vd,roll,pitch,yaw[,wx,…,fz][,temp]`, the
+//! header of a `--motion` full-state CSV,
+//! [`FullStateLayout::from_header`]) switches the stream's text rows to
+//! full-state rows ([`Sample::FullState`]), parsed by the vehicle module's
+//! [`FullStateRow::parse`]; a rate header (`time,wx,…`) switches back. A
+//! binary full-state kind ([`kind::FULL_STATE`]) stays reserved:
+//! rejected as [`Reject::UnsupportedKind`].
 
 use crc::{Crc, NoTable, CRC_16_IBM_3740};
 
+use crate::math::decimal::parse as parse_number;
 use crate::sensor::motion::{TRUTH_FORCE_LIMIT_G, TRUTH_RATE_LIMIT_DPS};
 use crate::sensor::Truth;
+use crate::vehicle::{FullStateLayout, FullStateRow, RowError, G_ICD};
 
 /// The two bytes a binary sample starts with (never in text: not ASCII).
 pub const SYNC: [u8; 2] = [0xF5, 0xED];
@@ -48,8 +51,10 @@ pub const SYNC: [u8; 2] = [0xF5, 0xED];
 pub const VERSION: u8 = 1;
 /// The device index meaning "the device this feed belongs to".
 pub const OWN_DEVICE: u16 = 0xFFFF;
-/// Longest text line, bytes (without its `\n`).
-pub const MAX_LINE: usize = 160;
+/// Longest text line, bytes (without its `\n`): room for a 17-column
+/// full-state row (below the decoder's 256-byte buffer: a line is
+/// decided within it).
+pub const MAX_LINE: usize = 240;
 /// Largest binary body (byte 4), bytes: room for a full-state kind.
 pub const MAX_BODY: u8 = 128;
 /// Bytes before the body: sync, version, kind, body length.
@@ -72,7 +77,8 @@ pub mod kind {
     pub const RATES: u8 = 1;
     /// Angular rate, specific force and sensor temperature: seven `f32`.
     pub const RATES_TEMP: u8 = 2;
-    /// Reserved for the full vehicle state (module docs): rejected today.
+    /// Reserved for the full vehicle state (module docs): rejected as
+    /// [`super::Reject::UnsupportedKind`]; full-state samples are text rows.
     pub const FULL_STATE: u8 = 3;
 }
 
@@ -101,13 +107,27 @@ pub struct RateSample {
     pub truth: Truth,
 }
 
-/// A decoded sample (see the module docs for the full-state extension
-/// point).
+/// One full-state sample: a text row after a full-state header (module
+/// docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FullStateSample {
+    /// The device it is for (text rows: [`OWN_DEVICE`]).
+    pub device: u16,
+    /// Its time, ns (`row.time_s` rounded to the ns).
+    pub time_ns: u64,
+    /// The row: position, velocity, attitude, and the rates, forces and
+    /// temperature if its header names them.
+    pub row: FullStateRow,
+}
+
+/// A decoded sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum Sample {
     /// Body rates and specific forces (text rows, kinds 1 and 2).
     Rates(RateSample),
+    /// The vehicle's full state (text rows after a full-state header).
+    FullState(FullStateSample),
 }
 
 impl Sample {
@@ -115,6 +135,7 @@ impl Sample {
     pub fn device(&self) -> u16 {
         match self {
             Sample::Rates(s) => s.device,
+            Sample::FullState(s) => s.device,
         }
     }
 
@@ -122,6 +143,7 @@ impl Sample {
     pub fn time_ns(&self) -> u64 {
         match self {
             Sample::Rates(s) => s.time_ns,
+            Sample::FullState(s) => s.time_ns,
         }
     }
 }
@@ -129,7 +151,8 @@ impl Sample {
 /// Why a sample was rejected (counted in [`Counts`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Reject {
-    /// A text line that is not 7 or 8 numbers (or a torn line, garbage).
+    /// A text line that is not 7 or 8 numbers — after a full-state header,
+    /// not its columns' count of numbers — or a torn line, garbage.
     Malformed = 0,
     /// A text line longer than [`MAX_LINE`].
     LineTooLong,
@@ -140,12 +163,13 @@ pub enum Reject {
     Checksum,
     /// A binary version other than [`VERSION`].
     UnsupportedVersion,
-    /// A kind this build does not take (the full state, for now).
+    /// A binary kind this build does not take (the reserved full state).
     UnsupportedKind,
     /// A value out of range: time negative or beyond [`MAX_TIME_S`], a
     /// rate beyond ±[`TRUTH_RATE_LIMIT_DPS`] (8192 °/s), a force beyond
     /// ±128 g, a temperature
-    /// outside [`TEMPERATURE_RANGE_C`], or not finite.
+    /// outside [`TEMPERATURE_RANGE_C`], or not finite; in a full-state
+    /// row also the vehicle module's ranges ([`RowError::OutOfRange`]).
     OutOfRange,
     /// A time not after the device's previous sample ([`Track`]).
     NonIncreasing,
@@ -218,6 +242,8 @@ pub struct Decoder {
     /// Discarding the rest of a rejected line or frame (no second
     /// rejection) up to a `\n` or a sync.
     skipping: bool,
+    /// The layout of text rows: `Some` after a full-state header.
+    layout: Option<FullStateLayout>,
     counts: Counts,
 }
 
@@ -245,11 +271,18 @@ impl Decoder {
             buf: [0; BUF],
             len: 0,
             skipping: false,
+            layout: None,
             counts: Counts {
                 samples: 0,
                 rejected: [0; REJECTS],
             },
         }
+    }
+
+    /// The layout text rows are read in: `Some` after a full-state header
+    /// (module docs), `None` for rate rows.
+    pub fn layout(&self) -> Option<FullStateLayout> {
+        self.layout
     }
 
     /// Decoded samples and the decoder's rejections so far.
@@ -357,7 +390,7 @@ impl Decoder {
     fn text(&mut self) -> Front {
         match self.line_end(1, MAX_LINE + 1) {
             None => Front::Wait,
-            Some((i, true)) => match parse_line(&self.buf[..i]) {
+            Some((i, true)) => match parse_line(&self.buf[..i], &mut self.layout) {
                 None => Front::Skip(i + 1),
                 Some(r) => Front::Done(i + 1, r, false),
             },
@@ -454,9 +487,9 @@ fn checked(device: u16, time_ns: u64, truth: Truth) -> Result<Sample, Reject> {
     }))
 }
 
-/// One text line (without `\n`): `None` for a line that is skipped
-/// (blank, comment, the rate header).
-fn parse_line(line: &[u8]) -> Option<Result<Sample, Reject>> {
+/// One text line (without `\n`) in `layout` (a header changes it):
+/// `None` for a line that is skipped (blank, comment, a header).
+fn parse_line(line: &[u8], layout: &mut Option<FullStateLayout>) -> Option<Result<Sample, Reject>> {
     let Ok(line) = core::str::from_utf8(line) else {
         return Some(Err(Reject::Malformed));
     };
@@ -464,11 +497,18 @@ fn parse_line(line: &[u8]) -> Option<Result<Sample, Reject>> {
     if line.is_empty() || line.starts_with('#') {
         return None;
     }
+    if let Some(l) = *layout {
+        // A header's first cell is a word: not a number.
+        return match full_state(line, &l) {
+            Err(None) => header(line, layout),
+            r => Some(r.map_err(|e| e.unwrap_or(Reject::Malformed))),
+        };
+    }
     let mut v = [0f64; 8];
     let mut n = 0;
     for cell in line.split(',').map(str::trim) {
         let Some(x) = parse_number(cell) else {
-            return header(line);
+            return header(line, layout);
         };
         if n == v.len() {
             return Some(Err(Reject::Malformed));
@@ -492,88 +532,42 @@ fn parse_line(line: &[u8]) -> Option<Result<Sample, Reject>> {
     Some(checked(OWN_DEVICE, time_ns, truth))
 }
 
-/// Exact powers of ten in `f64` (10²² is the last one).
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
-
-/// A decimal number (`-12.5`, `3e-4`, `.5`, `+7`): at most 19 significant
-/// digits are kept (the rest only scale), then `digits × 10^exp` —
-/// correctly rounded while both fit the exact `f64` range (≤ 2⁵³,
-/// |exp| ≤ 22), within a few ulps beyond. Not `str::parse::<f64>`: its
-/// tables cost 15 KiB of an MCU's flash, and a feed's values are `f32`
-/// anyway. `None` for anything else (`inf`, `NaN`, a header word).
-fn parse_number(s: &str) -> Option<f64> {
-    let b = s.as_bytes();
-    let (neg, mut i) = match b.first() {
-        Some(b'-') => (true, 1),
-        Some(b'+') => (false, 1),
-        _ => (false, 0),
-    };
-    let (mut m, mut exp, mut digits, mut kept) = (0u64, 0i32, 0u32, 0u32);
-    let mut dot = false;
-    while let Some(&c) = b.get(i) {
-        match c {
-            b'0'..=b'9' => {
-                digits += 1;
-                if kept < 19 {
-                    if m > 0 || c != b'0' {
-                        kept += 1;
-                    }
-                    m = m * 10 + u64::from(c - b'0');
-                    exp -= i32::from(dot);
-                } else {
-                    exp += i32::from(!dot);
-                }
-            }
-            b'.' if !dot => dot = true,
-            _ => break,
-        }
-        i += 1;
+/// A full-state row in `layout`, by the vehicle module's parser; given
+/// rates and forces must also be within the feed's limits. `Err(None)`: a
+/// cell is not a number (maybe a header).
+fn full_state(line: &str, layout: &FullStateLayout) -> Result<Sample, Option<Reject>> {
+    let row = FullStateRow::parse(line, layout).map_err(|e| match e {
+        RowError::OutOfRange => Some(Reject::OutOfRange),
+        RowError::WrongCount => Some(Reject::Malformed),
+        RowError::NotANumber => None,
+    })?;
+    let within =
+        |v: &Option<[f64; 3]>, lim: f64| v.is_none_or(|v| v.iter().all(|x| x.abs() <= lim));
+    if row.time_s > MAX_TIME_S
+        || !within(&row.rate_dps, f64::from(TRUTH_RATE_LIMIT_DPS))
+        || !within(&row.force_mps2, f64::from(TRUTH_FORCE_LIMIT_G) * G_ICD)
+        || row.temperature_c.is_some_and(|t| {
+            let (lo, hi) = TEMPERATURE_RANGE_C;
+            !(lo..=hi).contains(&t)
+        })
+    {
+        return Err(Some(Reject::OutOfRange));
     }
-    if digits == 0 {
-        return None;
-    }
-    if let Some(b'e' | b'E') = b.get(i) {
-        i += 1;
-        let (eneg, start) = match b.get(i) {
-            Some(b'-') => (true, i + 1),
-            Some(b'+') => (false, i + 1),
-            _ => (false, i),
-        };
-        i = start;
-        let mut e = 0i32;
-        while let Some(&c @ b'0'..=b'9') = b.get(i) {
-            e = (e * 10 + i32::from(c - b'0')).min(10_000);
-            i += 1;
-        }
-        if i == start {
-            return None;
-        }
-        exp += if eneg { -e } else { e };
-    }
-    if i != b.len() {
-        return None;
-    }
-    let mut v = m as f64;
-    let mut e = exp;
-    while e > 0 && v != 0.0 && v.is_finite() {
-        let k = e.min(22);
-        v *= POW10[k as usize];
-        e -= k;
-    }
-    while e < 0 && v != 0.0 {
-        let k = (-e).min(22);
-        v /= POW10[k as usize];
-        e += k;
-    }
-    Some(if neg { -v } else { v })
+    Ok(Sample::FullState(FullStateSample {
+        device: OWN_DEVICE,
+        time_ns: libm::round(row.time_s * 1e9) as u64,
+        row,
+    }))
 }
 
-/// A line that is not all numbers: the rate header (skipped), the
-/// full-state header (reserved), or malformed.
-fn header(line: &str) -> Option<Result<Sample, Reject>> {
+/// A line that is not all numbers: a full-state header (text rows become
+/// full-state rows), the rate header (rate rows again; both skipped), or
+/// malformed.
+fn header(line: &str, layout: &mut Option<FullStateLayout>) -> Option<Result<Sample, Reject>> {
+    if let Some(l) = FullStateLayout::from_header(line) {
+        *layout = Some(l);
+        return None;
+    }
     let mut cells = line.split(',').map(str::trim);
     if !cells
         .next()
@@ -583,15 +577,13 @@ fn header(line: &str) -> Option<Result<Sample, Reject>> {
     }
     let mut n = 1;
     for c in cells {
-        if c.eq_ignore_ascii_case("lat") || c.eq_ignore_ascii_case("lat_deg") {
-            return Some(Err(Reject::UnsupportedKind));
-        }
         if c.is_empty() || !c.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_') {
             return Some(Err(Reject::Malformed));
         }
         n += 1;
     }
     if n == 7 || n == 8 {
+        *layout = None;
         None
     } else {
         Some(Err(Reject::Malformed))
@@ -921,7 +913,7 @@ mod tests {
             (b"0,0,0,0,0,0,1,NaN\n", Malformed),
             (b"0,0,0,0,0,0,1,1e40\n", OutOfRange),
             (b"1e300,0,0,0,0,0,1\n", OutOfRange),
-            (b"time,lat,lon,h,vn,ve,vd,roll,pitch,yaw\n", UnsupportedKind),
+            (b"time,lat,lon,h,vn,ve,vd,roll,pitch,yaw\n", Malformed),
             (b"\xff\xfe,1\n", Malformed),
         ] {
             assert_eq!(all(line), [Err(why)], "{:?}", core::str::from_utf8(line));
@@ -947,6 +939,97 @@ mod tests {
         let mut f = bin(&rs(0, 5, 9999.0, None));
         assert_eq!(all(&f), [Err(OutOfRange)]);
         f.clear();
+    }
+
+    const FULL_HEADER: &str = "time,lat,lon,height,vn,ve,vd,roll,pitch,yaw";
+
+    #[test]
+    fn a_full_state_header_switches_the_rows_and_a_rate_header_back() {
+        use Reject::*;
+        let mut d = Decoder::new();
+        let mut v = Vec::new();
+        let text = format!(
+            "0.5,0,0,0,0,0,1\n{FULL_HEADER}\n\
+             1.25, 45.5, 7, 300, 10, 0, -1, 0, 5, 90\n\
+             2,0,0,0,0,0,1\n\
+             3,95,7,300,10,0,-1,0,5,90\n\
+             4,45,7,300,10,0,-1,0,5,inf\n\
+             time_s,wx,wy,wz,fx,fy,fz\n\
+             5,0,0,0,0,0,1\n\
+             {FULL_HEADER},wx,wy,wz,fx,fy,fz,temp\n\
+             6,45,7,300,0,0,0,0,0,0,1,2,3,0,0,-9.8,25\n\
+             7,45,7,300,0,0,0,0,0,0,9000,2,3,0,0,-9.8,25\n\
+             8,45,7,300,0,0,0,0,0,0,1,2,3,0,0,-1300,25\n"
+        );
+        d.decode(text.as_bytes(), &mut |r| v.push(r));
+        assert_eq!(v.len(), 9, "{v:?}");
+        assert!(matches!(v[0], Ok(Sample::Rates(_))));
+        let Ok(Sample::FullState(f)) = v[1] else {
+            panic!("{:?}", v[1])
+        };
+        assert_eq!(f.device, OWN_DEVICE);
+        assert_eq!(f.time_ns, 1_250_000_000);
+        assert_eq!(
+            (f.row.lat_deg, f.row.lon_deg, f.row.height_m),
+            (45.5, 7.0, 300.0)
+        );
+        assert_eq!(f.row.vel_ned, [10.0, 0.0, -1.0]);
+        assert_eq!(f.row.euler_deg, [0.0, 5.0, 90.0]);
+        assert_eq!((f.row.rate_dps, f.row.temperature_c), (None, None));
+        // A rate row is no full-state row: only a header switches back.
+        assert_eq!(v[2], Err(Malformed));
+        assert_eq!(v[3], Err(OutOfRange));
+        assert_eq!(v[4], Err(Malformed));
+        assert_eq!(v[5].map(|s| s.time_ns()), Ok(5_000_000_000));
+        assert!(matches!(v[5], Ok(Sample::Rates(_))));
+        let Ok(Sample::FullState(f)) = v[6] else {
+            panic!("{:?}", v[6])
+        };
+        assert_eq!(f.row.rate_dps, Some([1.0, 2.0, 3.0]));
+        assert_eq!(f.row.force_mps2, Some([0.0, 0.0, -9.8]));
+        assert_eq!(f.row.temperature_c, Some(25.0));
+        // Beyond the feed's limits (8192 °/s, 128 g) though within the
+        // vehicle module's.
+        assert_eq!(&v[7..], [Err(OutOfRange), Err(OutOfRange)]);
+        assert!(d.layout().is_some_and(|l| l.rates_forces && l.temperature));
+        // A long row of that layout still fits a line.
+        let long = "9.123456789,-45.123456789012,-170.123456789012,1234.5678901,\
+                    -10.1234567,20.1234567,-1.12345678,-1.12345678,2.12345678,\
+                    -179.123456,-12.3456789,23.4567891,-34.5678912,1.23456789,\
+                    -2.34567891,-9.80665432,25.125";
+        assert!(long.len() > 200 && long.len() <= MAX_LINE, "{}", long.len());
+        let mut w = Vec::new();
+        d.decode(format!("{long}\n").as_bytes(), &mut |r| w.push(r));
+        assert!(matches!(w[..], [Ok(Sample::FullState(_))]), "{w:?}");
+        let c = d.counts();
+        assert_eq!((c.samples, c.rejected_total()), (5, 5));
+        assert_eq!(c.rejected[Malformed as usize], 2);
+    }
+
+    #[test]
+    fn full_state_rows_decode_alike_in_any_chunking() {
+        let mut b = format!("{FULL_HEADER}\n0,45,7,300,10,0,0,0,0,0\n").into_bytes();
+        b.extend(bin(&rs(2, 500_000_000, 3.0, None)));
+        b.extend_from_slice(b"1,45.0001,7,300,10,0,0,0,0,0\n1.5,45,7\n");
+        let whole = all(&b);
+        assert_eq!(whole.len(), 4, "{whole:?}");
+        assert!(matches!(whole[0], Ok(Sample::FullState(_))));
+        assert!(matches!(whole[1], Ok(Sample::Rates(_))));
+        assert!(matches!(whole[2], Ok(Sample::FullState(_))));
+        assert_eq!(whole[3], Err(Reject::Malformed));
+        for cut in 1..b.len() {
+            let mut d = Decoder::new();
+            let mut v = Vec::new();
+            d.decode(&b[..cut], &mut |r| v.push(r));
+            d.decode(&b[cut..], &mut |r| v.push(r));
+            assert_eq!(v, whole, "cut at {cut}");
+        }
+        let mut d = Decoder::new();
+        let mut v = Vec::new();
+        for byte in &b {
+            d.decode(core::slice::from_ref(byte), &mut |r| v.push(r));
+        }
+        assert_eq!(v, whole);
     }
 
     #[test]
@@ -1026,6 +1109,14 @@ mod tests {
             )
             .into_bytes()),
             proptest::collection::vec(any::<u8>(), 0..80),
+            Just(format!("{FULL_HEADER}\n").into_bytes()),
+            Just(b"time,wx,wy,wz,fx,fy,fz\n".to_vec()),
+            (0u32..100_000, -80i32..80).prop_map(|(t, lat)| format!(
+                "{}.{:03},{lat},7,300,10,0,0,0,0,90\n",
+                t / 1000,
+                t % 1000
+            )
+            .into_bytes()),
             Just(vec![0xF5, 0xED]),
             Just(b"\n".to_vec()),
         ];

@@ -25,7 +25,8 @@ fn feed_all(
 
 /// Live motion feed decoder (`imu_emu::feed`, docs/feed.md): the same
 /// samples and rejections one shot, byte by byte and in pseudo-random
-/// chunks; the counts match them; every sample is in range and its binary
+/// chunks; the counts match them; every sample is in range (full-state
+/// rows too) and a rate sample's binary
 /// encoding decodes to itself; a [`imu_emu::feed::Track`] and a
 /// [`imu_emu::feed::Live`] take them, in and out of order, without panic,
 /// and interpolate within the two samples' values.
@@ -49,6 +50,12 @@ pub fn feed(data: &[u8]) {
     let mut track = Track::new();
     let mut live = Live::new(1_000_000);
     for (k, s) in one.iter().flatten().enumerate() {
+        if let Sample::FullState(f) = s {
+            // The vehicle module's ranges and the feed's time limit.
+            let r = &f.row;
+            assert!(r.lat_deg.abs() <= 89.9 && r.time_s <= 1.8e9, "{r:?}");
+            assert_eq!(f.time_ns, (r.time_s * 1e9).round() as u64);
+        }
         let Sample::Rates(r) = s else { continue };
         let t = &r.truth;
         assert!(t.rate_dps.iter().all(|v| v.abs() <= 8192.0));

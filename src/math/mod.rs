@@ -9,9 +9,11 @@
 //!   of ICD Appendix C and their conversions, in `f32` and in Q30.
 //! - [`fixed`]: the Q-format integer arithmetic of the `fixed-point` build.
 //! - [`units`]: g and the fixed-point scales of the sensor signals.
+//! - [`decimal`]: decimal numbers in text, without `str::parse`.
 //! - [`double`]: `f64` vectors, quaternions and rotation matrices of the
 //!   vehicle truth and the navigation outputs.
 
+pub mod decimal;
 pub mod double;
 pub mod fixed;
 pub mod rotation;

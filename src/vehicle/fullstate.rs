@@ -1,5 +1,6 @@
 //! Full-state rows: the vehicle given sample by sample (a file for
-//! `--motion`, later a live feed), parsed sans-IO, and the state between
+//! `--motion`, or the live feed's rows after a full-state header:
+//! `crate::feed`, docs/feed.md), parsed sans-IO, and the state between
 //! two rows (docs/motion.md, "Full-state CSV").
 //!
 //! A header line names the columns and so the layout:
@@ -136,10 +137,8 @@ impl FullStateRow {
             if n == layout.columns() {
                 return Err(RowError::WrongCount);
             }
-            v[n] = cell
-                .trim()
-                .parse::<f64>()
-                .ok()
+            // The feed's number parser: no `str::parse` tables in firmware.
+            v[n] = crate::math::decimal::parse(cell.trim())
                 .filter(|x| x.is_finite())
                 .ok_or(RowError::NotANumber)?;
             n += 1;

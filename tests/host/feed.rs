@@ -204,17 +204,180 @@ fn a_silent_feed_is_an_imx_imu_status_fault() {
     }
 }
 
-/// One lockstep run: GA started, then 400 samples 1 ms apart (a ramp of
-/// X), all sent at once; every byte the UART sends until it is quiet.
-fn lockstep_run() -> Vec<u8> {
-    let (_emu, mut c, mut ctl, feed) = start(&[
+/// Waits until `status` says `key=value`.
+fn wait_status(ctl: &mut Control, key: &str, value: &str) -> String {
+    let end = Instant::now() + TIMEOUT;
+    loop {
+        let s = ctl.cmd("status");
+        if word(&s, key) == value {
+            return s;
+        }
+        assert!(Instant::now() < end, "no {key}={value}: {s}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Every byte the UART sends until it is quiet (lockstep: device time
+/// stays at the last sample's).
+fn until_quiet(c: &mut Conn) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    while let Some(f) = c.frame_before(Instant::now() + Duration::from_millis(300)) {
+        bytes.extend(f.bytes);
+    }
+    bytes
+}
+
+/// A unit in lockstep at `--speed max` and its TCP feed's address.
+fn start_lockstep() -> (Emu, Conn, Control, SocketAddr) {
+    let (emu, c, ctl, feed) = start(&[
         "--motion-feed",
         "127.0.0.1:0",
         "--lockstep",
         "--speed",
         "max",
     ]);
-    let addr: SocketAddr = feed.strip_prefix("tcp ").unwrap().parse().unwrap();
+    let addr = feed.strip_prefix("tcp ").unwrap().parse().unwrap();
+    (emu, c, ctl, addr)
+}
+
+/// The number after `key=` in a reply.
+fn num(reply: &str, key: &str) -> f64 {
+    word(reply, key)
+        .parse()
+        .unwrap_or_else(|_| panic!("{key} not a number in {reply}"))
+}
+
+/// GA acc (Table 5.7): X, Y, Z in 1e-6 g at 12, 16, 20.
+fn acc(p: &[u8]) -> [f64; 3] {
+    [12, 16, 20].map(|i| f64::from(i32_at(p, i)) * 1e-6)
+}
+
+#[test]
+fn a_lockstep_full_state_feed_moves_the_vehicle_truth_and_the_ga_frames() {
+    let (_emu, mut c, mut ctl, addr) = start_lockstep();
+    // The command is read as device time moves (its bytes are paced on
+    // it): GA starts within the first samples.
+    c.send(&command(GA));
+    // 10 m/s north at 45° N, 300 m, pitched up 30° and yawing at 10 °/s
+    // (level flight: the nose turns, the path does not), a row every
+    // 10 ms for 0.5 s. The WGS84 meridian radius (NIMA TR8350.2 eq. 4-18)
+    // turns the speed into degrees of latitude a second.
+    let (a, e2) = (6_378_137.0, 6.694_379_990_14e-3);
+    let s2 = 45f64.to_radians().sin().powi(2);
+    let m = a * (1.0 - e2) / (1.0 - e2 * s2).powf(1.5);
+    let dlat = (10.0 / (m + 300.0)).to_degrees();
+    let mut text = String::from("time,lat,lon,height,vn,ve,vd,roll,pitch,yaw\n");
+    for k in 0..=50 {
+        let t = f64::from(k) * 0.01;
+        text.push_str(&format!(
+            "{t:.2},{:.12},7,300,10,0,0,0,30,{:.3}\n",
+            45.0 + dlat * t,
+            10.0 * t
+        ));
+    }
+    // Rejected and counted, device time does not move: a row short of
+    // columns, a latitude beyond 89.9°.
+    text.push_str("0.6,45,7,300\n0.61,95,7,300,10,0,0,0,30,6\n");
+    let mut f = TcpStream::connect(addr).unwrap();
+    f.write_all(text.as_bytes()).unwrap();
+    let s = wait_status(&mut ctl, "feed-samples", "51");
+    let s = if word(&s, "feed-rejected") == "2" {
+        s
+    } else {
+        wait_status(&mut ctl, "feed-rejected", "2")
+    };
+    assert_eq!(word(&s, "feed-rejected-malformed"), "1", "{s}");
+    assert_eq!(word(&s, "feed-rejected-out-of-range"), "1", "{s}");
+    let bytes = until_quiet(&mut c);
+    let t = ctl.cmd("truth");
+    assert_eq!(word(&t, "source"), "feed", "{t}");
+    assert!((num(&t, "time") - 0.5).abs() < 1e-3, "{t}");
+    assert!((num(&t, "lat") - (45.0 + dlat * 0.5)).abs() < 1e-8, "{t}");
+    assert!((num(&t, "lon") - 7.0).abs() < 1e-9, "{t}");
+    assert!((num(&t, "height") - 300.0).abs() < 1e-3, "{t}");
+    assert!((num(&t, "vn") - 10.0).abs() < 1e-3, "{t}");
+    assert!(
+        num(&t, "ve").abs() < 1e-3 && num(&t, "vd").abs() < 1e-3,
+        "{t}"
+    );
+    assert!((num(&t, "pitch") - 30.0).abs() < 1e-3, "{t}");
+    assert!((num(&t, "yaw") - 5.0).abs() < 1e-3, "{t}");
+    assert!(ctl.cmd("status").contains(" truth-source=feed "));
+    // Body FRD: ω = (−ψ' sin θ, 0, ψ' cos θ) = (−5, 0, 8.66) °/s; f = g
+    // (sin θ, 0, −cos θ). Housing (X right, Y forward, Z up): gyro (0, −5,
+    // −8.66) °/s, acc (0, 0.5, 0.866) × γ/g₀, γ = 9.8053 m/s² the normal
+    // gravity there, g₀ = 9.8106 (ICD 5.2.1). Earth and transport rates
+    // (< 0.003 °/s) are within the tolerance. Frames from 0.1 s on (the
+    // filters settled), by their 2 kHz counters, averaged.
+    let mut c = Conn::new(Box::new(std::io::Cursor::new(bytes)));
+    assert_eq!(c.frame().id(), GA, "the ack");
+    let (mut w, mut f, mut n) = ([0.0; 3], [0.0; 3], 0.0);
+    while let Some(fr) = c.frame_before(Instant::now()) {
+        let p = fr.payload();
+        if fr.id() != GA || p.len() < 28 || u16::from_le_bytes([p[24], p[25]]) < 200 {
+            continue;
+        }
+        for i in 0..3 {
+            w[i] += gyro(p)[i];
+            f[i] += acc(p)[i];
+        }
+        n += 1.0;
+    }
+    // 100 Hz: 40 frames (the first may be late by the command's line time).
+    assert!(n >= 39.0, "{n} GA frames from 0.1 s to 0.5 s");
+    let (w, f) = (w.map(|x| x / n), f.map(|x| x / n));
+    let k = 9.8053 / 9.8106;
+    for (got, want) in w.iter().zip([0.0, -5.0, -10.0 * 30f64.to_radians().cos()]) {
+        assert!((got - want).abs() < 0.1, "gyro {w:?}");
+    }
+    for (got, want) in f.iter().zip([0.0, 0.5 * k, 30f64.to_radians().cos() * k]) {
+        assert!((got - want).abs() < 0.003, "acc {f:?}");
+    }
+}
+
+#[test]
+fn real_time_full_state_rows_hold_the_newest_state_until_rates_take_over() {
+    let (_emu, _c, mut ctl, feed) = start(&["--motion-feed", "127.0.0.1:0"]);
+    let mut f = TcpStream::connect(feed.strip_prefix("tcp ").unwrap()).unwrap();
+    f.write_all(
+        b"time,lat,lon,height,vn,ve,vd,roll,pitch,yaw,wx,wy,wz,fx,fy,fz\n\
+          0,45,7,300,10,0,0,0,0,0,0,0,20,0,0,-9.8\n\
+          1,45.0001,7,300,10,0,0,0,0,90,0,0,20,0,0,-9.8\n",
+    )
+    .unwrap();
+    let end = Instant::now() + TIMEOUT;
+    let t = loop {
+        let t = ctl.cmd("truth");
+        if word(&t, "source") == "feed" && word(&t, "yaw") != "0.000000" {
+            break t;
+        }
+        assert!(Instant::now() < end, "the second row did not apply: {t}");
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    // The newest row holds, with its own rates and forces.
+    assert!((num(&t, "lat") - 45.0001).abs() < 1e-9, "{t}");
+    assert!((num(&t, "vn") - 10.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "yaw") - 90.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "wz") - 20.0).abs() < 1e-6, "{t}");
+    assert!((num(&t, "fz") + 9.8).abs() < 1e-6, "{t}");
+    std::thread::sleep(Duration::from_millis(50));
+    assert!((num(&ctl.cmd("truth"), "lat") - 45.0001).abs() < 1e-9);
+    // A rate header, a rate row: rates and forces again.
+    f.write_all(b"time,wx,wy,wz,fx,fy,fz\n2,0,0,5,0,0,1\n")
+        .unwrap();
+    wait_status(&mut ctl, "feed-samples", "3");
+    let end = Instant::now() + TIMEOUT;
+    while word(&ctl.cmd("truth"), "source") != "sample" {
+        assert!(Instant::now() < end, "the rate row did not take over");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(word(&ctl.cmd("status"), "feed-rejected"), "0");
+}
+
+/// One lockstep run: GA started, then 400 samples 1 ms apart (a ramp of
+/// X), all sent at once; every byte the UART sends until it is quiet.
+fn lockstep_run() -> Vec<u8> {
+    let (_emu, mut c, mut ctl, addr) = start_lockstep();
     c.send(&command(GA));
     // Device time stands still until the first sample: wait until the
     // command was taken (the monitor counts it) so it applies at time 0.
@@ -240,13 +403,9 @@ fn lockstep_run() -> Vec<u8> {
         assert!(Instant::now() < end, "not every sample was taken");
         std::thread::sleep(Duration::from_millis(5));
     }
-    let mut bytes = Vec::new();
     // Device time is at 0.4 s and stays there: the line's last bytes are
     // out once nothing more comes.
-    while let Some(f) = c.frame_before(Instant::now() + Duration::from_millis(300)) {
-        bytes.extend(f.bytes);
-    }
-    bytes
+    until_quiet(&mut c)
 }
 
 #[test]

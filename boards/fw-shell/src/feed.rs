@@ -78,6 +78,8 @@ impl FeedIn {
                 Sample::Rates(s) if s.device == OWN_DEVICE || s.device == 0 => {
                     live.offer(s.time_ns, s.truth, now_ns)
                 }
+                // Full-state rows are a host feed's (docs/feed.md).
+                Sample::FullState(_) => Err(Reject::UnsupportedKind),
                 _ => Err(Reject::WrongDevice),
             });
             counts.note(r);

@@ -502,6 +502,22 @@ fn ga_x_and_usw(tx: &[(u64, u8)], skip: usize) -> Vec<(f64, u16)> {
         .collect()
 }
 
+/// Full-state rows are a host feed's (docs/feed.md): the firmware counts
+/// them as `kind` and takes nothing.
+#[test]
+fn full_state_rows_are_rejected_as_kind() {
+    use imu_emu::feed::Reject;
+    let mut feed = feed::FeedIn::default();
+    feed.on_bytes(
+        b"time,lat,lon,height,vn,ve,vd,roll,pitch,yaw\n0,45,7,300,0,0,0,0,0,0\n",
+        0,
+    );
+    let c = feed.counts();
+    assert_eq!(c.rejected[Reject::UnsupportedKind as usize], 1);
+    assert_eq!((c.samples, c.rejected_total()), (0, 1));
+    assert_eq!(feed.at(1).0, None);
+}
+
 /// The feed UART: binary samples (split anywhere) move the gyros from the
 /// next service; silence beyond the timeout sets USW bit 1 (sensor
 /// communication failure), the last sample holding; a sample clears it.

@@ -16,6 +16,14 @@
 //!   the last two ([`imu_emu::feed::Track`]); nothing else moves it.
 //!   The same feed and seed give the same output bytes.
 //!
+//! Full-state rows (after a full-state header, `docs/feed.md`) drive the
+//! unit's vehicle ([`imu_emu::chain::SignalChain::set_vehicle`]) instead of
+//! its rates and forces: in real time the newest row's state holds, its
+//! rates and forces the row's own or, without them, derived from the last
+//! two rows at the newest ([`fullstate::between`]); in lockstep the state
+//! moves between the last two rows as a `--motion` full-state CSV plays
+//! ([`fullstate::sample`]). `truth` and `status` then report it.
+//!
 //! A TCP feed takes one client at a time (a new one replaces the old, with
 //! a fresh decoder); UDP takes each datagram as a whole (a `\n` is added
 //! after one that does not end a line). Every sample and rejection is
@@ -30,6 +38,7 @@ use std::os::fd::AsFd;
 
 use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, OWN_DEVICE};
 use imu_emu::sensor::Truth;
+use imu_emu::vehicle::{fullstate, FullStateRow, VehicleState};
 use nix::poll::{PollFd, PollFlags};
 
 /// Default `--feed-timeout`, s.
@@ -227,6 +236,54 @@ pub struct FeedConfig {
     pub timeout_ns: u64,
 }
 
+/// What a sample carries, queued or held.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Item {
+    /// Body rates and specific forces.
+    Rates(Truth),
+    /// The vehicle's full state.
+    Full(FullStateRow),
+}
+
+/// What the feed gives a tick (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FeedMotion {
+    /// Rates and forces: the chain measures them
+    /// ([`imu_emu::sensor::Motion::Sample`]).
+    Rates(Truth),
+    /// The vehicle: the chain measures its `truth()` and reports it.
+    Vehicle(VehicleState),
+}
+
+impl FeedMotion {
+    /// The rates and forces the chain measures.
+    pub fn truth(&self) -> Truth {
+        match self {
+            FeedMotion::Rates(t) => *t,
+            FeedMotion::Vehicle(s) => s.truth(),
+        }
+    }
+}
+
+/// Full-state rows as lockstep plays them: the newest two since the
+/// stream switched to full states, and the time of the last tick (the
+/// mean since then is measured, as for a `--motion` file).
+#[derive(Debug, Clone, Default)]
+struct FullTrack {
+    rows: Vec<FullStateRow>,
+    last_s: f64,
+}
+
+/// Full-state rows in real time: the newest row, its state, the device
+/// time it arrived at and the state the last tick applied.
+#[derive(Debug, Clone, Default)]
+struct FullLive {
+    row: Option<FullStateRow>,
+    newest: Option<VehicleState>,
+    arrived_ns: Option<u64>,
+    applied: Option<VehicleState>,
+}
+
 /// One device's feed: its samples, counters and fault (module docs).
 #[derive(Debug, Clone)]
 pub struct FeedState {
@@ -236,13 +293,18 @@ pub struct FeedState {
     /// Whether samples naming no device ([`OWN_DEVICE`]) are this
     /// device's (its own feed) or rejected (a shared feed).
     own: bool,
-    /// Lockstep: the newest two samples the device reached.
+    /// Lockstep: the newest two rate samples the device reached.
     track: Track,
+    /// Lockstep: the full-state rows; `Some` while the newest sample
+    /// reached is a full state.
+    full: Option<FullTrack>,
+    /// Real time: the full-state rows (the rest is in `live`).
+    full_live: FullLive,
     /// Real time: the samples as they arrive, the fault.
     live: Live,
     counts: Counts,
     /// Samples waiting for the device to reach their time (lockstep).
-    pending: VecDeque<(u64, Truth)>,
+    pending: VecDeque<(u64, Item)>,
     /// Host time of the newest sample (status in lockstep).
     last_host: Option<std::time::Instant>,
     label: String,
@@ -257,6 +319,8 @@ impl FeedState {
             device,
             own,
             track: Track::new(),
+            full: None,
+            full_live: FullLive::default(),
             live: Live::new(cfg.timeout_ns),
             counts: Counts::default(),
             pending: VecDeque::new(),
@@ -293,14 +357,13 @@ impl FeedState {
                 return Err(Reject::WrongDevice);
             }
             match s {
-                Sample::Rates(s) => Ok((s.time_ns, s.truth)),
-                // Future kinds (the full state) are not decoded yet.
-                #[allow(unreachable_patterns)]
+                Sample::Rates(s) => Ok((s.time_ns, Item::Rates(s.truth))),
+                Sample::FullState(s) => Ok((s.time_ns, Item::Full(s.row))),
                 _ => Err(Reject::UnsupportedKind),
             }
         });
         let r = match r {
-            Ok((t, truth)) if self.cfg.lockstep => {
+            Ok((t, item)) if self.cfg.lockstep => {
                 // Checked against the newest queued time, taken in order.
                 let newest = self
                     .pending
@@ -310,11 +373,11 @@ impl FeedState {
                 if newest.is_some_and(|n| t <= n) {
                     Err(Reject::NonIncreasing)
                 } else {
-                    self.pending.push_back((t, truth));
+                    self.pending.push_back((t, item));
                     Ok(())
                 }
             }
-            Ok((t, truth)) => self.live.offer(t, truth, now_ns),
+            Ok((t, item)) => self.offer_live(t, item, now_ns),
             Err(e) => Err(e),
         };
         match r {
@@ -324,6 +387,30 @@ impl FeedState {
         self.counts.note(r);
     }
 
+    /// Real time: a sample arrived at device time `now_ns`. A full state
+    /// holds with the rates and forces its row gives, else those of the
+    /// way from the previous full-state row to it, at its end.
+    fn offer_live(&mut self, t: u64, item: Item, now_ns: u64) -> Result<(), Reject> {
+        let (truth, full) = match item {
+            Item::Rates(truth) => (truth, None),
+            Item::Full(row) => {
+                let state = match &self.full_live.row {
+                    Some(prev) if prev.time_s < row.time_s => {
+                        fullstate::between(prev, &row, row.time_s)
+                    }
+                    _ => row.held(row.time_s),
+                };
+                (state.truth(), Some((row, state)))
+            }
+        };
+        self.live.offer(t, truth, now_ns)?;
+        let f = &mut self.full_live;
+        f.row = full.map(|(row, _)| row);
+        f.newest = full.map(|(_, state)| state);
+        f.arrived_ns = Some(now_ns);
+        Ok(())
+    }
+
     /// Lockstep: the time of the next queued sample, if any.
     pub fn next_time(&self) -> Option<u64> {
         self.pending.front().map(|p| p.0)
@@ -331,20 +418,62 @@ impl FeedState {
 
     /// Lockstep: makes the next queued sample the newest; its time.
     pub fn advance(&mut self) -> Option<u64> {
-        let (t, truth) = self.pending.pop_front()?;
-        // Queued in increasing order: accepted.
-        let _ = self.track.accept(t, truth);
+        let (t, item) = self.pending.pop_front()?;
+        match item {
+            Item::Rates(truth) => {
+                if self.full.take().is_some() {
+                    // No interpolation across the full states between.
+                    self.track = Track::new();
+                }
+                // Queued in increasing order: accepted.
+                let _ = self.track.accept(t, truth);
+            }
+            Item::Full(row) => {
+                let full = self.full.get_or_insert_with(|| FullTrack {
+                    rows: Vec::with_capacity(2),
+                    last_s: row.time_s,
+                });
+                if full.rows.len() == 2 {
+                    full.rows.remove(0);
+                }
+                full.rows.push(row);
+            }
+        }
         Some(t)
     }
 
-    /// The truth of the tick at `deadline_ns` (`None`: no sample yet, the
+    /// The motion of the tick at `deadline_ns` (`None`: no sample yet, the
     /// device's own motion goes on), and whether the feed is lost then.
-    pub fn at(&mut self, deadline_ns: u64) -> (Option<Truth>, bool) {
+    pub fn at(&mut self, deadline_ns: u64) -> (Option<FeedMotion>, bool) {
+        let now_s = deadline_ns as f64 * 1e-9;
         if self.cfg.lockstep {
-            return (self.track.at(deadline_ns), false);
+            if let Some(full) = self.full.as_mut() {
+                let state = fullstate::sample(&full.rows, full.last_s, now_s);
+                full.last_s = full.last_s.max(now_s);
+                return (
+                    state.map(|mut s| {
+                        s.time_s = now_s;
+                        FeedMotion::Vehicle(s)
+                    }),
+                    false,
+                );
+            }
+            return (self.track.at(deadline_ns).map(FeedMotion::Rates), false);
         }
         let was = self.live.lost();
         let (truth, lost) = self.live.at(deadline_ns);
+        // The same rule as `Live::at`: the newest applies from its arrival.
+        let f = &mut self.full_live;
+        if f.arrived_ns.is_some_and(|a| deadline_ns >= a) {
+            f.applied = f.newest;
+        }
+        let motion = match f.applied {
+            Some(mut s) => {
+                s.time_s = now_s;
+                Some(FeedMotion::Vehicle(s))
+            }
+            None => truth.map(FeedMotion::Rates),
+        };
         if lost != was {
             if lost {
                 eprintln!(
@@ -360,7 +489,17 @@ impl FeedState {
                 );
             }
         }
-        (truth, lost)
+        (motion, lost)
+    }
+
+    /// Whether the feed's newest applied sample is a full state (the
+    /// `truth` source is then `feed`).
+    pub fn drives_vehicle(&self) -> bool {
+        if self.cfg.lockstep {
+            self.full.is_some()
+        } else {
+            self.full_live.applied.is_some()
+        }
     }
 
     /// `status` words: `feed-clock`, `feed-samples`, `feed-age-ms`
@@ -425,12 +564,12 @@ mod tests {
         assert_eq!(f.at(0), (None, false));
         f.offer(sample(OWN_DEVICE, 5, 1.0), 1_000);
         assert_eq!(f.at(500).0, None);
-        assert_eq!(f.at(1_000).0.unwrap().rate_dps[0], 1.0);
+        assert_eq!(f.at(1_000).0.unwrap().truth().rate_dps[0], 1.0);
         f.offer(sample(0, 6, 2.0), 1_500);
-        assert_eq!(f.at(1_400).0.unwrap().rate_dps[0], 1.0);
+        assert_eq!(f.at(1_400).0.unwrap().truth().rate_dps[0], 1.0);
         assert_eq!(f.at(2_000), (f.at(2_000).0, false));
         assert!(f.at(2_600_000).1);
-        assert_eq!(f.at(2_600_000).0.unwrap().rate_dps[0], 2.0);
+        assert_eq!(f.at(2_600_000).0.unwrap().truth().rate_dps[0], 2.0);
         f.offer(sample(0, 6, 3.0), 2_600_000);
         f.offer(sample(1, 7, 3.0), 2_600_000);
         assert_eq!(f.counts().rejected[Reject::NonIncreasing as usize], 1);
@@ -440,6 +579,68 @@ mod tests {
         assert!(f
             .status(3_000_000)
             .contains("feed-samples=3 feed-age-ms=0 feed-lost=0"));
+    }
+
+    fn full(t_s: f64, lat: f64, vn: f64) -> Result<Sample, Reject> {
+        let layout = imu_emu::vehicle::FullStateLayout::default();
+        let row = FullStateRow::parse(&format!("{t_s},{lat},7,300,{vn},0,0,0,0,0"), &layout);
+        Ok(Sample::FullState(imu_emu::feed::FullStateSample {
+            device: OWN_DEVICE,
+            time_ns: (t_s * 1e9).round() as u64,
+            row: row.unwrap(),
+        }))
+    }
+
+    fn vehicle(m: Option<FeedMotion>) -> VehicleState {
+        match m {
+            Some(FeedMotion::Vehicle(s)) => s,
+            m => panic!("{m:?}"),
+        }
+    }
+
+    #[test]
+    fn real_time_full_states_hold_with_rates_derived_from_the_last_two() {
+        let cfg = FeedConfig {
+            lockstep: false,
+            timeout_ns: 1_000_000_000,
+        };
+        let mut f = FeedState::new(cfg, 0, true, "");
+        f.offer(full(1.0, 45.0, 0.0), 1_000);
+        let a = vehicle(f.at(2_000).0);
+        assert!((a.time_s - 2e-6).abs() < 1e-15);
+        assert_eq!(a.vel_ned, [0.0; 3]);
+        assert!(f.drives_vehicle());
+        // From rest to 10 m/s north in 1 s: ~1 m/s² forward, held.
+        f.offer(full(2.0, 45.00005, 10.0), 3_000);
+        assert_eq!(vehicle(f.at(2_500).0).vel_ned, a.vel_ned);
+        let b = vehicle(f.at(5_000).0);
+        assert_eq!(b.vel_ned, [10.0, 0.0, 0.0]);
+        assert!((b.lat_rad.to_degrees() - 45.00005).abs() < 1e-12);
+        assert!(b.force_b[0] > 1.0, "{:?}", b.force_b);
+        assert_eq!(vehicle(f.at(9_000).0).force_b, b.force_b);
+        // A rate sample takes over again.
+        f.offer(sample(OWN_DEVICE, 3_000_000_000, 4.0), 10_000);
+        assert_eq!(f.at(10_000).0.unwrap().truth().rate_dps[0], 4.0);
+        assert!(!f.drives_vehicle());
+    }
+
+    #[test]
+    fn lockstep_full_states_move_between_the_last_two() {
+        let cfg = FeedConfig {
+            lockstep: true,
+            timeout_ns: 1,
+        };
+        let mut f = FeedState::new(cfg, 0, true, "");
+        // 10 m/s north: 1 s is about 1.11e-4 ° of latitude at 45°.
+        let dlat = 10.0 / 111_132.0;
+        f.offer(full(1.0, 45.0, 10.0), 0);
+        f.offer(full(2.0, 45.0 + dlat, 10.0), 0);
+        assert_eq!(f.advance(), Some(1_000_000_000));
+        assert_eq!(f.advance(), Some(2_000_000_000));
+        let mid = vehicle(f.at(1_500_000_000).0);
+        assert_eq!(mid.time_s, 1.5);
+        assert!((mid.lat_rad.to_degrees() - (45.0 + dlat / 2.0)).abs() < 1e-7);
+        assert!((mid.vel_ned[0] - 10.0).abs() < 0.05, "{:?}", mid.vel_ned);
     }
 
     #[test]
@@ -457,7 +658,7 @@ mod tests {
         assert_eq!(f.advance(), Some(1_000));
         assert_eq!(f.next_time(), Some(2_000));
         assert_eq!(f.advance(), Some(2_000));
-        assert_eq!(f.at(1_500).0.unwrap().rate_dps[0], 5.0);
+        assert_eq!(f.at(1_500).0.unwrap().truth().rate_dps[0], 5.0);
         assert!(!f.at(1_500).1);
         assert_eq!(f.advance(), None);
     }

@@ -274,6 +274,8 @@ impl<T: Transport> HostPort<T> {
             "trajectory"
         } else if let Some(v) = &self.vehicle {
             v.kind()
+        } else if self.feed.as_ref().is_some_and(FeedState::drives_vehicle) {
+            "feed"
         } else {
             match chain.core_motion() {
                 Motion::Static { .. } => "static",
@@ -438,9 +440,15 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             dev.chain_mut().set_vehicle(state, state.truth());
         }
         if let Some(f) = self.feed.as_mut() {
-            let (truth, lost) = f.at(deadline.as_nanos());
-            if let Some(truth) = truth {
-                dev.chain_mut().set_motion(Motion::Sample(truth));
+            let (motion, lost) = f.at(deadline.as_nanos());
+            match motion {
+                Some(crate::feed::FeedMotion::Rates(truth)) => {
+                    dev.chain_mut().set_motion(Motion::Sample(truth))
+                }
+                Some(crate::feed::FeedMotion::Vehicle(state)) => {
+                    dev.chain_mut().set_vehicle(state, state.truth())
+                }
+                None => {}
             }
             dev.chain_mut().faults_mut().motion_feed_lost = lost;
         }
