@@ -382,6 +382,31 @@ fn persistent_streams_resume_after_a_software_reset_and_a_power_cycle() {
     assert_eq!(r.iter().filter(|p| p.did == did::IMU).count(), 10);
 }
 
+/// More streams running than the flash image has persistent slots
+/// (`MAX_STREAMS`): `$PERS` saves the first ten, and they resume after a
+/// reset (found by the `isb_device` fuzz target: the save indexed past its
+/// buffer).
+#[test]
+fn persist_saves_the_first_ten_of_more_running_streams() {
+    use imu_emu::isb::device::{MAX_RUNNING, MAX_STREAMS};
+    let mut b = Bench::new();
+    let dids: Vec<u8> = did::DATA_SETS
+        .iter()
+        .map(|d| d.did)
+        .filter(|&d| d != did::FLASH_CONFIG && d != did::SYS_CMD && d != did::RMC)
+        .collect();
+    for &d in &dids {
+        b.send(&get(d, 1000));
+    }
+    let running: Vec<u8> = b.dev.personality().streams().collect();
+    assert!(running.len() > MAX_STREAMS && running.len() <= MAX_RUNNING);
+    assert!(b.send(b"$PERS*14\r\n").is_empty());
+    b.send(b"$SRST*06\r\n");
+    b.run_ticks(1);
+    let resumed: Vec<u8> = b.dev.personality().streams().collect();
+    assert_eq!(resumed, running[..MAX_STREAMS]);
+}
+
 /// SYS_CMD: save persistent messages (the SDK's vector) and a software
 /// reset, each only with `invCommand == !command`.
 #[test]

@@ -690,15 +690,14 @@ impl State {
 
     // ----- flash -----
 
-    /// The running streams become the persistent ones, saved at once.
+    /// The running streams become the persistent ones, saved at once: the
+    /// first [`MAX_STREAMS`] of them (up to [`MAX_RUNNING`] run; the flash
+    /// image keeps its layout).
     fn save_persistent(&mut self, cx: &mut impl Context<Integrals>) {
         self.persist = [0; 4 + MAX_STREAMS * ENTRY];
-        le::put(
-            &mut self.persist,
-            0,
-            &(self.streams.len() as u32).to_le_bytes(),
-        );
-        for (k, s) in self.streams.iter().enumerate() {
+        let n = self.streams.len().min(MAX_STREAMS);
+        le::put(&mut self.persist, 0, &(n as u32).to_le_bytes());
+        for (k, s) in self.streams.iter().take(n).enumerate() {
             let e = &mut self.persist[4 + k * ENTRY..4 + (k + 1) * ENTRY];
             e[0] = s.did;
             le::put(e, 2, &s.size.to_le_bytes());
