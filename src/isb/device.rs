@@ -438,6 +438,16 @@ fn send_ack(cx: &mut impl Context<Integrals>, info: &AckInfo, nack: bool) {
     });
 }
 
+/// The chain's last measurement in the IMX body frame: rate (rad/s) and
+/// specific force (m/s²).
+fn last_measurement(cx: &impl Context<Integrals>) -> ([f32; 3], [f32; 3]) {
+    let [g, a, _] = cx.chain().last_sensor();
+    (
+        frd(g.map(|x| f64::from(x).to_radians())),
+        frd(a.map(|x| f64::from(x) * f64::from(crate::math::G))),
+    )
+}
+
 /// `(x, y, z)` of the chain's carrier frame (the KERNEL's housing axes:
 /// right, forward, up; ICD Figure 2.2) in the IMX body frame (forward,
 /// right, down), the vehicle's body frame ([`crate::vehicle::housing_to_body`]),
@@ -935,14 +945,21 @@ impl State {
             );
             sets::pimu::SIZE
         } else {
-            let inv = if dt > 0.0 { 1.0 / dt } else { 0.0 };
-            let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
+            let (pqr, acc) = if w.samples > 0 {
+                let inv = 1.0 / dt;
+                let mean = |v: [f64; 3]| frd([v[0] * inv, v[1] * inv, v[2] * inv]);
+                (mean(w.dtheta_raw_rad), mean(w.dv_raw_mps))
+            } else {
+                // No whole period measured yet (a GET right after power-on):
+                // the last measurement, as SYS_SENSORS reports it, not zeros.
+                last_measurement(cx)
+            };
             out[..sets::imu::SIZE].copy_from_slice(
                 &Imu {
                     time,
                     status,
-                    pqr: mean(w.dtheta_raw_rad),
-                    acc: mean(w.dv_raw_mps),
+                    pqr,
+                    acc,
                 }
                 .encode(),
             );
@@ -964,9 +981,7 @@ impl State {
         let tick = cx.time().ticks();
         let time = tick as f64 / f64::from(rate(cx));
         let truth = self.truth(cx);
-        let [g, a, _] = cx.chain().last_sensor();
-        let g = frd(g.map(|x| f64::from(x).to_radians()));
-        let a = frd(a.map(|x| f64::from(x) * f64::from(crate::math::G)));
+        let (g, a) = last_measurement(cx);
         let temp = cx.chain().temperature();
         let bar = self.nav.pressure_kpa(&truth, tick);
         let b = ins::barometer(time, bar, temp);
