@@ -469,6 +469,7 @@ fn a_rotation_of_1e6_deg_s_saturates_on_the_wire() {
     let mut c = emu.connect();
     let mut ctl = Control::connect(&addr);
     start_ga(&mut c);
+    ctl.wait_powered();
     assert_eq!(ctl.cmd("motion rotate 1e6 0 0"), "ok");
     c.drain_for(Duration::from_millis(100));
     for _ in 0..20 {

@@ -254,6 +254,7 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
     ]);
     let mut c = emu.connect();
     let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
     c.send(&isb_get(did::GPS1_POS, 1));
     c.send(&isb_get(did::INS_2, 25));
     let pos = |p: support::IsbPacket| GpsPos::decode(&p.payload.try_into().unwrap());
@@ -456,6 +457,7 @@ fn gps1_sat_over_tcp_with_an_outage() {
     let emu = isb(&["--control", &addr, "--speed", "20"]);
     let mut c = emu.connect();
     let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
     c.send(&isb_get(did::GPS1_SAT, 1));
     let sat =
         |c: &mut Conn| GpsSat::decode(&isb_packet_of(c, did::GPS1_SAT).payload.try_into().unwrap());

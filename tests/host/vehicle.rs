@@ -49,7 +49,8 @@ fn start(args: &[&str]) -> (Emu, Conn, Control) {
     all.extend_from_slice(args);
     let emu = Emu::tcp(&all);
     let c = emu.connect();
-    let ctl = Control::connect(&addr);
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
     (emu, c, ctl)
 }
 
