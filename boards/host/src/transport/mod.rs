@@ -128,6 +128,22 @@ pub(crate) fn revents(fds: &[nix::poll::PollFd<'_>]) -> Vec<nix::poll::PollFlags
 /// queued and the listener stays readable, so retrying at once would spin.
 pub const ACCEPT_BACKOFF: Duration = Duration::from_millis(100);
 
+/// What a connected peer's descriptor is polled for: input unless input
+/// is held back ([`Transport::hold_input`]: the device's line rate is the
+/// limit) or unwanted, output while a backlog waits for the peer.
+pub fn peer_interest(read: bool, backlog_pending: bool) -> nix::poll::PollFlags {
+    use nix::poll::PollFlags;
+    let mut ev = if read {
+        PollFlags::POLLIN
+    } else {
+        PollFlags::empty()
+    };
+    if backlog_pending {
+        ev |= PollFlags::POLLOUT;
+    }
+    ev
+}
+
 /// At most one message a second about failing `accept()` calls.
 pub const ACCEPT_REPORT_INTERVAL: Duration = Duration::from_secs(1);
 

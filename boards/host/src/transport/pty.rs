@@ -245,14 +245,7 @@ impl Transport for PtyTransport {
             // instead (a signal still wakes it), looking again afterwards.
             return;
         }
-        let mut ev = if self.hold {
-            PollFlags::empty()
-        } else {
-            PollFlags::POLLIN
-        };
-        if !self.backlog.is_empty() {
-            ev |= PollFlags::POLLOUT;
-        }
+        let ev = super::peer_interest(!self.hold, !self.backlog.is_empty());
         fds.push(PollFd::new(self.master.as_fd(), ev));
     }
 

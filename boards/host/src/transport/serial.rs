@@ -183,14 +183,7 @@ impl Transport for SerialTransport {
         // A hung-up port is not polled (it would report POLLHUP at once,
         // for ever): the wait is the runner's timeout.
         if let Some(o) = &self.open {
-            let mut ev = if self.hold {
-                PollFlags::empty()
-            } else {
-                PollFlags::POLLIN
-            };
-            if !self.backlog.is_empty() {
-                ev |= PollFlags::POLLOUT;
-            }
+            let ev = super::peer_interest(!self.hold, !self.backlog.is_empty());
             fds.push(PollFd::new(o.io.as_fd(), ev));
         }
     }

@@ -162,14 +162,8 @@ impl Transport for TcpTransport {
         if let Some((stream, _)) = &self.client {
             // A half-closed client stays readable (end of file) for ever:
             // only its output and hang-ups matter then.
-            let mut ev = if self.read_closed || self.hold {
-                PollFlags::empty()
-            } else {
-                PollFlags::POLLIN
-            };
-            if !self.backlog.is_empty() {
-                ev |= PollFlags::POLLOUT;
-            }
+            let read = !(self.read_closed || self.hold);
+            let ev = super::peer_interest(read, !self.backlog.is_empty());
             fds.push(PollFd::new(stream.as_fd(), ev));
         }
     }
