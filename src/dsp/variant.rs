@@ -147,25 +147,29 @@ impl VariantAccumulator {
         self.last = *main;
         self.last_f = *filtered;
         if self.variant == OutputVariant::Instant {
-            // The main channels' sum, for an interval beyond the limit.
+            // The main channels' sum, for an interval beyond the limit. The
+            // first tick's difference is 0 (the values are finite): an
+            // output every tick adds nothing.
             if self.n == 0 {
                 self.first = *main;
+            } else {
+                for c in 0..CHANNELS {
+                    self.sum[c] += main[c] - self.first[c];
+                }
             }
             self.n += 1;
-            for c in 0..CHANNELS {
-                self.sum[c] += main[c] - self.first[c];
-            }
             return;
         }
         if self.n == 0 {
             self.first = *main;
             self.first_f = *filtered;
+        } else {
+            for c in 0..CHANNELS {
+                self.sum[c] += main[c] - self.first[c];
+                self.sum_f[c] += filtered[c] - self.first_f[c];
+            }
         }
         self.n += 1;
-        for c in 0..CHANNELS {
-            self.sum[c] += main[c] - self.first[c];
-            self.sum_f[c] += filtered[c] - self.first_f[c];
-        }
         if self.variant == OutputVariant::Incremental {
             let k = self.dt * DEG;
             let da = [main[0] * k, main[1] * k, main[2] * k];
