@@ -12,7 +12,8 @@
 # two runs: start-up, configuration and shutdown cancel out. Then one
 # run of SECS under `strace -c -f` counts the syscalls per frame (all of
 # the run's, start-up included: a few hundred in millions of frames).
-# Prints one line a binary. Callgrind files (NAME.out, NAME.frames) are
+# Prints one line a binary. Callgrind files (NAME.out; NAME.frames: the
+# frames loadgen read, the device's ticks) are
 # kept in $OUT (default: a temporary directory) for `callgrind_annotate`.
 # Needs valgrind, strace and the release `boards/host/examples/loadgen.rs`
 # (built here into CARGO_TARGET_DIR).
@@ -46,17 +47,39 @@ read_frames() {
     "$loadgen" "$addr" "$1" --at-once | tr ' ' '\n' | sed -n 's/^frames=//p'
 }
 
+# Calls of function $1 in callgrind file $2 (names compressed as
+# `fn=(id) name` on first use, `calls=N …` after each `cfn=(id)`).
+calls() {
+    awk -v name="$1" '
+        match($0, /^c?fn=\([0-9]+\)/) {
+            id = substr($0, 1, RLENGTH)
+            sub(/^c?fn=/, "", id)
+            if (substr($0, RLENGTH + 2) == name) want[id] = 1
+            callee = ($0 ~ /^cfn=/) ? id : ""
+            next
+        }
+        /^calls=/ && callee != "" && (callee in want) { split(substr($0, 7), a, " "); n += a[1] }
+        { callee = "" }
+        END { print n + 0 }
+    ' "$2"
+}
+
 # Binary $1 under callgrind for $2 seconds of reading into $out/$3.out;
-# prints "INSTR FRAMES".
+# prints "INSTR FRAMES". FRAMES are the device's ticks (`Device::on_tick`
+# calls; GA at 2 kHz is a frame a tick), which unlike the frames `loadgen`
+# read do not depend on what was in flight when it stopped (a round of
+# 448 frames, or not); `loadgen`'s count if the symbol is not found.
 instr() {
     start "$3" valgrind --tool=callgrind --callgrind-out-file="$out/$3.out" "$1"
-    local frames
+    local frames ticks
     frames=$(read_frames "$2")
     kill "$pid"
     wait "$pid" || true
     pid=
-    echo "$frames" >"$out/$3.frames"
-    echo "$(sed -n 's/^totals: //p' "$out/$3.out") $frames"
+    ticks=$(calls 'imu_emu::device::Device<F,P>::on_tick' "$out/$3.out")
+    [ "$ticks" -gt 0 ] || ticks=$frames
+    echo "$frames $ticks" >"$out/$3.frames"
+    echo "$(sed -n 's/^totals: //p' "$out/$3.out") $ticks"
 }
 
 # Binary $1 under strace for $2 seconds; prints "SYSCALLS FRAMES".
@@ -77,6 +100,6 @@ for which in base new; do
     read -r i2 f2 < <(instr "$bin" "$((3 * secs))" "$which-long")
     read -r sc fs < <(syscalls "$bin" "$secs" "$which-strace")
     awk -v w="$which" -v b="$bin" -v i1="$i1" -v f1="$f1" -v i2="$i2" -v f2="$f2" -v sc="$sc" -v fs="$fs" \
-        'BEGIN { printf "%s instr_per_frame=%.1f syscalls_per_1000_frames=%.3f (%s; %d and %d frames counted, %d under strace)\n",
+        'BEGIN { printf "%s instr_per_frame=%.1f syscalls_per_1000_frames=%.3f (%s; %d and %d ticks counted, %d frames under strace)\n",
                  w, (i2 - i1) / (f2 - f1), 1000 * sc / fs, b, f1, f2, fs }'
 done
