@@ -30,8 +30,8 @@
 //! or after the sample's arrival, so below one period unless the
 //! emulator read it late) and *deadline → frame read* (the emulator's
 //! wake-up for that tick, the send, loopback and this reader's wake-up:
-//! host scheduling), and counted: steps whose tick is not the first after
-//! their send (`late_ticks`).
+//! host scheduling), and counted: steps whose tick's deadline is a period
+//! or more after their send (`late_ticks`: not the first tick after it).
 //!
 //! **Throughput.** A burst of `N` binary samples (default 200 000), then
 //! of `N` text rows, each written as fast as the socket takes them; the
@@ -208,13 +208,12 @@ fn main() {
             delays.push(us(at - t));
             // Signed: a deadline before the send would be a frame
             // computed before its sample arrived (or a shifted grid).
-            apply.push(if due >= t { us(due - t) } else { -us(t - due) });
+            let a = if due >= t { us(due - t) } else { -us(t - due) };
+            apply.push(a);
             host.push(us(at - due));
-            // The first deadline at or after the send.
-            let first = (t.saturating_duration_since(base).as_nanos() as f64
-                / period.as_nanos() as f64)
-                .ceil() as usize;
-            if n > first {
+            // Not the first tick after the send (by more than the grid's
+            // uncertainty: a deadline a whole period or more after it).
+            if a >= us(period) {
                 late_ticks += 1;
             }
         } else if i + 2 < steps as usize {
