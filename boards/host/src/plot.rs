@@ -1,5 +1,5 @@
 //! The one plot style of every picture the host tools draw (`client plot`,
-//! and any later plot such as the Allan deviation): a titled figure of
+//! `imu-emu allan`'s Allan deviation): a titled figure of
 //! panels stacked vertically sharing one x axis, each panel with a title,
 //! labelled axes with units, ticks, a light grid and a legend.
 //!
@@ -52,7 +52,17 @@ pub struct Series {
     pub name: String,
     /// `(x, y)` points; non-finite ones are left out.
     pub points: Vec<(f64, f64)>,
+    /// A reference line (a model, a specification): thin and dashed, in
+    /// [`REFERENCE_COLORS`] order, beside the measured lines in [`COLORS`].
+    pub reference: bool,
 }
+
+/// Colours of the reference lines, in order.
+pub const REFERENCE_COLORS: [RGBColor; 3] = [
+    RGBColor(0x00, 0x00, 0x00),
+    RGBColor(0x78, 0x78, 0x78),
+    RGBColor(0xA0, 0x50, 0x00),
+];
 
 /// One panel: a title, a y axis and its lines.
 #[derive(Debug, Clone, Default)]
@@ -131,7 +141,11 @@ fn fonts() {
 
 /// Draws `fig` to `out` (PNG or SVG by extension, see [`check_output`]).
 pub fn render(fig: &Figure, out: &Path) -> anyhow::Result<()> {
-    let kind = check_output(out)?;
+    render_as(fig, out, check_output(out)?)
+}
+
+/// Draws `fig` to `out` as `kind`, whatever the file's name.
+pub fn render_as(fig: &Figure, out: &Path, kind: Kind) -> anyhow::Result<()> {
     fonts();
     let what = || format!("plot: writing {}", out.display());
     match kind {
@@ -225,14 +239,22 @@ where
             && (fig.x_scale == Scale::Linear || x > 0.0)
             && (p.y_scale == Scale::Linear || y > 0.0)
     };
-    for (s, &color) in p.series.iter().zip(COLORS.iter().cycle()) {
-        chart
-            .draw_series(LineSeries::new(
-                s.points.iter().copied().filter(keep),
-                color.stroke_width(2),
-            ))?
+    let (mut measured, mut reference) = (COLORS.iter().cycle(), REFERENCE_COLORS.iter().cycle());
+    for s in &p.series {
+        let points = s.points.iter().copied().filter(keep);
+        let (color, width) = match s.reference {
+            false => (measured.next().copied().unwrap_or(BLACK), 2),
+            true => (reference.next().copied().unwrap_or(BLACK), 1),
+        };
+        let style = color.stroke_width(width);
+        let drawn = if s.reference {
+            chart.draw_series(DashedLineSeries::new(points, 8, 5, style))?
+        } else {
+            chart.draw_series(LineSeries::new(points, style))?
+        };
+        drawn
             .label(&s.name)
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style));
     }
     chart
         .configure_series_labels()

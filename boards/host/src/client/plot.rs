@@ -117,6 +117,7 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
                             .iter()
                             .filter_map(|r| Some((*r.get(x_col)?, *r.get(i)?)))
                             .collect(),
+                        reference: false,
                     })
                 })
                 .collect();
