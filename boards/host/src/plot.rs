@@ -224,15 +224,22 @@ where
         .x_label_area_size(45)
         .y_label_area_size(80)
         .build_cartesian_2d(x, y)?;
-    chart
-        .configure_mesh()
-        .x_desc(&fig.x_label)
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(&fig.x_label)
         .y_desc(&p.y_label)
         .label_style((FontFamily::SansSerif, 14))
         .axis_desc_style((FontFamily::SansSerif, 16))
         .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
-        .bold_line_style(RGBColor(0xCC, 0xCC, 0xCC))
-        .draw()?;
+        .bold_line_style(RGBColor(0xCC, 0xCC, 0xCC));
+    // Decades on a log axis as 1e-5, not 9.99999999e-6.
+    let decade = |v: &f64| format!("{v:.0e}");
+    if fig.x_scale == Scale::Log {
+        mesh.x_label_formatter(&decade);
+    }
+    if p.y_scale == Scale::Log {
+        mesh.y_label_formatter(&decade);
+    }
+    mesh.draw()?;
     let keep = |&(x, y): &(f64, f64)| {
         x.is_finite()
             && y.is_finite()
