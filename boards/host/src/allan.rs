@@ -4,10 +4,12 @@
 //!
 //! The data come either from a unit run **in process** as fast as the host
 //! computes (no TCP): a KERNEL `Device` streaming GA frames at `--rate`
-//! (the frames decoded with the core's typed decoder, `client::decode`),
-//! or, for `--model IMX-5`, its signal chain averaged over each output
-//! interval (what its IMU message carries); or from a recording
-//! (`--input FILE`, the CSV of `imu-emu client record`).
+//! (on the K120/K220 a UDD with the aux accelerometer; the frames decoded
+//! with the core's typed decoder, `client::decode`), or, for `--model
+//! IMX-5`, its signal chain averaged over each output interval (what its
+//! IMU message carries); or from a recording (`--input FILE`: the CSV of
+//! `imu-emu client record` or a raw KERNEL/ISB capture,
+//! [`crate::allan_input`]).
 //!
 //! **Allan deviation.** The phase `x_k = Σ y_i·τ₀` of each axis is kept
 //! every `S`-th sample (S chosen so that at most 2²⁰ values are kept:
@@ -22,7 +24,8 @@
 //! white noise (ARW °/√h = 60·N, VRW m/s/√h = 60·g·N), F the flicker floor
 //! (bias instability B = F / 0.6643), K the rate random walk. The
 //! datasheet reading (the curve's minimum / 0.6643, over τ up to a
-//! hundredth of the run, where each estimate averages ≥ 100 intervals) is
+//! hundredth of the run, where each estimate averages ≥ 100 intervals;
+//! docs/sensors.md "The datasheet reading" on the run length it needs) is
 //! printed beside it.
 //!
 //! The unit is held at its warmed-up temperature unless `--warming`
