@@ -74,6 +74,10 @@ use crate::vehicle::VehicleSource;
 
 /// What the host runner asks of a personality beyond the core's seam.
 pub trait HostPersonality: Personality {
+    /// The packet rules of this protocol's output, which the link follows to
+    /// count packets (`status frames-sent`, `format=`) and to cut whole ones.
+    fn wire() -> crate::link::Wire;
+
     /// The live value of a parameter (the KERNEL's Table 5.24), for the
     /// monitor's reasons (`-v`); `None` where the protocol has no such
     /// parameters.
@@ -92,12 +96,21 @@ pub trait HostPersonality: Personality {
 }
 
 impl HostPersonality for Kernel {
+    fn wire() -> crate::link::Wire {
+        crate::link::Wire::kernel()
+    }
+
     fn param(&self, id: u16) -> Option<&[u8]> {
         self.param_ram(id)
     }
 }
 
 impl HostPersonality for imu_emu::isb::Isb {
+    /// ISB packets (the data set ID at byte 3 of the header).
+    fn wire() -> crate::link::Wire {
+        crate::link::Wire::of::<imu_emu::isb::packet::Isb>(3)
+    }
+
     fn param(&self, _id: u16) -> Option<&[u8]> {
         None
     }
@@ -575,7 +588,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 vehicle: None,
                 feed: None,
                 feed_socket: None,
-                link: Link::new(0),
+                link: Link::with_wire(0, P::wire()),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
                 rx_pacer,
@@ -753,7 +766,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
 
     /// Seeds the link faults' random draws (`--seed`).
     pub fn with_seed(mut self, seed: u64) -> Self {
-        self.io.link = Link::new(seed);
+        self.io.link = Link::with_wire(seed, P::wire());
         self
     }
 
