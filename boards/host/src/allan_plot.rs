@@ -6,7 +6,7 @@
 //! walk K·√(τ/3) where the profile has one) dashed.
 
 use crate::allan::{Curve, FLICKER_FLOOR};
-use crate::plot::{Figure, Panel, Scale, Series};
+use crate::plot::{Corner, Figure, Panel, Scale, Series};
 use imu_emu::sensor::profile::{SensorProfile, SensorSpec};
 
 /// The figure of `curves` (three per sensor: gyro, acc, then aux if
@@ -42,6 +42,7 @@ pub fn figure(title: &str, curves: &[Curve], profile: Option<&SensorProfile>) ->
                 y_label: format!("Allan deviation σ(τ) ({unit})"),
                 y_scale: Scale::Log,
                 series,
+                legend: Corner::LowerLeft,
             }
         })
         .collect();

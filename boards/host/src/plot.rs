@@ -75,6 +75,18 @@ pub struct Panel {
     pub y_scale: Scale,
     /// The lines.
     pub series: Vec<Series>,
+    /// Where the legend goes: the corner the lines leave empty.
+    pub legend: Corner,
+}
+
+/// A corner of a panel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Corner {
+    /// Upper right (time series).
+    #[default]
+    UpperRight,
+    /// Lower left (curves falling from the upper left, an Allan plot).
+    LowerLeft,
 }
 
 /// A figure: panels stacked vertically sharing one x axis.
@@ -231,8 +243,18 @@ where
         .axis_desc_style((FontFamily::SansSerif, 16))
         .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
         .bold_line_style(RGBColor(0xCC, 0xCC, 0xCC));
-    // Decades on a log axis as 1e-5, not 9.99999999e-6.
-    let decade = |v: &f64| format!("{v:.0e}");
+    // On a log axis 1, 2 and 5 of each decade, as 1e-5 (not
+    // 9.99999999e-6); the ticks between them stay unlabelled, or a span
+    // of a decade or two crowds its labels.
+    let decade = |v: &f64| {
+        let text = format!("{v:.0e}");
+        let keep = ["1e", "2e", "5e"].iter().any(|m| text.starts_with(m));
+        if keep {
+            text
+        } else {
+            String::new()
+        }
+    };
     if fig.x_scale == Scale::Log {
         mesh.x_label_formatter(&decade);
     }
@@ -265,7 +287,10 @@ where
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(match p.legend {
+            Corner::UpperRight => SeriesLabelPosition::UpperRight,
+            Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+        })
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font((FontFamily::SansSerif, 14))
