@@ -3,9 +3,11 @@
 # `imu-emu` (K110, real time) with a feed and a control socket on free
 # loopback ports, runs boards/host/examples/feedbench.rs against it
 # (delay from a sample's arrival to the first GA frame carrying it at a
-# 2 kHz feed, p50/p99/max; binary and text throughput) and stops it.
+# 2 kHz feed, p50/p99/max, split into the design part and the host's
+# scheduling; binary and text throughput) and stops it. The load average
+# is printed before and after: the delay's tail is the machine's.
 #
-#   scripts/feed-bench.sh [--rate HZ] [--steps N] [--burst N]
+#   scripts/feed-bench.sh [--rate HZ] [--lpf CODE] [--steps N] [--burst N]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build -q --release -p imu-emu-host --bin imu-emu --example feedbench
@@ -19,4 +21,6 @@ for _ in $(seq 100); do [[ $(wc -l <"$out") -ge 3 ]] && break; sleep 0.05; done
 uart=$(sed -n 's/^listening on tcp //p' "$out")
 control=$(sed -n 's/^control on tcp //p' "$out")
 feed=$(sed -n 's/^feed on tcp //p' "$out")
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) ($(nproc) CPUs)"
 "$target/release/examples/feedbench" "$uart" "$control" "$feed" "$@"
+echo "load average after:  $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -245,6 +245,71 @@ impl Phasor {
     }
 }
 
+/// π/180 · 10⁻⁹: the rotation, rad, of 1 °/s over 1 ns, as the sum of two
+/// `f32` (computed at compile time).
+const DEG_NS: f64 = core::f64::consts::PI / 180.0 * 1e-9;
+const DEG_NS_HI: f32 = DEG_NS as f32;
+const DEG_NS_LO: f32 = (DEG_NS - DEG_NS_HI as f64) as f32;
+
+/// `a · b` exactly, as `p + e` (Dekker's product with Veltkamp's split: no
+/// `f64`, no fused multiply-add; |a|, |b| < 1e34).
+fn two_prod(a: f32, b: f32) -> (f32, f32) {
+    let split = |x: f32| {
+        let c = 4097.0 * x; // 2¹² + 1
+        let h = c - (c - x);
+        (h, x - h)
+    };
+    let p = a * b;
+    let ((ah, al), (bh, bl)) = (split(a), split(b));
+    (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+}
+
+/// One tick's rotation, rad, at `rate_dps` (°/s) for ticks of `dt` s, as
+/// `hi + lo` (each `f32`, |lo| ≤ ½ ulp(hi)), to ~2⁻⁴⁵ relative: the tick
+/// taken as a whole number of nanoseconds (the device's tick period,
+/// `1e9 / rate`: 500 000 ns at 2 kHz), not the `f32` `dt` (0.0005 is
+/// 2.4e-11 s off in `f32`). `rate · DEG · dt` in `f32` is off by up to
+/// ~1e-7 of itself, a rate error of ~2e-8 rad/s at 10 °/s that an
+/// integration of the reported rate turns into 1 m in 10 minutes
+/// (docs/motion.md, "Precision"). In `f32` only, once (the M4F has no
+/// double-precision FPU). A step beyond 0.1 rad (the integrator's large
+/// rotations), a tick beyond 2²⁴ ns or a non-finite rate keep the plain
+/// product (`lo` = 0).
+fn tick_angle(rate_dps: &Vec3, dt: f32) -> (Vec3, Vec3) {
+    let ns = libm::roundf(dt * 1e9);
+    let mut hi = [0.0; 3];
+    let mut lo = [0.0; 3];
+    for i in 0..3 {
+        let plain = rate_dps[i] * DEG * dt;
+        let (p, e) = two_prod(rate_dps[i], ns);
+        let (h, l) = two_prod(p, DEG_NS_HI);
+        let l = l + (e * DEG_NS_HI + p * DEG_NS_LO);
+        let s = h + l;
+        let r = l - (s - h);
+        let exact = s.is_finite() && r.is_finite() && ns <= 16_777_216.0;
+        (hi[i], lo[i]) = if exact && plain.abs() < 0.1 {
+            (s, r)
+        } else {
+            (plain, 0.0)
+        };
+    }
+    (hi, lo)
+}
+
+/// One tick's angle: `hi + (lo + carry)` rounded to `f32`, what the
+/// rounding left carried to the next tick (Fast2Sum: exact, as
+/// |lo + carry| ≤ ulp(hi)), so the angles sum to the exact rotation and
+/// the attitude turns at the rate reported.
+#[inline]
+fn carried(hi: &Vec3, lo: &Vec3, carry: &mut Vec3) -> Vec3 {
+    core::array::from_fn(|i| {
+        let t = lo[i] + carry[i];
+        let a = hi[i] + t;
+        carry[i] = t - (a - hi[i]);
+        a
+    })
+}
+
 /// The per-motion state of [`BuiltinMotion`].
 #[derive(Debug, Clone, PartialEq)]
 enum State {
@@ -252,8 +317,15 @@ enum State {
     Static { truth: Truth, base: Quat },
     /// Sample: the truth is in the [`Motion`].
     Sample,
-    /// Constant rotation: the attitude.
-    Rotation { q: QuatIntegrator },
+    /// Constant rotation: the attitude and one tick's rotation as the
+    /// `f32` pair `hi + lo` ([`tick_angle`]), the part of `lo` not yet
+    /// applied carried in `carry` (docs/motion.md, "Precision").
+    Rotation {
+        q: QuatIntegrator,
+        hi: Vec3,
+        lo: Vec3,
+        carry: Vec3,
+    },
     /// Vibration: the attitude and the phase (half-tick steps).
     Vibration { q: QuatIntegrator, phasor: Phasor },
     /// Coning: the base (heading) attitude, the phase, sin α/2, cos α/2 and
@@ -331,9 +403,15 @@ impl BuiltinMotion {
                 }
             }
             Motion::Sample(_) => State::Sample,
-            Motion::ConstantRotation { .. } => State::Rotation {
-                q: QuatIntegrator::new(base),
-            },
+            Motion::ConstantRotation { rate_dps, .. } => {
+                let (hi, lo) = tick_angle(&rate_dps, dt);
+                State::Rotation {
+                    q: QuatIntegrator::new(base),
+                    hi,
+                    lo,
+                    carry: [0.0; 3],
+                }
+            }
             // Vibration samples the rate at mid-tick: two half steps a tick.
             Motion::Vibration { freq_hz, .. } => State::Vibration {
                 q: QuatIntegrator::new(base),
@@ -383,7 +461,7 @@ impl BuiltinMotion {
         match (&self.state, self.motion) {
             (State::Static { truth, .. }, _) => *truth,
             (_, Motion::Sample(t)) => t,
-            (State::Rotation { q }, Motion::ConstantRotation { rate_dps, .. }) => {
+            (State::Rotation { q, .. }, Motion::ConstantRotation { rate_dps, .. }) => {
                 self.with_body_rate(&q.get(), rate_dps, [0.0; 3])
             }
             (
@@ -448,14 +526,7 @@ impl BuiltinMotion {
     fn advance(&mut self) {
         let dt = self.dt;
         match (&mut self.state, self.motion) {
-            (State::Rotation { q }, Motion::ConstantRotation { rate_dps, .. }) => {
-                let a = [
-                    rate_dps[0] * DEG * dt,
-                    rate_dps[1] * DEG * dt,
-                    rate_dps[2] * DEG * dt,
-                ];
-                q.rotate(&a);
-            }
+            (State::Rotation { q, hi, lo, carry }, _) => q.rotate(&carried(hi, lo, carry)),
             (State::Vibration { q, phasor }, Motion::Vibration { rate_amp_dps, .. }) => {
                 // Rate at mid-tick (second-order accurate attitude).
                 phasor.advance();
@@ -519,7 +590,7 @@ impl MotionSource for BuiltinMotion {
         match &self.state {
             State::Sample => None,
             State::Static { base, .. } => Some(canonical(base)),
-            State::Rotation { q } | State::Vibration { q, .. } => Some(canonical(&q.get())),
+            State::Rotation { q, .. } | State::Vibration { q, .. } => Some(canonical(&q.get())),
             State::Coning {
                 base,
                 phasor,
@@ -635,10 +706,13 @@ enum FixedKind {
         acc: [u32; 3],
     },
     /// Constant rotation: the attitude, the rotation of one tick (Q36 rad)
-    /// and the body rate (scaled).
+    /// rounded down, its fraction and running sum (dithered as
+    /// `Constant`'s rate) and the body rate (scaled).
     Rotation {
         q: QuatFixed,
         step: [i32; 3],
+        frac: [u32; 3],
+        acc: [u32; 3],
         rate: [i32; 3],
     },
     /// Vibration: the attitude, the phase, one tick's rotation at unit
@@ -703,12 +777,7 @@ impl BuiltinMotionFixed {
                 // rest then drifts up to 6 m in 10 minutes): dithered
                 // instead, exact on average.
                 let scale = crate::math::exp2i(GYRO_BITS as i32);
-                let exact = w.map(|v| f64::from(v) * scale);
-                let floor = exact.map(|x| libm::floor(x) as i32);
-                let frac = core::array::from_fn(|i| {
-                    let r = exact[i] - f64::from(floor[i]);
-                    libm::round(r * 4_294_967_296.0).min(4_294_967_295.0) as u32
-                });
+                let (floor, frac) = dither_parts(w.map(|v| f64::from(v) * scale));
                 FixedKind::Constant {
                     truth: TruthFixed {
                         rate: floor,
@@ -730,11 +799,27 @@ impl BuiltinMotionFixed {
                     acc: [0; 3],
                 }
             }
-            Motion::ConstantRotation { rate_dps, .. } => FixedKind::Rotation {
-                q,
-                step: rate_dps.map(tick_rad),
-                rate: rate_dps.map(|v| lim(v, GYRO_BITS)),
-            },
+            Motion::ConstantRotation { rate_dps, .. } => {
+                // The tick's rotation at the rate reported (scaled, so the
+                // two agree exactly), over the tick in whole nanoseconds,
+                // in Q36 with its fraction dithered: rounded to Q36 alone
+                // it is up to 7e-12 rad a tick off (1.5e-8 rad/s at 2 kHz,
+                // 2 m in 10 minutes of an integration; docs/motion.md,
+                // "Precision").
+                let rate = rate_dps.map(|v| lim(v, GYRO_BITS));
+                let tick_s = libm::round(f64::from(dt) * 1e9) * 1e-9;
+                let k = core::f64::consts::PI / 180.0
+                    * tick_s
+                    * crate::math::exp2i(36 - GYRO_BITS as i32);
+                let (step, frac) = dither_parts(rate.map(|r| (f64::from(r) * k).clamp(-2e9, 2e9)));
+                FixedKind::Rotation {
+                    q,
+                    step,
+                    frac,
+                    acc: [1 << 31; 3],
+                    rate,
+                }
+            }
             Motion::Vibration {
                 freq_hz,
                 acc_amp_g,
@@ -865,13 +950,11 @@ impl BuiltinMotionFixed {
                 acc,
                 ..
             } => {
-                for i in 0..3 {
-                    let (a, carry) = acc[i].overflowing_add(frac[i]);
-                    acc[i] = a;
-                    truth.rate[i] = floor[i] + i32::from(carry);
-                }
+                truth.rate = dither(floor, frac, acc);
             }
-            FixedKind::Rotation { q, step, .. } => q.rotate(step),
+            FixedKind::Rotation {
+                q, step, frac, acc, ..
+            } => q.rotate(&dither(step, frac, acc)),
             FixedKind::Vibration {
                 q, phasor, step, ..
             } => {
@@ -901,6 +984,28 @@ impl BuiltinMotionFixed {
     }
 }
 
+/// `exact` (in units) as its floor and the rest in 2⁻³² units, for
+/// [`dither`].
+fn dither_parts(exact: [f64; 3]) -> ([i32; 3], [u32; 3]) {
+    let floor = exact.map(|x| libm::floor(x) as i32);
+    let frac = core::array::from_fn(|i| {
+        let r = exact[i] - f64::from(floor[i]);
+        libm::round(r * 4_294_967_296.0).min(4_294_967_295.0) as u32
+    });
+    (floor, frac)
+}
+
+/// One tick's value of a dithered constant: `floor + 1` where the running
+/// sum `acc` of `frac` wraps, else `floor` — exact on average.
+#[inline]
+fn dither(floor: &[i32; 3], frac: &[u32; 3], acc: &mut [u32; 3]) -> [i32; 3] {
+    core::array::from_fn(|i| {
+        let (a, carry) = acc[i].overflowing_add(frac[i]);
+        acc[i] = a;
+        floor[i] + i32::from(carry)
+    })
+}
+
 /// The coning attitude `base ⊗ (C, S cos φ, S sin φ, 0)`, Q30, for a base
 /// rotation about z.
 fn cone_fixed(base: &QuatQ30, phasor: &PhasorFixed, cs: &[i32; 2]) -> QuatQ30 {
@@ -918,6 +1023,64 @@ fn cone_fixed(base: &QuatQ30, phasor: &PhasorFixed, cs: &[i32; 2]) -> QuatQ30 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The float rotation's tick angles sum, over ten minutes at 2 kHz,
+    /// to the exact rotation at the rate reported (in `f64`, over ticks of
+    /// 500 000 ns) to 1e-12 of it; each rounded on its own, as before,
+    /// they were off by up to ~1e-7 of it (here 1.1e-8 to 9.6e-8).
+    #[test]
+    fn the_float_rotation_tick_angles_sum_to_the_exact_rotation() {
+        let rate = [3.3f32, -2.1, 10.7];
+        let (hi, lo) = tick_angle(&rate, 0.0005);
+        let mut carry = [0.0; 3];
+        let mut sum = [0.0f64; 3];
+        let ticks = 1_200_000;
+        for _ in 0..ticks {
+            let a = carried(&hi, &lo, &mut carry);
+            for i in 0..3 {
+                sum[i] += f64::from(a[i]);
+            }
+        }
+        let mut worst_old = 0.0f64;
+        for i in 0..3 {
+            let exact = f64::from(rate[i]).to_radians() * 0.0005 * f64::from(ticks);
+            let e = (sum[i] - exact).abs() / exact.abs();
+            assert!(e < 1e-12, "axis {i}: {e}");
+            let old = f64::from(rate[i] * DEG * 0.0005) * f64::from(ticks);
+            worst_old = worst_old.max((old - exact).abs() / exact.abs());
+        }
+        assert!(worst_old > 1e-8, "{worst_old}");
+    }
+
+    /// The fixed-point rotation's attitude after ten minutes at 2 kHz is
+    /// the exact rotation of the rate it reports (scaled back) to 2e-7 rad
+    /// (4e-8 measured) — its Q36 tick angle dithered; rounded, as before,
+    /// it was ~1.5e-5 rad off (1.2e-8 to 1.7e-8 rad/s on each axis).
+    #[test]
+    fn the_fixed_rotation_turns_at_the_rate_it_reports() {
+        use crate::math::double;
+        let m = Motion::ConstantRotation {
+            lat_deg: 45.0,
+            heading_deg: 30.0,
+            rate_dps: [3.3, -2.1, 10.7],
+        };
+        let ticks = 1_200_000u64;
+        let mut fixed = BuiltinMotionFixed::new(m, 0.0005);
+        for _ in 0..=ticks {
+            fixed.step();
+        }
+        let FixedKind::Rotation { rate, .. } = fixed.kind else {
+            panic!("not a rotation")
+        };
+        let t = ticks as f64 * 0.0005;
+        let w = rate.map(|r| (f64::from(r) / f64::from(1u32 << GYRO_BITS)).to_radians() * t);
+        let base = quat_from_euler(30.0 * DEG, 0.0, 0.0).map(f64::from);
+        let want = double::quat_mul(&base, &double::quat_from_rotvec(&w));
+        let q = fixed.attitude().unwrap().map(f64::from);
+        let d = double::quat_mul(&double::quat_conj(&want), &q);
+        let e = 2.0 * (d[1] * d[1] + d[2] * d[2] + d[3] * d[3]).sqrt();
+        assert!(e < 2e-7, "{e} rad");
+    }
 
     /// The integer motions follow the float ones over 2 s at 2 kHz: truth
     /// within a few LSB of the fixed-point scale, attitude within 2e-6 rad —

@@ -253,8 +253,9 @@ fn record_decode_and_plot() {
     }
 
     // The raw capture holds the acknowledgement, the GA frames and the
-    // ReadRAM answer; decoding it gives the same GA rows (no host time).
-    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    // ReadRAM answer; decoding it gives the same GA rows (no host time),
+    // on stdout when the output is named `-`.
+    let o = run(&["client", "decode", raw.to_str().unwrap(), "-o", "-"]);
     let decoded = stdout(&o);
     let mut dl = decoded.lines();
     assert_eq!(

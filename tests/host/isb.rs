@@ -488,3 +488,34 @@ fn gps1_sat_over_tcp_with_an_outage() {
     }
     assert!(empty, "no satellites during the outage");
 }
+
+/// `status` counts ISB packets as it counts KERNEL frames: one GET of
+/// DEV_INFO with period 0 is one packet sent, and the bytes sent are the
+/// bytes the client received (the link had followed ISB output with the
+/// KERNEL's framing: 0 frames).
+#[test]
+fn status_counts_isb_packets() {
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&["--control", &addr]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
+    c.send(&isb_get(did::DEV_INFO, 0));
+    let p = isb_packet(&mut c);
+    assert_eq!(p.did, did::DEV_INFO);
+    // Nothing else comes: a GET with period 0 sends once.
+    let len = p.payload.len() + imu_emu::isb::packet::OVERHEAD;
+    assert!(c
+        .frame_before(Instant::now() + Duration::from_millis(300))
+        .is_none());
+    assert_eq!(c.received, len);
+    let s = ctl.cmd("status");
+    let field = |k: &str| {
+        s.split(' ')
+            .find_map(|kv| kv.strip_prefix(k)?.strip_prefix('='))
+            .unwrap_or_else(|| panic!("no {k} in {s}"))
+            .to_owned()
+    };
+    assert_eq!(field("frames-sent"), "1", "{s}");
+    assert_eq!(field("bytes-sent"), len.to_string(), "{s}");
+}

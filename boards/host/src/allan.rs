@@ -4,10 +4,12 @@
 //!
 //! The data come either from a unit run **in process** as fast as the host
 //! computes (no TCP): a KERNEL `Device` streaming GA frames at `--rate`
-//! (the frames decoded with the core's typed decoder, `client::decode`),
-//! or, for `--model IMX-5`, its signal chain averaged over each output
-//! interval (what its IMU message carries); or from a recording
-//! (`--input FILE`, the CSV of `imu-emu client record`).
+//! (on the K120/K220 a UDD with the aux accelerometer; the frames decoded
+//! with the core's typed decoder, `client::decode`), or, for `--model
+//! IMX-5`, its signal chain averaged over each output interval (what its
+//! IMU message carries); or from a recording (`--input FILE`: the CSV of
+//! `imu-emu client record` or a raw KERNEL/ISB capture,
+//! [`crate::allan_input`]).
 //!
 //! **Allan deviation.** The phase `x_k = Σ y_i·τ₀` of each axis is kept
 //! every `S`-th sample (S chosen so that at most 2²⁰ values are kept:
@@ -22,7 +24,8 @@
 //! white noise (ARW °/√h = 60·N, VRW m/s/√h = 60·g·N), F the flicker floor
 //! (bias instability B = F / 0.6643), K the rate random walk. The
 //! datasheet reading (the curve's minimum / 0.6643, over τ up to a
-//! hundredth of the run, where each estimate averages ≥ 100 intervals) is
+//! hundredth of the run, where each estimate averages ≥ 100 intervals;
+//! docs/sensors.md "The datasheet reading" on the run length it needs) is
 //! printed beside it.
 //!
 //! The unit is held at its warmed-up temperature unless `--warming`
@@ -38,19 +41,31 @@ use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::device::{Device, PowerOn};
 use imu_emu::dsp::variant::OutputVariant;
 use imu_emu::kernel::Kernel;
-use imu_emu::model::Product;
-use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile};
+use imu_emu::model::{Capability, Product};
+use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::sensor::profiles;
 use imu_emu::time::Instant;
 
 use crate::flash::MemNor;
+use crate::plot::Kind;
 
 /// Flicker floor / B: √(2 ln 2/π) (IEEE 952).
 pub const FLICKER_FLOOR: f64 = 0.664_282;
 /// Phases kept per axis at most.
 const KEEP: usize = 1 << 20;
-/// Channels: gyro X Y Z (°/s), acc X Y Z (g).
-pub const AXES: [&str; 6] = ["gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"];
+/// Channels: gyro X Y Z (°/s), acc X Y Z (g), and on the K120/K220 the
+/// aux accelerometer X Y Z (g): the `client record` column names.
+pub const AXES: [&str; 9] = [
+    "gyro_x",
+    "gyro_y",
+    "gyro_z",
+    "acc_x",
+    "acc_y",
+    "acc_z",
+    "aux_acc_x",
+    "aux_acc_y",
+    "aux_acc_z",
+];
 
 /// `imu-emu allan …`.
 #[derive(clap::Args, Debug, Clone)]
@@ -81,11 +96,16 @@ pub struct AllanArgs {
     /// Output rate, Hz (a divisor of the internal rate; KERNEL Data_Rate).
     #[arg(long, default_value_t = 100)]
     pub rate: u32,
-    /// Analyse this recording (`imu-emu client record` CSV: gyro_* and
-    /// acc_* columns) instead of running a unit; its rate is --rate unless
-    /// it has an `imu_time_ns` or `host_time_s` column.
-    #[arg(long, value_name = "CSV")]
+    /// Analyse this recording instead of running a unit: an `imu-emu
+    /// client record` CSV (gyro_* and acc_* columns), or a raw capture of a
+    /// KERNEL's frames or an IMX-5's ISB packets (docs/sensors.md
+    /// "Recordings"). Its rate comes from its own clock (`imu_time_ns`,
+    /// the 2 kHz counter, ISB `time`; a CSV's `host_time_s`), else --rate.
+    #[arg(long, value_name = "FILE")]
     pub input: Option<PathBuf>,
+    /// What --input holds: auto (from its content), csv, kernel or isb.
+    #[arg(long, value_enum, default_value_t = crate::allan_input::Format::Auto)]
+    pub format: crate::allan_input::Format,
     /// Plot to this PNG file.
     #[arg(long, value_name = "FILE")]
     pub png: Option<PathBuf>,
@@ -97,26 +117,28 @@ pub struct AllanArgs {
     pub table: Option<PathBuf>,
 }
 
-/// Phases of the six axes, kept every `stride` samples.
-struct Phases {
+/// Phases of the channels (the first `channels` of [`AXES`]), kept every
+/// `stride` samples.
+pub(crate) struct Phases {
     tau0: f64,
     stride: usize,
-    n: usize,
-    acc: [f64; 6],
-    first: Option<[f64; 6]>,
-    kept: [Vec<f64>; 6],
+    /// Samples pushed.
+    pub(crate) n: usize,
+    acc: Vec<f64>,
+    first: Option<Vec<f64>>,
+    kept: Vec<Vec<f64>>,
 }
 
 impl Phases {
-    fn new(tau0: f64, expected: usize) -> Self {
+    pub(crate) fn new(tau0: f64, expected: usize, channels: usize) -> Self {
         let stride = expected.div_ceil(KEEP).max(1);
         let mut p = Phases {
             tau0,
             stride,
             n: 0,
-            acc: [0.0; 6],
+            acc: vec![0.0; channels],
             first: None,
-            kept: Default::default(),
+            kept: vec![Vec::new(); channels],
         };
         for k in &mut p.kept {
             k.reserve(expected / stride + 2);
@@ -125,17 +147,23 @@ impl Phases {
         p
     }
 
-    fn push(&mut self, y: [f64; 6]) {
+    /// The channels' count.
+    fn channels(&self) -> usize {
+        self.acc.len()
+    }
+
+    /// One sample of every channel (`y.len()` = [`Phases::channels`]).
+    pub(crate) fn push(&mut self, y: &[f64]) {
         // Relative to the first sample: the phases stay small (the Allan
         // deviation ignores a constant).
-        let y0 = *self.first.get_or_insert(y);
-        for c in 0..6 {
-            self.acc[c] += (y[c] - y0[c]) * self.tau0;
+        let y0 = self.first.get_or_insert_with(|| y.to_vec());
+        for ((a, v), v0) in self.acc.iter_mut().zip(y).zip(y0.iter()) {
+            *a += (v - v0) * self.tau0;
         }
         self.n += 1;
         if self.n.is_multiple_of(self.stride) {
-            for c in 0..6 {
-                self.kept[c].push(self.acc[c]);
+            for (k, a) in self.kept.iter_mut().zip(&self.acc) {
+                k.push(*a);
             }
         }
     }
@@ -284,10 +312,13 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
 }
 
 /// What was analysed, for the report.
-struct Source {
-    title: String,
-    profile: Option<SensorProfile>,
-    phases: Phases,
+pub(crate) struct Source {
+    /// Plot and report title.
+    pub(crate) title: String,
+    /// The profile to compare with, if known.
+    pub(crate) profile: Option<SensorProfile>,
+    /// The channels' phases.
+    pub(crate) phases: Phases,
 }
 
 /// Runs a unit in process (module doc).
@@ -302,14 +333,8 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         Some(path) => Some(Box::leak(Box::new(crate::profile_file::load(path)?))),
         None => None,
     };
-    let imx = a.model.eq_ignore_ascii_case("IMX-5") || a.model.eq_ignore_ascii_case("IMX5");
-    let product = if imx {
-        Product::imx5()
-    } else {
-        Product::parse(&a.model).map_err(|e| {
-            crate::error::UsageError(format!("allan --model {}: {e} (or IMX-5)", a.model))
-        })?
-    };
+    let product = crate::allan_input::product(&a.model)?;
+    let imx = core::ptr::eq(product.model, &imu_emu::model::IMX5);
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
         return Err(crate::error::UsageError(format!(
@@ -319,7 +344,8 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         .into());
     }
     let outputs = (seconds * f64::from(a.rate)).round() as usize;
-    let mut phases = Phases::new(1.0 / f64::from(a.rate), outputs);
+    let aux = !imx && product.model.has(Capability::AuxAccel);
+    let mut phases = Phases::new(1.0 / f64::from(a.rate), outputs, if aux { 9 } else { 6 });
     let used = profile
         .copied()
         .unwrap_or_else(|| profiles::for_product(&product));
@@ -344,13 +370,18 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
             let s = chain.output_with(false);
             let g = s.gyro.map(f64::from);
             let f = s.acc.map(f64::from);
-            phases.push([g[0], g[1], g[2], f[0], f[1], f[2]]);
+            phases.push(&[g[0], g[1], g[2], f[0], f[1], f[2]]);
         }
     } else {
         title = format!(
-            "{}, seed {}, GA frames at {} Hz",
+            "{}, seed {}, {} frames at {} Hz",
             product.code(),
             a.seed,
+            if aux {
+                "UDD (gyro, acc, aux acc)"
+            } else {
+                "GA"
+            },
             a.rate
         );
         run_kernel(
@@ -375,7 +406,13 @@ fn steady(p: &SensorProfile, warming: bool) -> Option<f32> {
     (!warming).then_some(p.temperature.ambient_c + p.temperature.self_heating_c)
 }
 
-/// A KERNEL device streaming GA at `a.rate`: `outputs` frames decoded.
+/// UDD types of the aux-carrying stream (ICD Table 5.14): gyro HR, acc
+/// HR, aux accelerometer.
+const AUX_UDD: [u8; 3] = [0x21, 0x23, 0x2F];
+
+/// A KERNEL device streaming at `a.rate`: `outputs` frames decoded. GA
+/// (gyro and acc), or on a model with an aux accelerometer a UDD of
+/// [`AUX_UDD`] (GA does not carry it).
 fn run_kernel(
     product: Product,
     a: &AllanArgs,
@@ -385,6 +422,7 @@ fn run_kernel(
     phases: &mut Phases,
 ) -> anyhow::Result<()> {
     use imu_emu::kernel::command::Command;
+    use imu_emu::kernel::formats::UDD;
     use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
     let cfg = PowerOn {
         product,
@@ -396,25 +434,33 @@ fn run_kernel(
     dev.chain_mut().faults_mut().temperature_c = temperature;
     let period = dev.tick_period_ns();
     let mut now = 0u64;
-    // Data_Rate (Table 5.24 ID 0x0012), then GA (0x8F): the rate applies
-    // at the data command (5.3.1). In process the line is not paced (that
-    // is a board's job), so any rate fits.
+    // Data_Rate (Table 5.24 ID 0x0012), then the UDD list (5.3.5) and the
+    // data command: the rate applies at the data command (5.3.1). In
+    // process the line is not paced (that is a board's job), so any rate
+    // fits.
     let rate = u16::try_from(a.rate).context("allan --rate: at most 65535")?;
+    let aux = phases.channels() == AXES.len();
+    let format = if aux { UDD } else { 0x8F };
+    let udd = [AUX_UDD.len() as u8, AUX_UDD[0], AUX_UDD[1], AUX_UDD[2]];
+    let rate = rate.to_le_bytes();
+    let mut cmds = vec![Command::SaveFlash {
+        id: 0x0012,
+        len: 2,
+        value: &rate,
+    }];
+    if aux {
+        cmds.extend([Command::UddConfig, Command::UddConfigMessage(&udd)]);
+    }
+    cmds.push(Command::Data(format));
     let mut cmd = [0u8; 64];
-    for c in [
-        Command::SaveFlash {
-            id: 0x0012,
-            len: 2,
-            value: &rate.to_le_bytes(),
-        },
-        Command::Data(0x8F),
-    ] {
+    for c in cmds {
         let n = c.encode(&mut cmd).context("encoding a command")?;
         dev.on_rx(&cmd[..n], Instant::from_nanos(now));
     }
     let mut buf = vec![0u8; 4096];
     let mut rx = Box::new(Decoder::<512>::new());
     let mut got = 0usize;
+    let mut y = vec![0.0; phases.channels()];
     while got < outputs {
         now += period;
         dev.on_tick(Instant::from_nanos(now));
@@ -425,17 +471,16 @@ fn run_kernel(
             }
             let mut input = &buf[..n];
             while let Some(f) = rx.next_frame(&mut input) {
-                if f.msg_type != TYPE_DATA || f.id != 0x8F || got == outputs {
+                if f.msg_type != TYPE_DATA || f.id != format || got == outputs {
                     continue;
                 }
                 let Some(d) = crate::client::decode::decode(f.id, f.payload, &product) else {
                     continue;
                 };
-                let mut y = [0.0; 6];
-                for (c, name) in AXES.iter().enumerate() {
-                    y[c] = d.get(name).unwrap_or(0.0);
+                for (v, name) in y.iter_mut().zip(AXES) {
+                    *v = d.get(name).unwrap_or(0.0);
                 }
-                phases.push(y);
+                phases.push(&y);
                 got += 1;
             }
         }
@@ -444,7 +489,7 @@ fn run_kernel(
 }
 
 /// Reads a `client record` CSV.
-fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
+pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("allan {}", path.display()))?;
     let mut lines = text.lines();
@@ -454,7 +499,7 @@ fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
         .split(',')
         .collect();
     let col = |name: &str| header.iter().position(|h| h.trim() == name);
-    let cols: Vec<usize> = AXES
+    let mut cols: Vec<usize> = AXES[..6]
         .iter()
         .map(|a| {
             col(a).with_context(|| {
@@ -466,6 +511,9 @@ fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
             })
         })
         .collect::<anyhow::Result<_>>()?;
+    // The aux accelerometer too, when the recording has all three.
+    let aux: Option<Vec<usize>> = AXES[6..].iter().map(|a| col(a)).collect();
+    cols.extend(aux.into_iter().flatten());
     let rows: Vec<Vec<f64>> = lines
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
@@ -476,40 +524,52 @@ fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
         .collect();
     // The sample period from the unit's time or the host's, else --rate.
     let median_step = |c: usize, scale: f64| -> Option<f64> {
-        let mut d: Vec<f64> = rows
-            .windows(2)
-            .filter_map(|w| Some((w[1].get(c)? - w[0].get(c)?) * scale))
-            .filter(|v| v.is_finite() && *v > 0.0)
+        let t: Vec<f64> = rows
+            .iter()
+            .filter_map(|r| Some(r.get(c)? * scale))
             .collect();
-        d.sort_by(f64::total_cmp);
-        d.get(d.len() / 2).copied()
+        crate::allan_input::median_step(&t)
     };
     let tau0 = col("imu_time_ns")
         .and_then(|c| median_step(c, 1e-9))
         .or_else(|| col("host_time_s").and_then(|c| median_step(c, 1.0)))
         .unwrap_or(1.0 / f64::from(rate.max(1)));
-    let mut phases = Phases::new(tau0, rows.len());
+    let mut phases = Phases::new(tau0, rows.len(), cols.len());
+    let mut y = vec![0.0; cols.len()];
     for r in &rows {
-        let mut y = [0.0; 6];
-        for (c, &i) in cols.iter().enumerate() {
-            y[c] = r.get(i).copied().unwrap_or(f64::NAN);
+        for (v, &i) in y.iter_mut().zip(&cols) {
+            *v = r.get(i).copied().unwrap_or(f64::NAN);
         }
         if y.iter().all(|v| v.is_finite()) {
-            phases.push(y);
+            phases.push(&y);
         }
     }
-    if phases.n < 100 {
-        bail!(
-            "allan {}: {} usable rows (need 100 or more)",
-            path.display(),
-            phases.n
-        );
-    }
+    enough(path, phases.n)?;
     Ok(Source {
         title: format!("{} ({:.0} Hz)", path.display(), 1.0 / tau0),
         profile: None,
         phases,
     })
+}
+
+/// A recording needs 100 samples or more.
+pub(crate) fn enough(path: &Path, n: usize) -> anyhow::Result<()> {
+    if n < 100 {
+        bail!(
+            "allan {}: {n} usable samples (need 100 or more)",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// The profile's sensor of channel `c` (gyro, acc, aux).
+fn spec_of(p: &SensorProfile, c: usize) -> &SensorSpec {
+    match c / 3 {
+        0 => &p.gyro,
+        1 => &p.acc,
+        _ => &p.aux,
+    }
 }
 
 /// The report: per axis the fitted terms beside the profile's.
@@ -524,11 +584,11 @@ fn report(src: &Source, fits: &[Fit], seconds: f64) -> String {
     );
     let _ = writeln!(
         s,
-        "axis    white (fit)     profile   bias instability (fit, min/0.664)  profile   RRW (fit)"
+        "axis       white (fit)     profile   bias instability (fit, min/0.664)  profile   RRW (fit)"
     );
     for (c, f) in fits.iter().enumerate() {
         let gyro = c < 3;
-        let spec = src.profile.map(|p| if gyro { p.gyro } else { p.acc });
+        let spec = src.profile.as_ref().map(|p| spec_of(p, c));
         let (white, white_p, unit_w) = if gyro {
             (
                 density_to_arw(f.n as f32),
@@ -549,7 +609,7 @@ fn report(src: &Source, fits: &[Fit], seconds: f64) -> String {
         let opt = |v: Option<f64>| v.map_or("—".to_owned(), |v| format!("{v:.4}"));
         let _ = writeln!(
             s,
-            "{:<7} {:>8.4} {:<7} {:>8}   {:>9.4} {:<4} ({:>9.4})          {:>8}   {:.3e}",
+            "{:<10} {:>8.4} {:<7} {:>8}   {:>9.4} {:<4} ({:>9.4})          {:>8}   {:.3e}",
             AXES[c],
             white,
             unit_w,
@@ -568,7 +628,10 @@ fn report(src: &Source, fits: &[Fit], seconds: f64) -> String {
 pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let src = match &a.input {
-        Some(path) => read_csv(path, a.rate)?,
+        Some(path) => {
+            let product = crate::allan_input::product(&a.model)?;
+            crate::allan_input::read(path, a.format, &product, a.rate)?
+        }
         None => run_unit(a)?,
     };
     let seconds = src.phases.n as f64 * src.phases.tau0;
@@ -587,7 +650,7 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
     print!("{out}");
     if let Some(path) = &a.table {
         let mut t = String::from("tau_s");
-        for ax in AXES {
+        for ax in &AXES[..cs.len()] {
             let _ = write!(t, ",{ax}");
         }
         t.push('\n');
@@ -600,18 +663,11 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
         }
         std::fs::write(path, t).with_context(|| format!("allan --table {}", path.display()))?;
     }
-    if a.png.is_some() || a.svg.is_some() {
-        let plot = crate::allan_plot::Plot {
-            title: &src.title,
-            curves: &cs,
-            fits: &fits,
-            profile: src.profile.as_ref(),
-        };
-        if let Some(p) = &a.png {
-            plot.png(p)?;
-        }
-        if let Some(p) = &a.svg {
-            plot.svg(p)?;
+    let fig = crate::allan_plot::figure(&src.title, &cs, src.profile.as_ref());
+    for (path, kind) in [(&a.png, Kind::Png), (&a.svg, Kind::Svg)] {
+        if let Some(p) = path {
+            crate::plot::render_as(&fig, p, kind)
+                .with_context(|| format!("allan: plotting to {}", p.display()))?;
         }
     }
     Ok(())
@@ -627,10 +683,10 @@ mod tests {
         let mut rng = imu_emu::sensor::rng::Rng::new(3);
         let n = 0.01;
         let rate = 100.0;
-        let mut p = Phases::new(1.0 / rate, 200_000);
+        let mut p = Phases::new(1.0 / rate, 200_000, 6);
         for _ in 0..200_000 {
             let w = f64::from(rng.gaussian()) * n * rate.sqrt();
-            p.push([w, w, w, w, w, w]);
+            p.push(&[w, w, w, w, w, w]);
         }
         let c = curves(&p);
         let f = fit(&c[0], 200.0, 20.0);

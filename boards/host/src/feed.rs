@@ -6,8 +6,9 @@
 //! Two clocks (`docs/feed.md`):
 //!
 //! * **Real time** (default): a sample applies from its arrival — from the
-//!   first tick whose deadline is at or after the device time it was read
-//!   at — and holds until the next. Silence longer than `--feed-timeout`
+//!   first tick whose deadline is at or after the device time it reached
+//!   the socket at (the kernel's receive timestamp, else the time it was
+//!   read) — and holds until the next. Silence longer than `--feed-timeout`
 //!   (device time) raises [`Faults::motion_feed_lost`], which the KERNEL
 //!   reports as USW bit 1 and the IMX as a sensor fault; the next sample
 //!   clears it.
@@ -32,9 +33,10 @@
 //! [`Faults::motion_feed_lost`]: imu_emu::chain::Faults::motion_feed_lost
 
 use std::collections::VecDeque;
-use std::io::{self, Read};
+use std::io;
 use std::net::{SocketAddr, TcpListener, TcpStream, UdpSocket};
-use std::os::fd::AsFd;
+use std::os::fd::{AsFd, AsRawFd};
+use std::time::{Duration, SystemTime};
 
 use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, OWN_DEVICE};
 use imu_emu::sensor::Truth;
@@ -121,6 +123,7 @@ impl FeedSocket {
             FeedAddr::Udp(_) => {
                 let u = UdpSocket::bind(a).map_err(err)?;
                 u.set_nonblocking(true)?;
+                stamp_arrivals(&u);
                 let local = u.local_addr()?;
                 (Socket::Udp(u), local)
             }
@@ -162,6 +165,17 @@ impl FeedSocket {
     /// Reads what is there (at most [`MAX_READ`] bytes) and hands each
     /// decoded outcome to `each`. Never blocks.
     pub fn read(&mut self, each: &mut dyn FnMut(Result<Sample, Reject>)) -> anyhow::Result<()> {
+        self.read_stamped(&mut |r, _| each(r))
+    }
+
+    /// [`FeedSocket::read`], with how long ago (host time) the bytes that
+    /// ended each outcome reached the socket: the kernel's receive
+    /// timestamp (`SO_TIMESTAMPNS`; for TCP that of the newest segment a
+    /// read took), zero where there is none.
+    pub fn read_stamped(
+        &mut self,
+        each: &mut dyn FnMut(Result<Sample, Reject>, Duration),
+    ) -> anyhow::Result<()> {
         let mut buf = [0u8; 4096];
         let mut got = 0;
         match &mut self.socket {
@@ -170,6 +184,7 @@ impl FeedSocket {
                     match listener.accept() {
                         Ok((s, peer)) => {
                             s.set_nonblocking(true)?;
+                            stamp_arrivals(&s);
                             eprintln!(
                                 "imu-emu: {}motion feed client {peer} connected to {}",
                                 self.label, self.local
@@ -186,14 +201,14 @@ impl FeedSocket {
                     if got >= MAX_READ {
                         break;
                     }
-                    match s.read(&mut buf) {
-                        Ok(0) => {
+                    match recv_stamped(s, &mut buf) {
+                        Ok((0, _)) => {
                             eprintln!("imu-emu: {}motion feed client {peer} closed", self.label);
                             *client = None;
                         }
-                        Ok(n) => {
+                        Ok((n, age)) => {
                             got += n;
-                            self.decoder.decode(&buf[..n], each);
+                            self.decoder.decode(&buf[..n], &mut |r| each(r, age));
                         }
                         Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
                         Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -207,9 +222,10 @@ impl FeedSocket {
             Socket::Udp(u) => {
                 let mut d = [0u8; 65536];
                 while got < MAX_READ {
-                    match u.recv(&mut d) {
-                        Ok(n) => {
+                    match recv_stamped(u, &mut d) {
+                        Ok((n, age)) => {
                             got += n.max(1);
+                            let each = &mut |r| each(r, age);
                             self.decoder.decode(&d[..n], each);
                             if n > 0 && d[n - 1] != b'\n' {
                                 self.decoder.decode(b"\n", each);
@@ -225,6 +241,48 @@ impl FeedSocket {
         }
         Ok(())
     }
+}
+
+/// Asks the kernel to timestamp what `s` receives (`SO_TIMESTAMPNS`):
+/// when a sample arrived, rather than when the runner got to read it. A
+/// failure only costs that precision.
+fn stamp_arrivals(s: &impl AsFd) {
+    let _ = nix::sys::socket::setsockopt(s, nix::sys::socket::sockopt::ReceiveTimestampns, &true);
+}
+
+/// The oldest receive timestamp believed (older: unknown, zero).
+const MAX_AGE: Duration = Duration::from_secs(1);
+
+/// One non-blocking receive into `buf`: the bytes and how long ago (host
+/// time) the kernel received them (zero without a timestamp: the kernel
+/// stamps only once timestamping is on, a moment after the first socket
+/// asks). Errors are those of `read` (`WouldBlock`, `Interrupted`, …).
+fn recv_stamped(s: &impl AsRawFd, buf: &mut [u8]) -> io::Result<(usize, Duration)> {
+    use nix::sys::socket::{recvmsg, ControlMessageOwned, MsgFlags};
+    let mut cmsg = nix::cmsg_space!(nix::sys::time::TimeSpec);
+    let mut iov = [io::IoSliceMut::new(buf)];
+    let msg = recvmsg::<()>(
+        s.as_raw_fd(),
+        &mut iov,
+        Some(&mut cmsg),
+        MsgFlags::MSG_DONTWAIT,
+    )
+    .map_err(io::Error::from)?;
+    let mut age = Duration::ZERO;
+    if let Ok(cmsgs) = msg.cmsgs() {
+        for c in cmsgs {
+            if let ControlMessageOwned::ScmTimestampns(ts) = c {
+                let at = std::time::UNIX_EPOCH + Duration::from(ts);
+                age = SystemTime::now().duration_since(at).unwrap_or_default();
+                if age > MAX_AGE {
+                    // Not a receive time of this clock (a stepped clock,
+                    // another clock's stamp): unknown.
+                    age = Duration::ZERO;
+                }
+            }
+        }
+    }
+    Ok((msg.bytes, age))
 }
 
 /// How the feed drives the device.
@@ -302,6 +360,12 @@ pub struct FeedState {
     full_live: FullLive,
     /// Real time: the samples as they arrive, the fault.
     live: Live,
+    /// Real time: samples read whose arrival no tick has reached yet
+    /// (arrival, time, sample), oldest first: a pass reads the socket
+    /// before its ticks, so that a sample dated before a deadline applies
+    /// from that tick, and a newer one that came after it must wait for
+    /// its own (`Live` keeps only the newest).
+    arriving: VecDeque<(u64, u64, Item)>,
     counts: Counts,
     /// Samples waiting for the device to reach their time (lockstep).
     pending: VecDeque<(u64, Item)>,
@@ -322,6 +386,7 @@ impl FeedState {
             full: None,
             full_live: FullLive::default(),
             live: Live::new(cfg.timeout_ns),
+            arriving: VecDeque::new(),
             counts: Counts::default(),
             pending: VecDeque::new(),
             last_host: None,
@@ -377,7 +442,25 @@ impl FeedState {
                     Ok(())
                 }
             }
-            Ok((t, item)) => self.offer_live(t, item, now_ns),
+            Ok((t, item)) => {
+                let newest = self.arriving.back().map(|a| a.1).or(self
+                    .live
+                    .track()
+                    .last()
+                    .map(|l| l.0));
+                if newest.is_some_and(|n| t <= n) {
+                    Err(Reject::NonIncreasing)
+                } else {
+                    if self.arriving.len() >= MAX_PENDING {
+                        // Bounded: the oldest takes effect now.
+                        if let Some((a, t, item)) = self.arriving.pop_front() {
+                            let _ = self.offer_live(t, item, a);
+                        }
+                    }
+                    self.arriving.push_back((now_ns, t, item));
+                    Ok(())
+                }
+            }
             Err(e) => Err(e),
         };
         match r {
@@ -459,6 +542,11 @@ impl FeedState {
                 );
             }
             return (self.track.at(deadline_ns).map(FeedMotion::Rates), false);
+        }
+        while let Some(&(a, t, item)) = self.arriving.front().filter(|f| f.0 <= deadline_ns) {
+            self.arriving.pop_front();
+            // Checked in order when offered: accepted.
+            let _ = self.offer_live(t, item, a);
         }
         let was = self.live.lost();
         let (truth, lost) = self.live.at(deadline_ns);
@@ -542,6 +630,51 @@ mod tests {
     use super::*;
     use imu_emu::feed::RateSample;
 
+    /// A sample's age is from when the socket received it, not from the
+    /// read: one that waited 50 ms is read as 50 ms old (TCP and UDP). The
+    /// kernel stamps only once its timestamping is on (a work item a
+    /// moment after the first socket asks): rows are sent until one comes
+    /// stamped, at most 20.
+    #[test]
+    fn samples_are_dated_from_their_arrival_at_the_socket() {
+        let row = b"0.0005, 10, 0, 0, 0, 0, 1\n";
+        let wait = Duration::from_millis(50);
+        for addr in [
+            FeedAddr::parse("127.0.0.1:0"),
+            FeedAddr::parse("udp:127.0.0.1:0"),
+        ] {
+            let mut sock = FeedSocket::bind(&addr).unwrap();
+            let local = sock.local;
+            type Sender = Box<dyn FnMut(&[u8])>;
+            let mut send: Sender = if let FeedAddr::Tcp(_) = addr {
+                let mut c = std::net::TcpStream::connect(local).unwrap();
+                std::thread::sleep(Duration::from_millis(20));
+                sock.read_stamped(&mut |_, _| {}).unwrap(); // accept
+                Box::new(move |b| std::io::Write::write_all(&mut c, b).unwrap())
+            } else {
+                let c = UdpSocket::bind("127.0.0.1:0").unwrap();
+                Box::new(move |b| {
+                    c.send_to(b, local).unwrap();
+                })
+            };
+            let mut got = Vec::new();
+            for _ in 0..20 {
+                got.clear();
+                send(row);
+                std::thread::sleep(wait);
+                sock.read_stamped(&mut |r, age| got.push((r.is_ok(), age)))
+                    .unwrap();
+                if got.iter().any(|g| g.1 > Duration::ZERO) {
+                    break;
+                }
+            }
+            assert_eq!(got.len(), 1, "{addr:?}");
+            let (ok, age) = got[0];
+            assert!(ok, "{addr:?}");
+            assert!(age >= wait && age < MAX_AGE, "{addr:?}: {age:?}");
+        }
+    }
+
     fn sample(device: u16, t: u64, w: f32) -> Result<Sample, Reject> {
         Ok(Sample::Rates(RateSample {
             device,
@@ -554,13 +687,18 @@ mod tests {
         }))
     }
 
-    #[test]
-    fn real_time_applies_from_arrival_holds_and_times_out() {
+    /// A device's own real-time feed, silent after 1 ms.
+    fn real_time_1ms() -> FeedState {
         let cfg = FeedConfig {
             lockstep: false,
             timeout_ns: 1_000_000,
         };
-        let mut f = FeedState::new(cfg, 0, true, "");
+        FeedState::new(cfg, 0, true, "")
+    }
+
+    #[test]
+    fn real_time_applies_from_arrival_holds_and_times_out() {
+        let mut f = real_time_1ms();
         assert_eq!(f.at(0), (None, false));
         f.offer(sample(OWN_DEVICE, 5, 1.0), 1_000);
         assert_eq!(f.at(500).0, None);
@@ -579,6 +717,24 @@ mod tests {
         assert!(f
             .status(3_000_000)
             .contains("feed-samples=3 feed-age-ms=0 feed-lost=0"));
+    }
+
+    /// Samples read together (a runner that woke late reads the socket
+    /// before the ticks it owes): each tick takes the newest that had
+    /// arrived by its deadline, not the newest read.
+    #[test]
+    fn real_time_ticks_take_the_newest_sample_arrived_by_their_deadline() {
+        let mut f = real_time_1ms();
+        f.offer(sample(OWN_DEVICE, 1, 1.0), 100);
+        f.offer(sample(OWN_DEVICE, 2, 2.0), 450);
+        f.offer(sample(OWN_DEVICE, 3, 3.0), 600);
+        f.offer(sample(OWN_DEVICE, 3, 4.0), 650);
+        assert_eq!(f.counts().rejected[Reject::NonIncreasing as usize], 1);
+        let x = |f: &mut FeedState, d| f.at(d).0.map(|m| m.truth().rate_dps[0]);
+        assert_eq!(x(&mut f, 0), None);
+        assert_eq!(x(&mut f, 500), Some(2.0));
+        assert_eq!(x(&mut f, 1_000), Some(3.0));
+        assert!(f.status(1_000).contains("feed-samples=3 "));
     }
 
     fn full(t_s: f64, lat: f64, vn: f64) -> Result<Sample, Reject> {

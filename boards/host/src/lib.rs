@@ -37,6 +37,7 @@
 #![deny(missing_docs)]
 
 pub mod allan;
+pub mod allan_input;
 pub mod allan_plot;
 pub mod backlog;
 pub mod cli;

@@ -1,5 +1,5 @@
 //! The one plot style of every picture the host tools draw (`client plot`,
-//! and any later plot such as the Allan deviation): a titled figure of
+//! `imu-emu allan`'s Allan deviation): a titled figure of
 //! panels stacked vertically sharing one x axis, each panel with a title,
 //! labelled axes with units, ticks, a light grid and a legend.
 //!
@@ -52,7 +52,17 @@ pub struct Series {
     pub name: String,
     /// `(x, y)` points; non-finite ones are left out.
     pub points: Vec<(f64, f64)>,
+    /// A reference line (a model, a specification): thin and dashed, in
+    /// [`REFERENCE_COLORS`] order, beside the measured lines in [`COLORS`].
+    pub reference: bool,
 }
+
+/// Colours of the reference lines, in order.
+pub const REFERENCE_COLORS: [RGBColor; 3] = [
+    RGBColor(0x00, 0x00, 0x00),
+    RGBColor(0x78, 0x78, 0x78),
+    RGBColor(0xA0, 0x50, 0x00),
+];
 
 /// One panel: a title, a y axis and its lines.
 #[derive(Debug, Clone, Default)]
@@ -65,6 +75,18 @@ pub struct Panel {
     pub y_scale: Scale,
     /// The lines.
     pub series: Vec<Series>,
+    /// Where the legend goes: the corner the lines leave empty.
+    pub legend: Corner,
+}
+
+/// A corner of a panel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Corner {
+    /// Upper right (time series).
+    #[default]
+    UpperRight,
+    /// Lower left (curves falling from the upper left, an Allan plot).
+    LowerLeft,
 }
 
 /// A figure: panels stacked vertically sharing one x axis.
@@ -131,7 +153,11 @@ fn fonts() {
 
 /// Draws `fig` to `out` (PNG or SVG by extension, see [`check_output`]).
 pub fn render(fig: &Figure, out: &Path) -> anyhow::Result<()> {
-    let kind = check_output(out)?;
+    render_as(fig, out, check_output(out)?)
+}
+
+/// Draws `fig` to `out` as `kind`, whatever the file's name.
+pub fn render_as(fig: &Figure, out: &Path, kind: Kind) -> anyhow::Result<()> {
     fonts();
     let what = || format!("plot: writing {}", out.display());
     match kind {
@@ -210,33 +236,61 @@ where
         .x_label_area_size(45)
         .y_label_area_size(80)
         .build_cartesian_2d(x, y)?;
-    chart
-        .configure_mesh()
-        .x_desc(&fig.x_label)
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(&fig.x_label)
         .y_desc(&p.y_label)
         .label_style((FontFamily::SansSerif, 14))
         .axis_desc_style((FontFamily::SansSerif, 16))
         .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
-        .bold_line_style(RGBColor(0xCC, 0xCC, 0xCC))
-        .draw()?;
+        .bold_line_style(RGBColor(0xCC, 0xCC, 0xCC));
+    // On a log axis 1, 2 and 5 of each decade, as 1e-5 (not
+    // 9.99999999e-6); the ticks between them stay unlabelled, or a span
+    // of a decade or two crowds its labels.
+    let decade = |v: &f64| {
+        let text = format!("{v:.0e}");
+        let keep = ["1e", "2e", "5e"].iter().any(|m| text.starts_with(m));
+        if keep {
+            text
+        } else {
+            String::new()
+        }
+    };
+    if fig.x_scale == Scale::Log {
+        mesh.x_label_formatter(&decade);
+    }
+    if p.y_scale == Scale::Log {
+        mesh.y_label_formatter(&decade);
+    }
+    mesh.draw()?;
     let keep = |&(x, y): &(f64, f64)| {
         x.is_finite()
             && y.is_finite()
             && (fig.x_scale == Scale::Linear || x > 0.0)
             && (p.y_scale == Scale::Linear || y > 0.0)
     };
-    for (s, &color) in p.series.iter().zip(COLORS.iter().cycle()) {
-        chart
-            .draw_series(LineSeries::new(
-                s.points.iter().copied().filter(keep),
-                color.stroke_width(2),
-            ))?
+    let (mut measured, mut reference) = (COLORS.iter().cycle(), REFERENCE_COLORS.iter().cycle());
+    for s in &p.series {
+        let points = s.points.iter().copied().filter(keep);
+        let (color, width) = match s.reference {
+            false => (measured.next().copied().unwrap_or(BLACK), 2),
+            true => (reference.next().copied().unwrap_or(BLACK), 1),
+        };
+        let style = color.stroke_width(width);
+        let drawn = if s.reference {
+            chart.draw_series(DashedLineSeries::new(points, 8, 5, style))?
+        } else {
+            chart.draw_series(LineSeries::new(points, style))?
+        };
+        drawn
             .label(&s.name)
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style));
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(match p.legend {
+            Corner::UpperRight => SeriesLabelPosition::UpperRight,
+            Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+        })
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font((FontFamily::SansSerif, 14))

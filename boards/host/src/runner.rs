@@ -42,7 +42,8 @@
 //!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
 //!   or [`IDLE_WAKE`], whichever is first; [`BUSY_WAKE`] while bytes wait
 //!   for the client; not at all while ticks are due. UART input wakes it at
-//!   once.
+//!   once. The process asks for a timer slack of 1 ns (`cli::run`), so a
+//!   wake is not up to the kernel's default 50 µs late.
 //! * **`--speed max`**: device time moves on by [`MAX_BATCH_TICKS`] ticks
 //!   a pass, in rounds of passes that end when [`MAX_BACKLOG`] bytes wait
 //!   for the client (or input came, or [`MAX_ROUND_TICKS`] ran): one read
@@ -74,6 +75,10 @@ use crate::vehicle::VehicleSource;
 
 /// What the host runner asks of a personality beyond the core's seam.
 pub trait HostPersonality: Personality {
+    /// The packet rules of this protocol's output, which the link follows to
+    /// count packets (`status frames-sent`, `format=`) and to cut whole ones.
+    fn wire() -> crate::link::Wire;
+
     /// The live value of a parameter (the KERNEL's Table 5.24), for the
     /// monitor's reasons (`-v`); `None` where the protocol has no such
     /// parameters.
@@ -92,12 +97,21 @@ pub trait HostPersonality: Personality {
 }
 
 impl HostPersonality for Kernel {
+    fn wire() -> crate::link::Wire {
+        crate::link::Wire::kernel()
+    }
+
     fn param(&self, id: u16) -> Option<&[u8]> {
         self.param_ram(id)
     }
 }
 
 impl HostPersonality for imu_emu::isb::Isb {
+    /// ISB packets (the data set ID at byte 3 of the header).
+    fn wire() -> crate::link::Wire {
+        crate::link::Wire::of::<imu_emu::isb::packet::Isb>(3)
+    }
+
     fn param(&self, _id: u16) -> Option<&[u8]> {
         None
     }
@@ -588,7 +602,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 vehicle: None,
                 feed: None,
                 feed_socket: None,
-                link: Link::new(0),
+                link: Link::with_wire(0, P::wire()),
                 monitor: Monitor::new(),
                 rx_carry: std::collections::VecDeque::new(),
                 rx_pacer,
@@ -657,7 +671,26 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         }
     }
 
-    /// Reads the device's own feed socket (real time: stamped `now`).
+    /// Real time: reads the device's own feed socket, each sample stamped
+    /// with the device time it reached the socket (the kernel's receive
+    /// timestamp; the time of the read where there is none).
+    fn read_feed_live(&mut self) -> anyhow::Result<()> {
+        let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
+        else {
+            return Ok(());
+        };
+        let clock = &self.clock;
+        let k = match clock.speed() {
+            Speed::Factor(k) => k,
+            Speed::Max => 0.0,
+        };
+        sock.read_stamped(&mut |r, age| {
+            let age = (age.as_nanos() as f64 * k) as u64;
+            state.offer(r, clock.now_ns().saturating_sub(age));
+        })
+    }
+
+    /// Reads the device's own feed socket (lockstep: stamped `now`).
     fn read_feed(&mut self, now: u64) -> anyhow::Result<()> {
         let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
         else {
@@ -766,7 +799,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
 
     /// Seeds the link faults' random draws (`--seed`).
     pub fn with_seed(mut self, seed: u64) -> Self {
-        self.io.link = Link::new(seed);
+        self.io.link = Link::with_wire(seed, P::wire());
         self
     }
 
@@ -1037,11 +1070,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.io.held_back_ns = self.clock.held_back_ns();
         self.io.release()?;
         let limits = if self.io.rx_held { &HELD } else { &LIMITS };
-        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
         if !self.io.feed.as_ref().is_some_and(FeedState::lockstep) {
-            // Applies from the next pass's ticks (deadlines after `now`).
-            self.read_feed(now)?;
+            // Before the ticks: a sample that reached the socket before a
+            // deadline this pass runs applies from that tick, however
+            // late the host woke the runner (docs/feed.md, "Figures").
+            self.read_feed_live()?;
         }
+        let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
         self.stats.ticks += u64::from(pass.ticks);
         self.stats.rx_bytes += pass.rx as u64;
         self.stats.tx_bytes += pass.tx as u64;

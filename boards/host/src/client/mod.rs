@@ -141,7 +141,7 @@ pub enum ClientCmd {
         /// Record this many frames.
         #[arg(long, value_name = "N")]
         frames: Option<u64>,
-        /// Output file (default stdout).
+        /// Output file (default, or `-`: stdout).
         #[arg(long, short, value_name = "FILE")]
         out: Option<PathBuf>,
         /// csv or json (lines).
@@ -162,7 +162,7 @@ pub enum ClientCmd {
     Decode {
         /// The capture.
         file: PathBuf,
-        /// Output file (default stdout).
+        /// Output file (default, or `-`: stdout).
         #[arg(long, short, value_name = "FILE")]
         out: Option<PathBuf>,
         /// csv or json (lines).
@@ -803,8 +803,11 @@ fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     flag
 }
 
+/// The output of `record` and `decode`: the file named, or stdout when none
+/// is named or the name is `-` (the usual convention; it had written a file
+/// called `-`).
 fn writer(path: Option<&PathBuf>) -> anyhow::Result<Box<dyn Write>> {
-    Ok(match path {
+    Ok(match path.filter(|p| p.as_os_str() != "-") {
         Some(p) => Box::new(std::io::BufWriter::new(
             std::fs::File::create(p).with_context(|| format!("{}", p.display()))?,
         )),

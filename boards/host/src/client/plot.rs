@@ -9,7 +9,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context as _};
 
-use crate::plot::{Figure, Panel, Scale, Series};
+use crate::plot::{Corner, Figure, Panel, Scale, Series};
 
 /// Groups of columns drawn together: panel title, y label with unit, and
 /// `(column, legend)` pairs.
@@ -117,6 +117,7 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
                             .iter()
                             .filter_map(|r| Some((*r.get(x_col)?, *r.get(i)?)))
                             .collect(),
+                        reference: false,
                     })
                 })
                 .collect();
@@ -125,6 +126,7 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
                 y_label: (*y_label).to_owned(),
                 y_scale: Scale::Linear,
                 series,
+                legend: Corner::UpperRight,
             })
         })
         .collect();
