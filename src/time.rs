@@ -80,11 +80,13 @@ impl TimeBase {
     }
 
     /// The board told the time `now` (never moves the clock back).
+    #[inline]
     pub(crate) fn tell(&mut self, now: Instant) {
         self.clock = self.clock.max(now);
     }
 
     /// One more internal-rate tick.
+    #[inline]
     pub(crate) fn tick(&mut self) {
         self.ticks = self.ticks.wrapping_add(1);
     }

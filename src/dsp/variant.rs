@@ -144,28 +144,36 @@ impl VariantAccumulator {
     /// Adds one tick: `main` = FIR outputs, `filtered` = cascade outputs.
     #[inline]
     pub fn add(&mut self, main: &[f32; CHANNELS], filtered: &[f32; CHANNELS]) {
-        self.last = *main;
-        self.last_f = *filtered;
         if self.variant == OutputVariant::Instant {
-            // The main channels' sum, for an interval beyond the limit.
-            if self.n == 0 {
-                self.first = *main;
+            // The main channels' sum, for an interval beyond the limit. The
+            // first tick's difference is 0 (the values are finite) and its
+            // values are still `last` at the second: an output every tick
+            // adds and copies nothing.
+            if self.n == 1 {
+                self.first = self.last;
             }
+            if self.n > 0 {
+                for c in 0..CHANNELS {
+                    self.sum[c] += main[c] - self.first[c];
+                }
+            }
+            self.last = *main;
+            self.last_f = *filtered;
             self.n += 1;
-            for c in 0..CHANNELS {
-                self.sum[c] += main[c] - self.first[c];
-            }
             return;
         }
+        self.last = *main;
+        self.last_f = *filtered;
         if self.n == 0 {
             self.first = *main;
             self.first_f = *filtered;
+        } else {
+            for c in 0..CHANNELS {
+                self.sum[c] += main[c] - self.first[c];
+                self.sum_f[c] += filtered[c] - self.first_f[c];
+            }
         }
         self.n += 1;
-        for c in 0..CHANNELS {
-            self.sum[c] += main[c] - self.first[c];
-            self.sum_f[c] += filtered[c] - self.first_f[c];
-        }
         if self.variant == OutputVariant::Incremental {
             let k = self.dt * DEG;
             let da = [main[0] * k, main[1] * k, main[2] * k];
@@ -529,6 +537,39 @@ mod tests {
                 }
                 m
             }
+        }
+    }
+
+    /// Instant with a sample limit: the last tick's values up to the
+    /// limit, beyond it the mean `first + Σ (x − first) / n` bit for bit,
+    /// interval after interval (the first tick's values kept from `last`).
+    #[test]
+    fn instant_beyond_the_sample_limit_is_the_intervals_mean() {
+        let mut f = VariantAccumulator::new(OutputVariant::Instant, 0.0005, &[0.0; CHANNELS])
+            .with_sample_limit(2);
+        let mut k = 0u32;
+        for n in [1u32, 2, 3, 5, 1, 4, 2, 6] {
+            let xs: std::vec::Vec<[f32; CHANNELS]> = (0..n)
+                .map(|_| {
+                    k += 1;
+                    core::array::from_fn(|c| libm::sinf((k * 7 + c as u32) as f32) * 100.0)
+                })
+                .collect();
+            for x in &xs {
+                f.add(x, &[0.0; CHANNELS]);
+            }
+            let out = f.take();
+            let last = *xs.last().unwrap();
+            for c in 0..CHANNELS {
+                let want = if n <= 2 {
+                    last[c]
+                } else {
+                    let sum = xs.iter().fold(0.0f32, |s, x| s + (x[c] - xs[0][c]));
+                    xs[0][c] + sum * (1.0 / n as f32)
+                };
+                assert_eq!(out.main[c].to_bits(), want.to_bits(), "n {n} ch {c}");
+            }
+            assert_eq!(out.filtered, [0.0; CHANNELS]);
         }
     }
 

@@ -10,8 +10,13 @@
 //! client fails.
 //!
 //! ```text
-//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID] [--rate HZ] [--worst N]
+//! loadgen ADDR[,ADDR…] SECONDS [--filters] [--pid PID] [--rate HZ] [--worst N] [--at-once]
 //! ```
+//!
+//! `--at-once` (TCP) sends the configuration and the start without the
+//! pauses between them: at `--speed max` device time runs on while the
+//! client pauses (ticks without output, as many as the host computes
+//! meanwhile), which `scripts/speed-instr.sh` keeps out of its count.
 //!
 //! `--rate HZ` streams at that Data_Rate instead of 2000 (a divisor of
 //! 2000): every counter step must then be 2000 / HZ. `--worst N` (with
@@ -173,6 +178,12 @@ fn main() {
     let addrs: Vec<&str> = args[1].split(',').collect();
     let secs: f64 = args[2].parse().expect("SECONDS");
     let filters = args.iter().any(|a| a == "--filters");
+    let at_once = args.iter().any(|a| a == "--at-once");
+    let pause = |ms| {
+        if !at_once {
+            std::thread::sleep(Duration::from_millis(ms));
+        }
+    };
     let rate: u16 = args
         .iter()
         .position(|a| a == "--rate")
@@ -194,7 +205,7 @@ fn main() {
             let mut s = Line::open(addr);
             save(&mut s, params::BAUD_RATE.id, &[0x0B]);
             send(&mut s, Command::CommitBaudRate);
-            std::thread::sleep(Duration::from_millis(20));
+            pause(20);
             if s.follow_baud() {
                 // The emulator reads the port's speed every 20 ms.
                 std::thread::sleep(Duration::from_millis(100));
@@ -216,7 +227,7 @@ fn main() {
             }
         })
         .collect();
-    std::thread::sleep(Duration::from_millis(200));
+    pause(200);
     for dev in &mut devs {
         send(&mut dev.s, Command::Data(0x8F));
         dev.s.set_nonblocking();

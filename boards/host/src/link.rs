@@ -374,9 +374,8 @@ impl Link {
     /// `now`) through the faults; appends what reaches the client to `out`.
     pub fn tx(&mut self, bytes: &[u8], now: u64, out: &mut Vec<u8>) {
         self.release(now, out);
-        if !self.tx.any() && !self.cut_armed && !self.cutting && self.stall_until.is_none() {
-            // Clean: follow the frames (skipping over their bodies) and pass.
-            self.follow(bytes);
+        if self.clean() {
+            self.pass(bytes);
             out.extend_from_slice(bytes);
             return;
         }
@@ -420,8 +419,18 @@ impl Link {
         self.hold_or_pass(&faulted, now, out);
     }
 
-    /// Follows the frame boundaries of clean output (frame count, last ID).
-    fn follow(&mut self, mut bytes: &[u8]) {
+    /// Whether output passes as it is now: no fault, cut or stall, nothing
+    /// held back. [`Link::tx`] then appends its bytes unchanged, and
+    /// [`Link::pass`] does the rest of its work without that copy.
+    pub fn clean(&self) -> bool {
+        !self.tx.any() && !self.cut_armed && !self.cutting && self.stall_until.is_none()
+    }
+
+    /// [`Link::tx`] of output while the link is [`Link::clean`], but the
+    /// bytes are not copied: they reach the client as they are. Follows
+    /// the frame boundaries (frame count, last ID), skipping over their
+    /// bodies.
+    pub fn pass(&mut self, mut bytes: &[u8]) {
         while let Some((&b, rest)) = bytes.split_first() {
             // A whole header at a frame boundary: take it at once.
             let w = self.wire;
@@ -429,6 +438,12 @@ impl Link {
                 if let Some(total) = w.total(bytes) {
                     if let Some(&id) = bytes.get(w.id_at) {
                         self.last_id = Some(id);
+                    }
+                    if let Some(after) = bytes.get(total..) {
+                        // The whole frame is here: counted at once.
+                        self.frames_sent += 1;
+                        bytes = after;
+                        continue;
                     }
                     self.pos = FramePos {
                         at: w.header_len,

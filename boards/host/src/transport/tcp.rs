@@ -232,11 +232,14 @@ impl Transport for TcpTransport {
         Ok(())
     }
 
+    #[inline]
     fn send(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         // A real line loses what nobody reads.
         if self.client.is_some() {
             self.backlog.push(bytes);
-            if !bytes.is_empty() {
+            // Only a half-closed client's quiet time is ever read: no
+            // clock read per frame otherwise (`--speed max` sends millions).
+            if self.read_closed && !bytes.is_empty() {
                 self.quiet_since = std::time::Instant::now();
             }
         }
