@@ -159,7 +159,9 @@ impl VariantAccumulator {
             }
             self.last = *main;
             self.last_f = *filtered;
-            self.n += 1;
+            // Saturating: an interval no output ends (output stopped) may
+            // run past 2^32 ticks (24.8 days at 2 kHz) without a panic.
+            self.n = self.n.saturating_add(1);
             return;
         }
         self.last = *main;
@@ -173,7 +175,7 @@ impl VariantAccumulator {
                 self.sum_f[c] += filtered[c] - self.first_f[c];
             }
         }
-        self.n += 1;
+        self.n = self.n.saturating_add(1);
         if self.variant == OutputVariant::Incremental {
             let k = self.dt * DEG;
             let da = [main[0] * k, main[1] * k, main[2] * k];
