@@ -168,8 +168,9 @@ impl SensorLowPassFixed {
         self.m > 0
     }
 
-    /// One tick: filters `v` (any scale) in place.
-    #[inline]
+    /// One tick: filters `v` (any scale) in place. Not inlined: the
+    /// engine's common path (no filter: the KERNEL profiles) stays small.
+    #[inline(never)]
     pub fn apply(&mut self, v: &mut [i32; 3]) {
         let xs = v.map(|x| x.clamp(-TRUTH_LIMIT, TRUTH_LIMIT));
         if !self.primed {

@@ -382,9 +382,11 @@ impl TriadEngine {
             0.0
         };
         self.slow_on = slow_on;
-        self.noisy = noisy || slow_on || coupled || self.quant > 0.0;
-        self.coupled = coupled;
         self.lpf.configure(e.bandwidth_hz, dt);
+        // The filter's path is the noisy one (the ideal path adds the bias
+        // alone).
+        self.noisy = noisy || slow_on || coupled || self.quant > 0.0 || self.lpf.is_on();
+        self.coupled = coupled;
         self.set_temperature(e, temp_c);
     }
 
@@ -474,19 +476,19 @@ impl TriadEngine {
             for i in 0..3 {
                 y[i] += self.bias[i] + self.slow[i] + self.sigma[i] * rng.gaussian();
             }
+            // The sensor's own response, then its output word: resolution
+            // and range (docs/sensors.md "Bandwidth").
+            if self.lpf.is_on() {
+                self.lpf.apply(&mut y);
+            }
+            if self.quant > 0.0 {
+                for v in y.iter_mut() {
+                    *v = libm::roundf(*v * self.inv_quant) * self.quant;
+                }
+            }
         } else {
             for i in 0..3 {
                 y[i] += self.bias[i];
-            }
-        }
-        // The sensor's own response, then its output word: resolution and
-        // range (docs/sensors.md "Bandwidth").
-        if self.lpf.is_on() {
-            self.lpf.apply(&mut y);
-        }
-        if self.quant > 0.0 {
-            for v in y.iter_mut() {
-                *v = libm::roundf(*v * self.inv_quant) * self.quant;
             }
         }
         let over = saturate(&mut y, self.range);
@@ -697,8 +699,8 @@ impl TriadEngineFixed {
         self.quant = (step > 1).then(|| (Recip::new(step as u32), step));
         self.slow_on = slow_on;
         self.coupled = coupled;
-        self.noisy = noisy || slow_on || coupled || self.quant.is_some();
         self.lpf.configure(e.bandwidth_hz, dt as f32);
+        self.noisy = noisy || slow_on || coupled || self.quant.is_some() || self.lpf.is_on();
         for i in 0..3 {
             self.set_axis_temperature(e, i, temp_c);
         }
@@ -783,7 +785,7 @@ impl TriadEngineFixed {
     /// the specific force at 2^[`ACC_BITS`] for the g-sensitivity); returns
     /// the measurement and a mask of the axes beyond the range (bit i =
     /// axis i), which are clipped.
-    #[inline]
+    #[inline(always)]
     pub fn measure(&mut self, truth: &[i32; 3], force: &[i32; 3], rng: &mut Rng) -> ([i32; 3], u8) {
         let x = truth;
         let mut y = *x;
@@ -811,17 +813,17 @@ impl TriadEngineFixed {
                     .saturating_add(self.sigma[i].apply_small(rng.gaussian_sum()));
                 y[i] = y[i].saturating_add(e);
             }
+            if self.lpf.is_on() {
+                self.lpf.apply(&mut y);
+            }
+            if let Some((r, step)) = self.quant {
+                for v in y.iter_mut() {
+                    *v = r.div_round(i64::from(*v)).saturating_mul(step);
+                }
+            }
         } else {
             for i in 0..3 {
                 y[i] = y[i].saturating_add(self.bias[i]);
-            }
-        }
-        if self.lpf.is_on() {
-            self.lpf.apply(&mut y);
-        }
-        if let Some((r, step)) = self.quant {
-            for v in y.iter_mut() {
-                *v = r.div_round(i64::from(*v)).saturating_mul(step);
             }
         }
         let over = saturate(&mut y, self.range);
