@@ -6,11 +6,13 @@
 //!
 //! ```text
 //! x        = Σ_j M_ij · truth_j  +  g_i · force_i        (g-sensitivity: gyro only)
-//! measured = sat( quant( x + n_i·x·|x|/range  +  b_i + f_i(t) + r_i(t)  +  σ_i · w_i ) )
+//! measured = sat( quant( lpf( x + n_i·x·|x|/range  +  b_i + f_i(t) + r_i(t)  +  σ_i · w_i ) ) )
 //! M        = I + diag(scale_factor + temp_scale·ΔT) + misalignment (off-diagonal)
 //! b_i      = bias (turn-on) + temp_bias · ΔT,   ΔT = T − 25 °C
 //! f_i(t)   = flicker bias (bias instability B), r_i(t) = rate random walk K
 //! σ_i      = noise_density · √f_s             (white noise per tick)
+//! lpf      = the sensor's −3 dB bandwidth, first order, DC gain 1
+//!            (super::bandwidth; none when the profile gives none)
 //! ```
 //!
 //! **Allan mapping.** White noise of density N (unit/√Hz) has the Allan
@@ -55,6 +57,7 @@
 // Numeric code indexes parallel arrays (axes, channels) by one index.
 #![allow(clippy::needless_range_loop)]
 
+use super::bandwidth::{SensorLowPass, SensorLowPassFixed};
 use super::profile::{SensorProfile, SensorSpec};
 use super::rng::Rng;
 use crate::math::fixed::{mul64, Coef, Recip};
@@ -121,6 +124,11 @@ pub struct SensorErrors {
     pub range: f32,
     /// Quantisation step of the output, unit (0 = none).
     pub resolution: f32,
+    /// The sensor's −3 dB bandwidth, Hz: a first-order low-pass of the
+    /// output, noise included, before quantisation and saturation
+    /// ([`super::bandwidth`]); 0, or at or above the internal rate's
+    /// Nyquist frequency: none.
+    pub bandwidth_hz: f32,
 }
 
 /// Error parameters of the whole unit.
@@ -144,6 +152,7 @@ impl SensorErrors {
         let mut s = SensorErrors {
             range: spec.range,
             resolution: spec.resolution,
+            bandwidth_hz: spec.bandwidth_hz,
             ..SensorErrors::default()
         };
         for a in s.axes.iter_mut() {
@@ -229,6 +238,7 @@ const SENSOR_IDEAL: SensorErrors = SensorErrors {
     misalignment: [[0.0; 3]; 3],
     range: 0.0,
     resolution: 0.0,
+    bandwidth_hz: 0.0,
 };
 
 /// √3 / 32768: a 16-bit signed uniform scaled to unit variance.
@@ -293,6 +303,8 @@ pub struct TriadEngine {
     coupled: bool,
     phase: u32,
     range: f32,
+    /// The sensor's bandwidth ([`super::bandwidth`]).
+    lpf: SensorLowPass,
 }
 
 impl TriadEngine {
@@ -318,6 +330,7 @@ impl TriadEngine {
             coupled: false,
             phase: 0,
             range,
+            lpf: SensorLowPass::OFF,
         }
     }
 
@@ -369,7 +382,10 @@ impl TriadEngine {
             0.0
         };
         self.slow_on = slow_on;
-        self.noisy = noisy || slow_on || coupled || self.quant > 0.0;
+        self.lpf.configure(e.bandwidth_hz, dt);
+        // The filter's path is the noisy one (the ideal path adds the bias
+        // alone).
+        self.noisy = noisy || slow_on || coupled || self.quant > 0.0 || self.lpf.is_on();
         self.coupled = coupled;
         self.set_temperature(e, temp_c);
     }
@@ -460,6 +476,11 @@ impl TriadEngine {
             for i in 0..3 {
                 y[i] += self.bias[i] + self.slow[i] + self.sigma[i] * rng.gaussian();
             }
+            // The sensor's own response, then its output word: resolution
+            // and range (docs/sensors.md "Bandwidth").
+            if self.lpf.is_on() {
+                self.lpf.apply(&mut y);
+            }
             if self.quant > 0.0 {
                 for v in y.iter_mut() {
                     *v = libm::roundf(*v * self.inv_quant) * self.quant;
@@ -529,6 +550,8 @@ pub struct TriadEngineFixed {
     quant: Option<(Recip, i32)>,
     phase: u32,
     range: i32,
+    /// The sensor's bandwidth ([`super::bandwidth`]).
+    lpf: SensorLowPassFixed,
 }
 
 fn q(v: f64, bits: u32) -> i32 {
@@ -578,6 +601,7 @@ impl TriadEngineFixed {
             quant: None,
             phase: 0,
             range: q(f64::from(range), bits).max(0),
+            lpf: SensorLowPassFixed::OFF,
         }
     }
 
@@ -675,7 +699,8 @@ impl TriadEngineFixed {
         self.quant = (step > 1).then(|| (Recip::new(step as u32), step));
         self.slow_on = slow_on;
         self.coupled = coupled;
-        self.noisy = noisy || slow_on || coupled || self.quant.is_some();
+        self.lpf.configure(e.bandwidth_hz, dt as f32);
+        self.noisy = noisy || slow_on || coupled || self.quant.is_some() || self.lpf.is_on();
         for i in 0..3 {
             self.set_axis_temperature(e, i, temp_c);
         }
@@ -760,7 +785,7 @@ impl TriadEngineFixed {
     /// the specific force at 2^[`ACC_BITS`] for the g-sensitivity); returns
     /// the measurement and a mask of the axes beyond the range (bit i =
     /// axis i), which are clipped.
-    #[inline]
+    #[inline(always)]
     pub fn measure(&mut self, truth: &[i32; 3], force: &[i32; 3], rng: &mut Rng) -> ([i32; 3], u8) {
         let x = truth;
         let mut y = *x;
@@ -787,6 +812,9 @@ impl TriadEngineFixed {
                     .saturating_add(self.slow[i])
                     .saturating_add(self.sigma[i].apply_small(rng.gaussian_sum()));
                 y[i] = y[i].saturating_add(e);
+            }
+            if self.lpf.is_on() {
+                self.lpf.apply(&mut y);
             }
             if let Some((r, step)) = self.quant {
                 for v in y.iter_mut() {

@@ -6,6 +6,7 @@
 //! [`crate::chain`]; the filters in [`crate::dsp`], alignment and attitude in
 //! [`crate::ahrs`].
 
+pub mod bandwidth;
 pub mod errors;
 pub mod motion;
 pub mod profile;

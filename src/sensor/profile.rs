@@ -57,9 +57,10 @@ pub struct SensorSpec {
     /// Resolution (quantisation step of the sensor's output), unit; 0 =
     /// none beyond the chain's own.
     pub resolution: f32,
-    /// −3 dB bandwidth of the sensor, Hz. Documented, not applied: the
-    /// chain's band-limit is its FIR (ICD 5.6) and decimation; a value
-    /// above the internal rate's Nyquist frequency is refused.
+    /// −3 dB bandwidth of the sensor, Hz: a first-order low-pass per axis
+    /// at the chain's internal rate, before its FIR (ICD 5.6)
+    /// ([`crate::sensor::bandwidth`]); 0 = not given, no filter, and none
+    /// at or above the internal rate's Nyquist frequency either.
     pub bandwidth_hz: f32,
 }
 

@@ -138,7 +138,7 @@ fn comment(sensor: Sensor, key: &str, v: f32) -> String {
         "temp_bias" => format!("{u}/°C"),
         "temp_scale" => "1/°C".to_owned(),
         "resolution" => format!("{u} (0 = none)"),
-        "bandwidth_hz" => "Hz (documented, not applied; 0 = not given)".to_owned(),
+        "bandwidth_hz" => "Hz, −3 dB, first order (0 = not given: no filter)".to_owned(),
         _ => String::new(),
     }
 }
