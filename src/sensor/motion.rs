@@ -58,9 +58,10 @@ pub struct Truth {
 
 /// Largest angular rate handed to the sensor model, °/s: 8192, beyond every
 /// gyro range (the IMX-5's ±4000 °/s included, so its over-range flag sees
-/// a rate beyond it). The fixed-point build's truth stops at ±2048 °/s
-/// (`TRUTH_LIMIT`: its attitude holds 0.03 rad a tick), so there a rate
-/// beyond 2048 °/s reads 2048 °/s on the IMX-5 without the flag.
+/// a rate beyond it). The fixed-point build's truth stops at ±4095 °/s
+/// (`RATE_TRUTH_LIMIT`, still beyond the IMX-5's range, so the flag sees
+/// it; a built-in motion's attitude turns at most 0.029 rad a tick,
+/// 3335 °/s at 2 kHz: docs/sensors.md "Fixed point").
 pub const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
 /// Largest specific force handed to the sensor model, g: 128, beyond every
 /// accelerometer range.
@@ -609,10 +610,11 @@ impl MotionSource for BuiltinMotion {
 
 use crate::math::fixed::{mul_q30, mul_shr, to_fixed};
 use crate::math::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
-use crate::math::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+use crate::math::units::{ACC_BITS, GYRO_BITS, RATE_TRUTH_LIMIT, TRUTH_LIMIT};
 
-/// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`], specific
-/// force in g·2^[`ACC_BITS`], each clamped to ±[`TRUTH_LIMIT`].
+/// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`] (clamped
+/// to ±[`RATE_TRUTH_LIMIT`]), specific force in g·2^[`ACC_BITS`]
+/// (clamped to ±[`TRUTH_LIMIT`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TruthFixed {
     /// Inertial angular rate, scaled.
@@ -626,10 +628,13 @@ pub struct TruthFixed {
 impl TruthFixed {
     /// `t` scaled and clamped (rounded to nearest; NaN reads 0).
     pub fn from_truth(t: &Truth) -> Self {
-        let c = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
         TruthFixed {
-            rate: t.rate_dps.map(|v| c(v, GYRO_BITS)),
-            force: t.specific_force_g.map(|v| c(v, ACC_BITS)),
+            rate: t
+                .rate_dps
+                .map(|v| to_fixed(v, GYRO_BITS).clamp(-RATE_TRUTH_LIMIT, RATE_TRUTH_LIMIT)),
+            force: t
+                .specific_force_g
+                .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT)),
             temperature_c: t.temperature_c,
         }
     }
@@ -762,7 +767,14 @@ impl BuiltinMotionFixed {
             let x = f64::from(v) * core::f64::consts::PI / 180.0 * f64::from(dt);
             libm::round(x * 68_719_476_736.0).clamp(-2e9, 2e9) as i32 // 2³⁶
         };
-        let lim = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        let lim = |v: f32, bits: u32| {
+            let l = if bits == GYRO_BITS {
+                RATE_TRUTH_LIMIT
+            } else {
+                TRUTH_LIMIT
+            };
+            to_fixed(v, bits).clamp(-l, l)
+        };
         let q = QuatFixed::from_f32(&base_f);
         let kind = match motion {
             Motion::Static { .. } => {
@@ -811,6 +823,9 @@ impl BuiltinMotionFixed {
                 let k = core::f64::consts::PI / 180.0
                     * tick_s
                     * crate::math::exp2i(36 - GYRO_BITS as i32);
+                // The step is a Q36 i32: clamped at 0.029 rad a tick (3335 °/s
+                // at 2 kHz); a faster rotation reports its rate (up to
+                // RATE_TRUTH_LIMIT) and turns its attitude at that step.
                 let (step, frac) = dither_parts(rate.map(|r| (f64::from(r) * k).clamp(-2e9, 2e9)));
                 FixedKind::Rotation {
                     q,
@@ -896,10 +911,19 @@ impl BuiltinMotionFixed {
 
     fn with_body(&self, q: &QuatQ30, rate: [i32; 3], acc: [i32; 3]) -> TruthFixed {
         let (w, f) = earth_and_gravity_fixed(q, &self.earth);
-        let add = |a: i32, b: i32| a.saturating_add(b).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        let add = |a: i32, b: i32, l: i32| a.saturating_add(b).clamp(-l, l);
+        let (r, t) = (RATE_TRUTH_LIMIT, TRUTH_LIMIT);
         TruthFixed {
-            rate: [add(w[0], rate[0]), add(w[1], rate[1]), add(w[2], rate[2])],
-            force: [add(f[0], acc[0]), add(f[1], acc[1]), add(f[2], acc[2])],
+            rate: [
+                add(w[0], rate[0], r),
+                add(w[1], rate[1], r),
+                add(w[2], rate[2], r),
+            ],
+            force: [
+                add(f[0], acc[0], t),
+                add(f[1], acc[1], t),
+                add(f[2], acc[2], t),
+            ],
             temperature_c: None,
         }
     }
