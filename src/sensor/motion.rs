@@ -60,8 +60,7 @@ pub struct Truth {
 /// gyro range (the IMX-5's ±4000 °/s included, so its over-range flag sees
 /// a rate beyond it). The fixed-point build's truth stops at ±4095 °/s
 /// (`RATE_TRUTH_LIMIT`, still beyond the IMX-5's range, so the flag sees
-/// it; a built-in motion's attitude turns at most 0.029 rad a tick,
-/// 3335 °/s at 2 kHz: docs/sensors.md "Fixed point").
+/// it; docs/sensors.md "Fixed point").
 pub const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
 /// Largest specific force handed to the sensor model, g: 128, beyond every
 /// accelerometer range.
@@ -710,15 +709,16 @@ enum FixedKind {
         frac: [u32; 3],
         acc: [u32; 3],
     },
-    /// Constant rotation: the attitude, the rotation of one tick (Q36 rad)
-    /// rounded down, its fraction and running sum (dithered as
-    /// `Constant`'s rate) and the body rate (scaled).
+    /// Constant rotation: the attitude, the rotation of one tick (Q36 rad;
+    /// of half a tick if `halves`) rounded down, its fraction and running
+    /// sum (dithered as `Constant`'s rate) and the body rate (scaled).
     Rotation {
         q: QuatFixed,
         step: [i32; 3],
         frac: [u32; 3],
         acc: [u32; 3],
         rate: [i32; 3],
+        halves: bool,
     },
     /// Vibration: the attitude, the phase, one tick's rotation at unit
     /// phase (Q36 rad), rate and acceleration amplitudes (scaled).
@@ -823,16 +823,20 @@ impl BuiltinMotionFixed {
                 let k = core::f64::consts::PI / 180.0
                     * tick_s
                     * crate::math::exp2i(36 - GYRO_BITS as i32);
-                // The step is a Q36 i32: clamped at 0.029 rad a tick (3335 °/s
-                // at 2 kHz); a faster rotation reports its rate (up to
-                // RATE_TRUTH_LIMIT) and turns its attitude at that step.
-                let (step, frac) = dither_parts(rate.map(|r| (f64::from(r) * k).clamp(-2e9, 2e9)));
+                // The step is a Q36 i32: a tick's rotation beyond 0.029 rad
+                // (3335 °/s at 2 kHz, up to RATE_TRUTH_LIMIT's 0.036) turns
+                // in two dithered half-tick steps.
+                let exact = rate.map(|r| f64::from(r) * k);
+                let halves = exact.iter().any(|x| x.abs() > 2e9);
+                let h = if halves { 0.5 } else { 1.0 };
+                let (step, frac) = dither_parts(exact.map(|x| (x * h).clamp(-2e9, 2e9)));
                 FixedKind::Rotation {
                     q,
                     step,
                     frac,
                     acc: [1 << 31; 3],
                     rate,
+                    halves,
                 }
             }
             Motion::Vibration {
@@ -977,8 +981,18 @@ impl BuiltinMotionFixed {
                 truth.rate = dither(floor, frac, acc);
             }
             FixedKind::Rotation {
-                q, step, frac, acc, ..
-            } => q.rotate(&dither(step, frac, acc)),
+                q,
+                step,
+                frac,
+                acc,
+                halves,
+                ..
+            } => {
+                q.rotate(&dither(step, frac, acc));
+                if *halves {
+                    q.rotate(&dither(step, frac, acc));
+                }
+            }
             FixedKind::Vibration {
                 q, phasor, step, ..
             } => {
@@ -1082,13 +1096,28 @@ mod tests {
     /// it was ~1.5e-5 rad off (1.2e-8 to 1.7e-8 rad/s on each axis).
     #[test]
     fn the_fixed_rotation_turns_at_the_rate_it_reports() {
+        fixed_rotation_error([3.3, -2.1, 10.7], 1_200_000, 2e-7);
+    }
+
+    /// Beyond 0.029 rad a tick (3335 °/s at 2 kHz) the fixed-point
+    /// rotation turns in two half-tick steps: at 3900 °/s (and at
+    /// RATE_TRUTH_LIMIT on all axes) it still turns at the rate it reports.
+    #[test]
+    fn a_fast_fixed_rotation_turns_at_the_rate_it_reports() {
+        fixed_rotation_error([3900.0, 0.0, -200.0], 20_000, 1e-6);
+        fixed_rotation_error([-4095.0, 4095.0, 4095.0], 20_000, 1e-6);
+    }
+
+    /// The attitude error (rad) of a fixed-point constant rotation at
+    /// `rate_dps` after `ticks` at 2 kHz against the exact rotation of the
+    /// rate it reports, asserted below `tol`.
+    fn fixed_rotation_error(rate_dps: Vec3, ticks: u64, tol: f64) {
         use crate::math::double;
         let m = Motion::ConstantRotation {
             lat_deg: 45.0,
             heading_deg: 30.0,
-            rate_dps: [3.3, -2.1, 10.7],
+            rate_dps,
         };
-        let ticks = 1_200_000u64;
         let mut fixed = BuiltinMotionFixed::new(m, 0.0005);
         for _ in 0..=ticks {
             fixed.step();
@@ -1103,7 +1132,7 @@ mod tests {
         let q = fixed.attitude().unwrap().map(f64::from);
         let d = double::quat_mul(&double::quat_conj(&want), &q);
         let e = 2.0 * (d[1] * d[1] + d[2] * d[2] + d[3] * d[3]).sqrt();
-        assert!(e < 2e-7, "{e} rad");
+        assert!(e < tol, "{rate_dps:?}: {e} rad");
     }
 
     /// The integer motions follow the float ones over 2 s at 2 kHz: truth
