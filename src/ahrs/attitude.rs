@@ -185,6 +185,13 @@ pub struct AttitudeFixed {
 
 const Q36: f64 = 68_719_476_736.0;
 
+/// The largest rotation of one tick about an axis the fixed-point AHRS
+/// carries, Q36 rad: 2³¹ − 2²⁷, 0.0293 rad (3357 °/s at 2 kHz). A faster
+/// axis is read at this rate (the attitude lags; no ISB output reads it,
+/// docs/sensors.md "Fixed point"). The margin keeps the coning term
+/// (|p × w| < 1.76·2⁶²) and a = ½(p + w) + p × w/12 within their integers.
+pub const TICK_ROTATION_MAX: i32 = ((1i64 << 31) - (1 << 27)) as i32;
+
 impl AttitudeFixed {
     /// Starts at `q` with ticks of `dt` and the assumed Earth rate
     /// `earth_enu` (rad/s).
@@ -223,9 +230,18 @@ impl AttitudeFixed {
         self.bias_tick = bias_dps.map(|b| crate::math::fixed::to_fixed(b * k, 0));
     }
 
+    /// A gyro sample's rotation in one tick, Q36 rad, clamped to
+    /// ±[`TICK_ROTATION_MAX`] (the product in `i64`: at 2 kHz the `i32`
+    /// holds 3581 °/s, the gyro up to 4096).
+    #[inline(always)]
+    fn tick_rotation(&self, g: i32) -> i32 {
+        let r = (mul64(g, self.gyro_k) + (1 << 29)) >> 30;
+        r.clamp(-i64::from(TICK_ROTATION_MAX), i64::from(TICK_ROTATION_MAX)) as i32
+    }
+
     /// [`Attitude::note_rate`] (gyro scaled).
     pub fn note_rate(&mut self, gyro: &[i32; 3]) {
-        self.prev = gyro.map(|g| mul_shr(g, self.gyro_k, 30));
+        self.prev = gyro.map(|g| self.tick_rotation(g));
         self.has_prev = true;
     }
 
@@ -254,7 +270,8 @@ impl AttitudeFixed {
         for i in 0..3 {
             // Q50 → Q36.
             let we36 = (we[i] + (1 << 13)) >> 14;
-            w[i] = mul_shr(gyro[i], self.gyro_k, 30)
+            w[i] = self
+                .tick_rotation(gyro[i])
                 .saturating_sub(self.bias_tick[i])
                 .saturating_sub(we36);
         }
@@ -285,6 +302,7 @@ impl AttitudeFixed {
                 }
             }
         }
+        let w = w.map(|x| x.clamp(-TICK_ROTATION_MAX, TICK_ROTATION_MAX));
         // The first sample ever only opens the first interval.
         if !self.has_prev {
             self.prev = w;

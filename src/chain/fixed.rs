@@ -119,7 +119,7 @@ pub fn truth_of(t: &TruthF32) -> Truth {
 }
 
 /// The fixed-point truth is bounded where it is made (its integer scale
-/// holds ±2048 °/s, ±128 g): unchanged.
+/// holds ±4095 °/s, ±128 g): unchanged.
 #[inline(always)]
 pub fn bounded(t: &Truth) -> Truth {
     *t

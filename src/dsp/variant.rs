@@ -393,8 +393,11 @@ impl VariantFixed {
             return;
         }
         if self.variant == OutputVariant::Incremental {
-            // α, υ before this tick at the block exponent: |Σ| < n·2^28.2,
-            // s = ⌊log₂ n⌋ − 1 keeps them within 2^30.
+            // α, υ before this tick at the block exponent: |Σ| < n·2^28.2
+            // up to ±2048 °/s, s = ⌊log₂ n⌋ − 1 keeps them within 2^30
+            // (up to the fixed-point truth's ±4095 °/s, n·2^29.2: `block`
+            // saturates a partial sum beyond an i32; the products are
+            // 64-bit either way).
             let s = u32::from(self.shift);
             let mut h = [0i32; CHANNELS];
             for c in 0..CHANNELS {

@@ -22,4 +22,4 @@ pub mod units;
 
 pub use rotation::{Mat3, Quat, Vec3};
 pub use trig::{asinf, atan2f, cosf, exp2i, sincos, sincosf, sinf, tanf};
-pub use units::{ACC_BITS, G, GYRO_BITS, TRUTH_LIMIT};
+pub use units::{ACC_BITS, G, GYRO_BITS, RATE_TRUTH_LIMIT, TRUTH_LIMIT};

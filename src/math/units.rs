@@ -12,7 +12,13 @@ pub const GYRO_BITS: u32 = 19;
 /// Fraction bits of the fixed-point accelerometer measurements: 2²³ per g
 /// (LSB 1.2e-7 g; ±256 g fit an `i32`).
 pub const ACC_BITS: u32 = 23;
-/// Truth entering the fixed-point engine is clamped to ±2³⁰ (2048 °/s,
-/// 128 g: beyond every range, so the saturation flags still see it), and
-/// each entry of M − I to ±¼, so M·truth cannot overflow.
+/// Specific force entering the fixed-point engine is clamped to ±2³⁰
+/// (128 g: beyond every accelerometer range, so the saturation flags still
+/// see it).
 pub const TRUTH_LIMIT: i32 = 1 << 30;
+/// The rate truth entering the fixed-point engine is clamped to
+/// ±4095 °/s (the `i32` at [`GYRO_BITS`] holds ±4096 °/s): beyond every
+/// gyro range (the IMX-5's ±4000 °/s), so the over-range flag still sees
+/// it. The steps on the rate path compute in `i64` where a result can
+/// exceed an `i32` and saturate (docs/sensors.md "Fixed point").
+pub const RATE_TRUTH_LIMIT: i32 = 4095 << GYRO_BITS;

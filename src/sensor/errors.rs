@@ -62,7 +62,7 @@ use super::profile::{SensorProfile, SensorSpec};
 use super::rng::Rng;
 use crate::math::fixed::{mul64, Coef, Recip};
 use crate::math::rotation::{Mat3, Vec3};
-use crate::math::{ACC_BITS, TRUTH_LIMIT};
+use crate::math::{ACC_BITS, RATE_TRUTH_LIMIT, TRUTH_LIMIT};
 use crate::model::Product;
 use libm::sqrtf;
 
@@ -631,9 +631,15 @@ impl TriadEngineFixed {
     /// kept (rescaled if its fraction bits change).
     pub fn configure(&mut self, e: &SensorErrors, temp_c: f32, dt: f32) {
         if e.range > 0.0 {
-            // Capped below the truth limit (±2048 °/s, ±128 g): a range
-            // beyond it (the IMX-5's ±4000 °/s) saturates there, flagged.
-            self.range = q(f64::from(e.range), self.bits()).clamp(0, TRUTH_LIMIT - 1);
+            // Capped below the truth limits (±4095 °/s, ±128 g), so a
+            // truth beyond the range is flagged (the IMX-5's ±4000 °/s
+            // is within them).
+            let limit = if self.bits() == ACC_BITS {
+                TRUTH_LIMIT
+            } else {
+                RATE_TRUTH_LIMIT
+            };
+            self.range = q(f64::from(e.range), self.bits()).clamp(0, limit - 1);
         }
         let scale = self.scale();
         let dt = f64::from(dt);
@@ -781,7 +787,8 @@ impl TriadEngineFixed {
         self.resum();
     }
 
-    /// One tick: measures `truth` (scaled, |·| ≤ [`TRUTH_LIMIT`]; `force`
+    /// One tick: measures `truth` (scaled, any `i32`: M·truth is summed in
+    /// `i64` and saturated; `force`
     /// the specific force at 2^[`ACC_BITS`] for the g-sensitivity); returns
     /// the measurement and a mask of the axes beyond the range (bit i =
     /// axis i), which are clipped.
@@ -792,7 +799,14 @@ impl TriadEngineFixed {
         if !self.identity_m {
             for i in 0..3 {
                 let r = &self.m[i];
-                y[i] = x[i] + r[0].apply(x[0]) + r[1].apply(x[1]) + r[2].apply(x[2]);
+                // |M − I| ≤ ¼ an entry: |Σ| < 1.75·2³¹, an i64 (the IMX-5's
+                // ±4000 °/s is 0.98·2³¹); saturated to the i32 (the range
+                // then clips and flags it).
+                let s = i64::from(x[i])
+                    + i64::from(r[0].apply(x[0]))
+                    + i64::from(r[1].apply(x[1]))
+                    + i64::from(r[2].apply(x[2]));
+                y[i] = s.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
             }
         }
         if self.noisy {

@@ -58,9 +58,9 @@ pub struct Truth {
 
 /// Largest angular rate handed to the sensor model, °/s: 8192, beyond every
 /// gyro range (the IMX-5's ±4000 °/s included, so its over-range flag sees
-/// a rate beyond it). The fixed-point build's truth stops at ±2048 °/s
-/// (`TRUTH_LIMIT`: its attitude holds 0.03 rad a tick), so there a rate
-/// beyond 2048 °/s reads 2048 °/s on the IMX-5 without the flag.
+/// a rate beyond it). The fixed-point build's truth stops at ±4095 °/s
+/// (`RATE_TRUTH_LIMIT`, still beyond the IMX-5's range, so the flag sees
+/// it; docs/sensors.md "Fixed point").
 pub const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
 /// Largest specific force handed to the sensor model, g: 128, beyond every
 /// accelerometer range.
@@ -609,10 +609,11 @@ impl MotionSource for BuiltinMotion {
 
 use crate::math::fixed::{mul_q30, mul_shr, to_fixed};
 use crate::math::rotation::{quat_rotate_inv_q30, up_in_body_q30, QuatFixed, QuatQ30};
-use crate::math::units::{ACC_BITS, GYRO_BITS, TRUTH_LIMIT};
+use crate::math::units::{ACC_BITS, GYRO_BITS, RATE_TRUTH_LIMIT, TRUTH_LIMIT};
 
-/// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`], specific
-/// force in g·2^[`ACC_BITS`], each clamped to ±[`TRUTH_LIMIT`].
+/// One tick of truth in integers: rates in °/s·2^[`GYRO_BITS`] (clamped
+/// to ±[`RATE_TRUTH_LIMIT`]), specific force in g·2^[`ACC_BITS`]
+/// (clamped to ±[`TRUTH_LIMIT`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TruthFixed {
     /// Inertial angular rate, scaled.
@@ -626,10 +627,13 @@ pub struct TruthFixed {
 impl TruthFixed {
     /// `t` scaled and clamped (rounded to nearest; NaN reads 0).
     pub fn from_truth(t: &Truth) -> Self {
-        let c = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
         TruthFixed {
-            rate: t.rate_dps.map(|v| c(v, GYRO_BITS)),
-            force: t.specific_force_g.map(|v| c(v, ACC_BITS)),
+            rate: t
+                .rate_dps
+                .map(|v| to_fixed(v, GYRO_BITS).clamp(-RATE_TRUTH_LIMIT, RATE_TRUTH_LIMIT)),
+            force: t
+                .specific_force_g
+                .map(|v| to_fixed(v, ACC_BITS).clamp(-TRUTH_LIMIT, TRUTH_LIMIT)),
             temperature_c: t.temperature_c,
         }
     }
@@ -705,15 +709,16 @@ enum FixedKind {
         frac: [u32; 3],
         acc: [u32; 3],
     },
-    /// Constant rotation: the attitude, the rotation of one tick (Q36 rad)
-    /// rounded down, its fraction and running sum (dithered as
-    /// `Constant`'s rate) and the body rate (scaled).
+    /// Constant rotation: the attitude, the rotation of one tick (Q36 rad;
+    /// of half a tick if `halves`) rounded down, its fraction and running
+    /// sum (dithered as `Constant`'s rate) and the body rate (scaled).
     Rotation {
         q: QuatFixed,
         step: [i32; 3],
         frac: [u32; 3],
         acc: [u32; 3],
         rate: [i32; 3],
+        halves: bool,
     },
     /// Vibration: the attitude, the phase, one tick's rotation at unit
     /// phase (Q36 rad), rate and acceleration amplitudes (scaled).
@@ -762,7 +767,14 @@ impl BuiltinMotionFixed {
             let x = f64::from(v) * core::f64::consts::PI / 180.0 * f64::from(dt);
             libm::round(x * 68_719_476_736.0).clamp(-2e9, 2e9) as i32 // 2³⁶
         };
-        let lim = |v: f32, bits: u32| to_fixed(v, bits).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        let lim = |v: f32, bits: u32| {
+            let l = if bits == GYRO_BITS {
+                RATE_TRUTH_LIMIT
+            } else {
+                TRUTH_LIMIT
+            };
+            to_fixed(v, bits).clamp(-l, l)
+        };
         let q = QuatFixed::from_f32(&base_f);
         let kind = match motion {
             Motion::Static { .. } => {
@@ -811,13 +823,20 @@ impl BuiltinMotionFixed {
                 let k = core::f64::consts::PI / 180.0
                     * tick_s
                     * crate::math::exp2i(36 - GYRO_BITS as i32);
-                let (step, frac) = dither_parts(rate.map(|r| (f64::from(r) * k).clamp(-2e9, 2e9)));
+                // The step is a Q36 i32: a tick's rotation beyond 0.029 rad
+                // (3335 °/s at 2 kHz, up to RATE_TRUTH_LIMIT's 0.036) turns
+                // in two dithered half-tick steps.
+                let exact = rate.map(|r| f64::from(r) * k);
+                let halves = exact.iter().any(|x| x.abs() > 2e9);
+                let h = if halves { 0.5 } else { 1.0 };
+                let (step, frac) = dither_parts(exact.map(|x| (x * h).clamp(-2e9, 2e9)));
                 FixedKind::Rotation {
                     q,
                     step,
                     frac,
                     acc: [1 << 31; 3],
                     rate,
+                    halves,
                 }
             }
             Motion::Vibration {
@@ -896,10 +915,19 @@ impl BuiltinMotionFixed {
 
     fn with_body(&self, q: &QuatQ30, rate: [i32; 3], acc: [i32; 3]) -> TruthFixed {
         let (w, f) = earth_and_gravity_fixed(q, &self.earth);
-        let add = |a: i32, b: i32| a.saturating_add(b).clamp(-TRUTH_LIMIT, TRUTH_LIMIT);
+        let add = |a: i32, b: i32, l: i32| a.saturating_add(b).clamp(-l, l);
+        let (r, t) = (RATE_TRUTH_LIMIT, TRUTH_LIMIT);
         TruthFixed {
-            rate: [add(w[0], rate[0]), add(w[1], rate[1]), add(w[2], rate[2])],
-            force: [add(f[0], acc[0]), add(f[1], acc[1]), add(f[2], acc[2])],
+            rate: [
+                add(w[0], rate[0], r),
+                add(w[1], rate[1], r),
+                add(w[2], rate[2], r),
+            ],
+            force: [
+                add(f[0], acc[0], t),
+                add(f[1], acc[1], t),
+                add(f[2], acc[2], t),
+            ],
             temperature_c: None,
         }
     }
@@ -953,8 +981,18 @@ impl BuiltinMotionFixed {
                 truth.rate = dither(floor, frac, acc);
             }
             FixedKind::Rotation {
-                q, step, frac, acc, ..
-            } => q.rotate(&dither(step, frac, acc)),
+                q,
+                step,
+                frac,
+                acc,
+                halves,
+                ..
+            } => {
+                q.rotate(&dither(step, frac, acc));
+                if *halves {
+                    q.rotate(&dither(step, frac, acc));
+                }
+            }
             FixedKind::Vibration {
                 q, phasor, step, ..
             } => {
@@ -1058,13 +1096,28 @@ mod tests {
     /// it was ~1.5e-5 rad off (1.2e-8 to 1.7e-8 rad/s on each axis).
     #[test]
     fn the_fixed_rotation_turns_at_the_rate_it_reports() {
+        fixed_rotation_error([3.3, -2.1, 10.7], 1_200_000, 2e-7);
+    }
+
+    /// Beyond 0.029 rad a tick (3335 °/s at 2 kHz) the fixed-point
+    /// rotation turns in two half-tick steps: at 3900 °/s (and at
+    /// RATE_TRUTH_LIMIT on all axes) it still turns at the rate it reports.
+    #[test]
+    fn a_fast_fixed_rotation_turns_at_the_rate_it_reports() {
+        fixed_rotation_error([3900.0, 0.0, -200.0], 20_000, 1e-6);
+        fixed_rotation_error([-4095.0, 4095.0, 4095.0], 20_000, 1e-6);
+    }
+
+    /// The attitude error (rad) of a fixed-point constant rotation at
+    /// `rate_dps` after `ticks` at 2 kHz against the exact rotation of the
+    /// rate it reports, asserted below `tol`.
+    fn fixed_rotation_error(rate_dps: Vec3, ticks: u64, tol: f64) {
         use crate::math::double;
         let m = Motion::ConstantRotation {
             lat_deg: 45.0,
             heading_deg: 30.0,
-            rate_dps: [3.3, -2.1, 10.7],
+            rate_dps,
         };
-        let ticks = 1_200_000u64;
         let mut fixed = BuiltinMotionFixed::new(m, 0.0005);
         for _ in 0..=ticks {
             fixed.step();
@@ -1079,7 +1132,7 @@ mod tests {
         let q = fixed.attitude().unwrap().map(f64::from);
         let d = double::quat_mul(&double::quat_conj(&want), &q);
         let e = 2.0 * (d[1] * d[1] + d[2] * d[2] + d[3] * d[3]).sqrt();
-        assert!(e < 2e-7, "{e} rad");
+        assert!(e < tol, "{rate_dps:?}: {e} rad");
     }
 
     /// The integer motions follow the float ones over 2 s at 2 kHz: truth

@@ -158,7 +158,7 @@ impl core::fmt::Display for ProfileError {
 
 /// Allowed ranges of a [`SensorSpec`]'s fields: (key, min, max) for a gyro
 /// (°/s) and an accelerometer (g). The ranges bound what the engines can
-/// represent (fixed point: ±2048 °/s, ±128 g of truth; M − I within ±¼)
+/// represent (fixed point: ±4095 °/s, ±128 g of truth; M − I within ±¼)
 /// and what is physical; they are wide on purpose.
 const GYRO_LIMITS: [(&str, f32, f32); 13] = [
     ("range", 1.0, 4096.0),
