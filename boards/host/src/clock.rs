@@ -114,6 +114,19 @@ impl Clock {
         }
     }
 
+    /// The device time at which something that happened `age` ago (host
+    /// time) happened, e.g. a feed sample's arrival at its socket: `age`
+    /// scaled by the speed; at [`Speed::Max`], where host time does not
+    /// drive the device, now.
+    pub fn arrived_ns(&self, age: Duration) -> u64 {
+        let k = match self.speed {
+            Speed::Factor(k) => k,
+            Speed::Max => 0.0,
+        };
+        self.now_ns()
+            .saturating_sub((age.as_nanos() as f64 * k) as u64)
+    }
+
     /// [`Speed::Max`]: moves device time on to `ns` (never back). No
     /// effect at a factor, where the host clock drives it.
     pub fn advance_to(&mut self, ns: u64) {
@@ -185,6 +198,22 @@ mod tests {
         assert_eq!(m.host_wait(1_000_000), Duration::ZERO);
         m.hold_back(1_000);
         assert_eq!((m.now_ns(), m.held_back_ns()), (5_000, 0));
+    }
+
+    /// An arrival `age` ago is that much device time ago, scaled by the
+    /// speed; at `--speed max` it is now (the shared and own feeds both).
+    #[test]
+    fn an_arrival_is_dated_back_by_its_scaled_age() {
+        let epoch = std::time::Instant::now() - Duration::from_secs(10);
+        let c = Clock::new(epoch, Speed::Factor(2.0));
+        let before = c.now_ns();
+        let at = c.arrived_ns(Duration::from_millis(50));
+        let after = c.now_ns();
+        assert!(at + 100_000_000 >= before && at + 100_000_000 <= after);
+        assert_eq!(c.arrived_ns(Duration::from_secs(100)), 0);
+        let mut m = Clock::new(epoch, Speed::Max);
+        m.advance_to(7_000);
+        assert_eq!(m.arrived_ns(Duration::from_millis(50)), 7_000);
     }
 
     #[test]

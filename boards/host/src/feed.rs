@@ -633,8 +633,9 @@ mod tests {
     /// A sample's age is from when the socket received it, not from the
     /// read: one that waited 50 ms is read as 50 ms old (TCP and UDP). The
     /// kernel stamps only once its timestamping is on (a work item a
-    /// moment after the first socket asks): rows are sent until one comes
-    /// stamped, at most 20.
+    /// moment after the first socket asks; what came before is stamped
+    /// when read): rows are sent until one comes stamped with its
+    /// arrival, at most 20.
     #[test]
     fn samples_are_dated_from_their_arrival_at_the_socket() {
         let row = b"0.0005, 10, 0, 0, 0, 0, 1\n";
@@ -664,7 +665,9 @@ mod tests {
                 std::thread::sleep(wait);
                 sock.read_stamped(&mut |r, age| got.push((r.is_ok(), age)))
                     .unwrap();
-                if got.iter().any(|g| g.1 > Duration::ZERO) {
+                // A datagram that came before the kernel's timestamping was
+                // on is stamped when it is read (an age of µs): not yet.
+                if got.iter().any(|g| g.1 >= wait) {
                     break;
                 }
             }

@@ -156,11 +156,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         };
         let slots = &mut self.slots;
         let counts = &mut self.shared_counts;
-        let r = sock.read(&mut |r| {
+        // Each sample dated by its arrival at the socket, as a device's own
+        // feed's are (the runner's `feed_offer`).
+        let r = sock.read_stamped(&mut |r, age| {
             let k = r.as_ref().map(|s| usize::from(s.device()));
             match (k, r) {
                 (Ok(k), r) => match slots.get_mut(k) {
-                    Some(Some(Slot::On(runner))) => runner.feed_offer(r),
+                    Some(Some(Slot::On(runner))) => runner.feed_offer(r, age),
                     _ => {
                         tracing::info!("motion feed: sample for dev {k}, which is off or absent");
                         counts.note(Err(imu_emu::feed::Reject::WrongDevice));

@@ -648,11 +648,21 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self
     }
 
-    /// Hands the device a sample of a shared feed (or its rejection).
-    pub fn feed_offer(&mut self, r: Result<imu_emu::feed::Sample, imu_emu::feed::Reject>) {
-        let now = self.clock.now_ns();
+    /// Hands the device a sample of a shared feed (or its rejection) that
+    /// reached the socket `age` ago (host time; the kernel's receive
+    /// timestamp, [`FeedSocket::read_stamped`]): in real time it is dated
+    /// with the device time of its arrival, as a device's own feed's
+    /// samples are; zero: now.
+    ///
+    /// [`FeedSocket::read_stamped`]: crate::feed::FeedSocket::read_stamped
+    pub fn feed_offer(
+        &mut self,
+        r: Result<imu_emu::feed::Sample, imu_emu::feed::Reject>,
+        age: Duration,
+    ) {
+        let at = self.clock.arrived_ns(age);
         if let Some(f) = self.io.feed.as_mut() {
-            f.offer(r, now);
+            f.offer(r, at);
         }
     }
 
@@ -680,14 +690,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             return Ok(());
         };
         let clock = &self.clock;
-        let k = match clock.speed() {
-            Speed::Factor(k) => k,
-            Speed::Max => 0.0,
-        };
-        sock.read_stamped(&mut |r, age| {
-            let age = (age.as_nanos() as f64 * k) as u64;
-            state.offer(r, clock.now_ns().saturating_sub(age));
-        })
+        sock.read_stamped(&mut |r, age| state.offer(r, clock.arrived_ns(age)))
     }
 
     /// Reads the device's own feed socket (lockstep: stamped `now`).
