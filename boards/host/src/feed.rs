@@ -163,15 +163,10 @@ impl FeedSocket {
     }
 
     /// Reads what is there (at most [`MAX_READ`] bytes) and hands each
-    /// decoded outcome to `each`. Never blocks.
-    pub fn read(&mut self, each: &mut dyn FnMut(Result<Sample, Reject>)) -> anyhow::Result<()> {
-        self.read_stamped(&mut |r, _| each(r))
-    }
-
-    /// [`FeedSocket::read`], with how long ago (host time) the bytes that
-    /// ended each outcome reached the socket: the kernel's receive
-    /// timestamp (`SO_TIMESTAMPNS`; for TCP that of the newest segment a
-    /// read took), zero where there is none.
+    /// decoded outcome to `each` with how long ago (host time) the bytes
+    /// that ended it reached the socket: the kernel's receive timestamp
+    /// (`SO_TIMESTAMPNS`; for TCP that of the newest segment a read took),
+    /// zero where there is none. Never blocks.
     pub fn read_stamped(
         &mut self,
         each: &mut dyn FnMut(Result<Sample, Reject>, Duration),

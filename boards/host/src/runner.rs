@@ -264,6 +264,20 @@ struct HostPort<T: Transport> {
 }
 
 impl<T: Transport> HostPort<T> {
+    /// Hands what the link let through to the web view's tap and the
+    /// transport.
+    #[inline]
+    fn deliver(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
+        if let Some(w) = &self.web {
+            w.tx(bytes);
+        }
+        if bytes.is_empty() {
+            Ok(())
+        } else {
+            self.transport.send(bytes)
+        }
+    }
+
     /// Device time input is credited up to: the pass's time, but no later
     /// than the tick after the last one run.
     fn rx_time(&self) -> u64 {
@@ -367,26 +381,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
         if self.link.clean() {
             // No link fault: the bytes go as they are, without a copy.
             self.link.pass(bytes);
-            if let Some(w) = &self.web {
-                w.tx(bytes);
-            }
-            return if bytes.is_empty() {
-                Ok(())
-            } else {
-                self.transport.send(bytes)
-            };
+            return self.deliver(bytes);
         }
         let mut out = core::mem::take(&mut self.scratch);
         out.clear();
         self.link.tx(bytes, self.now_ns, &mut out);
-        if let Some(w) = &self.web {
-            w.tx(&out);
-        }
-        let r = if out.is_empty() {
-            Ok(())
-        } else {
-            self.transport.send(&out)
-        };
+        let r = self.deliver(&out);
         self.scratch = out;
         r
     }
@@ -681,20 +681,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         }
     }
 
-    /// Real time: reads the device's own feed socket, each sample stamped
-    /// with the device time it reached the socket (the kernel's receive
-    /// timestamp; the time of the read where there is none).
-    fn read_feed_live(&mut self) -> anyhow::Result<()> {
-        let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
-        else {
-            return Ok(());
-        };
-        let clock = &self.clock;
-        sock.read_stamped(&mut |r, age| state.offer(r, clock.arrived_ns(age)))
-    }
-
-    /// Reads the device's own feed socket (lockstep: stamped `now`).
-    fn read_feed(&mut self, now: u64) -> anyhow::Result<()> {
+    /// Reads the device's own feed socket (not while the lockstep queue is
+    /// full). In real time each sample is stamped with the device time it
+    /// reached the socket (the kernel's receive timestamp; the time of the
+    /// read where there is none), in lockstep with now.
+    fn read_feed(&mut self) -> anyhow::Result<()> {
         let (Some(sock), Some(state)) = (self.io.feed_socket.as_mut(), self.io.feed.as_mut())
         else {
             return Ok(());
@@ -702,7 +693,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         if !state.wants_more() {
             return Ok(());
         }
-        sock.read(&mut |r| state.offer(r, now))
+        let clock = &self.clock;
+        let lockstep_now = state.lockstep().then(|| clock.now_ns());
+        sock.read_stamped(&mut |r, age| {
+            state.offer(r, lockstep_now.unwrap_or_else(|| clock.arrived_ns(age)));
+        })
     }
 
     /// A lockstep turn: device time moves on to each queued sample's
@@ -710,7 +705,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     /// [`MAX_BACKLOG`] bytes wait for it; input and control are served
     /// every turn.
     fn lockstep_turn(&mut self) -> anyhow::Result<Duration> {
-        self.read_feed(self.clock.now_ns())?;
+        self.read_feed()?;
         let mut ticks = 0u64;
         let mut wait = IDLE_WAKE;
         loop {
@@ -1077,7 +1072,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             // Before the ticks: a sample that reached the socket before a
             // deadline this pass runs applies from that tick, however
             // late the host woke the runner (docs/feed.md, "Figures").
-            self.read_feed_live()?;
+            self.read_feed()?;
         }
         let pass = self.sched.poll(&mut self.dev, &mut self.io, now, limits)?;
         self.stats.ticks += u64::from(pass.ticks);
