@@ -53,6 +53,7 @@ pub mod ahrs;
 pub mod chain;
 pub mod device;
 pub mod dsp;
+pub mod earth;
 pub mod feed;
 pub mod framing;
 pub mod io;

@@ -12,14 +12,12 @@
 
 use libm::{exp, log, pow, sqrt};
 
-use super::nav::{
-    ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, GEOID_SEPARATION_M,
-    LEAP_SECONDS,
-};
+use super::nav::{ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, LEAP_SECONDS};
 use super::nav_sets::{
     gps_status, hdw_nav, ins_status, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, GpsVel, Ins1,
     Ins2, Ins3, Ins4, InsHeader, Magnetometer, MAX_NUM_SATELLITES,
 };
+use crate::earth::geoid_undulation_m;
 use crate::math::double::{
     euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
 };
@@ -292,7 +290,8 @@ impl NavState {
         }
         // A failed barometer keeps its last good reading.
         if !self.faults.baro_failed || self.baro_frozen.is_none() {
-            self.baro_frozen = Some(isa_kpa(truth.h_m - GEOID_SEPARATION_M) as f32);
+            self.baro_frozen =
+                Some(isa_kpa(truth.h_m - geoid_undulation_m(truth.lat_deg, truth.lon_deg)) as f32);
         }
     }
 
@@ -478,7 +477,7 @@ impl NavState {
         match self.baro_frozen {
             Some(p) if self.faults.baro_failed => p,
             _ => {
-                let p = isa_kpa(truth.h_m - GEOID_SEPARATION_M);
+                let p = isa_kpa(truth.h_m - geoid_undulation_m(truth.lat_deg, truth.lon_deg));
                 (p + BARO_NOISE_KPA * self.noise(tick, 7)) as f32
             }
         }
@@ -541,7 +540,7 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
 pub fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
     Ins3 {
         ins2: ins2(h, s),
-        msl: (s.lla[2] - GEOID_SEPARATION_M) as f32,
+        msl: (s.lla[2] - geoid_undulation_m(s.lla[0], s.lla[1])) as f32,
     }
 }
 
@@ -568,7 +567,7 @@ pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) 
                 | gps_status::FIX_OK,
             ecef: ecef_of(&lla),
             lla,
-            h_msl: (lla[2] - GEOID_SEPARATION_M) as f32,
+            h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
             h_acc: H_ACC_M,
             v_acc: V_ACC_M,
             p_dop: P_DOP,

@@ -17,9 +17,6 @@ use crate::math::double::quat_from_euler;
 pub const DEFAULT_LON_DEG: f64 = 0.0;
 /// Height of the built-in site above the WGS84 ellipsoid, m.
 pub const DEFAULT_HEIGHT_M: f64 = 0.0;
-/// Geoid height (ellipsoid − MSL) the emulator uses everywhere: it has no
-/// geoid model (neither has the SDK), so MSL = ellipsoid height.
-pub const GEOID_SEPARATION_M: f64 = 0.0;
 
 /// WGS84 semi-major axis, m.
 pub const WGS84_A: f64 = 6_378_137.0;
