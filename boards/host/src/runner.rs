@@ -291,7 +291,7 @@ impl<T: Transport> HostPort<T> {
     #[inline]
     fn deliver(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         if let Some(w) = &self.web {
-            w.tx(bytes);
+            w.tx(bytes, self.rx_time());
         }
         if bytes.is_empty() {
             Ok(())
@@ -524,7 +524,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                 // Heading, pitch, roll (deg): the vehicle's when a script,
                 // file, trajectory or feed plays (heading in [0, 360) like
                 // the built-in motion's), else the built-in motion's.
-                let truth = match dev.chain().vehicle_source() {
+                let attitude = match dev.chain().vehicle_source() {
                     Some(v) => {
                         let [roll, pitch, yaw] = v.euler_rad().map(f64::to_degrees);
                         Some([yaw.rem_euclid(360.0), pitch, roll].map(|x| x as f32))
@@ -534,6 +534,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                         .truth_attitude()
                         .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
                 };
+                // Where the unit is (the vehicle's, or the built-in
+                // motion's fixed place): the page's position track.
+                let v = dev.chain().vehicle();
+                let lla = [v.lat_rad.to_degrees(), v.lon_rad.to_degrees(), v.height_m];
+                let truth = crate::web::Truth { attitude, lla };
                 w.publish(self.status(dev), at.as_nanos(), truth);
             }
             self.web = Some(w);
