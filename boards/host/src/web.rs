@@ -60,6 +60,8 @@ use crate::control;
 pub const PUBLISH_EVERY: Duration = Duration::from_millis(40);
 /// Bytes of output kept for the web thread between two of its polls.
 pub const TX_RING: usize = 512 * 1024;
+/// Stamped runs of output bytes kept between two polls, at most.
+const MAX_MARKS: usize = 16 * 1024;
 /// Decoded points kept per device (the page asks for what is new).
 pub const KEEP_POINTS: usize = 8192;
 /// Most points one poll returns.
@@ -194,8 +196,11 @@ impl Tap {
         let room = TX_RING.saturating_sub(s.tx.len());
         let take = bytes.len().min(room);
         s.tx.extend(&bytes[..take]);
+        let full = s.marks.len() >= MAX_MARKS;
         match s.marks.back_mut() {
-            Some((ns, n)) if *ns == device_ns => *n += take,
+            // The same time, or no room for another stamp (no page has
+            // polled for long): the bytes join the last run.
+            Some((ns, n)) if *ns == device_ns || full => *n += take,
             _ if take > 0 => s.marks.push_back((device_ns, take)),
             _ => {}
         }
