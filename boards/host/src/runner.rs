@@ -51,7 +51,7 @@
 //!   round's start, one send at its end; while no client is connected
 //!   device time waits. The loop never sleeps then, it only polls the
 //!   transport (or waits for the client to read). **Repeatable sessions**:
-//!   while the device is quiet ([`Runner::max_quiet`]: nothing to send,
+//!   while the device is quiet (`Runner::max_quiet`: nothing to send,
 //!   no stream, no reset waiting, input neither held back nor within the
 //!   RX idle time) device time waits for the client's input too, and input
 //!   is read only then or while a stream runs; so a client that waits for

@@ -18,7 +18,7 @@
 //!   and answers the page's polls.
 //! - **One device clock**: every point, the truth and the status are on
 //!   the runner's device time (s since power-on), whatever the frame
-//!   carries ([`Timing`]): the tap stamps each run of bytes with the
+//!   carries (`Timing`): the tap stamps each run of bytes with the
 //!   device time it left the emulated line, and a frame's time is its
 //!   stream's previous time plus the step of its own clock — the 2 kHz
 //!   counter (a 16-bit wrap every 32.768 s resolved by the stamps), the
