@@ -648,3 +648,54 @@ fn a_seeded_speed_max_session_repeats_byte_for_byte() {
     let b = isb(Duration::from_millis(300));
     assert!(a == b, "the two IMX-5 sessions differ");
 }
+
+/// The project's own client, twice against `--speed max --seed 7`: `set
+/// Data_Rate 200`, then `record --format GA --frames 400` after a pause
+/// of its own length each run; the CSVs are the same but for the host's
+/// reception times (README "Repeatable sessions").
+#[test]
+fn the_projects_client_records_the_same_rows_run_after_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |pause: Duration, name: &str| {
+        let emu = Emu::tcp(&["--model", "K110", "--speed", "max", "--seed", "7"]);
+        let addr = emu.addr().to_string();
+        let client = |args: &[&str]| {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+                .args(["client", "--tcp", &addr])
+                .args(args)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        };
+        std::thread::sleep(pause);
+        client(&["set", "Data_Rate", "200"]);
+        std::thread::sleep(pause);
+        let csv = dir.path().join(name);
+        let path = csv.to_str().unwrap();
+        client(&["record", "--format", "GA", "--frames", "400", "-o", path]);
+        // The columns but the host's time.
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let host = header.iter().position(|&h| h == "host_time_s");
+        let rows: Vec<String> = lines
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|&(i, _)| Some(i) != host)
+                    .map(|(_, v)| v)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect();
+        assert_eq!(rows.len(), 400);
+        rows
+    };
+    let a = run(Duration::from_millis(10), "a.csv");
+    let b = run(Duration::from_millis(300), "b.csv");
+    assert!(a == b, "the recordings differ:\n{}\n{}", a[0], b[0]);
+}
