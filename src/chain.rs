@@ -250,23 +250,6 @@ impl ChainConfig {
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
     }
-
-    /// The longest output interval, in ticks, at which Instant samples
-    /// the FIR's output (ICD 5.3.6); at longer intervals it decimates by
-    /// the interval's mean (a boxcar over the output interval): the
-    /// **decimation's band limit**. Sampling keeps the white noise within
-    /// the profile's figure only while the FIR's bandwidth is below the
-    /// output's Nyquist frequency (2·f_c·n ≤ f_s); beyond it the noise of
-    /// the whole FIR band would alias into the output band and read high
-    /// by up to √(2·f_c/f_out) — the K201 with its LPF off (f_c = ∞: 1
-    /// tick) read its ARW √2 high at 2 kHz, a K110 at its factory 262 Hz
-    /// and 100 Hz read it 2.3× high. docs/sensors.md "Decimation".
-    pub fn instant_sample_limit(&self) -> u32 {
-        match self.lpf.hz() {
-            None => 1,
-            Some(fc) => ((self.internal_rate_hz as f32 / (2.0 * fc)) as u32).max(1),
-        }
-    }
 }
 
 /// Injectable faults (they drive [`Health`]).

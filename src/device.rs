@@ -365,6 +365,15 @@ impl<F: NorFlash, P: Personality> Device<F, P> {
         self.personality.ticks_to_next_output()
     }
 
+    /// Whether a software reset waits for the bytes queued before it (it
+    /// runs at the first tick once the line is empty): the device's own
+    /// work that [`Device::ticks_to_next_output`] does not show, for a
+    /// board that stops its clock while the device is idle (the host's
+    /// `--speed max`).
+    pub fn reset_pending(&self) -> bool {
+        self.shell.reset_pending
+    }
+
     /// The emulated product.
     pub fn product(&self) -> Product {
         self.shell.cfg.product

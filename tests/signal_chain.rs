@@ -196,11 +196,11 @@ fn output_variants_instant_average_incremental() {
             }
         }
     }
-    // With the LPF off, Instant decimates by the interval mean (the band
-    // limit of `ChainConfig::instant_sample_limit`): 1.0 over 40 ticks;
-    // at one tick an interval it is each tick's value (below).
+    // Instant is the last tick's value at any interval (ICD 5.3.6), here
+    // 2.0 after 40 ticks and each tick's value at one tick an interval
+    // (below); the others the interval's mean.
     for (variant, expect) in [
-        (OutputVariant::Instant, 1.0),
+        (OutputVariant::Instant, 2.0),
         (OutputVariant::Average, 1.0),
         (OutputVariant::Incremental, 1.0),
     ] {

@@ -435,15 +435,51 @@ fn output_density(model: &str, lpf: Bandwidth, variant: OutputVariant, rate: u32
     sd / f64::from(rate).sqrt()
 }
 
-/// Decimation band-limits: at every output rate, variant and LPF setting
-/// the output reads at most the configured density (instant samples the
-/// FIR's output while its band is below the output's Nyquist frequency,
-/// and decimates by the interval mean beyond:
-/// `ChainConfig::instant_sample_limit`); the unfiltered ones read it
-/// (they keep the whole band). Before, a K201 with its LPF off read √2
-/// high at 2 kHz (4 kHz point-sampled) and a K110 at its factory settings
-/// (262 Hz, 100 Hz) 2.3× high. The rates include the closest case of
-/// sampling, 2·f_c / f_out = 0.825 (33 Hz at 80 Hz).
+/// Σh² of the FIR `lpf` selects on `model` (its white-noise power gain),
+/// from its impulse response read through the chain: Instant at an output
+/// every tick, one tick of 100 °/s on gyro Z after a still start.
+fn fir_noise_gain(model: &str, lpf: Bandwidth) -> f64 {
+    struct Impulse(u32);
+    impl imu_emu::sensor::MotionSource for Impulse {
+        fn next(&mut self, _now: Instant, _dt: f32) -> imu_emu::sensor::Truth {
+            self.0 += 1;
+            let z = if self.0 == 1000 { 100.0 } else { 0.0 };
+            imu_emu::sensor::Truth {
+                rate_dps: [0.0, 0.0, z],
+                specific_force_g: [0.0, 0.0, 1.0],
+                temperature_c: Some(25.0),
+            }
+        }
+    }
+    let product = Product::parse(model).unwrap();
+    let mut chain = SignalChain::new(product, 5);
+    let mut cfg = ChainConfig::defaults(&product);
+    cfg.lpf = lpf;
+    cfg.output_variant = OutputVariant::Instant;
+    chain.configure(&cfg);
+    *chain.errors_mut() = ErrorModel::IDEAL;
+    let period_us = 1_000_000 / u64::from(product.model.internal_rate_hz);
+    let mut src = Impulse(0);
+    let mut gain = 0.0;
+    for t in 1..=3000u64 {
+        chain.tick_with(Instant::from_micros(period_us * t), &mut src);
+        let h = f64::from(chain.output().gyro[2]) / 100.0;
+        gain += h * h;
+    }
+    gain
+}
+
+/// Decimation: Average and Incremental are band-limited by their mean
+/// over the output interval and read at most the configured density at
+/// every output rate and LPF setting (the unfiltered average reads it: it
+/// keeps the whole band). Instant is the FIR's output sampled at the
+/// output instant (ICD 5.3.6 "exact values as measured at that
+/// instant"), as on a real unit: its σ is the FIR output's, N·√(f_s·Σh²),
+/// whatever the output rate, so it reads √(f_s·Σh²/f_out)·N — at most N
+/// while the FIR's band is below the output's Nyquist frequency, above
+/// it (the band's noise aliased) at lower rates: a K110 at its factory
+/// settings (262 Hz, instant, 100 Hz) reads 2.3 N, with the LPF off
+/// √(f_s/f_out)·N (docs/sensors.md "Decimation").
 #[test]
 fn no_variant_or_lpf_raises_the_white_noise_above_the_profile() {
     use OutputVariant::*;
@@ -456,25 +492,44 @@ fn no_variant_or_lpf_raises_the_white_noise_above_the_profile() {
         Bandwidth::Hz262,
         Bandwidth::Off,
     ];
-    // σ of 2000 outputs: 1.6 % (1σ); 4σ above.
+    // σ of 2000 outputs: 1.6 % (1σ); 4σ.
     let tol = 1.065;
     for (model, rates) in [
         ("K201", &[4000u32, 2000, 500][..]),
         ("K110", &[2000, 1000, 400, 200, 80][..]),
     ] {
+        let internal = Product::parse(model).unwrap().model.internal_rate_hz;
         for lpf in lpfs {
             if model == "K201" && matches!(lpf, Bandwidth::Hz16 | Bandwidth::Hz33) {
                 continue; // not a K201 setting (Table 5.24)
             }
+            let gain = fir_noise_gain(model, lpf);
             for variant in [Instant, Average, Incremental] {
                 for &rate in rates {
                     let read = output_density(model, lpf, variant, rate, n) / f64::from(n);
                     println!("{model} {lpf:?} {variant:?} {rate} Hz: {read:.3} of N");
+                    if variant == Instant {
+                        let want = (f64::from(internal) * gain / f64::from(rate)).sqrt();
+                        // Outputs closer than the FIR's memory are
+                        // correlated (fewer independent samples): there
+                        // only the bound.
+                        let fc = lpf.hz().map_or(f64::INFINITY, f64::from);
+                        if f64::from(rate) <= 2.0 * fc {
+                            assert!(
+                                (read / want - 1.0).abs() < tol - 1.0,
+                                "{model} {lpf:?} Instant {rate} Hz: {read:.3} of N, \
+                                 sampled FIR {want:.3}"
+                            );
+                        } else {
+                            assert!(want < 1.0 && read < tol, "{model} {lpf:?} {rate} Hz");
+                        }
+                        continue;
+                    }
                     assert!(
                         read < tol,
                         "{model} {lpf:?} {variant:?} {rate} Hz: {read:.3} of N"
                     );
-                    if lpf == Bandwidth::Off && variant != Incremental {
+                    if lpf == Bandwidth::Off && variant == Average {
                         // Unfiltered: the whole band, read at the figure.
                         assert!(read > 2.0 - tol, "{model} {variant:?} {rate} Hz: {read:.3}");
                     }
@@ -482,4 +537,10 @@ fn no_variant_or_lpf_raises_the_white_noise_above_the_profile() {
             }
         }
     }
+    // The factory settings of a K110: the 262 Hz band aliased into 100 Hz.
+    let read = output_density("K110", Bandwidth::Hz262, Instant, 100, n) / f64::from(n);
+    assert!(
+        (2.0..2.6).contains(&read),
+        "K110 factory Instant: {read:.3} of N"
+    );
 }

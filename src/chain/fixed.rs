@@ -173,8 +173,7 @@ impl Core {
             motion: BuiltinMotionFixed::new(Motion::default(), dt),
             mounting: MountingFixed::new(&mounting),
             cascade: CascadeFixed::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantFixed::new(cfg.output_variant, dt, &x)
-                .with_sample_limit(cfg.instant_sample_limit()),
+            variant: VariantFixed::new(cfg.output_variant, dt, &x),
             attitude: AttitudeFixed::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
             temp_pending: 0,
             bias_fir: [0; 3],
@@ -300,8 +299,7 @@ impl Core {
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         self.mounting = MountingFixed::new(&mounting);
-        self.variant = VariantFixed::new(cfg.output_variant, dt, &last)
-            .with_sample_limit(cfg.instant_sample_limit());
+        self.variant = VariantFixed::new(cfg.output_variant, dt, &last);
     }
 
     /// Chooses a built-in motion.

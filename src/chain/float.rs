@@ -125,8 +125,7 @@ impl Core {
             motion: BuiltinMotion::new(Motion::default(), dt),
             mounting: Mounting::from_angles_deg(cfg.alignment_angles_deg),
             cascade: Cascade::new(&cfg.cascade, cfg.internal_rate_hz, &x),
-            variant: VariantAccumulator::new(cfg.output_variant, dt, &x)
-                .with_sample_limit(cfg.instant_sample_limit()),
+            variant: VariantAccumulator::new(cfg.output_variant, dt, &x),
             attitude: Attitude::new(level_from(&t0[1]), EARTH_ASSUMED, dt),
         };
         // A unit without the aux accelerometer does not filter its (zero)
@@ -234,8 +233,7 @@ impl Core {
         self.cascade
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
         self.mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
-        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last)
-            .with_sample_limit(cfg.instant_sample_limit());
+        self.variant = VariantAccumulator::new(cfg.output_variant, dt, &last);
     }
 
     /// Chooses a built-in motion.

@@ -5,11 +5,11 @@
 //! channels; at an output tick [`VariantAccumulator::take`] gives, over the
 //! interval since the previous output:
 //!
-//! - **Instant**: the last tick's values — while the interval is at most
-//!   [`VariantAccumulator::with_sample_limit`] ticks (the FIR band-limits
-//!   the signal below the output's Nyquist frequency); over a longer
-//!   interval the mean of its ticks (the decimation's band limit:
-//!   [`crate::chain::ChainConfig::instant_sample_limit`]).
+//! - **Instant**: the last tick's values, at every interval ("the exact
+//!   values as measured at that instant"): a point sample of the FIR's
+//!   output. Below the FIR's band (2·f_c > the output rate) it aliases the
+//!   band's noise into the output's band, as a real unit's does
+//!   (docs/sensors.md "Decimation").
 //! - **Average**: the mean of the interval's ticks ("if the IMU's data rate is
 //!   500 Hz, … the mean of four values"; at the internal rate it is instant).
 //! - **Incremental**: the angle increment Δθ and the velocity increment Δv
@@ -71,8 +71,6 @@ pub struct VariantOutput {
 pub struct VariantAccumulator {
     variant: OutputVariant,
     dt: f32,
-    /// Instant: the longest interval (ticks) that is sampled, not averaged.
-    sample_limit: u32,
     n: u32,
     first: [f32; CHANNELS],
     first_f: [f32; CHANNELS],
@@ -97,7 +95,6 @@ impl VariantAccumulator {
         VariantAccumulator {
             variant,
             dt,
-            sample_limit: u32::MAX,
             n: 0,
             first: [0.0; CHANNELS],
             first_f: [0.0; CHANNELS],
@@ -110,14 +107,6 @@ impl VariantAccumulator {
             upsilon: [[0.0; 3]; 2],
             sculling: [[0.0; 3]; 2],
         }
-    }
-
-    /// Instant over an interval longer than `ticks` gives the interval's
-    /// mean of the main channels (the decimation's band limit); the
-    /// default samples at every interval.
-    pub fn with_sample_limit(mut self, ticks: u32) -> Self {
-        self.sample_limit = ticks.max(1);
-        self
     }
 
     /// The variant.
@@ -144,28 +133,14 @@ impl VariantAccumulator {
     /// Adds one tick: `main` = FIR outputs, `filtered` = cascade outputs.
     #[inline]
     pub fn add(&mut self, main: &[f32; CHANNELS], filtered: &[f32; CHANNELS]) {
+        self.last = *main;
+        self.last_f = *filtered;
+        // Saturating: an interval no output ends (output stopped) may run
+        // past 2^32 ticks (24.8 days at 2 kHz) without a panic.
         if self.variant == OutputVariant::Instant {
-            // The main channels' sum, for an interval beyond the limit. The
-            // first tick's difference is 0 (the values are finite) and its
-            // values are still `last` at the second: an output every tick
-            // adds and copies nothing.
-            if self.n == 1 {
-                self.first = self.last;
-            }
-            if self.n > 0 {
-                for c in 0..CHANNELS {
-                    self.sum[c] += main[c] - self.first[c];
-                }
-            }
-            self.last = *main;
-            self.last_f = *filtered;
-            // Saturating: an interval no output ends (output stopped) may
-            // run past 2^32 ticks (24.8 days at 2 kHz) without a panic.
             self.n = self.n.saturating_add(1);
             return;
         }
-        self.last = *main;
-        self.last_f = *filtered;
         if self.n == 0 {
             self.first = *main;
             self.first_f = *filtered;
@@ -213,12 +188,6 @@ impl VariantAccumulator {
             filtered: self.last_f,
             ticks: n.max(1),
         };
-        if self.variant == OutputVariant::Instant && n > self.sample_limit {
-            let inv = 1.0 / n as f32;
-            for c in 0..CHANNELS {
-                out.main[c] = self.first[c] + self.sum[c] * inv;
-            }
-        }
         if n > 0 && self.variant != OutputVariant::Instant {
             let inv = 1.0 / n as f32;
             for c in 0..CHANNELS {
@@ -286,8 +255,6 @@ pub struct VariantOutputFixed {
 #[derive(Debug, Clone)]
 pub struct VariantFixed {
     variant: OutputVariant,
-    /// Instant: the longest interval (ticks) that is sampled, not averaged.
-    sample_limit: u32,
     /// The block exponent s (LSB of C and S: 2^2s units²).
     shift: u8,
     /// ½·G.
@@ -340,7 +307,6 @@ impl VariantFixed {
     pub fn new(variant: OutputVariant, dt: f32, last: &[i32; CHANNELS]) -> Self {
         VariantFixed {
             variant,
-            sample_limit: u32::MAX,
             shift: 0,
             half_g: 0.5 * dt * DEG / 131_072.0,
             n: 0,
@@ -351,12 +317,6 @@ impl VariantFixed {
             coning: [0; 3],
             sculling: [[0; 3]; 2],
         }
-    }
-
-    /// [`VariantAccumulator::with_sample_limit`].
-    pub fn with_sample_limit(mut self, ticks: u32) -> Self {
-        self.sample_limit = ticks.max(1);
-        self
     }
 
     /// The variant.
@@ -385,10 +345,6 @@ impl VariantFixed {
         self.last = *main;
         self.last_f = *filtered;
         if self.variant == OutputVariant::Instant {
-            // The main channels' sum, for an interval beyond the limit.
-            for c in 0..CHANNELS {
-                self.sum[c] = self.sum[c].wrapping_add(i64::from(main[c]));
-            }
             self.n = self.n.saturating_add(1);
             return;
         }
@@ -443,12 +399,6 @@ impl VariantFixed {
             filtered: self.last_f,
             ticks: n.max(1),
         };
-        if self.variant == OutputVariant::Instant && n > self.sample_limit {
-            let r = Recip::new(n);
-            for c in 0..CHANNELS {
-                out.main[c] = r.div_round(self.sum[c]);
-            }
-        }
         if n > 0 && self.variant != OutputVariant::Instant {
             let r = Recip::new(n);
             for c in 0..CHANNELS {
@@ -545,36 +495,31 @@ mod tests {
         }
     }
 
-    /// Instant with a sample limit: the last tick's values up to the
-    /// limit, beyond it the mean `first + Σ (x − first) / n` bit for bit,
-    /// interval after interval (the first tick's values kept from `last`).
+    /// Instant is the last tick's values at every interval length (ICD
+    /// 5.3.6 "exact values as measured at that instant"), bit for bit, in
+    /// both builds' accumulators; never the interval's mean.
     #[test]
-    fn instant_beyond_the_sample_limit_is_the_intervals_mean() {
-        let mut f = VariantAccumulator::new(OutputVariant::Instant, 0.0005, &[0.0; CHANNELS])
-            .with_sample_limit(2);
+    fn instant_is_the_last_ticks_sample_at_every_interval() {
+        let mut f = VariantAccumulator::new(OutputVariant::Instant, 0.0005, &[0.0; CHANNELS]);
+        let mut q = VariantFixed::new(OutputVariant::Instant, 0.0005, &[0; CHANNELS]);
         let mut k = 0u32;
-        for n in [1u32, 2, 3, 5, 1, 4, 2, 6] {
-            let xs: std::vec::Vec<[f32; CHANNELS]> = (0..n)
-                .map(|_| {
-                    k += 1;
-                    core::array::from_fn(|c| libm::sinf((k * 7 + c as u32) as f32) * 100.0)
-                })
-                .collect();
-            for x in &xs {
-                f.add(x, &[0.0; CHANNELS]);
+        for n in [1u32, 2, 3, 5, 1, 4, 20, 2000] {
+            let mut last = [0.0f32; CHANNELS];
+            let mut last_q = [0i32; CHANNELS];
+            for _ in 0..n {
+                k += 1;
+                last = core::array::from_fn(|c| libm::sinf((k * 7 + c as u32) as f32) * 100.0);
+                last_q = last.map(|x| (x * 1000.0) as i32);
+                f.add(&last, &[1.0; CHANNELS]);
+                q.add(&last_q, &[1; CHANNELS]);
             }
             let out = f.take();
-            let last = *xs.last().unwrap();
-            for c in 0..CHANNELS {
-                let want = if n <= 2 {
-                    last[c]
-                } else {
-                    let sum = xs.iter().fold(0.0f32, |s, x| s + (x[c] - xs[0][c]));
-                    xs[0][c] + sum * (1.0 / n as f32)
-                };
-                assert_eq!(out.main[c].to_bits(), want.to_bits(), "n {n} ch {c}");
-            }
-            assert_eq!(out.filtered, [0.0; CHANNELS]);
+            assert_eq!(out.main.map(f32::to_bits), last.map(f32::to_bits), "n {n}");
+            assert_eq!(out.filtered, [1.0; CHANNELS]);
+            assert_eq!(out.ticks, n);
+            let out = q.take();
+            assert_eq!(out.main, last_q, "n {n}");
+            assert_eq!(out.ticks, n);
         }
     }
 

@@ -342,16 +342,13 @@ mod tests {
         let lo = |v: &[f32; 3], k: u32| v.map(|x| f64::from(sat_i16(x, k)) / f64::from(k));
         match field {
             Field::Euler => Value::Angles([
-                f64::from(sat_u16(
-                    crate::kernel::fields::heading_0_360(s.euler[0]),
-                    ANGLE_SCALE,
-                )) / 100.0,
+                f64::from(crate::kernel::fields::heading_code(s.euler[0], ANGLE_SCALE)) / 100.0,
                 f64::from(sat_i16(s.euler[1], ANGLE_SCALE)) / 100.0,
                 f64::from(sat_i16(s.euler[2], ANGLE_SCALE)) / 100.0,
             ]),
             Field::EulerHr => Value::Angles([
-                f64::from(sat_i32(
-                    crate::kernel::fields::heading_0_360(s.euler[0]),
+                f64::from(crate::kernel::fields::heading_code(
+                    s.euler[0],
                     ANGLE_HR_SCALE,
                 )) / 1000.0,
                 f64::from(sat_i32(s.euler[1], ANGLE_HR_SCALE)) / 1000.0,

@@ -250,12 +250,27 @@ pub fn sat_u16(x: f32, k: u32) -> u16 {
 }
 
 /// Heading in [0, 360) degrees (the f32 remainder is exact).
-pub(crate) fn heading_0_360(h: f32) -> f32 {
+fn heading_0_360(h: f32) -> f32 {
     let h = crate::math::rotation::small_rem(h, 360.0);
     if h < 0.0 {
         h + 360.0
     } else {
         h
+    }
+}
+
+/// Heading `h` degrees as the field integer `h · k` (see [`scale_round`])
+/// in [0, 360·k): the heading of the Euler fields (Tables 5.5, 5.9, 5.10,
+/// UDD 0x07, 0x08) is 0 up to below 360. A heading just below 360 (or a
+/// tiny negative one, which `+ 360` rounds to 360.0 in `f32`) rounds to
+/// 360·k, which is 0: wrapped in the integers, where the wrap is exact.
+pub(crate) fn heading_code(h: f32, k: u32) -> u32 {
+    let full = 360 * k;
+    let n = sat_signed(heading_0_360(h), k, 0, full) as u32;
+    if n >= full {
+        n - full
+    } else {
+        n
     }
 }
 
@@ -370,15 +385,14 @@ impl Field {
         }
         match self {
             Field::Euler => {
-                out[0..2].copy_from_slice(
-                    &sat_u16(heading_0_360(s.euler[0]), ANGLE_SCALE).to_le_bytes(),
-                );
+                out[0..2]
+                    .copy_from_slice(&(heading_code(s.euler[0], ANGLE_SCALE) as u16).to_le_bytes());
                 out[2..4].copy_from_slice(&sat_i16(s.euler[1], ANGLE_SCALE).to_le_bytes());
                 out[4..6].copy_from_slice(&sat_i16(s.euler[2], ANGLE_SCALE).to_le_bytes());
             }
             Field::EulerHr => {
                 out[0..4].copy_from_slice(
-                    &sat_i32(heading_0_360(s.euler[0]), ANGLE_HR_SCALE).to_le_bytes(),
+                    &(heading_code(s.euler[0], ANGLE_HR_SCALE) as i32).to_le_bytes(),
                 );
                 out[4..8].copy_from_slice(&sat_i32(s.euler[1], ANGLE_HR_SCALE).to_le_bytes());
                 out[8..12].copy_from_slice(&sat_i32(s.euler[2], ANGLE_HR_SCALE).to_le_bytes());
@@ -572,6 +586,65 @@ impl Field {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Heading is sent in [0, 360) (docs/kernel.md): at the wrap, where a
+    /// heading a hair below 360 or below 0 used to round to 360.00/360.000,
+    /// both Euler fields write 0, and a heading just past the rounding
+    /// boundary keeps its last step below 360.
+    #[test]
+    fn heading_at_the_wrap_reads_below_360() {
+        let product = Product::parse("K110").unwrap();
+        let sc = Scales::of(&product);
+        // (heading, deg·100 sent, deg·1000 sent)
+        let cases: [(f32, u32, u32); 11] = [
+            (0.0, 0, 0),
+            (-0.0, 0, 0),
+            (-1e-7, 0, 0),
+            (-0.0004, 0, 0),
+            (-0.0006, 0, 359_999),
+            (359.9996, 0, 0),
+            (359.9994, 0, 359_999),
+            (359.994, 35_999, 359_994),
+            (360.0, 0, 0),
+            (-360.0, 0, 0),
+            (f32::NAN, 0, 0),
+        ];
+        for (h, lo, hr) in cases {
+            let mut s = Sample::STATIC_LEVEL;
+            s.euler = [h, 0.0, 0.0];
+            let ctx = OutputCtx {
+                sample: &s,
+                product: &product,
+                counter: 0,
+                usw: 0,
+                usw_ext: 0,
+                time_flags: 0,
+                second_fraction_ns: 0,
+                imu_time_ns: 0,
+            };
+            let mut b = [0u8; 12];
+            assert_eq!(Field::Euler.write(&ctx, &mut b), 6);
+            assert_eq!(
+                u32::from(u16::from_le_bytes([b[0], b[1]])),
+                lo,
+                "{h} deg·100"
+            );
+            let Some(Value::Angles(a)) = Field::Euler.read(sc, &b) else {
+                panic!("Euler reads angles")
+            };
+            assert!((0.0..360.0).contains(&a[0]), "{h}: {}", a[0]);
+            assert_eq!(Field::EulerHr.write(&ctx, &mut b), 12);
+            assert_eq!(
+                i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u32,
+                hr,
+                "{h} deg·1000"
+            );
+            let Some(Value::Angles(a)) = Field::EulerHr.read(sc, &b) else {
+                panic!("EulerHr reads angles")
+            };
+            assert!((0.0..360.0).contains(&a[0]), "{h}: {}", a[0]);
+        }
+    }
 
     /// The reference: the exact product in f64 (a 24-bit mantissa times a
     /// scale below 2^20 is exact in f64), rounded half away from zero.

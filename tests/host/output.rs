@@ -577,3 +577,125 @@ fn bad_speed_values_are_refused_at_start() {
         assert!(err.contains("--speed"), "--speed {bad}: {err}");
     }
 }
+
+/// One scripted client session over TCP with `args`, the client pausing
+/// `pause` (host time) before each command and waiting for each answer
+/// before the next: every byte it received.
+fn kernel_session(args: &[&str], pause: Duration) -> Vec<u8> {
+    let emu = Emu::tcp(args);
+    let mut c = emu.connect();
+    let mut got = Vec::new();
+    std::thread::sleep(pause);
+    c.send(&support::save_flash(DATA_RATE, &200u16.to_le_bytes()));
+    got.extend(c.frame_with_id(0xB2).bytes);
+    std::thread::sleep(pause);
+    c.send(&read_ram(DATA_RATE, 2));
+    got.extend(c.frame_with_id(0xB1).bytes);
+    std::thread::sleep(pause);
+    c.send(&command(0x8F));
+    let fs = frames(&mut c, 0x8F, 601);
+    // After the acknowledgement, the first GA frame's 2 kHz counter: the
+    // device time the stream started (Table 5.7), however long the client
+    // paused before its commands.
+    let counter = u16_at(fs[1].payload(), 24);
+    assert!(counter < 4000, "the stream started at counter {counter}");
+    for f in fs {
+        got.extend(f.bytes);
+    }
+    assert_eq!((c.bad, c.skipped), (0, 0), "every byte in a frame");
+    got
+}
+
+/// Repeatable sessions: at `--speed max` device time waits while the
+/// device has nothing to send and no input is pending, so one seed and
+/// one command sequence give the same bytes over TCP run after run,
+/// however long the client takes between its commands (README
+/// "Repeatable sessions"). Before, device time raced while the client had
+/// not yet sent its command (the first GA counter 45 140 in one run, 84
+/// in the other). Also for an IMX-5 with a fixed `--gps-time`.
+#[test]
+fn a_seeded_speed_max_session_repeats_byte_for_byte() {
+    let args = ["--model", "K110", "--speed", "max", "--seed", "7"];
+    let a = kernel_session(&args, Duration::from_millis(10));
+    let b = kernel_session(&args, Duration::from_millis(300));
+    assert_eq!(a.len(), b.len());
+    assert!(a == b, "the two sessions differ");
+
+    let isb = |pause: Duration| {
+        let emu = Emu::tcp(&[
+            "--protocol",
+            "isb",
+            "--speed",
+            "max",
+            "--seed",
+            "7",
+            "--gps-time",
+            "2026-03-01T12:00:00Z",
+        ]);
+        let mut c = emu.connect();
+        let mut got = Vec::new();
+        std::thread::sleep(pause);
+        c.send(&support::isb_get(imu_emu::isb::did::DEV_INFO, 0));
+        got.extend(support::isb_packet(&mut c).raw);
+        std::thread::sleep(pause);
+        c.send(&support::isb_get(imu_emu::isb::did::IMU, 1));
+        for _ in 0..500 {
+            got.extend(support::isb_packet(&mut c).raw);
+        }
+        got
+    };
+    let a = isb(Duration::from_millis(10));
+    let b = isb(Duration::from_millis(300));
+    assert!(a == b, "the two IMX-5 sessions differ");
+}
+
+/// The project's own client, twice against `--speed max --seed 7`: `set
+/// Data_Rate 200`, then `record --format GA --frames 400` after a pause
+/// of its own length each run; the CSVs are the same but for the host's
+/// reception times (README "Repeatable sessions").
+#[test]
+fn the_projects_client_records_the_same_rows_run_after_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |pause: Duration, name: &str| {
+        let emu = Emu::tcp(&["--model", "K110", "--speed", "max", "--seed", "7"]);
+        let addr = emu.addr().to_string();
+        let client = |args: &[&str]| {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+                .args(["client", "--tcp", &addr])
+                .args(args)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        };
+        std::thread::sleep(pause);
+        client(&["set", "Data_Rate", "200"]);
+        std::thread::sleep(pause);
+        let csv = dir.path().join(name);
+        let path = csv.to_str().unwrap();
+        client(&["record", "--format", "GA", "--frames", "400", "-o", path]);
+        // The columns but the host's time.
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let host = header.iter().position(|&h| h == "host_time_s");
+        let rows: Vec<String> = lines
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|&(i, _)| Some(i) != host)
+                    .map(|(_, v)| v)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect();
+        assert_eq!(rows.len(), 400);
+        rows
+    };
+    let a = run(Duration::from_millis(10), "a.csv");
+    let b = run(Duration::from_millis(300), "b.csv");
+    assert!(a == b, "the recordings differ:\n{}\n{}", a[0], b[0]);
+}

@@ -131,3 +131,63 @@ fn a_link_to_a_live_pty_is_refused_not_stolen() {
     );
     assert_eq!(std::fs::read_link(&link).unwrap(), first.pty_path());
 }
+
+/// Waits (up to 3 s) for the emulator's stderr to hold `what`.
+fn wait_log(emu: &Emu, what: &str) -> String {
+    let deadline = std::time::Instant::now() + Duration::from_secs(3);
+    loop {
+        let log = emu.stderr();
+        if log.contains(what) || std::time::Instant::now() > deadline {
+            return log;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A client that sets its port's speed with serialport-rs (as the
+/// project's own client does: termios2, `BOTHER` and the integer rate,
+/// which the classic `CBAUD` bits cannot say) at 9 600 bit/s against an
+/// IMX-5 whose pty runs at 921 600: the runner reads the speed with
+/// `TCGETS2`, warns once naming both rates, and the request reaches the
+/// device garbled (no answer); set to 921 600 the same way, the line
+/// matches again and the device answers.
+#[test]
+fn a_termios2_client_at_the_wrong_rate_is_warned_naming_both_rates() {
+    use serialport::SerialPort as _;
+    use std::os::unix::fs::OpenOptionsExt as _;
+    let emu = Emu::start(&["--protocol", "isb", "--pty"]);
+    let port = serialport::new(emu.pty_path().to_string_lossy(), 9600)
+        .timeout(Duration::from_millis(100))
+        .open_native()
+        .unwrap();
+    // serialport-rs set the speed as termios2 does: BOTHER, not B9600
+    // (read on another descriptor of the same tty: the settings are the
+    // tty's).
+    let tty = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
+        .open(emu.pty_path())
+        .unwrap();
+    let t = termios::tcgetattr(&tty).unwrap();
+    drop(tty);
+    let cbaud = t.control_flags.bits() & nix::libc::CBAUD;
+    assert_eq!(cbaud, nix::libc::BOTHER, "serialport-rs sets BOTHER");
+    let mut handle = port.try_clone_native().unwrap();
+    let mut c = Conn::new(Box::new(port));
+    let warning = "the client's port is at 9600 bit/s, the device's line at 921600 bit/s: \
+                   bytes are garbled both ways as on a real line";
+    let log = wait_log(&emu, warning);
+    assert!(log.contains(warning), "{log}");
+    // DEV_INFO requested at the wrong rate: garbled, unanswered.
+    c.send(&support::isb_get(imu_emu::isb::did::DEV_INFO, 0));
+    assert_eq!(c.drain_for(Duration::from_millis(300)), 0);
+    handle.set_baud_rate(921_600).unwrap();
+    let again = "the client's port matches the line rate again (921600 bit/s)";
+    let log = wait_log(&emu, again);
+    assert!(log.contains(again), "{log}");
+    c.send(&support::isb_get(imu_emu::isb::did::DEV_INFO, 0));
+    let p = support::isb_packet(&mut c);
+    assert_eq!((p.did, p.payload.len()), (imu_emu::isb::did::DEV_INFO, 84));
+    assert_eq!(log.matches("the client's port is at").count(), 1, "{log}");
+}

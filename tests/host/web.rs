@@ -4,8 +4,12 @@
 //! page shows in the unit's status word on the wire, and a malformed
 //! command gets an HTTP error. For the IMX (`--protocol isb`) the
 //! navigation plots advance and the page's "GPS outage" shows in INS_2 and
-//! GPS1_POS on the wire. `.ci/run` installs chromium when missing; without
-//! it these tests fail (they never skip).
+//! GPS1_POS on the wire. Every panel is on one device clock, across a
+//! pause longer than a counter wrap, every format reaches the page (those
+//! without a time field timed by their rate and order), and the position
+//! panel draws the truth's (and an IMX's INS and GPS) track. `.ci/run`
+//! installs chromium when missing; without it these tests fail (they
+//! never skip).
 //!
 //! `IMU_EMU_WEB_SCREENSHOT=docs/web-view.png` and
 //! `IMU_EMU_WEB_SCREENSHOT_IMX=docs/web-view-imx.png` also save screenshots.
@@ -341,13 +345,111 @@ fn the_page_plots_the_output_and_its_fault_button_reaches_the_wire() {
     );
 
     if std::env::var("IMU_EMU_WEB_SCREENSHOT").is_ok() {
-        // The fault off, some motion for the plots, then the picture.
-        for cmd in ["fault comm off", "motion rotate 0 0 30"] {
-            page.press(cmd);
+        // The fault off, Calibrated HR (attitude on the wire too), a
+        // turning flight for the plots and the track, then the picture.
+        page.press("fault comm off");
+        uart.send(&support::command(0xFE));
+        uart.drain_for(Duration::from_millis(50));
+        uart.send(&support::command(0x81));
+        let turn = "motion script start 45 0 300 350 40; coord-turn 20 60";
+        page.eval(&format!(
+            "document.getElementById('cmd').value = {}; \
+             document.querySelector('#cmd-form button').click()",
+            json!(turn)
+        ));
+        page.wait_for(&format!(
+            "window.imuEmu.lastReply === {}",
+            json!(format!("{turn} → ok"))
+        ));
+        // Read the stream meanwhile (a client that stops reading would
+        // fill the transport's backlog).
+        let until = Instant::now() + Duration::from_secs(9);
+        while Instant::now() < until {
+            uart.drain_for(Duration::from_millis(100));
         }
-        std::thread::sleep(Duration::from_secs(4));
+        // Tall enough for the position panel below the time plots.
+        page.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({"width": 1500, "height": 1500, "deviceScaleFactor": 1, "mobile": false}),
+        );
         page.screenshot_to("IMU_EMU_WEB_SCREENSHOT");
     }
+}
+
+/// One device clock on every panel, across a pause longer than a 16-bit
+/// counter wrap, and every output format shown: a K120 at `--speed 20`
+/// streams GA, stops for 50 s of device time and streams GA again — the
+/// sent points are at the device time of the truth and the status, not
+/// 32.768 s behind; then Orientation, Quaternion and GAA (no time field:
+/// timed by their rate and order, 10 ms apart at 100 Hz) each reach the
+/// page; the position panel draws the truth's track.
+#[test]
+fn the_page_keeps_one_clock_across_a_pause_and_shows_every_format() {
+    let emu = Emu::tcp(&[
+        "--model",
+        "K120",
+        "--power-on",
+        "now",
+        "--web",
+        "127.0.0.1:0",
+        "--seed",
+        "1",
+        "--speed",
+        "20",
+    ]);
+    let web = web_url(&emu, 1);
+    let mut uart = Conn::tcp(emu.addr());
+    uart.send(&support::command(0x8F));
+    uart.frame_with_id(0x8F);
+    let (_browser, mut page) = open(&web);
+    // Newest point with `key` (and none of `not`), its device time, and
+    // the device time now: within 2 s (publishing every 40 ms of host
+    // time is 0.8 s of device time at --speed 20).
+    let on_clock = |key: &str, not: &str| {
+        format!(
+            "(s => {{ const p = s.points.filter(p => '{key}' in p && !('{not}' in p));              const l = p[p.length - 1]; const tr = s.truth[s.truth.length - 1];              return !!l && !!tr && Math.abs(l.t - s.deviceTime) < 2 &&              Math.abs(tr.t - s.deviceTime) < 2; }})(window.imuEmu)"
+        )
+    };
+    page.wait_for(&on_clock("counter", "none"));
+    let before = page.eval("window.imuEmu.lastT").as_f64().unwrap();
+    uart.send(&support::command(0xFE));
+    uart.drain_for(Duration::from_millis(100));
+    // 2.5 s at --speed 20: 50 s of device time, more than 32.768 s.
+    std::thread::sleep(Duration::from_millis(2500));
+    uart.send(&support::command(0x8F));
+    uart.frame_with_id(0x8F);
+    page.wait_for(&format!("window.imuEmu.lastT > {before} + 45"));
+    page.wait_for(&on_clock("counter", "none"));
+    // Every format: each reaches the page on the same clock.
+    for (code, key, not) in [
+        (0x33u8, "heading", "q0"),
+        (0x82, "q0", "none"),
+        (0xA5, "aux_acc_x", "counter"),
+    ] {
+        uart.send(&support::command(0xFE));
+        uart.drain_for(Duration::from_millis(50));
+        uart.send(&support::command(code));
+        uart.frame_with_id(code);
+        let n = page
+            .eval(&format!(
+                "window.imuEmu.points.filter(p => '{key}' in p && !('{not}' in p)).length"
+            ))
+            .as_u64()
+            .unwrap();
+        page.wait_for(&format!(
+            "window.imuEmu.points.filter(p => '{key}' in p && !('{not}' in p)).length > {n} + 50"
+        ));
+        page.wait_for(&on_clock(key, not));
+    }
+    // GAA (no time field) at its known 100 Hz: whole periods in order.
+    let steps = page.eval(
+        "(p => p.slice(-40).map((x, i, a) => i ? x.t - a[i - 1].t : 0.01))         (window.imuEmu.points.filter(p => 'aux_acc_x' in p))",
+    );
+    for d in steps.as_array().unwrap() {
+        assert!((d.as_f64().unwrap() - 0.01).abs() < 1e-6, "{steps}");
+    }
+    // The position panel: the truth's track.
+    page.wait_for("!!window.imuEmu.track && window.imuEmu.track.counts[0] > 10");
 }
 
 /// The INS_2 insStatus has a GPS fix in it (NAV mode, `docs/isb.md`).
@@ -411,9 +513,17 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
         "(n => n && n.ins > 0 && n.gps > 0 && n.mag > 0 && n.baro > 0 && n.gpsFix === 3)\
          (window.imuEmu.nav)",
     );
-    // The INS plot advances in device time (GPS seconds of the week).
+    // The INS plot advances in device time, the same clock as the
+    // status's (its GPS time of week is the axis's second label).
     let t0 = page.eval("window.imuEmu.nav.insT").as_f64().unwrap();
     page.wait_for(&format!("window.imuEmu.nav.insT > {t0} + 1"));
+    page.wait_for(
+        "(s => Math.abs(s.nav.insT - s.deviceTime) < 2 && s.towAtZero !== null)(window.imuEmu)",
+    );
+    // The position panel: truth, INS and GPS1 tracks.
+    page.wait_for(
+        "(t => !!t && t.counts.length === 3 && t.counts.every(n => n > 3))(window.imuEmu.track)",
+    );
 
     // Manoeuvres through the page: a preset script and a script file.
     page.press("motion script start 45 0 300 0 60; hold 5; coord-turn 3 60; hold 30");
@@ -490,7 +600,13 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
 
     if std::env::var("IMU_EMU_WEB_SCREENSHOT_IMX").is_ok() {
         page.press("motion script start 45 0 300 0 60; hold 5; coord-turn 3 60; hold 30");
-        std::thread::sleep(Duration::from_secs(3));
+        // The IMU too, for the rate and acceleration panels; the stream
+        // read meanwhile.
+        uart.send(&isb_get(did::IMU, 10));
+        let until = Instant::now() + Duration::from_secs(4);
+        while Instant::now() < until {
+            uart.drain_for(Duration::from_millis(100));
+        }
         // Tall enough for the navigation panels below the IMU plots.
         page.call(
             "Emulation.setDeviceMetricsOverride",

@@ -4,8 +4,9 @@
 //!
 //! The data come either from a unit run **in process** as fast as the host
 //! computes (no TCP): a KERNEL `Device` streaming GA frames at `--rate`
-//! (on the K120/K220 a UDD with the aux accelerometer; the frames decoded
-//! with the core's typed decoder, `client::decode`), or, for `--model
+//! with the average output variant (on the K120/K220 a UDD with the aux
+//! accelerometer; the frames decoded with the core's typed decoder,
+//! `client::decode`), or, for `--model
 //! IMX-5`, its signal chain averaged over each output interval (what its
 //! IMU message carries); or from a recording (`--input FILE`: the CSV of
 //! `imu-emu client record` or a raw KERNEL/ISB capture,
@@ -374,7 +375,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         }
     } else {
         title = format!(
-            "{}, seed {}, {} frames at {} Hz",
+            "{}, seed {}, {} frames at {} Hz, average variant",
             product.code(),
             a.seed,
             if aux {
@@ -434,20 +435,30 @@ fn run_kernel(
     dev.chain_mut().faults_mut().temperature_c = temperature;
     let period = dev.tick_period_ns();
     let mut now = 0u64;
-    // Data_Rate (Table 5.24 ID 0x0012), then the UDD list (5.3.5) and the
-    // data command: the rate applies at the data command (5.3.1). In
-    // process the line is not paced (that is a board's job), so any rate
-    // fits.
+    // Data_Rate (Table 5.24 ID 0x0012) and Output_Variant average (ID
+    // 0x03D0 = 1), then the UDD list (5.3.5) and the data command: the
+    // rate applies at the data command (5.3.1). In process the line is
+    // not paced (that is a board's job), so any rate fits. The average,
+    // as a datasheet's figures are read: the factory Instant variant
+    // samples the FIR's output and aliases its band's noise into the
+    // output's (its ARW reads higher: docs/sensors.md "Decimation").
     let rate = u16::try_from(a.rate).context("allan --rate: at most 65535")?;
     let aux = phases.channels() == AXES.len();
     let format = if aux { UDD } else { 0x8F };
     let udd = [AUX_UDD.len() as u8, AUX_UDD[0], AUX_UDD[1], AUX_UDD[2]];
     let rate = rate.to_le_bytes();
-    let mut cmds = vec![Command::SaveFlash {
-        id: 0x0012,
-        len: 2,
-        value: &rate,
-    }];
+    let mut cmds = vec![
+        Command::SaveFlash {
+            id: 0x0012,
+            len: 2,
+            value: &rate,
+        },
+        Command::SaveFlash {
+            id: 0x03D0,
+            len: 1,
+            value: &[1],
+        },
+    ];
     if aux {
         cmds.extend([Command::UddConfig, Command::UddConfigMessage(&udd)]);
     }

@@ -191,7 +191,9 @@ pub struct Args {
 
     /// Device seconds per host second: a factor (`1` real time, `10`,
     /// `0.5`) or `max` (as fast as the host computes and the client reads;
-    /// nothing is dropped, a slow client slows device time down). The line
+    /// nothing is dropped, a slow client slows device time down; time
+    /// waits while the device has nothing to send and no input is pending,
+    /// so with --seed a session repeats byte for byte). The line
     /// rate, `--pps`, the trajectory and the control socket all follow
     /// device time.
     #[arg(long, value_name = "SPEED", default_value = "1")]

@@ -16,7 +16,9 @@
 //!   ([`MAX_BATCH_TICKS`]) whenever less than [`MAX_BACKLOG`] bytes wait
 //!   for the client, and otherwise waits for the client to read. Nothing
 //!   is dropped for speed's sake, so a slow client slows device time down
-//!   instead (with no client connected, time stops).
+//!   instead (with no client connected, time stops; and while the
+//!   device is quiet — nothing to send, no input pending — time waits for
+//!   input: `crate::runner`, "Repeatable sessions").
 //!
 //! Either way the device sees the same sequence of ticks and bytes at the
 //! same device times as in real time: a recorded session replays

@@ -45,11 +45,19 @@
 //!   once. The process asks for a timer slack of 1 ns (`cli::run`), so a
 //!   wake is not up to the kernel's default 50 µs late.
 //! * **`--speed max`**: device time moves on by [`MAX_BATCH_TICKS`] ticks
-//!   a pass, in rounds of passes that end when [`MAX_BACKLOG`] bytes wait
-//!   for the client (or input came, or [`MAX_ROUND_TICKS`] ran): one read
-//!   at a round's start, one send at its end; while no client is connected
+//!   a pass (batches end on multiples of it), in rounds of passes that end
+//!   when [`MAX_BACKLOG`] bytes wait for the client (or input came, or
+//!   [`MAX_ROUND_TICKS`] ran, or the device went quiet): one read at a
+//!   round's start, one send at its end; while no client is connected
 //!   device time waits. The loop never sleeps then, it only polls the
-//!   transport (or waits for the client to read).
+//!   transport (or waits for the client to read). **Repeatable sessions**:
+//!   while the device is quiet (`Runner::max_quiet`: nothing to send,
+//!   no stream, no reset waiting, input neither held back nor within the
+//!   RX idle time) device time waits for the client's input too, and input
+//!   is read only then or while a stream runs; so a client that waits for
+//!   each answer before its next command sends every command at the same
+//!   device time, run after run, and one seed gives the same bytes
+//!   (README "Repeatable sessions").
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -170,6 +178,18 @@ const NO_RX: Limits = Limits {
 /// Most ticks one `--speed max` round runs before it sends and reads
 /// (0.5 s of device time at 2 kHz): input is seen at least this often.
 pub const MAX_ROUND_TICKS: u64 = 1024;
+/// `--speed max`: how long after its last input byte the device is not
+/// quiet ([`Runner::max_quiet`]): the personalities' RX idle time, after
+/// which a frame cut short is abandoned (both 100 ms), and a tick.
+const RX_SETTLE_NS: u64 = {
+    let k = imu_emu::kernel::RX_IDLE_ABANDON_NS;
+    let i = imu_emu::isb::device::RX_IDLE_ABANDON_NS;
+    if k > i {
+        k
+    } else {
+        i
+    }
+};
 
 /// What the runner counted so far.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -261,6 +281,8 @@ struct HostPort<T: Transport> {
     fw_update: bool,
     /// The web view's tap (`--web`), if any: never blocks.
     web: Option<crate::web::Tap>,
+    /// Device time the last input byte reached the device, ns.
+    last_rx_ns: Option<u64>,
 }
 
 impl<T: Transport> HostPort<T> {
@@ -269,7 +291,7 @@ impl<T: Transport> HostPort<T> {
     #[inline]
     fn deliver(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         if let Some(w) = &self.web {
-            w.tx(bytes);
+            w.tx(bytes, self.rx_time());
         }
         if bytes.is_empty() {
             Ok(())
@@ -428,6 +450,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
             n += k;
         }
         self.rx_pacer.consume(n);
+        if n > 0 {
+            self.last_rx_ns = Some(self.rx_time());
+        }
         self.rx_held = n == limit;
         self.transport.hold_input(self.rx_held);
         if !self.fw_update {
@@ -499,7 +524,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                 // Heading, pitch, roll (deg): the vehicle's when a script,
                 // file, trajectory or feed plays (heading in [0, 360) like
                 // the built-in motion's), else the built-in motion's.
-                let truth = match dev.chain().vehicle_source() {
+                let attitude = match dev.chain().vehicle_source() {
                     Some(v) => {
                         let [roll, pitch, yaw] = v.euler_rad().map(f64::to_degrees);
                         Some([yaw.rem_euclid(360.0), pitch, roll].map(|x| x as f32))
@@ -509,6 +534,11 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                         .truth_attitude()
                         .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
                 };
+                // Where the unit is (the vehicle's, or the built-in
+                // motion's fixed place): the page's position track.
+                let v = dev.chain().vehicle();
+                let lla = [v.lat_rad.to_degrees(), v.lon_rad.to_degrees(), v.height_m];
+                let truth = crate::web::Truth { attitude, lla };
                 w.publish(self.status(dev), at.as_nanos(), truth);
             }
             self.web = Some(w);
@@ -617,6 +647,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 label: String::new(),
                 fw_update: false,
                 web: None,
+                last_rx_ns: None,
             },
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
@@ -906,7 +937,9 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         // Nobody to read (output would be dropped): time waits.
         let client_keeps_up =
             self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG;
-        let pass = if max && client_keeps_up {
+        // Quiet: time waits for input (read by the step, at this time).
+        let quiet = max && self.max_quiet();
+        let pass = if max && client_keeps_up && !quiet {
             self.max_round()?
         } else {
             self.step()?
@@ -918,8 +951,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             // More is due or waiting: go on at once.
             Duration::ZERO
         } else if max {
-            // Poll only, or wait (briefly) for the client to read.
-            if self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG {
+            // Poll only, wait for input (quiet: a wait ends at once when
+            // it comes), or wait (briefly) for the client to read.
+            if pass.rx == 0 && self.max_quiet() {
+                IDLE_WAKE
+            } else if self.io.transport.connected() && self.io.transport.backlog_len() < MAX_BACKLOG
+            {
                 Duration::ZERO
             } else {
                 BUSY_WAKE
@@ -1033,9 +1070,13 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         let period = self.sched.period_ns();
         let end = self.sched.ticks() + MAX_ROUND_TICKS;
         let mut total = Pass::default();
-        let mut first = true;
+        let mut first = self.max_reads_input();
         loop {
-            let to = (self.sched.ticks() + MAX_BATCH_TICKS).saturating_mul(period);
+            // Batches end on multiples of MAX_BATCH_TICKS, wherever the
+            // round began (rounds end as the client reads): the device
+            // goes quiet at the same device time run after run.
+            let batch = self.sched.ticks() / MAX_BATCH_TICKS + 1;
+            let to = (batch * MAX_BATCH_TICKS).saturating_mul(period);
             self.clock.advance_to(to);
             let now = self.now_ns();
             self.io.now_ns = now;
@@ -1049,6 +1090,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             if pass.rx > 0
                 || self.io.transport.backlog_len() >= MAX_BACKLOG
                 || self.sched.ticks() >= end
+                || self.max_quiet()
             {
                 break;
             }
@@ -1058,6 +1100,44 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         self.stats.tx_bytes += total.tx as u64;
         self.io.transport.flush()?;
         Ok(total)
+    }
+
+    /// `--speed max`: whether the device has nothing to do until its
+    /// next input, so device time waits for it — nothing to send or
+    /// switch on the line ([`Schedule::poll_at`]: no stream, its
+    /// alignment included), no software reset waiting, no input held
+    /// back at the line rate or within [`RX_SETTLE_NS`] of its last byte,
+    /// no link stall to end, no `--pps` generator and no live feed
+    /// (their time is the host's business).
+    fn max_quiet(&self) -> bool {
+        let now = self.now_ns();
+        self.sched.poll_at(&self.dev, now).is_none()
+            && !self.dev.reset_pending()
+            && !self.io.rx_held
+            && self.io.rx_carry.is_empty()
+            && self.io.link.stall_until().is_none()
+            && self.io.next_pps_ns.is_none()
+            && self.io.feed.is_none()
+            && self
+                .io
+                .last_rx_ns
+                .is_none_or(|t| now > t.saturating_add(RX_SETTLE_NS + self.sched.period_ns()))
+    }
+
+    /// `--speed max`: whether a round reads input at its start. Not while
+    /// the device only finishes an answer (or a reset, or its RX idle
+    /// time): a command sent on reading an answer then arrives when the
+    /// device is quiet again, however fast the client sends it
+    /// (repeatable sessions). While a stream runs, input is held back at
+    /// the line rate or by link faults, or time runs for the `--pps`
+    /// generator, a live feed or a link stall, it is read as it comes.
+    fn max_reads_input(&self) -> bool {
+        self.dev.ticks_to_next_output().is_some()
+            || self.io.rx_held
+            || !self.io.rx_carry.is_empty()
+            || self.io.next_pps_ns.is_some()
+            || self.io.feed.is_some()
+            || self.io.link.stall_until().is_some()
     }
 
     /// One pass of the shared schedule at the clock's time, then the

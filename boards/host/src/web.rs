@@ -16,6 +16,20 @@
 //!   the last [`KEEP_POINTS`] points per device with their device time
 //!   (and, for ISB, their data set's name: field names repeat across sets),
 //!   and answers the page's polls.
+//! - **One device clock**: every point, the truth and the status are on
+//!   the runner's device time (s since power-on), whatever the frame
+//!   carries (`Timing`): the tap stamps each run of bytes with the
+//!   device time it left the emulated line, and a frame's time is its
+//!   stream's previous time plus the step of its own clock — the 2 kHz
+//!   counter (a 16-bit wrap every 32.768 s resolved by the stamps), the
+//!   IMU time, an ISB set's time since boot or GPS time of week — or, for
+//!   a format without a time field (Orientation, Quaternion, GAA, GAm,
+//!   GAAm), the whole output periods at its known rate (the status's
+//!   `output-rate`) nearest the stamps: the frames' order and rate. A
+//!   stream whose step disagrees with the stamps by more than
+//!   [`REANCHOR_S`] (a pause, a restart, a power cycle) starts again at
+//!   its stamp. For an IMX the GPS time of week of device time 0 is
+//!   reported too (from the GPS-timed sets), a second label of the axis.
 //! - **Commands**: `POST /api/command?dev=K` carries one control-socket
 //!   line. It is parsed here with the control socket's own parser
 //!   ([`control::parse`]): a malformed line gets HTTP 400 with the parser's
@@ -39,13 +53,15 @@ use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
 use imu_emu::model::Product;
 
 use crate::cli::Protocol;
-use crate::client::{self, DeviceClock};
+use crate::client;
 use crate::control;
 
 /// How often a runner publishes its status (host time): 25 Hz.
 pub const PUBLISH_EVERY: Duration = Duration::from_millis(40);
 /// Bytes of output kept for the web thread between two of its polls.
 pub const TX_RING: usize = 512 * 1024;
+/// Stamped runs of output bytes kept between two polls, at most.
+const MAX_MARKS: usize = 16 * 1024;
 /// Decoded points kept per device (the page asks for what is new).
 pub const KEEP_POINTS: usize = 8192;
 /// Most points one poll returns.
@@ -58,6 +74,13 @@ const COMMANDS_PER_PASS: usize = 8;
 const MAX_QUEUED: usize = 16;
 /// How long the web thread waits for a runner's answer.
 const ANSWER_WITHIN: Duration = Duration::from_secs(2);
+/// A stream's own step and its line stamps may differ by this much (the
+/// TX queue's and the line's delay) before it starts again at its stamp.
+pub const REANCHOR_S: f64 = 0.3;
+/// The KERNEL's computation counter rate (ICD Tables 5.7, 5.10 note 3).
+const COUNTER_HZ: f64 = 2000.0;
+/// A GPS week, s.
+const WEEK_S: f64 = 604_800.0;
 
 const INDEX_HTML: &str = include_str!("web/index.html");
 const APP_JS: &str = include_str!("web/app.js");
@@ -83,11 +106,23 @@ impl Pending {
 #[derive(Debug, Default)]
 struct Shared {
     tx: VecDeque<u8>,
+    /// Runs of `tx`: (device time the bytes left the line, ns; how many).
+    marks: VecDeque<(u64, usize)>,
     status: String,
     device_ns: u64,
-    /// Truth attitude (heading, pitch, roll, deg) at device times, ns.
-    truth: VecDeque<(u64, [f32; 3])>,
+    /// Truth at device times, ns: attitude (heading, pitch, roll, deg)
+    /// and position (latitude, longitude deg, height m).
+    truth: VecDeque<(u64, Truth)>,
     on: bool,
+}
+
+/// The truth the runner publishes ([`Tap::publish`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Truth {
+    /// Heading, pitch, roll, deg (none for a motion without attitude).
+    pub attitude: Option<[f32; 3]>,
+    /// Latitude, longitude (deg), height (m).
+    pub lla: [f64; 3],
 }
 
 /// One device's place in the hub.
@@ -149,8 +184,9 @@ pub struct Tap {
 }
 
 impl Tap {
-    /// The bytes the unit sent (as the client receives them).
-    pub fn tx(&self, bytes: &[u8]) {
+    /// The bytes the unit sent (as the client receives them), leaving the
+    /// line at device time `device_ns`.
+    pub fn tx(&self, bytes: &[u8], device_ns: u64) {
         let Ok(mut s) = self.slot.shared.try_lock() else {
             self.slot
                 .lost
@@ -160,6 +196,14 @@ impl Tap {
         let room = TX_RING.saturating_sub(s.tx.len());
         let take = bytes.len().min(room);
         s.tx.extend(&bytes[..take]);
+        let full = s.marks.len() >= MAX_MARKS;
+        match s.marks.back_mut() {
+            // The same time, or no room for another stamp (no page has
+            // polled for long): the bytes join the last run.
+            Some((ns, n)) if *ns == device_ns || full => *n += take,
+            _ if take > 0 => s.marks.push_back((device_ns, take)),
+            _ => {}
+        }
         if take < bytes.len() {
             self.slot
                 .lost
@@ -182,9 +226,9 @@ impl Tap {
             .is_none_or(|t| t.elapsed() >= PUBLISH_EVERY)
     }
 
-    /// Publishes the `status` words, the device time and the truth
-    /// attitude (deg), if the web thread is not reading right now.
-    pub fn publish(&mut self, status: String, device_ns: u64, truth: Option<[f32; 3]>) {
+    /// Publishes the `status` words, the device time and the truth, if
+    /// the web thread is not reading right now.
+    pub fn publish(&mut self, status: String, device_ns: u64, truth: Truth) {
         self.published_at = Some(Instant::now());
         let Ok(mut s) = self.slot.shared.try_lock() else {
             return;
@@ -192,12 +236,10 @@ impl Tap {
         s.status = status;
         s.device_ns = device_ns;
         s.on = true;
-        if let Some(t) = truth {
-            if s.truth.len() >= KEEP_POINTS {
-                s.truth.pop_front();
-            }
-            s.truth.push_back((device_ns, t));
+        if s.truth.len() >= KEEP_POINTS {
+            s.truth.pop_front();
         }
+        s.truth.push_back((device_ns, truth));
     }
 }
 
@@ -211,14 +253,85 @@ struct Point {
     values: Vec<(String, f64)>,
 }
 
+/// One stream's clock ([`Timing`]).
+#[derive(Debug, Clone, Copy)]
+struct Stream {
+    /// Device time given to its last frame, s.
+    t: f64,
+    /// Its own clock then, s, if it has one.
+    own: Option<f64>,
+}
+
+/// A frame's own clock: its value (s) and the period it wraps at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Own {
+    value: f64,
+    wrap: Option<f64>,
+}
+
+/// Puts every frame on the device clock (module doc, "One device clock").
+#[derive(Debug, Default)]
+struct Timing {
+    /// Per stream: the KERNEL's frame ID, the ISB's data set ID + 256.
+    streams: std::collections::HashMap<u16, Stream>,
+}
+
+impl Timing {
+    /// The device time (s) of a frame of `stream` whose last byte left the
+    /// line at `stamp` (s), with its own clock `own`, or, without one,
+    /// sent every `1 / rate` s (`rate` Hz, if known).
+    fn time(&mut self, stream: u16, stamp: f64, own: Option<Own>, rate: Option<f64>) -> f64 {
+        let t = match (self.streams.get(&stream), own) {
+            (Some(prev), Some(o)) if prev.own.is_some() => {
+                let mut step = o.value - prev.own.unwrap_or(o.value);
+                if let Some(w) = o.wrap {
+                    // The wraps the stamps say passed (a pause).
+                    step = step.rem_euclid(w);
+                    step += w * ((stamp - prev.t - step) / w).round().max(0.0);
+                }
+                prev.t + step
+            }
+            (Some(prev), None) => match rate.filter(|r| *r > 0.0) {
+                Some(r) => prev.t + ((stamp - prev.t) * r).round().max(1.0) / r,
+                None => stamp,
+            },
+            _ => stamp,
+        };
+        let prev = self.streams.get(&stream).map(|p| p.t);
+        let t = if (t - stamp).abs() > REANCHOR_S || prev.is_some_and(|p| t <= p) {
+            stamp
+        } else {
+            t
+        };
+        self.streams.insert(
+            stream,
+            Stream {
+                t,
+                own: own.map(|o| o.value),
+            },
+        );
+        t
+    }
+}
+
+/// Whether an ISB data set's time ([`imu_emu::isb::fields::device_time`])
+/// is GPS time of week: the set has a `timeOfWeek` or `timeOfWeekMs`
+/// field (the others count seconds since boot, `time`).
+fn gps_timed(did: u8) -> bool {
+    imu_emu::isb::fields::set(did)
+        .is_some_and(|(_, fields)| fields.iter().any(|f| f.name.starts_with("timeOfWeek")))
+}
+
 /// The web thread's view of one device.
 struct View {
     slot: Arc<Slot>,
     kernel: Box<KernelDecoder<4096>>,
     isb: Box<imu_emu::isb::packet::Decoder<{ imu_emu::isb::packet::MAX_PACKET }>>,
-    clock: DeviceClock,
+    timing: Timing,
+    /// GPS time of week at device time 0, s (an IMX's GPS-timed sets).
+    gps_tow_at_zero: Option<f64>,
     points: VecDeque<Point>,
-    truth: VecDeque<(u64, f64, [f32; 3])>,
+    truth: VecDeque<(u64, f64, Truth)>,
     seq: u64,
     truth_seq: u64,
     frames: u64,
@@ -230,7 +343,8 @@ impl View {
             slot,
             kernel: Box::new(KernelDecoder::new()),
             isb: Box::new(imu_emu::isb::packet::Decoder::new()),
-            clock: DeviceClock::default(),
+            timing: Timing::default(),
+            gps_tow_at_zero: None,
             points: VecDeque::new(),
             truth: VecDeque::new(),
             seq: 0,
@@ -241,12 +355,13 @@ impl View {
 
     /// Takes what the runner published; decodes the new bytes.
     fn refresh(&mut self, protocol: Protocol) -> (String, u64, bool) {
-        let (bytes, status, device_ns, truth, on) = {
+        let (bytes, marks, status, device_ns, truth, on) = {
             let Ok(mut s) = self.slot.shared.lock() else {
                 return ("mode=off".to_owned(), 0, false);
             };
             (
                 std::mem::take(&mut s.tx),
+                std::mem::take(&mut s.marks),
                 s.status.clone(),
                 s.device_ns,
                 std::mem::take(&mut s.truth),
@@ -260,8 +375,25 @@ impl View {
         while self.truth.len() > KEEP_POINTS {
             self.truth.pop_front();
         }
+        // The known output rate of a KERNEL stream (formats without a
+        // time field are timed by it).
+        let rate: Option<f64> = status
+            .split_whitespace()
+            .find_map(|w| w.strip_prefix("output-rate="))
+            .and_then(|r| r.parse().ok());
         let bytes: Vec<u8> = bytes.into();
-        let mut input: &[u8] = &bytes;
+        let mut at = 0;
+        for (ns, n) in marks {
+            let chunk = &bytes[at.min(bytes.len())..(at + n).min(bytes.len())];
+            at += n;
+            self.decode(protocol, chunk, ns as f64 * 1e-9, rate);
+        }
+        (status, device_ns, on)
+    }
+
+    /// Decodes `chunk`, which left the line at device time `stamp` (s).
+    fn decode(&mut self, protocol: Protocol, chunk: &[u8], stamp: f64, rate: Option<f64>) {
+        let mut input = chunk;
         let product = self.slot.product;
         match protocol {
             Protocol::Kernel => {
@@ -272,9 +404,18 @@ impl View {
                     let Some(d) = client::decode::decode(f.id, f.payload, &product) else {
                         continue;
                     };
-                    let Some(t) = self.clock.time(&d) else {
-                        continue;
+                    let own = match (d.get("imu_time_ns"), d.get("counter")) {
+                        (Some(ns), _) => Some(Own {
+                            value: ns * 1e-9,
+                            wrap: None,
+                        }),
+                        (None, Some(c)) => Some(Own {
+                            value: c / COUNTER_HZ,
+                            wrap: Some(65_536.0 / COUNTER_HZ),
+                        }),
+                        _ => None,
                     };
+                    let t = self.timing.time(u16::from(f.id), stamp, own, rate);
                     let values = d
                         .values
                         .iter()
@@ -293,16 +434,23 @@ impl View {
                     let Some((did, b)) = p.whole_set() else {
                         continue;
                     };
-                    let Some(t) = imu_emu::isb::fields::device_time(did, b) else {
-                        continue;
-                    };
+                    let gps = gps_timed(did);
+                    let own = imu_emu::isb::fields::device_time(did, b).map(|value| Own {
+                        value,
+                        wrap: gps.then_some(WEEK_S),
+                    });
+                    // An ISB stream's period is its own (no known rate):
+                    // a set without a time is placed at its stamp.
+                    let t = self.timing.time(256 + u16::from(did), stamp, own, None);
+                    if let (true, Some(o)) = (gps, own) {
+                        self.gps_tow_at_zero = Some((o.value - t).rem_euclid(WEEK_S));
+                    }
                     let values = client::isb::numbers(did, b);
                     let set = imu_emu::isb::fields::set(did).map(|(name, _)| name);
                     self.push(t, set, values);
                 }
             }
         }
-        (status, device_ns, on)
     }
 
     fn push(&mut self, t: f64, set: Option<&'static str>, values: Vec<(String, f64)>) {
@@ -632,20 +780,24 @@ fn state_json(protocol: Protocol, v: &mut View, since: u64, truth_since: u64) ->
         .truth
         .iter()
         .filter(|t| t.0 > truth_since)
-        .map(|(seq, t, a)| {
-            format!(
-                "{{\"seq\":{seq},\"t\":{},\"heading\":{},\"pitch\":{},\"roll\":{}}}",
-                json_num(*t),
-                json_num(f64::from(a[0])),
-                json_num(f64::from(a[1])),
-                json_num(f64::from(a[2]))
-            )
+        .map(|(seq, t, truth)| {
+            let mut fields = vec![format!("\"seq\":{seq}"), format!("\"t\":{}", json_num(*t))];
+            if let Some(a) = truth.attitude {
+                for (k, x) in ["heading", "pitch", "roll"].iter().zip(a) {
+                    fields.push(format!("\"{k}\":{}", json_num(f64::from(x))));
+                }
+            }
+            for (k, x) in ["lat", "lon", "height"].iter().zip(truth.lla) {
+                fields.push(format!("\"{k}\":{}", json_num(x)));
+            }
+            format!("{{{}}}", fields.join(","))
         })
         .collect();
     format!(
-        "{{\"on\":{on},\"device_time_s\":{},\"status\":{{{}}},\"frames_decoded\":{},\
-         \"view_lost_bytes\":{},\"points\":[{}],\"truth\":[{}]}}",
+        "{{\"on\":{on},\"device_time_s\":{},\"gps_tow_at_zero_s\":{},\"status\":{{{}}},\
+         \"frames_decoded\":{},\"view_lost_bytes\":{},\"points\":[{}],\"truth\":[{}]}}",
         json_num(device_ns as f64 * 1e-9),
+        v.gps_tow_at_zero.map_or("null".to_owned(), json_num),
         words.join(","),
         v.frames,
         v.slot.lost.load(Ordering::Relaxed),
@@ -716,15 +868,114 @@ mod tests {
         );
     }
 
+    /// GA frames at 100 Hz, stamped 3 ms after their counter's time, with
+    /// a 45 s pause (a 16-bit counter wrap) in the middle: on the device
+    /// clock, 10 ms apart, and after the pause 45 s later, not 45 − 32.768.
+    #[test]
+    fn the_counter_is_unwrapped_across_a_pause_by_the_stamps() {
+        let mut tm = Timing::default();
+        let own = |k: u64| {
+            Some(Own {
+                value: (k * 20 % 65_536) as f64 / COUNTER_HZ,
+                wrap: Some(65_536.0 / COUNTER_HZ),
+            })
+        };
+        let mut ts = Vec::new();
+        for k in 0..500u64 {
+            ts.push(tm.time(0x8F, 1.003 + k as f64 * 0.01, own(k), Some(100.0)));
+        }
+        // The pause: the next frame is 4500 periods (45 s) later.
+        let k = 499 + 4500;
+        let t = tm.time(0x8F, 1.003 + k as f64 * 0.01, own(k), Some(100.0));
+        for w in ts.windows(2) {
+            assert!((w[1] - w[0] - 0.01).abs() < 1e-9, "{w:?}");
+        }
+        assert!((t - ts[499] - 45.0).abs() < 1e-9, "{}", t - ts[499]);
+        // Orientation (no time field) at 200 Hz, stamps jittering by a
+        // tick: whole periods in the frames' order.
+        let mut last: Option<f64> = None;
+        for k in 0..400u64 {
+            let jitter = if k % 3 == 0 { 0.0005 } else { 0.0 };
+            let t = tm.time(0x33, 2.0 + k as f64 * 0.005 + jitter, None, Some(200.0));
+            if let Some(l) = last {
+                assert!((t - l - 0.005f64).abs() < 1e-9, "{k}: {t} after {l}");
+            }
+            last = Some(t);
+        }
+        // A restart (the counter from 0, 2 s later): back at the stamp.
+        let t = tm.time(0x8F, 60.0, own(0), Some(100.0));
+        assert_eq!(t, 60.0);
+    }
+
+    /// An IMX's INS_2 (GPS time of week) and IMU (time since boot) land on
+    /// one clock; the GPS time of week of device time 0 is reported.
+    #[test]
+    fn isb_sets_on_two_clocks_share_the_device_clock() {
+        let h = hub();
+        let mut v = View::new(Arc::clone(&h.slots[0]));
+        let mut ins = [0u8; 128];
+        let mut imu = [0u8; 64];
+        for k in 0..20u32 {
+            let t = 5.0 + f64::from(k) * 0.1;
+            ins[4..12].copy_from_slice(&(403_168.0 + t).to_le_bytes());
+            imu[0..8].copy_from_slice(&t.to_le_bytes());
+            let mut bytes = Vec::new();
+            for (did, body) in [
+                (imu_emu::isb::did::INS_2, &ins[..]),
+                (imu_emu::isb::did::IMU, &imu[..]),
+            ] {
+                let size = usize::from(imu_emu::isb::did::lookup(u16::from(did)).unwrap().size);
+                let mut pkt = [0u8; 512];
+                let n = imu_emu::isb::message::encode_data(
+                    did,
+                    &body[..size],
+                    0,
+                    size as u16,
+                    &mut pkt,
+                )
+                .unwrap();
+                bytes.extend_from_slice(&pkt[..n]);
+            }
+            v.decode(Protocol::Isb, &bytes, t + 0.002, None);
+        }
+        let last = |set: &str| {
+            v.points
+                .iter()
+                .rev()
+                .find(|p| p.set == Some(set))
+                .unwrap()
+                .t
+        };
+        assert!((last("INS_2") - last("IMU")).abs() < 1e-9);
+        assert!((v.gps_tow_at_zero.unwrap() - 403_168.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn the_gps_timed_sets_are_those_with_a_time_of_week() {
+        use imu_emu::isb::did;
+        for d in [
+            did::INS_1,
+            did::INS_2,
+            did::GPS1_POS,
+            did::GPS1_VEL,
+            did::SYS_PARAMS,
+        ] {
+            assert!(gps_timed(d), "{d}");
+        }
+        for d in [did::IMU, did::PIMU, did::MAGNETOMETER, did::BAROMETER] {
+            assert!(!gps_timed(d), "{d}");
+        }
+    }
+
     #[test]
     fn a_busy_lock_costs_the_tap_nothing() {
         let h = hub();
         let tap = h.tap(0).unwrap();
         let guard = h.slots[0].shared.lock().unwrap();
-        tap.tx(&[1, 2, 3]);
+        tap.tx(&[1, 2, 3], 0);
         drop(guard);
         assert_eq!(h.slots[0].lost.load(Ordering::Relaxed), 3);
-        tap.tx(&[4]);
+        tap.tx(&[4], 0);
         assert_eq!(h.slots[0].shared.lock().unwrap().tx.len(), 1);
     }
 }

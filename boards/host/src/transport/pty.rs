@@ -20,10 +20,14 @@
 //! **Baud mismatch**: while a client has the port open its termios speed
 //! is its own (a rate change of the device, CommitBaudRate, does not touch
 //! it, as a real UART's rate does not follow the far end). The runner
-//! reads it every [`SPEED_CHECK`]; when it differs from the device's line
+//! reads it every [`SPEED_CHECK`] — with `TCGETS2` (termios2, through
+//! `rustix`), so the integer speed of a client that set an arbitrary one
+//! (`BOTHER`, as serialport-rs does for every rate on Linux) is read as
+//! well as a classic `Bxxx` speed; when it differs from the device's line
 //! rate, the bytes in both directions are garbled as a UART at the wrong
 //! rate reads them ([`crate::uart::resample`]: wrong bits, framing errors
-//! read as `0x00`) and a warning is logged once per mismatch.
+//! read as `0x00`) and a warning naming both rates is logged once per
+//! mismatch.
 
 use std::fs::File;
 use std::io::{self, Read};
@@ -51,8 +55,8 @@ pub struct PtyTransport {
     backlog: Backlog,
     /// The device's line rate, bit/s.
     bps: u32,
-    /// The client's termios speed when it differs from the device's
-    /// (standard speeds only), as of the last check.
+    /// The client's termios speed when it differs from the device's, as
+    /// of the last check.
     mismatch: Option<u32>,
     /// When the client's speed was last read (host time).
     checked_at: Option<std::time::Instant>,
@@ -126,14 +130,12 @@ impl PtyTransport {
         }
         self.checked_at = Some(now);
         let slave = self.open_slave()?;
-        let t = termios::tcgetattr(&slave).context("tcgetattr")?;
-        // A non-standard speed (BOTHER) is not readable here: no verdict.
-        let client = speed_of(&t);
+        let client = client_speed(&slave)?;
+        // The device's rate as the runner wrote it (the nearest standard
+        // speed), or exactly (a termios2 client that set the very rate).
         let device = baud_bps(nearest_baud(self.bps));
-        let mismatch = match (client, device) {
-            (Some(c), Some(d)) if c != d => Some(c),
-            _ => None,
-        };
+        let mismatch =
+            (client != 0 && client != self.bps && Some(client) != device).then_some(client);
         if mismatch != self.mismatch {
             match mismatch {
                 Some(c) => tracing::warn!(
@@ -378,14 +380,15 @@ pub fn nearest_baud(bps: u32) -> BaudRate {
         .unwrap_or(BaudRate::B115200)
 }
 
-/// The standard speed in `t` (the `CBAUD` bits of its control flags), bit/s;
-/// `None` for a non-standard one (`BOTHER`, set through termios2), which
-/// `cfgetospeed` cannot express.
-pub fn speed_of(t: &termios::Termios) -> Option<u32> {
-    let raw = t.control_flags.bits() & termios::ControlFlags::CBAUD.bits();
-    BaudRate::try_from(raw as nix::libc::speed_t)
-        .ok()
-        .and_then(baud_bps)
+/// The output speed a client set on the tty `fd`, bit/s: read with
+/// `TCGETS2`, whose `c_ospeed` holds the integer rate both for a classic
+/// `Bxxx` speed (the kernel fills it in) and for an arbitrary one
+/// (`BOTHER`, which the `CBAUD` bits and `cfgetospeed` cannot express).
+/// 0 is B0 (hang up), no rate.
+pub fn client_speed(fd: impl std::os::fd::AsFd) -> anyhow::Result<u32> {
+    Ok(rustix::termios::tcgetattr(fd)
+        .context("tcgetattr (TCGETS2)")?
+        .output_speed())
 }
 
 /// The rate of a standard termios speed, bit/s (`None` for one not in the
@@ -502,6 +505,18 @@ mod tests {
         client.read_exact(&mut g).unwrap();
         assert_eq!(g[0], crate::uart::resample(&[0x55], 4800, 115_200)[0]);
         termios::cfsetspeed(&mut tio, BaudRate::B4800).unwrap();
+        termios::tcsetattr(&client, SetArg::TCSANOW, &tio).unwrap();
+        std::thread::sleep(SPEED_CHECK);
+        t.receive(usize::MAX, &mut |_| {}).unwrap();
+        assert_eq!(t.mismatch(), None);
+        // An arbitrary speed set through termios2 (BOTHER) is read too.
+        let mut t2 = rustix::termios::tcgetattr(&client).unwrap();
+        t2.set_speed(250_000).unwrap();
+        rustix::termios::tcsetattr(&client, rustix::termios::OptionalActions::Now, &t2).unwrap();
+        assert_eq!(client_speed(&client).unwrap(), 250_000);
+        std::thread::sleep(SPEED_CHECK);
+        t.receive(usize::MAX, &mut |_| {}).unwrap();
+        assert_eq!(t.mismatch(), Some(250_000));
         termios::tcsetattr(&client, SetArg::TCSANOW, &tio).unwrap();
         std::thread::sleep(SPEED_CHECK);
         t.receive(usize::MAX, &mut |_| {}).unwrap();
