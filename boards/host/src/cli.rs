@@ -250,9 +250,19 @@ pub enum Sub {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the man page (roff, from this command-line definition):
-    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`.
-    Man,
+    /// Print a man page (roff, from this command-line definition):
+    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`; a subcommand's with its
+    /// path (`imu-emu man client record` is imu-emu-client-record(1)), or
+    /// every page into a folder (`--dir`).
+    Man {
+        /// The subcommand whose page to print (`client`, `client
+        /// record`, `sensor-profile show`); none: imu-emu(1).
+        command: Vec<String>,
+        /// Write every page (imu-emu.1, imu-emu-client.1, …) into DIR (it
+        /// must exist) instead, one file a page.
+        #[arg(long, value_name = "DIR", conflicts_with = "command")]
+        dir: Option<PathBuf>,
+    },
     /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
     /// IMX-5) as a file to start from; `check FILE` reads one.
     #[command(name = "sensor-profile", subcommand)]
@@ -270,6 +280,7 @@ pub enum ProfileSub {
     /// K201 K210 K220 IMX-5) as a TOML file.
     Show {
         /// Model name.
+        #[arg(value_parser = ProfileName)]
         name: String,
     },
     /// Read FILE and print it back as the emulator understood it (or the
@@ -278,6 +289,35 @@ pub enum ProfileSub {
         /// The profile file.
         file: PathBuf,
     },
+}
+
+/// `sensor-profile show NAME`: any text (the lookup, any case, says
+/// what it has), with the built-in profiles' names as its possible values
+/// so that the completions offer them.
+#[derive(Debug, Clone, Copy)]
+struct ProfileName;
+
+impl clap::builder::TypedValueParser for ProfileName {
+    type Value = String;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        _arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<String, clap::Error> {
+        Ok(value.to_string_lossy().into_owned())
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(
+            imu_emu::sensor::profiles::BUILTIN
+                .iter()
+                .map(|b| clap::builder::PossibleValue::new(b.name)),
+        ))
+    }
 }
 
 /// Runs `imu-emu sensor-profile …`.
@@ -473,18 +513,8 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(Sub::Client(c)) => return crate::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
         Some(Sub::Allan(a)) => return crate::allan::run(&a),
-        Some(Sub::Completions { shell }) => {
-            let mut cmd = <Args as clap::CommandFactory>::command();
-            let mut text = Vec::new();
-            clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
-            return print_all(&text);
-        }
-        Some(Sub::Man) => {
-            let cmd = <Args as clap::CommandFactory>::command();
-            let mut text = Vec::new();
-            clap_mangen::Man::new(cmd).render(&mut text)?;
-            return print_all(&text);
-        }
+        Some(Sub::Completions { shell }) => return print_all(&completions(shell)),
+        Some(Sub::Man { command, dir }) => return man(&command, dir.as_deref()),
         None => {}
     }
     check_addresses(&args)?;
@@ -513,6 +543,54 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
     }
+}
+
+/// The completion script for `shell`, from the command-line definition.
+///
+/// clap_complete's bash script (4.6.12) spells the states of a
+/// hyphenated program's subcommands two ways: the loop that walks the
+/// words sets `imu__emu__subcmd__client`, the case labels read
+/// `imu__subcmd__emu__subcmd__client`, so nothing past the first word
+/// completed. The labels are respelled the loop's way (zsh and fish keep
+/// the name verbatim and need nothing).
+pub fn completions(shell: clap_complete::Shell) -> Vec<u8> {
+    let mut cmd = <Args as clap::CommandFactory>::command();
+    let mut text = Vec::new();
+    clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
+    if shell == clap_complete::Shell::Bash {
+        let script = String::from_utf8_lossy(&text).replace("imu__subcmd__emu", "imu__emu");
+        return script.into_bytes();
+    }
+    text
+}
+
+/// `imu-emu man [COMMAND…] [--dir DIR]`: the page of the command at that
+/// path, or every page into DIR. The `help` subcommands have no page (the
+/// pages list none).
+fn man(path: &[String], dir: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let mut cmd = <Args as clap::CommandFactory>::command().disable_help_subcommand(true);
+    cmd.build();
+    if let Some(d) = dir {
+        clap_mangen::generate_to(cmd, d).with_context(|| format!("man --dir {}", d.display()))?;
+        return Ok(());
+    }
+    let mut page = &cmd;
+    for (i, w) in path.iter().enumerate() {
+        page = page.find_subcommand(w).ok_or_else(|| {
+            let names: Vec<&str> = page.get_subcommands().map(|c| c.get_name()).collect();
+            UsageError(format!(
+                "man: `{}` has no subcommand {w}; it has: {}",
+                std::iter::once("imu-emu")
+                    .chain(path[..i].iter().map(String::as_str))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                names.join(" ")
+            ))
+        })?;
+    }
+    let mut text = Vec::new();
+    clap_mangen::Man::new(page.clone()).render(&mut text)?;
+    print_all(&text)
 }
 
 /// The web view of `--web`, if asked for: its hub and its running server
