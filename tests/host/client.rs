@@ -225,7 +225,8 @@ fn record_decode_and_plot() {
     stdout(&o);
     assert_eq!(
         stderr(&o),
-        "imu-emu: 200 frames recorded, 0 failed their checksum, 0 counter gaps\n"
+        "imu-emu: 200 frames recorded, 1.990 s of device time, 0 failed their checksum, 0 \
+         counter gaps\n"
     );
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -252,9 +253,9 @@ fn record_decode_and_plot() {
         assert!((az - 1.0).abs() < 0.05, "{az}");
     }
 
-    // The raw capture holds the acknowledgement, the GA frames and the
-    // ReadRAM answer; decoding it gives the same GA rows (no host time),
-    // on stdout when the output is named `-`.
+    // The raw capture holds the acknowledgement and the GA frames;
+    // decoding it gives the same GA rows (no host time), on stdout when
+    // the output is named `-`.
     let o = run(&["client", "decode", raw.to_str().unwrap(), "-o", "-"]);
     let decoded = stdout(&o);
     let mut dl = decoded.lines();
@@ -483,7 +484,7 @@ fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
     assert!(
         err.starts_with("imu-emu: ")
             && err.ends_with(
-                " frames recorded, 0 failed their checksum, 0 counter gaps (interrupted; \
+                " s of device time, 0 failed their checksum, 0 counter gaps (interrupted; \
                  stream stopped)\n"
             ),
         "{err}"
@@ -543,8 +544,8 @@ fn isb_client_info_bit_get_and_set() {
     );
     assert_eq!(
         stdout(&isb(&a, &["set", "flash_config.startupNavDtMs", "8"])),
-        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `set \
-         SYS_CMD.command 99` with SYS_CMD.invCommand, or a power cycle)\n"
+        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `imu-emu client \
+         --protocol isb reset` (SYS_CMD 99 with its inverse), or a power cycle)\n"
     );
     assert_eq!(
         stdout(&isb(&a, &["get", "startupNavDtMs"])),
@@ -617,7 +618,9 @@ fn isb_client_record_decode_and_plot() {
     assert_eq!(
         stderr(&o),
         format!(
-            "imu-emu: {} packets recorded, {:.3} s of device time, 0 failed their checksum\n",
+            "imu-emu: {} packets recorded (IMU {} over {:.3} s of device time), 0 failed their \
+             checksum\n",
+            rows.len(),
             rows.len(),
             times[times.len() - 1] - times[0]
         )
@@ -686,4 +689,331 @@ fn isb_client_record_decode_and_plot() {
         );
         assert!(v["qn2b_w"].is_number() && v["lla_z"].is_number(), "{l}");
     }
+}
+
+/// `set Data_Rate 1000` at 115 200 bit/s says the rate the device lowers
+/// it to (Formula 5.1: GA 250 Hz), and `record --duration 2` then records
+/// two seconds of device time at that rate (500 frames 8 counter ticks
+/// apart), not 2 × 1000 frames.
+#[test]
+fn record_duration_counts_device_time_at_the_rate_the_device_runs() {
+    let (_e, a) = emu();
+    assert_eq!(
+        stdout(&client(&a, &["set", "Data_Rate", "1000"])),
+        "Data_Rate saved = 1000\nat 115200 bit/s the device lowers it (ICD 5.5, Formula 5.1): \
+         it sends GA, GAm at 250 Hz; Orientation, GAA, GAAm, Quaternion at 200 Hz; Calibrated \
+         HR at 125 Hz (a UDD by its length; a faster line rate keeps 1000 Hz)\n"
+    );
+    // A rate every format keeps: nothing more.
+    assert_eq!(
+        stdout(&client(&a, &["set", "Data_Rate", "50"])),
+        "Data_Rate saved = 50\n"
+    );
+    stdout(&client(&a, &["set", "Data_Rate", "1000"]));
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let started = std::time::Instant::now();
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GA",
+            "--duration",
+            "2",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: 500 frames recorded, 1.996 s of device time, 0 failed their checksum, 0 \
+         counter gaps\n"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 500);
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.004), "row {i}");
+    }
+    let counters: Vec<u16> = rows.iter().map(|r| r[10].parse().unwrap()).collect();
+    assert!(counters.windows(2).all(|w| w[1] == w[0].wrapping_add(8)));
+    // Real time: about the two seconds asked for (it was 8 s).
+    assert!(started.elapsed() < Duration::from_secs(6), "{:?}", started.elapsed());
+}
+
+/// Formats without a clock field (GAA, Orientation, Quaternion, GAm, GAAm)
+/// get `device_time_s` too: the frame's place in the stream at the rate
+/// the device runs (read from the unit by `record`; `decode --rate`, else
+/// the factory 100 Hz), and `--duration` counts it.
+#[test]
+fn clockless_formats_are_timed_from_their_rate_and_order() {
+    let (_e, a) = emu();
+    stdout(&client(&a, &["set", "Data_Rate", "50"]));
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("gaa.csv");
+    let raw = dir.path().join("gaa.bin");
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GAA",
+            "--duration",
+            "1",
+            "-o",
+            csv.to_str().unwrap(),
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("frame,format,device_time_s,host_time_s,gyro_x"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 50);
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[1], "GAA");
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.02), "row {i}");
+    }
+    // decode: --rate times them; without it the factory 100 Hz, said.
+    let o = run(&["client", "decode", raw.to_str().unwrap(), "--rate", "50"]);
+    let d: Vec<String> = stdout(&o).lines().skip(1).map(str::to_owned).collect();
+    assert!(d.len() >= 50, "{}", d.len());
+    assert_eq!(d[49].split(',').nth(2), Some("0.980000"));
+    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    let d: Vec<String> = stdout(&o).lines().skip(1).map(str::to_owned).collect();
+    assert_eq!(d[1].split(',').nth(2), Some("0.010000"));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "imu-emu: {}: GAA frames carry no clock: device_time_s counts them at 100 Hz, the \
+             factory Data_Rate (--rate HZ for another)\n",
+            raw.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// `client decode` of an IMX-5's capture without `--protocol isb` decodes
+/// it as ISB (and says so); bytes that are neither fail with one line and
+/// exit 1; `decode … | head` ends quietly with status 0.
+#[test]
+fn decode_detects_the_protocol_and_ends_quietly_on_a_closed_pipe() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let raw = dir.path().join("imu.bin");
+    stdout(&isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "IMU",
+            "--frames",
+            "300",
+            "-o",
+            "/dev/null",
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    ));
+    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    let text = stdout(&o);
+    assert!(
+        text.starts_with("frame,did,device_time_s,time,status,pqr_x"),
+        "{text}"
+    );
+    assert!(text.lines().count() >= 301);
+    assert!(stderr(&o).starts_with(&format!(
+        "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb\n",
+        raw.display()
+    )));
+    // Forced to KERNEL: nothing decodes, an error.
+    let o = run(&[
+        "client",
+        "--protocol",
+        "kernel",
+        "decode",
+        raw.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!(
+            "imu-emu: decode {}: no KERNEL data frame in ",
+            raw.display()
+        )) && err.ends_with("not a KERNEL capture? (--protocol isb for an IMX-5's)\n"),
+        "{err}"
+    );
+    let junk = dir.path().join("junk.bin");
+    std::fs::write(&junk, b"hello, this is not a capture\n").unwrap();
+    let o = run(&["client", "decode", junk.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(err.lines().count(), 1);
+    // | head: the reader goes away after two lines.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "decode", raw.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::BufRead as _;
+        let mut r = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap();
+        r.read_line(&mut line).unwrap();
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("Broken pipe"), "{}", stderr(&o));
+}
+
+/// A recording whose line a second client takes over (the emulator serves
+/// one client at a time) ends saying so, not `write: Broken pipe`.
+#[test]
+fn a_recording_taken_over_by_another_client_says_so() {
+    let (_e, a) = emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
+        .arg(&csv)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no rows");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    stdout(&client(&a, &["info"]));
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        assert!(std::time::Instant::now() < deadline, "record did not end");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {a}: the unit closed the connection (the emulator serves one client \
+             at a time: another client connecting took the line over, or the emulator stopped)\n"
+        )
+    );
+}
+
+/// ISB `reset` and `factory-reset` send the SYS_CMD command with its
+/// inverse in one packet: a saved startupNavDtMs 8 takes effect at the
+/// reset (IMU packets 8 ms apart), the factory reset restores 4 ms; the
+/// hint printed by `set` is that command. `set SYS_CMD.command 99` sends
+/// the pair too; `set SET v,v,…` writes a whole set.
+#[test]
+fn isb_reset_factory_reset_and_whole_sets() {
+    let (_e, a) = isb_emu();
+    let imu_period = |a: &str| -> f64 {
+        let o = isb(a, &["record", "--did", "IMU", "--frames", "5", "--to", "csv"]);
+        let text = stdout(&o);
+        let t: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(4).unwrap().parse().unwrap())
+            .collect();
+        ((t[4] - t[1]) / 3.0 * 1e4).round() / 1e4
+    };
+    assert_eq!(imu_period(&a), 0.004);
+    let set = stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "8"]));
+    assert!(set.contains("`imu-emu client --protocol isb reset`"), "{set}");
+    assert_eq!(imu_period(&a), 0.004, "not before the reset");
+    assert_eq!(
+        stdout(&isb(&a, &["reset"])),
+        "reset (SYS_CMD 99): the unit restarts with its saved FLASH_CONFIG\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.008);
+    assert_eq!(
+        stdout(&isb(&a, &["factory-reset"])),
+        "factory reset (SYS_CMD 1357924680 after the unlock): FLASH_CONFIG back to its \
+         defaults, saved; the unit restarts\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 4 ms\n"
+    );
+    assert_eq!(imu_period(&a), 0.004);
+    // One field of SYS_CMD: the client adds the inverse.
+    stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "8"]));
+    assert_eq!(
+        stdout(&isb(&a, &["set", "SYS_CMD.command", "99"])),
+        "SYS_CMD.command saved = 99\n(sent with SYS_CMD.invCommand = 0xffffff9c in the same \
+         SET_DATA: a command runs only with its inverse)\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.008);
+    // A whole set: every field in order.
+    stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "4"]));
+    assert_eq!(
+        stdout(&isb(&a, &["set", "SYS_CMD", "99,4294967196"])),
+        "SYS_CMD saved = 99,4294967196\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.004);
+    let o = isb(&a, &["set", "SYS_CMD", "99"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: set SYS_CMD: 1 values given, the set takes 2 (command, invCommand, in order, \
+         comma-separated)\n"
+    );
+    // A KERNEL has none of it.
+    let o = run(&["client", "--tcp", &a, "reset"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("reset and factory-reset are IMX-5 (--protocol isb) commands"));
+}
+
+/// A record of IMU (time since boot) and INS_1 (GPS time of week) sums
+/// up each set on its own clock: no span across the two.
+#[test]
+fn a_mixed_isb_record_is_summed_up_per_set() {
+    let (_e, a) = isb_emu();
+    let o = isb(
+        &a,
+        &[
+            "record", "--did", "IMU,INS_1", "--duration", "1", "--to", "json", "-o", "/dev/null",
+        ],
+    );
+    stdout(&o);
+    let err = stderr(&o);
+    // `imu-emu: N packets recorded (IMU n over 0.99x s of device time,
+    // INS_1 m over 0.99x s of device time), 0 failed their checksum`.
+    let words: Vec<&str> = err
+        .split(|c: char| c == ' ' || c == '(' || c == ',')
+        .filter(|w| !w.is_empty())
+        .collect();
+    assert_eq!(
+        words,
+        [
+            "imu-emu:", words[1], "packets", "recorded", "IMU", words[5], "over", words[7], "s",
+            "of", "device", "time", "INS_1", words[13], "over", words[15], "s", "of", "device",
+            "time)", "0", "failed", "their", "checksum\n"
+        ],
+        "{err}"
+    );
+    let n = |i: usize| words[i].parse::<u64>().unwrap();
+    assert_eq!(n(1), n(5) + n(13));
+    assert!(n(5) >= 249 && n(13) >= 249, "{err}");
+    for span in [words[7], words[15]] {
+        let s: f64 = span.parse().unwrap();
+        // Printed to the ms: up to 1.000 for a span just under 1 s.
+        assert!((0.99..=1.0).contains(&s), "{err}");
+    }
+    assert!(!err.contains("over -"), "{err}");
 }

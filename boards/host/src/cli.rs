@@ -48,8 +48,9 @@ pub const DEFAULT_TCP: &str = "127.0.0.1:7000";
 #[command(name = "imu-emu", version, about)]
 pub struct Args {
     /// The device's protocol: `kernel` (an Inertial Labs KERNEL, the
-    /// default) or `isb` (an Inertial Sense IMX-5 in IMU mode speaking ISB;
-    /// `--model` does not apply, the line starts at 921 600 bit/s).
+    /// default) or `isb` (an Inertial Sense IMX-5 speaking ISB: its IMU,
+    /// INS, GNSS, magnetometer and barometer data sets; `--model` does not
+    /// apply, the line starts at 921 600 bit/s).
     #[arg(long, value_name = "PROTOCOL", value_enum, default_value_t = Protocol::Kernel)]
     pub protocol: Protocol,
 
@@ -527,7 +528,8 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_timerslack(1);
     // A bad profile file stops the program before anything listens.
-    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))?;
+    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))
+        .map_err(as_usage)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -552,16 +554,62 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
 /// words sets `imu__emu__subcmd__client`, the case labels read
 /// `imu__subcmd__emu__subcmd__client`, so nothing past the first word
 /// completed. The labels are respelled the loop's way (zsh and fish keep
-/// the name verbatim and need nothing).
+/// the name verbatim; fish gets the positional values it lacks,
+/// [`fish_positionals`]).
 pub fn completions(shell: clap_complete::Shell) -> Vec<u8> {
     let mut cmd = <Args as clap::CommandFactory>::command();
     let mut text = Vec::new();
     clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
-    if shell == clap_complete::Shell::Bash {
-        let script = String::from_utf8_lossy(&text).replace("imu__subcmd__emu", "imu__emu");
-        return script.into_bytes();
+    match shell {
+        clap_complete::Shell::Bash => String::from_utf8_lossy(&text)
+            .replace("imu__subcmd__emu", "imu__emu")
+            .into_bytes(),
+        clap_complete::Shell::Fish => {
+            text.extend_from_slice(fish_positionals().as_bytes());
+            text
+        }
+        _ => text,
     }
-    text
+}
+
+/// clap_complete's fish script (4.6.12) completes options and
+/// subcommands but no positional argument's values (`completions
+/// <SHELL>`, `sensor-profile show <NAME>`): one line each, in the script's
+/// own conditions.
+fn fish_positionals() -> String {
+    let mut cmd = <Args as clap::CommandFactory>::command();
+    cmd.build();
+    let mut out = String::new();
+    let mut line = |cond: String, c: &clap::Command| {
+        for a in c.get_positionals() {
+            let vals: Vec<String> = a
+                .get_possible_values()
+                .iter()
+                .filter(|v| !v.is_hide_set())
+                .map(|v| v.get_name().to_owned())
+                .collect();
+            if !vals.is_empty() {
+                out.push_str(&format!(
+                    "complete -c imu-emu -n \"{cond}\" -f -a \"{}\"\n",
+                    vals.join(" ")
+                ));
+            }
+        }
+    };
+    for sub in cmd.get_subcommands() {
+        let name = sub.get_name();
+        line(format!("__fish_imu_emu_using_subcommand {name}"), sub);
+        for sub2 in sub.get_subcommands() {
+            line(
+                format!(
+                    "__fish_imu_emu_using_subcommand {name}; and __fish_seen_subcommand_from {}",
+                    sub2.get_name()
+                ),
+                sub2,
+            );
+        }
+    }
+    out
 }
 
 /// `imu-emu man [COMMAND…] [--dir DIR]`: the page of the command at that
@@ -617,9 +665,26 @@ fn print_all(text: &[u8]) -> anyhow::Result<()> {
     }
 }
 
+/// `e` as a usage error (exit status 2): a file named on the command line
+/// that cannot be read or is not what the option takes.
+fn as_usage(e: anyhow::Error) -> anyhow::Error {
+    if e.chain().any(|c| c.is::<UsageError>()) {
+        e
+    } else {
+        UsageError(format!("{e:#}")).into()
+    }
+}
+
 /// Options that parse but make no sense together: refused rather than
 /// ignored.
 fn check_combinations(args: &Args) -> anyhow::Result<()> {
+    if args.protocol == Protocol::Kernel && args.gps_time.is_some() {
+        return Err(UsageError(
+            "--gps-time sets an IMX-5's GPS time (--protocol isb); a KERNEL keeps no GPS time"
+                .into(),
+        )
+        .into());
+    }
     if args.protocol == Protocol::Isb {
         if let Some(m) = &args.model {
             return Err(UsageError(format!(
@@ -752,7 +817,10 @@ fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSou
     let Some(path) = &args.motion else {
         return Ok(None);
     };
-    let v = crate::vehicle::VehicleSource::load(path)?;
+    // A file that does not load is a bad argument, as a bad
+    // --sensor-profile is (exit status 2).
+    let v = crate::vehicle::VehicleSource::load(path)
+        .map_err(|e| as_usage(e.context(format!("--motion {}", path.display()))))?;
     eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
     Ok(Some(v))
 }
