@@ -33,7 +33,11 @@ fn bash_complete(script: &Path, line: &[&str]) -> Vec<String> {
         line.len() - 1,
         line.join(" "),
     );
-    let out = Command::new("bash").arg("-c").arg(program).output().unwrap();
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(program)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", text(&out.stderr));
     text(&out.stdout)
         .lines()
@@ -58,7 +62,10 @@ fn bash_completion_completes_every_level() {
         (&["imu-emu", "client", "re"], &["reset", "record"]),
         (&["imu-emu", "client", "--protocol", ""], &["kernel", "isb"]),
         (&["imu-emu", "--protocol", "i"], &["isb"]),
-        (&["imu-emu", "client", "record", "--to", ""], &["csv", "json"]),
+        (
+            &["imu-emu", "client", "record", "--to", ""],
+            &["csv", "json"],
+        ),
         (&["imu-emu", "client", "record", "--fo"], &["--format"]),
         (&["imu-emu", "sensor-profile", "sh"], &["show"]),
         (&["imu-emu", "completions", "f"], &["fish"]),
@@ -121,7 +128,9 @@ fn every_man_page_named_can_be_produced() {
             .collect::<Vec<_>>()
             .join("-");
         assert!(
-            page.starts_with(&format!(".ie \\n(.g .ds Aq \\(aq\n.el .ds Aq '\n.TH {name} 1")),
+            page.starts_with(&format!(
+                ".ie \\n(.g .ds Aq \\(aq\n.el .ds Aq '\n.TH {name} 1"
+            )),
             "{args:?}: {}",
             &page[..page.len().min(200)]
         );
@@ -149,7 +158,10 @@ fn every_man_page_named_can_be_produced() {
         "imu-emu-allan",
         "imu-emu-man",
     ] {
-        assert!(seen.iter().any(|s| s == want), "{want} not reached: {seen:?}");
+        assert!(
+            seen.iter().any(|s| s == want),
+            "{want} not reached: {seen:?}"
+        );
     }
     assert!(!seen.iter().any(|s| s.ends_with("-help")), "{seen:?}");
     let dir = tempfile::tempdir().unwrap();
@@ -214,11 +226,7 @@ fn the_readme_quickstart_runs_as_pasted() {
         .output()
         .unwrap();
     let stdout = text(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        text(&out.stderr)
-    );
+    assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
     assert!(stdout.starts_with("serial: 10000000\n"), "{stdout}");
     assert!(stdout.contains("Data_Rate saved = 200\n"), "{stdout}");
     let work = PathBuf::from(stdout.lines().last().unwrap());
@@ -275,7 +283,12 @@ fn options_that_do_not_fit_are_usage_errors() {
         let mut all = vec!["--tcp", "127.0.0.1:0"];
         all.extend_from_slice(args);
         let out = imu_emu(&all);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", text(&out.stderr));
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
         assert!(out.stdout.is_empty(), "{args:?} listened");
         let err = text(&out.stderr);
         assert_eq!(err.lines().count(), 1, "{err}");
@@ -286,5 +299,8 @@ fn options_that_do_not_fit_are_usage_errors() {
     // With --protocol isb, --gps-time is the IMX's GPS time: accepted.
     let help = text(&imu_emu(&["--help"]).stdout);
     assert!(!help.contains("IMU mode"), "{help}");
-    assert!(help.contains("an Inertial Sense IMX-5 speaking ISB: its IMU,"), "{help}");
+    assert!(
+        help.contains("an Inertial Sense IMX-5 speaking ISB: its IMU,"),
+        "{help}"
+    );
 }

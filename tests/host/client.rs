@@ -732,7 +732,11 @@ fn record_duration_counts_device_time_at_the_rate_the_device_runs() {
          counter gaps\n"
     );
     let text = std::fs::read_to_string(&csv).unwrap();
-    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     assert_eq!(rows.len(), 500);
     for (i, r) in rows.iter().enumerate() {
         assert_eq!(r[2], format!("{:.6}", i as f64 * 0.004), "row {i}");
@@ -740,7 +744,11 @@ fn record_duration_counts_device_time_at_the_rate_the_device_runs() {
     let counters: Vec<u16> = rows.iter().map(|r| r[10].parse().unwrap()).collect();
     assert!(counters.windows(2).all(|w| w[1] == w[0].wrapping_add(8)));
     // Real time: about the two seconds asked for (it was 8 s).
-    assert!(started.elapsed() < Duration::from_secs(6), "{:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(6),
+        "{:?}",
+        started.elapsed()
+    );
 }
 
 /// Formats without a clock field (GAA, Orientation, Quaternion, GAm, GAAm)
@@ -919,7 +927,10 @@ fn a_recording_taken_over_by_another_client_says_so() {
 fn isb_reset_factory_reset_and_whole_sets() {
     let (_e, a) = isb_emu();
     let imu_period = |a: &str| -> f64 {
-        let o = isb(a, &["record", "--did", "IMU", "--frames", "5", "--to", "csv"]);
+        let o = isb(
+            a,
+            &["record", "--did", "IMU", "--frames", "5", "--to", "csv"],
+        );
         let text = stdout(&o);
         let t: Vec<f64> = text
             .lines()
@@ -930,7 +941,10 @@ fn isb_reset_factory_reset_and_whole_sets() {
     };
     assert_eq!(imu_period(&a), 0.004);
     let set = stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "8"]));
-    assert!(set.contains("`imu-emu client --protocol isb reset`"), "{set}");
+    assert!(
+        set.contains("`imu-emu client --protocol isb reset`"),
+        "{set}"
+    );
     assert_eq!(imu_period(&a), 0.004, "not before the reset");
     assert_eq!(
         stdout(&isb(&a, &["reset"])),
@@ -987,7 +1001,15 @@ fn a_mixed_isb_record_is_summed_up_per_set() {
     let o = isb(
         &a,
         &[
-            "record", "--did", "IMU,INS_1", "--duration", "1", "--to", "json", "-o", "/dev/null",
+            "record",
+            "--did",
+            "IMU,INS_1",
+            "--duration",
+            "1",
+            "--to",
+            "json",
+            "-o",
+            "/dev/null",
         ],
     );
     stdout(&o);
@@ -1001,9 +1023,30 @@ fn a_mixed_isb_record_is_summed_up_per_set() {
     assert_eq!(
         words,
         [
-            "imu-emu:", words[1], "packets", "recorded", "IMU", words[5], "over", words[7], "s",
-            "of", "device", "time", "INS_1", words[13], "over", words[15], "s", "of", "device",
-            "time)", "0", "failed", "their", "checksum\n"
+            "imu-emu:",
+            words[1],
+            "packets",
+            "recorded",
+            "IMU",
+            words[5],
+            "over",
+            words[7],
+            "s",
+            "of",
+            "device",
+            "time",
+            "INS_1",
+            words[13],
+            "over",
+            words[15],
+            "s",
+            "of",
+            "device",
+            "time)",
+            "0",
+            "failed",
+            "their",
+            "checksum\n"
         ],
         "{err}"
     );

@@ -67,10 +67,7 @@ impl VehicleSource {
                     layout.column_name(c),
                     c + 1
                 ),
-                None => anyhow::anyhow!(
-                    "line {n}: {e} ({} expected): {line:?}",
-                    layout.columns()
-                ),
+                None => anyhow::anyhow!("line {n}: {e} ({} expected): {line:?}", layout.columns()),
             })?;
             if rows.last().is_some_and(|p| r.time_s <= p.time_s) {
                 bail!("line {n}: time {} does not increase", r.time_s);
