@@ -1060,3 +1060,89 @@ fn a_mixed_isb_record_is_summed_up_per_set() {
     }
     assert!(!err.contains("over -"), "{err}");
 }
+
+/// The points of each `<polyline>` of an SVG with these attributes.
+fn polylines(svg: &str, attrs: &str) -> Vec<Vec<(i32, i32)>> {
+    svg.lines()
+        .filter(|l| l.starts_with("<polyline") && l.contains(attrs))
+        .map(|l| {
+            let p = &l[l.find("points=\"").unwrap() + 8..];
+            p[..p.find('"').unwrap()]
+                .split_whitespace()
+                .map(|xy| {
+                    let (x, y) = xy.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A PIMU plot: the Δθ axis spans its data (10⁻⁵ rad, labelled as such,
+/// not ±0.001), every data line stays inside its panel's frame, and the
+/// legend stands beside the frame (it covered the last data).
+#[test]
+fn plots_fit_their_data_inside_the_frame_with_the_legend_beside() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("pimu.csv");
+    stdout(&isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "PIMU",
+            "--duration",
+            "1",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    ));
+    let svg = dir.path().join("pimu.svg");
+    stdout(&plot(&csv, &svg));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // Frames: the axis lines (1 px, black) that are whole sides: a y axis
+    // (x fixed, its panel's height) and an x axis (y fixed).
+    let axes = polylines(&text, "stroke=\"#000000\" stroke-width=\"1\"");
+    let sides: Vec<&Vec<(i32, i32)>> = axes.iter().filter(|p| p.len() == 2).collect();
+    let frames: Vec<((i32, i32), (i32, i32))> = sides
+        .iter()
+        .filter(|p| p[0].0 == p[1].0 && p[1].1 - p[0].1 > 200)
+        .map(|y_axis| {
+            let x_axis = sides
+                .iter()
+                .find(|q| {
+                    q[0].1 == q[1].1 && (q[0].0 - y_axis[0].0).abs() <= 1 && q[1].0 - q[0].0 > 500
+                })
+                .expect("an x axis beside the y axis");
+            (
+                (y_axis[0].0, x_axis[1].0),
+                (y_axis[0].1, y_axis[1].1.max(x_axis[0].1)),
+            )
+        })
+        .collect();
+    assert_eq!(frames.len(), 2, "{frames:?}");
+    let lines = polylines(&text, "stroke-width=\"2\"");
+    let (data, legend): (Vec<_>, Vec<_>) = lines.iter().partition(|p| p.len() > 2);
+    assert_eq!(data.len(), 6);
+    for (k, line) in data.iter().enumerate() {
+        let ((x0, x1), (y0, y1)) = frames[k / 3];
+        for &(x, y) in line.iter() {
+            assert!(
+                (x0..=x1).contains(&x) && (y0..=y1).contains(&y),
+                "line {k}: ({x}, {y}) outside {frames:?}"
+            );
+        }
+    }
+    assert_eq!(legend.len(), 6);
+    for l in &legend {
+        assert!(
+            l[0].0 > frames[0].0 .1,
+            "legend sample at {l:?} inside the frame"
+        );
+    }
+    // The Δθ axis is labelled in 10⁻⁶ rad (the data are ≈ 10⁻⁵ rad).
+    assert!(text.contains(">\n2.0e-6\n<"), "no 2.0e-6 tick");
+    assert!(!text.contains(">\n0.0010\n<") && !text.contains(">\n0.001\n<"));
+    assert!(!text.contains(">\n-0.0\n<"));
+}
