@@ -149,6 +149,28 @@ class EmulatorTest(unittest.TestCase):
         self.assertTrue(all(e.split()[0] == "tov" for e in ctl.events))
 
 
+class ReadmeTest(unittest.TestCase):
+    def test_the_readme_python_snippet_prints_what_it_says(self):
+        # The repository's README, from the clone these tests run from.
+        import contextlib
+        import io
+        import re
+        readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+        snippet = re.search(r"```python\n(import imu_emu\n.*?)```", readme, re.S).group(1)
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            exec(compile(snippet, "README.md", "exec"), {})
+        lines = out.getvalue().splitlines()
+        self.assertEqual(len(lines), 3, lines)
+        self.assertTrue(lines[0].startswith("b'KERNEL-110-G2000-A40 imu-emu"), lines[0])
+        n = int(lines[1].split()[0])
+        self.assertGreaterEqual(n, 90)
+        # After 1 % of the sent bytes were corrupted, frames failed their
+        # checksum at this end (the snippet printed `rejected`, always 0:
+        # the device's count of frames it refused).
+        self.assertGreater(int(lines[2]), 0, lines)
+
+
 class FleetTest(unittest.TestCase):
     def setUp(self):
         self.fleet = imu_emu.Fleet(3, ["--seed", "1"])

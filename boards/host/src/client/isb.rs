@@ -578,7 +578,10 @@ fn record_rows(
     // With --duration: the sets (each on its own clock) that reached it; a
     // set without a clock follows host time.
     let mut done: Vec<u8> = Vec::new();
-    while until.frames.is_none_or(|n| rec.rows < n) && done.len() < dids.len() && !stop() {
+    let mut sets = dids.to_vec();
+    sets.sort_unstable();
+    sets.dedup();
+    while until.frames.is_none_or(|n| rec.rows < n) && done.len() < sets.len() && !stop() {
         match link.packet_before(Instant::now() + Duration::from_millis(100))? {
             Some(p) if p.whole_set().is_some_and(|(d, _)| dids.contains(&d)) => {
                 quiet_since = Instant::now();
