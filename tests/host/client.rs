@@ -1017,7 +1017,7 @@ fn a_mixed_isb_record_is_summed_up_per_set() {
     // `imu-emu: N packets recorded (IMU n over 0.99x s of device time,
     // INS_1 m over 0.99x s of device time), 0 failed their checksum`.
     let words: Vec<&str> = err
-        .split(|c: char| c == ' ' || c == '(' || c == ',')
+        .split([' ', '(', ','])
         .filter(|w| !w.is_empty())
         .collect();
     assert_eq!(

@@ -948,7 +948,7 @@ pub fn lowered_rates(requested: u32, baud: u32, product: &Product) -> Option<Str
     if groups.is_empty() {
         return None;
     }
-    groups.sort_by(|a, b| b.0.cmp(&a.0));
+    groups.sort_by_key(|g| std::cmp::Reverse(g.0));
     let list: Vec<String> = groups
         .iter()
         .map(|(r, names)| format!("{} at {r} Hz", names.join(", ")))
