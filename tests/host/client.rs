@@ -858,6 +858,17 @@ fn decode_detects_the_protocol_and_ends_quietly_on_a_closed_pipe() {
         )) && err.ends_with("not a KERNEL capture? (--protocol isb for an IMX-5's)\n"),
         "{err}"
     );
+    // From a pipe (read once: the protocol from its head, then the rest).
+    let piped = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "cat '{}' | '{}' client decode /dev/stdin",
+            raw.display(),
+            env!("CARGO_BIN_EXE_imu-emu")
+        ))
+        .output()
+        .unwrap();
+    assert_eq!(stdout(&piped), text);
     let junk = dir.path().join("junk.bin");
     std::fs::write(&junk, b"hello, this is not a capture\n").unwrap();
     let o = run(&["client", "decode", junk.to_str().unwrap()]);

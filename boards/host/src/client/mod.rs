@@ -719,15 +719,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             if did.is_some() {
                 return Err(UsageError("record --did goes with --protocol isb".into()).into());
             }
-            // The rate the device sends at (Data_Rate lowered by Formula
-            // 5.1 for the format's frame length on the running line rate)
-            // times the frames of a format without a clock.
-            let data_rate = get(&mut link, &params::DATA_RATE)?;
-            let line = RateOf::Line {
-                data_rate: u32::from(u16::from_le_bytes([data_rate[0], data_rate[1]])),
-                baud: params::baud_rate(get(&mut link, &params::BAUD_RATE)?[0]),
-                internal_hz: args.model.model.internal_rate_hz,
-            };
+            let rate = stream_rate(&mut link, &args.model);
             if let Some(r) = raw {
                 link.line.tee = Some(
                     std::fs::File::create(r).with_context(|| format!("--raw {}", r.display()))?,
@@ -738,7 +730,10 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                 None => None,
             };
             let mut w = writer(o.as_ref())?;
-            let mut rec = Recorder::new(*to, args.model).with_rate(line);
+            let mut rec = Recorder::new(*to, args.model);
+            if let Some(r) = rate {
+                rec = rec.with_rate(r);
+            }
             rec.end_s = *duration;
             let r = record(&mut link, &mut w, &mut rec, *frames, &stop);
             // The stream is stopped even when recording failed; that
@@ -796,19 +791,21 @@ fn decode_file(
     did: Option<&str>,
     rate: Option<f64>,
 ) -> anyhow::Result<()> {
-    use std::io::Seek as _;
     let what = || format!("decode {}", file.display());
-    let mut src = std::fs::File::open(file).with_context(what)?;
+    let mut file_src = std::fs::File::open(file).with_context(what)?;
+    // The first 64 KiB tell the protocol; they are read once and decoded
+    // ahead of the rest (a pipe or a FIFO cannot be read twice).
+    let mut head = Vec::new();
+    (&mut file_src)
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .with_context(what)?;
+    let empty = head.is_empty();
+    let mut src = std::io::Cursor::new(head).chain(file_src);
     let protocol = match args.protocol {
         Some(p) => p,
         None => {
-            let mut head = Vec::new();
-            (&mut src)
-                .take(1 << 16)
-                .read_to_end(&mut head)
-                .with_context(what)?;
-            src.rewind().with_context(what)?;
-            let p = protocol_of(&head).unwrap_or(Protocol::Kernel);
+            let p = protocol_of(src.get_ref().0.get_ref()).unwrap_or(Protocol::Kernel);
             if p == Protocol::Isb {
                 eprintln!(
                     "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb",
@@ -829,7 +826,7 @@ fn decode_file(
         let only = did.map(isb::parse_set).transpose()?;
         let (rec, errors) = isb::decode(&mut src, &what, &mut w, to, only)?;
         w.flush()?;
-        if rec.rows == 0 && src.metadata().map_or(0, |m| m.len()) > 0 {
+        if rec.rows == 0 && !empty {
             bail!(
                 "{}: no ISB data set packet{} ({errors} packets failed their checksum): not an \
                  IMX-5's capture? (--protocol kernel for a KERNEL's)",
@@ -958,6 +955,20 @@ pub fn lowered_rates(requested: u32, baud: u32, product: &Product) -> Option<Str
          (a UDD by its length; a faster line rate keeps {requested} Hz)",
         list.join("; ")
     ))
+}
+
+/// The rate the device sends at, read from the unit (Data_Rate lowered by
+/// Formula 5.1 for a frame's length at the running line rate): it times
+/// the frames of a format without a clock. `None` when the unit does not
+/// answer ReadRAM (such frames then get no `device_time_s`).
+fn stream_rate(link: &mut Link, product: &Product) -> Option<RateOf> {
+    let data_rate = get(link, &params::DATA_RATE).ok()?;
+    let baud = get(link, &params::BAUD_RATE).ok()?;
+    Some(RateOf::Line {
+        data_rate: u32::from(u16::from_le_bytes([data_rate[0], data_rate[1]])),
+        baud: params::baud_rate(baud[0]),
+        internal_hz: product.model.internal_rate_hz,
+    })
 }
 
 fn parse_types(s: &str) -> anyhow::Result<Vec<u8>> {
@@ -1217,6 +1228,13 @@ impl Recorder {
                     self.timed_by_rate = true;
                 }
                 self.timed = clocked || self.timed_by_rate;
+                if !self.timed && self.end_s.is_some() {
+                    bail!(
+                        "record --duration: {} frames carry no clock and the unit did not say its \
+                         rate (ReadRAM Data_Rate): record --frames N instead",
+                        decode::format_name(id)
+                    );
+                }
                 if self.to == OutFormat::Csv {
                     let mut h = vec!["frame", "format"];
                     if self.timed {
