@@ -63,6 +63,26 @@ fn stderr(o: &Output) -> String {
     String::from_utf8(o.stderr.clone()).unwrap()
 }
 
+/// `record SEL… --duration S -o CSV --raw RAW`.
+fn record_args<'a>(
+    sel: &[&'a str],
+    duration: &'a str,
+    csv: &'a std::path::Path,
+    raw: &'a std::path::Path,
+) -> Vec<&'a str> {
+    let mut args = vec!["record"];
+    args.extend_from_slice(sel);
+    args.extend([
+        "--duration",
+        duration,
+        "-o",
+        csv.to_str().unwrap(),
+        "--raw",
+        raw.to_str().unwrap(),
+    ]);
+    args
+}
+
 fn emu() -> (Emu, String) {
     let e = Emu::tcp(&["--power-on", "now"]);
     let a = e.addr().to_string();
@@ -208,20 +228,7 @@ fn record_decode_and_plot() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("ga.csv");
     let raw = dir.path().join("ga.bin");
-    let o = client(
-        &a,
-        &[
-            "record",
-            "--format",
-            "GA",
-            "--duration",
-            "2",
-            "-o",
-            csv.to_str().unwrap(),
-            "--raw",
-            raw.to_str().unwrap(),
-        ],
-    );
+    let o = client(&a, &record_args(&["--format", "GA"], "2", &csv, &raw));
     stdout(&o);
     assert_eq!(
         stderr(&o),
@@ -447,6 +454,25 @@ fn the_client_talks_over_a_serial_port() {
     );
 }
 
+/// `client record --format GA -o CSV` running in the background, once
+/// rows arrive (the header and some rows are flushed by 8 KiB blocks:
+/// wait for the file to grow).
+fn recording(a: &str, csv: &std::path::Path) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--tcp", a, "record", "--format", "GA", "-o"])
+        .arg(csv)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(csv).map_or(0, |m| m.len()) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no rows");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    child
+}
+
 /// Ctrl-C during `record`: the stream the client started is stopped, the
 /// summary printed, the exit status 0; the unit then sends nothing.
 #[test]
@@ -454,20 +480,7 @@ fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
     let (_e, a) = emu();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("ga.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
-        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
-        .arg(&csv)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Wait until rows arrive (the header and some rows are flushed by 8 KiB
-    // blocks: wait for the file to grow).
-    let deadline = std::time::Instant::now() + Duration::from_secs(10);
-    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
-        assert!(std::time::Instant::now() < deadline, "no rows");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let mut child = recording(&a, &csv);
     nix::sys::signal::kill(
         nix::unistd::Pid::from_raw(child.id() as i32),
         nix::sys::signal::Signal::SIGINT,
@@ -585,20 +598,7 @@ fn isb_client_record_decode_and_plot() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("imu.csv");
     let raw = dir.path().join("imu.bin");
-    let o = isb(
-        &a,
-        &[
-            "record",
-            "--did",
-            "IMU",
-            "--duration",
-            "1",
-            "-o",
-            csv.to_str().unwrap(),
-            "--raw",
-            raw.to_str().unwrap(),
-        ],
-    );
+    let o = isb(&a, &record_args(&["--did", "IMU"], "1", &csv, &raw));
     stdout(&o);
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -762,20 +762,7 @@ fn clockless_formats_are_timed_from_their_rate_and_order() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("gaa.csv");
     let raw = dir.path().join("gaa.bin");
-    let o = client(
-        &a,
-        &[
-            "record",
-            "--format",
-            "GAA",
-            "--duration",
-            "1",
-            "-o",
-            csv.to_str().unwrap(),
-            "--raw",
-            raw.to_str().unwrap(),
-        ],
-    );
+    let o = client(&a, &record_args(&["--format", "GAA"], "1", &csv, &raw));
     stdout(&o);
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -900,18 +887,7 @@ fn a_recording_taken_over_by_another_client_says_so() {
     let (_e, a) = emu();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("ga.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
-        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
-        .arg(&csv)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let deadline = std::time::Instant::now() + Duration::from_secs(10);
-    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
-        assert!(std::time::Instant::now() < deadline, "no rows");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let mut child = recording(&a, &csv);
     stdout(&client(&a, &["info"]));
     let deadline = std::time::Instant::now() + Duration::from_secs(10);
     while child.try_wait().unwrap().is_none() {
