@@ -555,7 +555,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
 /// `imu__subcmd__emu__subcmd__client`, so nothing past the first word
 /// completed. The labels are respelled the loop's way (zsh and fish keep
 /// the name verbatim; fish gets the positional values it lacks,
-/// [`fish_positionals`]).
+/// `fish_positionals`).
 pub fn completions(shell: clap_complete::Shell) -> Vec<u8> {
     let mut cmd = <Args as clap::CommandFactory>::command();
     let mut text = Vec::new();

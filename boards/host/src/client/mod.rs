@@ -11,8 +11,9 @@
 //! | `get PARAM` / `set PARAM VALUE` | ReadRAM / SaveFlash (5.3.7, 5.3.8) by Table 5.24 name |
 //! | `commit-baud` | CommitBaudRate (5.3.9) |
 //! | `udd TYPE,…` | User_Def_Data_config (5.3.5) with the type codes, prints the device's check |
-//! | `record` | decoded frames to CSV or JSON lines, with a progress line on a terminal |
-//! | `decode FILE` | a raw capture decoded the same way |
+//! | `record` | decoded frames to CSV or JSON lines, each with its device time, for `--frames N` or `--duration S` of device time, with a progress line on a terminal |
+//! | `decode FILE` | a raw capture decoded the same way (its protocol detected) |
+//! | `reset`, `factory-reset` | IMX-5 only: SYS_CMD with its inverse in one packet |
 //! | `plot CSV` | a recording to PNG or SVG: rates, accelerations, attitude against device time |
 //!
 //! Errors are one line: the port cannot be opened, no answer within
@@ -781,8 +782,9 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
 }
 
 /// `client decode FILE`: the capture's protocol is `--protocol`, else
-/// detected from its first 64 KiB ([`protocol_of`]); a capture in which
-/// nothing decodes but checksum failures is an error.
+/// detected from its first 64 KiB ([`protocol_of`]); bytes in which no
+/// data frame (no data-set packet) decodes are an error, not an empty
+/// output with status 0.
 fn decode_file(
     args: &ClientArgs,
     file: &std::path::Path,
