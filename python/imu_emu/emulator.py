@@ -4,36 +4,63 @@ import os
 import shutil
 import socket
 import subprocess
+import struct
 import threading
 import time
+import warnings
 from pathlib import Path
 from typing import Any, List, Optional, Sequence, Union
 
 from .isb import PacketReader
-from .kernel import FrameReader
+from .kernel import (
+    BAUD_RATE,
+    BAUD_RATES,
+    DATA_RATE,
+    READ_RAM,
+    SAVE_FLASH,
+    FrameReader,
+    RateLoweredWarning,
+    effective_rate,
+    read_ram,
+    save_flash,
+)
 
 _REPO = Path(__file__).resolve().parents[2]
 
 
 def find_binary():
-    """The ``imu-emu`` binary: ``$IMU_EMU_BIN``, then the cargo target
-    directory (``$CARGO_TARGET_DIR`` or ``target/`` of the repository,
-    release before debug), then ``PATH``."""
+    """The ``imu-emu`` binary, looked for in this order: ``$IMU_EMU_BIN``
+    (a path, or a name on ``PATH``); ``release/imu-emu`` then ``debug/imu-emu`` under
+    ``$CARGO_TARGET_DIR``, the repository's ``target/`` (when the package
+    runs from a clone) and ``~/.cache/imu-emu/target`` (where ``.ci/run``
+    builds); then ``imu-emu`` on ``PATH``. Raises :class:`FileNotFoundError`
+    listing every place it looked."""
     env = os.environ.get("IMU_EMU_BIN")
     if env:
-        return env
+        found = shutil.which(env)
+        if found is None:
+            raise FileNotFoundError(
+                "IMU_EMU_BIN=%s is not an executable file (build one with "
+                "`cargo build --release -p imu-emu-host`, or unset IMU_EMU_BIN to look "
+                "in the cargo target directories and on PATH)" % env
+            )
+        return found
     dirs = [os.environ.get("CARGO_TARGET_DIR"), str(_REPO / "target"),
             os.path.expanduser("~/.cache/imu-emu/target")]
+    looked = ["$IMU_EMU_BIN (not set)"]
     for d in filter(None, dirs):
         for profile in ("release", "debug"):
             p = Path(d) / profile / "imu-emu"
+            looked.append(str(p))
             if p.is_file() and os.access(p, os.X_OK):
                 return str(p)
     found = shutil.which("imu-emu")
     if found:
         return found
+    looked.append("imu-emu on PATH")
     raise FileNotFoundError(
-        "imu-emu binary not found: build it (cargo build -p imu-emu-host) or set IMU_EMU_BIN"
+        "imu-emu binary not found; looked at: %s. Build it (cargo build --release "
+        "-p imu-emu-host) or set IMU_EMU_BIN to its path" % ", ".join(looked)
     )
 
 
@@ -171,6 +198,28 @@ class Uart:
         """Sends ``frame`` and returns the next frame with ``ident``."""
         self.send(frame)
         return self.frame(ident, timeout)
+
+    def set_data_rate(self, rate, fmt="GA", internal_hz=2000):
+        """SaveFlash of Data_Rate ``rate`` (KERNEL); returns the rate a
+        stream of ``fmt`` runs at over the device's running line rate
+        (Formula 5.1, :func:`imu_emu.kernel.effective_rate`; read with
+        ReadRAM Baud_Rate). When the device lowers it, a
+        :class:`imu_emu.kernel.RateLoweredWarning` names both rates (as
+        ``imu-emu client set Data_Rate`` prints). Raises
+        :class:`TimeoutError` if the device does not acknowledge (a value
+        it refuses gets no answer, ICD 5.3.7)."""
+        self.request(save_flash(DATA_RATE, struct.pack("<H", rate)), SAVE_FLASH)
+        code = self.request(read_ram(BAUD_RATE, 1), READ_RAM).payload[0]
+        baud = BAUD_RATES[code] if code < len(BAUD_RATES) else BAUD_RATES[0]
+        eff = effective_rate(rate, baud, fmt, internal_hz)
+        if eff != rate:
+            warnings.warn(
+                "Data_Rate %d Hz: at %d bit/s the device sends %s at %d Hz (Formula 5.1, "
+                "ICD 5.5)" % (rate, baud, fmt, eff),
+                RateLoweredWarning,
+                stacklevel=2,
+            )
+        return eff
 
     def close(self):
         """Closes the UART connection, if open."""

@@ -26,6 +26,27 @@ FORMATS = {
     "UDD": 0x95,
 }
 
+#: Payload bytes of each fixed format (Tables 5.5-5.12), for Formula 5.1.
+PAYLOAD_LEN = {
+    "Orientation": 34,
+    "GA": 32,
+    "GAm": 32,
+    "GAA": 44,
+    "GAAm": 44,
+    "Quaternion": 34,
+    "Calibrated HR": 52,
+}
+
+#: Line rate (bit/s) of each Baud_Rate code (Table 5.24).
+BAUD_RATES = (
+    115_200, 4_800, 9_600, 14_400, 19_200, 38_400, 57_600, 115_200, 230_400, 460_800,
+    921_600, 2_000_000, 375_000, 1_843_200, 3_686_400, 1_000_000, 4_000_000,
+)
+
+#: Parameter IDs (Table 5.24) the helper reads and writes.
+DATA_RATE = 0x0012
+BAUD_RATE = 0x03B2
+
 STOP = 0xFE
 GET_DEV_INFO = 0x12
 GET_BIT = 0x1A
@@ -93,6 +114,30 @@ def read_ram(param_id, length):
     return command(b"\xB1\xFF" + struct.pack("<HH", param_id, length))
 
 
+def max_rate(baud, payload_len, internal_hz=2000):
+    """Formula 5.1 (ICD 5.5): the highest output rate, a divisor of
+    ``internal_hz``, with ``rate * 11 * (payload_len + 8) <= baud``; never
+    below 1 Hz. The same rule as the emulator's ``kernel::rate``."""
+    limit = baud // (11 * (payload_len + 8))
+    for k in range(1, internal_hz + 1):
+        if internal_hz % k == 0 and internal_hz // k <= limit:
+            return internal_hz // k
+    return 1
+
+
+def effective_rate(data_rate, baud, fmt="GA", internal_hz=2000):
+    """The rate a stream of ``fmt`` (a name of :data:`PAYLOAD_LEN`, or a
+    payload length in bytes) actually runs at: Data_Rate lowered to
+    :func:`max_rate` when its frames do not fit the line (ICD 5.5)."""
+    n = PAYLOAD_LEN[fmt] if isinstance(fmt, str) else int(fmt)
+    return min(max(data_rate, 1), internal_hz, max_rate(baud, n, internal_hz))
+
+
+class RateLoweredWarning(UserWarning):
+    """A Data_Rate the device lowers (Formula 5.1): the message names the
+    requested and the effective rate."""
+
+
 @dataclass
 class Frame:
     """A checked frame."""
@@ -152,7 +197,18 @@ class FrameReader:
 
 
 def decode_ga(payload):
-    """A GA payload (Table 5.7) as a dict: deg/s, g, counter, USW, deg C."""
+    """A GA payload (Table 5.7) as a dict: deg/s, g, counter, USW, deg C.
+
+    Raises :class:`ValueError` for a payload that is not 32 bytes: the
+    2-byte payload of a frame with GA's ident is the acknowledgement of the
+    GA command (the command's checksum, ICD 5.3.1), not data."""
+    if len(payload) != PAYLOAD_LEN["GA"]:
+        if len(payload) == 2:
+            raise ValueError(
+                "a 2-byte payload is the acknowledgement of the GA command (ICD 5.3.1: "
+                "its checksum), not a GA frame (32 bytes)"
+            )
+        raise ValueError("a GA payload is 32 bytes, not %d" % len(payload))
     gx, gy, gz, ax, ay, az, counter, usw, _res, temp = struct.unpack("<6iHHhh", payload)
     return {
         "gyro": (gx / 1e5, gy / 1e5, gz / 1e5),

@@ -5,10 +5,17 @@ A profile is TOML (``imu-emu sensor-profile show K110`` prints a built-in
 one): sections ``gyro``, ``acc``, ``aux`` with the keys of
 :data:`SENSOR_KEYS` (gyro in deg/s, accelerometers in g) and
 ``temperature`` with :data:`TEMPERATURE_KEYS`; every key is required
-(docs/sensors.md). Standard library only (``tomllib``, Python 3.11).
+(docs/sensors.md). The TOML reader is the standard library's ``tomllib``
+on Python 3.11 and later, and ``tomli`` (the same API; a dependency the
+package declares for older Pythons only) before.
 """
 
-import tomllib
+import sys
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on the oldest Python CI tests
+    import tomli as tomllib
 
 #: g in m/s^2 (ICD Table 5.5 note 1), as the emulator uses it.
 G = 9.8106

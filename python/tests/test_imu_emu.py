@@ -45,6 +45,22 @@ class CodecTest(unittest.TestCase):
         self.assertEqual(d["counter"], 40)
         self.assertEqual(d["temp_c"], 25.3)
 
+    def test_the_ga_acknowledgement_is_not_decoded_as_data(self):
+        # The device acknowledges the GA command with a frame of GA's ident
+        # whose 2-byte payload is the command's checksum (ICD 5.3.1).
+        with self.assertRaisesRegex(ValueError, "acknowledgement of the GA command"):
+            kernel.decode_ga(imu_emu.start("GA")[-2:])
+        with self.assertRaisesRegex(ValueError, "32 bytes, not 31"):
+            kernel.decode_ga(bytes(31))
+
+    def test_formula_5_1_gives_table_5_28(self):
+        # ICD Table 5.28: GA and Calibrated HR at 38 400 ... 2 000 000 bit/s.
+        for baud, ga, hr in ((38_400, 80, 50), (115_200, 250, 125), (460_800, 1000, 500),
+                             (2_000_000, 2000, 2000)):
+            self.assertEqual(imu_emu.max_rate(baud, 32), ga)
+            self.assertEqual(imu_emu.effective_rate(2000, baud, "Calibrated HR"), hr)
+        self.assertEqual(imu_emu.effective_rate(100, 115_200, "GA"), 100)
+
 
 class ProfileTest(unittest.TestCase):
     def test_a_shown_builtin_profile_reads_with_its_datasheet_figures(self):
@@ -87,6 +103,23 @@ class EmulatorTest(unittest.TestCase):
         az = kernel.decode_ga(frames[0].payload)["acc"][2]
         self.assertAlmostEqual(az, 1.0, delta=0.05)
 
+    def test_set_data_rate_says_when_the_device_lowers_it(self):
+        with self.assertWarnsRegex(
+            imu_emu.RateLoweredWarning,
+            r"Data_Rate 1000 Hz: at 115200 bit/s the device sends GA at 250 Hz",
+        ):
+            self.assertEqual(self.emu.set_data_rate(1000), 250)
+        # The stream runs at the rate returned: counter steps of 2000/250.
+        self.emu.request(imu_emu.start("GA"), 0x8F)
+        frames = [f for f in self.emu.frames(0.3) if f.ident == 0x8F]
+        counters = [kernel.decode_ga(f.payload)["counter"] for f in frames]
+        self.assertGreaterEqual(len(counters), 10)
+        self.assertEqual({(b - a) & 0xFFFF for a, b in zip(counters, counters[1:])}, {8})
+        import warnings
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            self.assertEqual(self.emu.set_data_rate(200), 200)
+
     def test_control_status_link_faults_and_errors(self):
         self.emu.request(imu_emu.start("GA"), 0x8F)
         ctl = self.emu.control()
@@ -114,6 +147,28 @@ class EmulatorTest(unittest.TestCase):
         self.assertEqual(ctl.cmd("status").split()[0], "mode=continuous")
         self.assertGreater(len(ctl.events), 0)
         self.assertTrue(all(e.split()[0] == "tov" for e in ctl.events))
+
+
+class ReadmeTest(unittest.TestCase):
+    def test_the_readme_python_snippet_prints_what_it_says(self):
+        # The repository's README, from the clone these tests run from.
+        import contextlib
+        import io
+        import re
+        readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+        snippet = re.search(r"```python\n(import imu_emu\n.*?)```", readme, re.S).group(1)
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            exec(compile(snippet, "README.md", "exec"), {})
+        lines = out.getvalue().splitlines()
+        self.assertEqual(len(lines), 3, lines)
+        self.assertTrue(lines[0].startswith("b'KERNEL-110-G2000-A40 imu-emu"), lines[0])
+        n = int(lines[1].split()[0])
+        self.assertGreaterEqual(n, 90)
+        # After 1 % of the sent bytes were corrupted, frames failed their
+        # checksum at this end (the snippet printed `rejected`, always 0:
+        # the device's count of frames it refused).
+        self.assertGreater(int(lines[2]), 0, lines)
 
 
 class FleetTest(unittest.TestCase):
@@ -159,6 +214,21 @@ class PackageTest(unittest.TestCase):
         self.assertIn("imu_emu.pytest_plugin", [e.value for e in group])
         typed = os.path.join(os.path.dirname(imu_emu.__file__), "py.typed")
         self.assertTrue(os.path.isfile(typed))
+
+    def test_a_missing_binary_error_says_where_it_looked(self):
+        import sys
+        with tempfile.TemporaryDirectory() as d:
+            env = {"PATH": d, "HOME": d, "CARGO_TARGET_DIR": os.path.join(d, "tgt")}
+            run = [sys.executable, "-c", "import imu_emu; imu_emu.find_binary()"]
+            err = subprocess.run(run, env=env, capture_output=True, text=True)
+            self.assertNotEqual(err.returncode, 0)
+            self.assertIn("imu-emu binary not found; looked at: $IMU_EMU_BIN (not set), "
+                          + os.path.join(d, "tgt", "release", "imu-emu"), err.stderr)
+            self.assertIn("imu-emu on PATH. Build it", err.stderr)
+            env["IMU_EMU_BIN"] = os.path.join(d, "nothing")
+            err = subprocess.run(run, env=env, capture_output=True, text=True)
+            self.assertIn("IMU_EMU_BIN=%s is not an executable file" % env["IMU_EMU_BIN"],
+                          err.stderr)
 
     def test_a_failed_start_says_why(self):
         with self.assertRaises(imu_emu.EmulatorStartError) as e:

@@ -79,6 +79,29 @@ impl FullStateLayout {
     pub fn columns(&self) -> usize {
         10 + if self.rates_forces { 6 } else { 0 } + usize::from(self.temperature)
     }
+
+    /// The header name of column `i` (`lat`, `wx`, `temp`).
+    pub fn column_name(&self, i: usize) -> &'static str {
+        match i {
+            0..=9 => COLUMNS[i],
+            10..=15 if self.rates_forces => RATE_FORCE[i - 10],
+            _ => "temp",
+        }
+    }
+
+    /// The closed range of column `i`'s values (module doc).
+    fn limits(&self, i: usize) -> (f64, f64) {
+        match (i, self.rates_forces) {
+            (0, _) => (0.0, f64::INFINITY),
+            (1, _) => (-89.9, 89.9),
+            (2, _) => (-360.0, 360.0),
+            (3, _) => (-12_000.0, 1_000_000.0),
+            (4..=6, _) => (-10_000.0, 10_000.0),
+            (7..=9, _) => (-720.0, 720.0),
+            (10..=15, true) => (-1e4, 1e4),
+            _ => (-100.0, 200.0),
+        }
+    }
 }
 
 /// Why a row was refused.
@@ -131,50 +154,44 @@ pub struct FullStateRow {
 impl FullStateRow {
     /// Parses one data line of `layout`.
     pub fn parse(line: &str, layout: &FullStateLayout) -> Result<Self, RowError> {
+        Self::parse_column(line, layout).map_err(|(e, _)| e)
+    }
+
+    /// [`FullStateRow::parse`], the error with the column it is in
+    /// (`None` for a wrong count; [`FullStateLayout::column_name`] names
+    /// it): every value is read before any is range-checked, so a row
+    /// with both faults is [`RowError::NotANumber`].
+    pub fn parse_column(
+        line: &str,
+        layout: &FullStateLayout,
+    ) -> Result<Self, (RowError, Option<usize>)> {
         let mut v = [0.0f64; 17];
         let mut n = 0;
         for cell in line.split(',') {
             if n == layout.columns() {
-                return Err(RowError::WrongCount);
+                return Err((RowError::WrongCount, None));
             }
             // The feed's number parser: no `str::parse` tables in firmware.
             v[n] = crate::math::decimal::parse(cell.trim())
                 .filter(|x| x.is_finite())
-                .ok_or(RowError::NotANumber)?;
+                .ok_or((RowError::NotANumber, Some(n)))?;
             n += 1;
         }
         if n != layout.columns() {
-            return Err(RowError::WrongCount);
+            return Err((RowError::WrongCount, None));
         }
-        let within = |x: f64, lim: f64| x.abs() <= lim;
-        let ok = v[0] >= 0.0
-            && within(v[1], 89.9)
-            && within(v[2], 360.0)
-            && (-12_000.0..=1_000_000.0).contains(&v[3])
-            && v[4..7].iter().all(|&x| within(x, 10_000.0))
-            && v[7..10].iter().all(|&x| within(x, 720.0));
-        if !ok {
-            return Err(RowError::OutOfRange);
+        for (i, &x) in v[..n].iter().enumerate() {
+            let (lo, hi) = layout.limits(i);
+            if !(lo..=hi).contains(&x) {
+                return Err((RowError::OutOfRange, Some(i)));
+            }
         }
         let (rate_dps, force_mps2) = if layout.rates_forces {
-            if !(v[10..13].iter().all(|&x| within(x, 1e4))
-                && v[13..16].iter().all(|&x| within(x, 1e4)))
-            {
-                return Err(RowError::OutOfRange);
-            }
             (Some([v[10], v[11], v[12]]), Some([v[13], v[14], v[15]]))
         } else {
             (None, None)
         };
-        let temperature_c = if layout.temperature {
-            let t = v[n - 1];
-            if !(-100.0..=200.0).contains(&t) {
-                return Err(RowError::OutOfRange);
-            }
-            Some(t as f32)
-        } else {
-            None
-        };
+        let temperature_c = layout.temperature.then(|| v[n - 1] as f32);
         Ok(FullStateRow {
             time_s: v[0],
             lat_deg: v[1],

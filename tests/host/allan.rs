@@ -9,6 +9,10 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+// Shared with the other host suites; not every helper is used here.
+#[allow(dead_code)]
+mod support;
+
 fn imu_emu(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
         .args(args)
@@ -139,7 +143,14 @@ fn a_recording_reads_back_its_white_noise() {
     std::fs::write(&path, text).unwrap();
     let (ok, out, err) = imu_emu(&["allan", "--input", path.to_str().unwrap()]);
     assert!(ok, "{err}");
-    assert!(out.contains("(100 Hz)"), "{out}");
+    // No device time in this file: the host's, said.
+    assert!(out.contains("(KERNEL CSV, 100 Hz from host time)"), "{out}");
+    assert!(
+        err.contains(
+            "no device time (device_time_s, imu_time_ns): the rate comes from host_time_s"
+        ),
+        "{err}"
+    );
     let axes = out
         .lines()
         .filter(|l| l.starts_with("gyro_") || l.starts_with("acc_"));
@@ -309,4 +320,187 @@ fn raw_isb_captures_of_imu_and_pimu_read_back_their_white_noise() {
         assert!(head.contains(name), "{head}");
         assert!(head.contains(", 250 Hz)"), "{head}");
     }
+}
+
+/// Six channels of white noise, `n` rows of standard deviation `sigma`
+/// (sum of 12 uniforms from a xorshift generator).
+fn white_rows(n: usize, sigma: f64, seed: u64) -> Vec<[f64; 6]> {
+    let mut s = seed | 1;
+    let mut uniform = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| core::array::from_fn(|_| ((0..12).map(|_| uniform()).sum::<f64>() - 6.0) * sigma))
+        .collect()
+}
+
+/// The white noise column of each axis line of a report (ARW °/√h, VRW
+/// m/s/√h) as a density, °/s/√Hz or g/√Hz.
+fn densities(report: &str) -> Vec<(String, f64)> {
+    report
+        .lines()
+        .filter(|l| l.starts_with("gyro_") || l.starts_with("acc_"))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            let white: f64 = w[1].parse().unwrap();
+            let d = if w[0].starts_with("gyro") {
+                white / 60.0
+            } else {
+                white / 60.0 / 9.8106
+            };
+            (w[0].to_owned(), d)
+        })
+        .collect()
+}
+
+/// A CSV's rate comes from its device time (`device_time_s`) however the
+/// host received the rows; an IMX-5's CSVs (IMU: rad/s, m/s²; PIMU: Δθ,
+/// Δv over `dt`) read back their white noise in the KERNEL's units.
+#[test]
+fn csvs_take_the_rate_from_device_time_and_isb_csvs_read() {
+    let dir = temp_dir("csv-device-time");
+    let g = 9.8106;
+    let rad = std::f64::consts::PI / 180.0;
+    // KERNEL: 100 Hz device time, host times 11 ms apart.
+    let rows = white_rows(30_000, 0.01 * 10.0, 7);
+    let mut text = String::from(
+        "frame,format,device_time_s,host_time_s,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,temp_c\n",
+    );
+    for (k, r) in rows.iter().enumerate() {
+        text.push_str(&format!(
+            "{k},GAA,{:.6},{:.6}",
+            k as f64 * 0.01,
+            k as f64 * 0.011
+        ));
+        for v in r {
+            text.push_str(&format!(",{v:.7}"));
+        }
+        text.push_str(",25\n");
+    }
+    let path = dir.join("kernel.csv");
+    std::fs::write(&path, text).unwrap();
+    let (ok, out, err) = imu_emu(&["allan", "--input", path.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("(KERNEL CSV, 100 Hz from device time)"),
+        "{out}"
+    );
+    assert!(!err.contains("host_time_s"), "{err}");
+    for (axis, d) in densities(&out) {
+        assert!((d / 0.01 - 1.0).abs() < 0.05, "{axis}: {d}");
+    }
+    // ISB IMU at 250 Hz: rad/s and m/s²; PIMU: Δθ = ω·dt, Δv = f·dt.
+    let rows = white_rows(60_000, 0.01 * 250f64.sqrt(), 11);
+    let mut imu = String::from(
+        "frame,did,device_time_s,host_time_s,time,status,pqr_x,pqr_y,pqr_z,acc_x,acc_y,acc_z\n",
+    );
+    let mut pimu = String::from(
+        "frame,did,device_time_s,host_time_s,time,dt,status,theta_x,theta_y,theta_z,vel_x,\
+         vel_y,vel_z\n",
+    );
+    for (k, r) in rows.iter().enumerate() {
+        let t = 10.0 + k as f64 * 0.004;
+        imu.push_str(&format!("{k},IMU,{t:.6},{:.6},{t},0", k as f64 * 0.005));
+        pimu.push_str(&format!(
+            "{k},PIMU,{t:.6},{:.6},{t},0.004,0",
+            k as f64 * 0.005
+        ));
+        for v in &r[..3] {
+            imu.push_str(&format!(",{}", v * rad));
+            pimu.push_str(&format!(",{}", v * rad * 0.004));
+        }
+        for v in &r[3..] {
+            imu.push_str(&format!(",{}", v * g));
+            pimu.push_str(&format!(",{}", v * g * 0.004));
+        }
+        imu.push('\n');
+        pimu.push('\n');
+    }
+    for (name, body, title) in [
+        ("imu.csv", imu, "(ISB IMU CSV, 250 Hz from device time)"),
+        (
+            "pimu.csv",
+            pimu,
+            "(ISB PIMU (Δθ/dt, Δv/dt) CSV, 250 Hz from device time)",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, body).unwrap();
+        let (ok, out, err) = imu_emu(&["allan", "--input", path.to_str().unwrap()]);
+        assert!(ok, "{name}: {err}");
+        assert!(out.contains(title), "{out}");
+        let d = densities(&out);
+        assert_eq!(d.len(), 6, "{out}");
+        for (axis, d) in d {
+            assert!((d / 0.01 - 1.0).abs() < 0.05, "{name} {axis}: {d}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every CSV `imu-emu client record` writes reads (a KERNEL's GA and its
+/// clockless GAA, an IMX-5's IMU and PIMU), and a record of a second or
+/// two is too short for the figures past the white noise: a warning says
+/// so.
+#[test]
+fn every_client_csv_reads_and_a_short_one_is_said_to_be() {
+    let dir = temp_dir("client-csv");
+    let kernel = support::Emu::tcp(&["--power-on", "now"]);
+    let isb = support::Emu::tcp(&["--protocol", "isb", "--power-on", "now"]);
+    let (k, i) = (kernel.addr().to_string(), isb.addr().to_string());
+    let cases: [(&str, &str, Vec<&str>, &str); 4] = [
+        (
+            "ga.csv",
+            &k,
+            vec!["--format", "GA", "--duration", "2"],
+            "(KERNEL CSV, 100 Hz from device time)",
+        ),
+        (
+            "gaa.csv",
+            &k,
+            vec!["--format", "GAA", "--duration", "2"],
+            "(KERNEL CSV, 100 Hz from device time)",
+        ),
+        (
+            "imu.csv",
+            &i,
+            vec!["--did", "IMU", "--duration", "1"],
+            "(ISB IMU CSV, 250 Hz from device time)",
+        ),
+        (
+            "pimu.csv",
+            &i,
+            vec!["--did", "PIMU", "--duration", "1"],
+            "(ISB PIMU (Δθ/dt, Δv/dt) CSV, 250 Hz from device time)",
+        ),
+    ];
+    for (name, addr, rec, title) in cases {
+        let path = dir.join(name);
+        let mut args = vec!["client", "--tcp", addr];
+        if addr == i {
+            args.extend(["--protocol", "isb"]);
+        }
+        args.push("record");
+        args.extend(rec);
+        args.extend(["-o", path.to_str().unwrap()]);
+        let (ok, _, err) = imu_emu(&args);
+        assert!(ok, "{name}: {err}");
+        let (ok, out, err) = imu_emu(&["allan", "--input", path.to_str().unwrap()]);
+        assert!(ok, "{name}: {err}");
+        assert!(out.contains(title), "{name}: {out}");
+        assert_eq!(densities(&out).len(), 6, "{out}");
+        assert!(
+            err.starts_with("imu-emu allan: warning: the record (")
+                && err.contains(
+                    "is too short for bias instability and rate random walk: the Allan \
+                     deviation of gyro_x"
+                )
+                && err.ends_with("only the white noise (ARW/VRW) is read\n"),
+            "{name}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

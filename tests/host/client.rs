@@ -63,6 +63,26 @@ fn stderr(o: &Output) -> String {
     String::from_utf8(o.stderr.clone()).unwrap()
 }
 
+/// `record SEL… --duration S -o CSV --raw RAW`.
+fn record_args<'a>(
+    sel: &[&'a str],
+    duration: &'a str,
+    csv: &'a std::path::Path,
+    raw: &'a std::path::Path,
+) -> Vec<&'a str> {
+    let mut args = vec!["record"];
+    args.extend_from_slice(sel);
+    args.extend([
+        "--duration",
+        duration,
+        "-o",
+        csv.to_str().unwrap(),
+        "--raw",
+        raw.to_str().unwrap(),
+    ]);
+    args
+}
+
 fn emu() -> (Emu, String) {
     let e = Emu::tcp(&["--power-on", "now"]);
     let a = e.addr().to_string();
@@ -208,24 +228,12 @@ fn record_decode_and_plot() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("ga.csv");
     let raw = dir.path().join("ga.bin");
-    let o = client(
-        &a,
-        &[
-            "record",
-            "--format",
-            "GA",
-            "--duration",
-            "2",
-            "-o",
-            csv.to_str().unwrap(),
-            "--raw",
-            raw.to_str().unwrap(),
-        ],
-    );
+    let o = client(&a, &record_args(&["--format", "GA"], "2", &csv, &raw));
     stdout(&o);
     assert_eq!(
         stderr(&o),
-        "imu-emu: 200 frames recorded, 0 failed their checksum, 0 counter gaps\n"
+        "imu-emu: 200 frames recorded, 1.990 s of device time, 0 failed their checksum, 0 \
+         counter gaps\n"
     );
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -252,9 +260,9 @@ fn record_decode_and_plot() {
         assert!((az - 1.0).abs() < 0.05, "{az}");
     }
 
-    // The raw capture holds the acknowledgement, the GA frames and the
-    // ReadRAM answer; decoding it gives the same GA rows (no host time),
-    // on stdout when the output is named `-`.
+    // The raw capture holds the acknowledgement and the GA frames;
+    // decoding it gives the same GA rows (no host time), on stdout when
+    // the output is named `-`.
     let o = run(&["client", "decode", raw.to_str().unwrap(), "-o", "-"]);
     let decoded = stdout(&o);
     let mut dl = decoded.lines();
@@ -446,6 +454,25 @@ fn the_client_talks_over_a_serial_port() {
     );
 }
 
+/// `client record --format GA -o CSV` running in the background, once
+/// rows arrive (the header and some rows are flushed by 8 KiB blocks:
+/// wait for the file to grow).
+fn recording(a: &str, csv: &std::path::Path) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--tcp", a, "record", "--format", "GA", "-o"])
+        .arg(csv)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while std::fs::metadata(csv).map_or(0, |m| m.len()) == 0 {
+        assert!(std::time::Instant::now() < deadline, "no rows");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    child
+}
+
 /// Ctrl-C during `record`: the stream the client started is stopped, the
 /// summary printed, the exit status 0; the unit then sends nothing.
 #[test]
@@ -453,20 +480,7 @@ fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
     let (_e, a) = emu();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("ga.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
-        .args(["client", "--tcp", &a, "record", "--format", "GA", "-o"])
-        .arg(&csv)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Wait until rows arrive (the header and some rows are flushed by 8 KiB
-    // blocks: wait for the file to grow).
-    let deadline = std::time::Instant::now() + Duration::from_secs(10);
-    while std::fs::metadata(&csv).map_or(0, |m| m.len()) == 0 {
-        assert!(std::time::Instant::now() < deadline, "no rows");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let mut child = recording(&a, &csv);
     nix::sys::signal::kill(
         nix::unistd::Pid::from_raw(child.id() as i32),
         nix::sys::signal::Signal::SIGINT,
@@ -483,7 +497,7 @@ fn ctrl_c_during_record_stops_the_stream_and_prints_a_summary() {
     assert!(
         err.starts_with("imu-emu: ")
             && err.ends_with(
-                " frames recorded, 0 failed their checksum, 0 counter gaps (interrupted; \
+                " s of device time, 0 failed their checksum, 0 counter gaps (interrupted; \
                  stream stopped)\n"
             ),
         "{err}"
@@ -543,8 +557,8 @@ fn isb_client_info_bit_get_and_set() {
     );
     assert_eq!(
         stdout(&isb(&a, &["set", "flash_config.startupNavDtMs", "8"])),
-        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `set \
-         SYS_CMD.command 99` with SYS_CMD.invCommand, or a power cycle)\n"
+        "FLASH_CONFIG.startupNavDtMs saved = 8\n(takes effect after a reset: `imu-emu client \
+         --protocol isb reset` (SYS_CMD 99 with its inverse), or a power cycle)\n"
     );
     assert_eq!(
         stdout(&isb(&a, &["get", "startupNavDtMs"])),
@@ -584,20 +598,7 @@ fn isb_client_record_decode_and_plot() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("imu.csv");
     let raw = dir.path().join("imu.bin");
-    let o = isb(
-        &a,
-        &[
-            "record",
-            "--did",
-            "IMU",
-            "--duration",
-            "1",
-            "-o",
-            csv.to_str().unwrap(),
-            "--raw",
-            raw.to_str().unwrap(),
-        ],
-    );
+    let o = isb(&a, &record_args(&["--did", "IMU"], "1", &csv, &raw));
     stdout(&o);
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
@@ -617,7 +618,9 @@ fn isb_client_record_decode_and_plot() {
     assert_eq!(
         stderr(&o),
         format!(
-            "imu-emu: {} packets recorded, {:.3} s of device time, 0 failed their checksum\n",
+            "imu-emu: {} packets recorded (IMU {} over {:.3} s of device time), 0 failed their \
+             checksum\n",
+            rows.len(),
             rows.len(),
             times[times.len() - 1] - times[0]
         )
@@ -686,4 +689,447 @@ fn isb_client_record_decode_and_plot() {
         );
         assert!(v["qn2b_w"].is_number() && v["lla_z"].is_number(), "{l}");
     }
+}
+
+/// `set Data_Rate 1000` at 115 200 bit/s says the rate the device lowers
+/// it to (Formula 5.1: GA 250 Hz), and `record --duration 2` then records
+/// two seconds of device time at that rate (500 frames 8 counter ticks
+/// apart), not 2 × 1000 frames.
+#[test]
+fn record_duration_counts_device_time_at_the_rate_the_device_runs() {
+    let (_e, a) = emu();
+    assert_eq!(
+        stdout(&client(&a, &["set", "Data_Rate", "1000"])),
+        "Data_Rate saved = 1000\nat 115200 bit/s the device lowers it (ICD 5.5, Formula 5.1): \
+         it sends GA, GAm at 250 Hz; Orientation, GAA, GAAm, Quaternion at 200 Hz; Calibrated \
+         HR at 125 Hz (a UDD by its length; a faster line rate keeps 1000 Hz)\n"
+    );
+    // A rate every format keeps: nothing more.
+    assert_eq!(
+        stdout(&client(&a, &["set", "Data_Rate", "50"])),
+        "Data_Rate saved = 50\n"
+    );
+    stdout(&client(&a, &["set", "Data_Rate", "1000"]));
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let started = std::time::Instant::now();
+    let o = client(
+        &a,
+        &[
+            "record",
+            "--format",
+            "GA",
+            "--duration",
+            "2",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    );
+    stdout(&o);
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: 500 frames recorded, 1.996 s of device time, 0 failed their checksum, 0 \
+         counter gaps\n"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 500);
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.004), "row {i}");
+    }
+    let counters: Vec<u16> = rows.iter().map(|r| r[10].parse().unwrap()).collect();
+    assert!(counters.windows(2).all(|w| w[1] == w[0].wrapping_add(8)));
+    // Real time: about the two seconds asked for (it was 8 s).
+    assert!(
+        started.elapsed() < Duration::from_secs(6),
+        "{:?}",
+        started.elapsed()
+    );
+}
+
+/// Formats without a clock field (GAA, Orientation, Quaternion, GAm, GAAm)
+/// get `device_time_s` too: the frame's place in the stream at the rate
+/// the device runs (read from the unit by `record`; `decode --rate`, else
+/// the factory 100 Hz), and `--duration` counts it.
+#[test]
+fn clockless_formats_are_timed_from_their_rate_and_order() {
+    let (_e, a) = emu();
+    stdout(&client(&a, &["set", "Data_Rate", "50"]));
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("gaa.csv");
+    let raw = dir.path().join("gaa.bin");
+    let o = client(&a, &record_args(&["--format", "GAA"], "1", &csv, &raw));
+    stdout(&o);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("frame,format,device_time_s,host_time_s,gyro_x"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 50);
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[1], "GAA");
+        assert_eq!(r[2], format!("{:.6}", i as f64 * 0.02), "row {i}");
+    }
+    // decode: --rate times them; without it the factory 100 Hz, said.
+    let o = run(&["client", "decode", raw.to_str().unwrap(), "--rate", "50"]);
+    let d: Vec<String> = stdout(&o).lines().skip(1).map(str::to_owned).collect();
+    assert!(d.len() >= 50, "{}", d.len());
+    assert_eq!(d[49].split(',').nth(2), Some("0.980000"));
+    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    let d: Vec<String> = stdout(&o).lines().skip(1).map(str::to_owned).collect();
+    assert_eq!(d[1].split(',').nth(2), Some("0.010000"));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "imu-emu: {}: GAA frames carry no clock: device_time_s counts them at 100 Hz, the \
+             factory Data_Rate (--rate HZ for another)\n",
+            raw.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// `client decode` of an IMX-5's capture without `--protocol isb` decodes
+/// it as ISB (and says so); bytes that are neither fail with one line and
+/// exit 1; `decode … | head` ends quietly with status 0.
+#[test]
+fn decode_detects_the_protocol_and_ends_quietly_on_a_closed_pipe() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let raw = dir.path().join("imu.bin");
+    stdout(&isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "IMU",
+            "--frames",
+            "300",
+            "-o",
+            "/dev/null",
+            "--raw",
+            raw.to_str().unwrap(),
+        ],
+    ));
+    let o = run(&["client", "decode", raw.to_str().unwrap()]);
+    let text = stdout(&o);
+    assert!(
+        text.starts_with("frame,did,device_time_s,time,status,pqr_x"),
+        "{text}"
+    );
+    assert!(text.lines().count() >= 301);
+    assert!(stderr(&o).starts_with(&format!(
+        "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb\n",
+        raw.display()
+    )));
+    // Forced to KERNEL: nothing decodes, an error.
+    let o = run(&[
+        "client",
+        "--protocol",
+        "kernel",
+        "decode",
+        raw.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!(
+            "imu-emu: decode {}: no KERNEL data frame in ",
+            raw.display()
+        )) && err.ends_with("not a KERNEL capture? (--protocol isb for an IMX-5's)\n"),
+        "{err}"
+    );
+    // From a pipe (read once: the protocol from its head, then the rest).
+    let piped = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "cat '{}' | '{}' client decode /dev/stdin",
+            raw.display(),
+            env!("CARGO_BIN_EXE_imu-emu")
+        ))
+        .output()
+        .unwrap();
+    assert_eq!(stdout(&piped), text);
+    let junk = dir.path().join("junk.bin");
+    std::fs::write(&junk, b"hello, this is not a capture\n").unwrap();
+    let o = run(&["client", "decode", junk.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(err.lines().count(), 1);
+    // | head: the reader goes away after two lines.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "decode", raw.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::BufRead as _;
+        let mut r = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap();
+        r.read_line(&mut line).unwrap();
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("Broken pipe"), "{}", stderr(&o));
+}
+
+/// A recording whose line a second client takes over (the emulator serves
+/// one client at a time) ends saying so, not `write: Broken pipe`.
+#[test]
+fn a_recording_taken_over_by_another_client_says_so() {
+    let (_e, a) = emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ga.csv");
+    let mut child = recording(&a, &csv);
+    stdout(&client(&a, &["info"]));
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while child.try_wait().unwrap().is_none() {
+        assert!(std::time::Instant::now() < deadline, "record did not end");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        format!(
+            "imu-emu: --tcp {a}: the unit closed the connection (the emulator serves one client \
+             at a time: another client connecting took the line over, or the emulator stopped)\n"
+        )
+    );
+}
+
+/// ISB `reset` and `factory-reset` send the SYS_CMD command with its
+/// inverse in one packet: a saved startupNavDtMs 8 takes effect at the
+/// reset (IMU packets 8 ms apart), the factory reset restores 4 ms; the
+/// hint printed by `set` is that command. `set SYS_CMD.command 99` sends
+/// the pair too; `set SET v,v,…` writes a whole set.
+#[test]
+fn isb_reset_factory_reset_and_whole_sets() {
+    let (_e, a) = isb_emu();
+    let imu_period = |a: &str| -> f64 {
+        let o = isb(
+            a,
+            &["record", "--did", "IMU", "--frames", "5", "--to", "csv"],
+        );
+        let text = stdout(&o);
+        let t: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(4).unwrap().parse().unwrap())
+            .collect();
+        ((t[4] - t[1]) / 3.0 * 1e4).round() / 1e4
+    };
+    assert_eq!(imu_period(&a), 0.004);
+    let set = stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "8"]));
+    assert!(
+        set.contains("`imu-emu client --protocol isb reset`"),
+        "{set}"
+    );
+    assert_eq!(imu_period(&a), 0.004, "not before the reset");
+    assert_eq!(
+        stdout(&isb(&a, &["reset"])),
+        "reset (SYS_CMD 99): the unit restarts with its saved FLASH_CONFIG\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.008);
+    assert_eq!(
+        stdout(&isb(&a, &["factory-reset"])),
+        "factory reset (SYS_CMD 1357924680 after the unlock): FLASH_CONFIG back to its \
+         defaults, saved; the unit restarts\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        stdout(&isb(&a, &["get", "startupNavDtMs"])),
+        "startupNavDtMs = 4 ms\n"
+    );
+    assert_eq!(imu_period(&a), 0.004);
+    // One field of SYS_CMD: the client adds the inverse.
+    stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "8"]));
+    assert_eq!(
+        stdout(&isb(&a, &["set", "SYS_CMD.command", "99"])),
+        "SYS_CMD.command saved = 99\n(sent with SYS_CMD.invCommand = 0xffffff9c in the same \
+         SET_DATA: a command runs only with its inverse)\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.008);
+    // A whole set: every field in order.
+    stdout(&isb(&a, &["set", "FLASH_CONFIG.startupNavDtMs", "4"]));
+    assert_eq!(
+        stdout(&isb(&a, &["set", "SYS_CMD", "99,4294967196"])),
+        "SYS_CMD saved = 99,4294967196\n"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(imu_period(&a), 0.004);
+    let o = isb(&a, &["set", "SYS_CMD", "99"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        stderr(&o),
+        "imu-emu: set SYS_CMD: 1 values given, the set takes 2 (command, invCommand, in order, \
+         comma-separated)\n"
+    );
+    // A KERNEL has none of it.
+    let o = run(&["client", "--tcp", &a, "reset"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("reset and factory-reset are IMX-5 (--protocol isb) commands"));
+}
+
+/// A record of IMU (time since boot) and INS_1 (GPS time of week) sums
+/// up each set on its own clock: no span across the two.
+#[test]
+fn a_mixed_isb_record_is_summed_up_per_set() {
+    let (_e, a) = isb_emu();
+    let o = isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "IMU,INS_1",
+            "--duration",
+            "1",
+            "--to",
+            "json",
+            "-o",
+            "/dev/null",
+        ],
+    );
+    stdout(&o);
+    let err = stderr(&o);
+    // `imu-emu: N packets recorded (IMU n over 0.99x s of device time,
+    // INS_1 m over 0.99x s of device time), 0 failed their checksum`.
+    let words: Vec<&str> = err
+        .split([' ', '(', ','])
+        .filter(|w| !w.is_empty())
+        .collect();
+    assert_eq!(
+        words,
+        [
+            "imu-emu:",
+            words[1],
+            "packets",
+            "recorded",
+            "IMU",
+            words[5],
+            "over",
+            words[7],
+            "s",
+            "of",
+            "device",
+            "time",
+            "INS_1",
+            words[13],
+            "over",
+            words[15],
+            "s",
+            "of",
+            "device",
+            "time)",
+            "0",
+            "failed",
+            "their",
+            "checksum\n"
+        ],
+        "{err}"
+    );
+    let n = |i: usize| words[i].parse::<u64>().unwrap();
+    assert_eq!(n(1), n(5) + n(13));
+    assert!(n(5) >= 249 && n(13) >= 249, "{err}");
+    for span in [words[7], words[15]] {
+        let s: f64 = span.parse().unwrap();
+        // Printed to the ms: up to 1.000 for a span just under 1 s.
+        assert!((0.99..=1.0).contains(&s), "{err}");
+    }
+    assert!(!err.contains("over -"), "{err}");
+}
+
+/// The points of each `<polyline>` of an SVG with these attributes.
+fn polylines(svg: &str, attrs: &str) -> Vec<Vec<(i32, i32)>> {
+    svg.lines()
+        .filter(|l| l.starts_with("<polyline") && l.contains(attrs))
+        .map(|l| {
+            let p = &l[l.find("points=\"").unwrap() + 8..];
+            p[..p.find('"').unwrap()]
+                .split_whitespace()
+                .map(|xy| {
+                    let (x, y) = xy.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A PIMU plot: the Δθ axis spans its data (10⁻⁵ rad, labelled as such,
+/// not ±0.001), every data line stays inside its panel's frame, and the
+/// legend stands beside the frame (it covered the last data).
+#[test]
+fn plots_fit_their_data_inside_the_frame_with_the_legend_beside() {
+    let (_e, a) = isb_emu();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("pimu.csv");
+    stdout(&isb(
+        &a,
+        &[
+            "record",
+            "--did",
+            "PIMU",
+            "--duration",
+            "1",
+            "-o",
+            csv.to_str().unwrap(),
+        ],
+    ));
+    let svg = dir.path().join("pimu.svg");
+    stdout(&plot(&csv, &svg));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // Frames: the axis lines (1 px, black) that are whole sides: a y axis
+    // (x fixed, its panel's height) and an x axis (y fixed).
+    let axes = polylines(&text, "stroke=\"#000000\" stroke-width=\"1\"");
+    let sides: Vec<&Vec<(i32, i32)>> = axes.iter().filter(|p| p.len() == 2).collect();
+    let frames: Vec<((i32, i32), (i32, i32))> = sides
+        .iter()
+        .filter(|p| p[0].0 == p[1].0 && p[1].1 - p[0].1 > 200)
+        .map(|y_axis| {
+            let x_axis = sides
+                .iter()
+                .find(|q| {
+                    q[0].1 == q[1].1 && (q[0].0 - y_axis[0].0).abs() <= 1 && q[1].0 - q[0].0 > 500
+                })
+                .expect("an x axis beside the y axis");
+            (
+                (y_axis[0].0, x_axis[1].0),
+                (y_axis[0].1, y_axis[1].1.max(x_axis[0].1)),
+            )
+        })
+        .collect();
+    assert_eq!(frames.len(), 2, "{frames:?}");
+    let lines = polylines(&text, "stroke-width=\"2\"");
+    let (data, legend): (Vec<_>, Vec<_>) = lines.iter().partition(|p| p.len() > 2);
+    assert_eq!(data.len(), 6);
+    for (k, line) in data.iter().enumerate() {
+        let ((x0, x1), (y0, y1)) = frames[k / 3];
+        for &(x, y) in line.iter() {
+            assert!(
+                (x0..=x1).contains(&x) && (y0..=y1).contains(&y),
+                "line {k}: ({x}, {y}) outside {frames:?}"
+            );
+        }
+    }
+    assert_eq!(legend.len(), 6);
+    for l in &legend {
+        assert!(
+            l[0].0 > frames[0].0 .1,
+            "legend sample at {l:?} inside the frame"
+        );
+    }
+    // The Δθ axis is labelled in 10⁻⁶ rad (the data are ≈ 10⁻⁵ rad).
+    assert!(text.contains(">\n2.0e-6\n<"), "no 2.0e-6 tick");
+    assert!(!text.contains(">\n0.0010\n<") && !text.contains(">\n0.001\n<"));
+    assert!(!text.contains(">\n-0.0\n<"));
 }

@@ -296,9 +296,14 @@ fn bad_motion_files_are_refused_at_start() {
         "row.csv",
         "time,lat,lon,height,vn,ve,vd,roll,pitch,yaw\n0,45,7,300,0,0,0,0,0,0\n1,45,7,x,0,0,0,0,0,0\n",
     );
-    let (_, out, err) = refused(&["--tcp", "127.0.0.1:0", "--motion", row.path()]);
+    let (code, out, err) = refused(&["--tcp", "127.0.0.1:0", "--motion", row.path()]);
     assert!(out.is_empty(), "listened anyway: {out}");
-    assert!(err.contains("line 3: not a finite number"), "{err}");
+    // The column named; a usage error (2), as a bad --sensor-profile is.
+    assert!(
+        err.contains("line 3, column height (value 4): not a finite number"),
+        "{err}"
+    );
+    assert_eq!(code, Some(2), "{err}");
     let (code, _, err) = refused(&[
         "--tcp",
         "127.0.0.1:0",

@@ -101,7 +101,8 @@ pub struct AllanArgs {
     /// client record` CSV (gyro_* and acc_* columns), or a raw capture of a
     /// KERNEL's frames or an IMX-5's ISB packets (docs/sensors.md
     /// "Recordings"). Its rate comes from its own clock (`imu_time_ns`,
-    /// the 2 kHz counter, ISB `time`; a CSV's `host_time_s`), else --rate.
+    /// the 2 kHz counter, ISB `time`; a CSV's `device_time_s`, else its
+    /// `host_time_s` with a warning), else --rate.
     #[arg(long, value_name = "FILE")]
     pub input: Option<PathBuf>,
     /// What --input holds: auto (from its content), csv, kernel or isb.
@@ -499,7 +500,15 @@ fn run_kernel(
     Ok(())
 }
 
-/// Reads a `client record` CSV.
+/// Reads a CSV of `imu-emu client record` or `client decode`
+/// (docs/sensors.md "Recordings"): a KERNEL's (`gyro_*` °/s, `acc_*` g,
+/// `aux_acc_*` when all three are there) or an IMX-5's (a `did` column:
+/// IMU, IMU_RAW, IMU_MAG `pqr_*` rad/s and `acc_*` m/s²; PIMU, PIMU_MAG
+/// `theta_*` rad and `vel_*` m/s over `dt`, read as their means), in the
+/// KERNEL's units. The sample period comes from device time
+/// (`device_time_s`, else `imu_time_ns`), else host time
+/// (`host_time_s`, with a warning: it carries the host's scheduling),
+/// else `rate`.
 pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("allan {}", path.display()))?;
@@ -510,21 +519,47 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
         .split(',')
         .collect();
     let col = |name: &str| header.iter().position(|h| h.trim() == name);
-    let mut cols: Vec<usize> = AXES[..6]
-        .iter()
-        .map(|a| {
-            col(a).with_context(|| {
-                format!(
-                    "allan {}: no {a} column (a `client record` CSV of GA, GAm or UDD with \
-                     gyro and acc?)",
-                    path.display()
-                )
+    let need = |names: &[&str], what: &str| -> anyhow::Result<Vec<usize>> {
+        names
+            .iter()
+            .map(|a| {
+                col(a).with_context(|| format!("allan {}: no {a} column ({what})", path.display()))
             })
-        })
-        .collect::<anyhow::Result<_>>()?;
-    // The aux accelerometer too, when the recording has all three.
-    let aux: Option<Vec<usize>> = AXES[6..].iter().map(|a| col(a)).collect();
-    cols.extend(aux.into_iter().flatten());
+            .collect()
+    };
+    const RAD_S: [&str; 6] = ["pqr_x", "pqr_y", "pqr_z", "acc_x", "acc_y", "acc_z"];
+    const DELTAS: [&str; 6] = ["theta_x", "theta_y", "theta_z", "vel_x", "vel_y", "vel_z"];
+    let deg = 180.0 / std::f64::consts::PI;
+    let g = f64::from(imu_emu::math::G);
+    // Per column: its index and the factor to °/s or g; a PIMU's `dt`.
+    let (cols, scale, dt, what): (Vec<usize>, Vec<f64>, Option<usize>, &str) =
+        if col("did").is_some() {
+            let isb = "an IMX-5 `client record --protocol isb` CSV of IMU or PIMU?";
+            if col("pqr_x").is_some() {
+                let c = need(&RAD_S, isb)?;
+                (
+                    c,
+                    vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g],
+                    None,
+                    "ISB IMU",
+                )
+            } else {
+                let c = need(&DELTAS, isb)?;
+                let dt = need(&["dt"], isb)?[0];
+                let s = vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g];
+                (c, s, Some(dt), "ISB PIMU (Δθ/dt, Δv/dt)")
+            }
+        } else {
+            let mut c = need(
+                &AXES[..6],
+                "a `client record` CSV of GA, GAm or UDD with gyro and acc, or an IMX-5's with pqr",
+            )?;
+            // The aux accelerometer too, when the recording has all three.
+            let aux: Option<Vec<usize>> = AXES[6..].iter().map(|a| col(a)).collect();
+            c.extend(aux.into_iter().flatten());
+            let n = c.len();
+            (c, vec![1.0; n], None, "KERNEL")
+        };
     let rows: Vec<Vec<f64>> = lines
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
@@ -533,7 +568,6 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
                 .collect()
         })
         .collect();
-    // The sample period from the unit's time or the host's, else --rate.
     let median_step = |c: usize, scale: f64| -> Option<f64> {
         let t: Vec<f64> = rows
             .iter()
@@ -541,15 +575,26 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
             .collect();
         crate::allan_input::median_step(&t)
     };
-    let tau0 = col("imu_time_ns")
-        .and_then(|c| median_step(c, 1e-9))
-        .or_else(|| col("host_time_s").and_then(|c| median_step(c, 1.0)))
-        .unwrap_or(1.0 / f64::from(rate.max(1)));
+    let (tau0, clock) = if let Some(t) = col("device_time_s").and_then(|c| median_step(c, 1.0)) {
+        (t, "device time")
+    } else if let Some(t) = col("imu_time_ns").and_then(|c| median_step(c, 1e-9)) {
+        (t, "device time")
+    } else if let Some(t) = col("host_time_s").and_then(|c| median_step(c, 1.0)) {
+        eprintln!(
+            "imu-emu allan: warning: {}: no device time (device_time_s, imu_time_ns): the rate \
+             comes from host_time_s, the host's arrival times",
+            path.display()
+        );
+        (t, "host time")
+    } else {
+        (1.0 / f64::from(rate.max(1)), "--rate")
+    };
     let mut phases = Phases::new(tau0, rows.len(), cols.len());
     let mut y = vec![0.0; cols.len()];
     for r in &rows {
-        for (v, &i) in y.iter_mut().zip(&cols) {
-            *v = r.get(i).copied().unwrap_or(f64::NAN);
+        let per_s = dt.map_or(1.0, |c| 1.0 / r.get(c).copied().unwrap_or(f64::NAN));
+        for ((v, &i), k) in y.iter_mut().zip(&cols).zip(&scale) {
+            *v = r.get(i).copied().unwrap_or(f64::NAN) * k * per_s;
         }
         if y.iter().all(|v| v.is_finite()) {
             phases.push(&y);
@@ -557,10 +602,51 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
     }
     enough(path, phases.n)?;
     Ok(Source {
-        title: format!("{} ({:.0} Hz)", path.display(), 1.0 / tau0),
+        title: format!(
+            "{} ({what} CSV, {:.0} Hz from {clock})",
+            path.display(),
+            1.0 / tau0
+        ),
         profile: None,
         phases,
     })
+}
+
+/// The warning for a run too short for the figures past the white noise:
+/// on some axis the Allan deviation still falls at its longest τ (a
+/// quarter of the run), so the floor (bias instability) and a rise (rate
+/// random walk) lie beyond the data and those columns are upper bounds of
+/// noise, not readings (docs/sensors.md "The datasheet reading": a floor
+/// shows from about 100 times the τ where the white noise meets it, hours
+/// for the built-in profiles). `None` when every curve turns.
+pub fn too_short(cs: &[Curve], seconds: f64) -> Option<String> {
+    let falling: Vec<&str> = cs
+        .iter()
+        .zip(AXES)
+        .filter(|(c, _)| {
+            let lowest = c
+                .points
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+                .map(|(i, _)| i);
+            c.points.len() < 2 || lowest == Some(c.points.len() - 1)
+        })
+        .map(|(_, ax)| ax)
+        .collect();
+    if falling.is_empty() {
+        return None;
+    }
+    let longest = cs
+        .first()
+        .and_then(|c| c.points.last())
+        .map_or(0.0, |p| p.0);
+    Some(format!(
+        "the record ({seconds:.1} s) is too short for bias instability and rate random walk: \
+         the Allan deviation of {} still falls at its longest τ ({longest:.3} s), so their \
+         figures below are upper bounds, not readings; only the white noise (ARW/VRW) is read",
+        falling.join(" ")
+    ))
 }
 
 /// A recording needs 100 samples or more.
@@ -651,6 +737,9 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
         .iter()
         .map(|c| fit(c, seconds / 10.0, seconds / 100.0))
         .collect();
+    if let Some(w) = too_short(&cs, seconds) {
+        eprintln!("imu-emu allan: warning: {w}");
+    }
     let mut out = report(&src, &fits, seconds);
     let _ = writeln!(
         out,

@@ -130,33 +130,27 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
     d.get(d.len() / 2).copied()
 }
 
-/// CSV if the first line names `gyro_x`; else the protocol with more valid
-/// frames/packets in the first 64 KiB (KERNEL on a tie; text with neither
-/// is a CSV).
+/// CSV if the first line names `gyro_x` (a KERNEL's) or `pqr_x` /
+/// `theta_x` (an IMX-5's); else the protocol with more valid
+/// frames/packets in the first 64 KiB ([`crate::client::protocol_of`];
+/// text with neither is a CSV).
 fn detect(bytes: &[u8]) -> Format {
+    use crate::cli::Protocol;
     let head = &bytes[..bytes.len().min(1 << 16)];
     let first_line = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
-    if std::str::from_utf8(first_line).is_ok_and(|l| l.split(',').any(|c| c.trim() == "gyro_x")) {
+    if std::str::from_utf8(first_line).is_ok_and(|l| {
+        l.split(',')
+            .any(|c| matches!(c.trim(), "gyro_x" | "pqr_x" | "theta_x"))
+    }) {
         return Format::Csv;
     }
-    let mut k = Box::new(KernelDecoder::<4096>::new());
-    let mut input = head;
-    let mut frames = 0usize;
-    while k.next_frame(&mut input).is_some() {
-        frames += 1;
-    }
-    let mut i = Box::new(IsbDecoder::<MAX_PACKET>::new());
-    let mut input = head;
-    let mut packets = 0usize;
-    while i.next_packet(&mut input).is_some() {
-        packets += 1;
-    }
-    match (frames, packets) {
+    match crate::client::protocol_of(head) {
+        Some(Protocol::Isb) => Format::Isb,
+        Some(Protocol::Kernel) => Format::Kernel,
         // Neither: text is read as a CSV (whose error names the column
         // it lacks), anything else as KERNEL bytes.
-        (0, 0) if std::str::from_utf8(head).is_ok() => Format::Csv,
-        (f, p) if p > f => Format::Isb,
-        _ => Format::Kernel,
+        None if std::str::from_utf8(head).is_ok() => Format::Csv,
+        None => Format::Kernel,
     }
 }
 

@@ -48,8 +48,9 @@ pub const DEFAULT_TCP: &str = "127.0.0.1:7000";
 #[command(name = "imu-emu", version, about)]
 pub struct Args {
     /// The device's protocol: `kernel` (an Inertial Labs KERNEL, the
-    /// default) or `isb` (an Inertial Sense IMX-5 in IMU mode speaking ISB;
-    /// `--model` does not apply, the line starts at 921 600 bit/s).
+    /// default) or `isb` (an Inertial Sense IMX-5 speaking ISB: its IMU,
+    /// INS, GNSS, magnetometer and barometer data sets; `--model` does not
+    /// apply, the line starts at 921 600 bit/s).
     #[arg(long, value_name = "PROTOCOL", value_enum, default_value_t = Protocol::Kernel)]
     pub protocol: Protocol,
 
@@ -252,9 +253,19 @@ pub enum Sub {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
-    /// Print the man page (roff, from this command-line definition):
-    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`.
-    Man,
+    /// Print a man page (roff, from this command-line definition):
+    /// `imu-emu man > imu-emu.1; man ./imu-emu.1`; a subcommand's with its
+    /// path (`imu-emu man client record` is imu-emu-client-record(1)), or
+    /// every page into a folder (`--dir`).
+    Man {
+        /// The subcommand whose page to print (`client`, `client
+        /// record`, `sensor-profile show`); none: imu-emu(1).
+        command: Vec<String>,
+        /// Write every page (imu-emu.1, imu-emu-client.1, …) into DIR (it
+        /// must exist) instead, one file a page.
+        #[arg(long, value_name = "DIR", conflicts_with = "command")]
+        dir: Option<PathBuf>,
+    },
     /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
     /// IMX-5) as a file to start from; `check FILE` reads one.
     #[command(name = "sensor-profile", subcommand)]
@@ -272,6 +283,7 @@ pub enum ProfileSub {
     /// K201 K210 K220 IMX-5) as a TOML file.
     Show {
         /// Model name.
+        #[arg(value_parser = ProfileName)]
         name: String,
     },
     /// Read FILE and print it back as the emulator understood it (or the
@@ -280,6 +292,35 @@ pub enum ProfileSub {
         /// The profile file.
         file: PathBuf,
     },
+}
+
+/// `sensor-profile show NAME`: any text (the lookup, any case, says
+/// what it has), with the built-in profiles' names as its possible values
+/// so that the completions offer them.
+#[derive(Debug, Clone, Copy)]
+struct ProfileName;
+
+impl clap::builder::TypedValueParser for ProfileName {
+    type Value = String;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        _arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<String, clap::Error> {
+        Ok(value.to_string_lossy().into_owned())
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(
+            imu_emu::sensor::profiles::BUILTIN
+                .iter()
+                .map(|b| clap::builder::PossibleValue::new(b.name)),
+        ))
+    }
 }
 
 /// Runs `imu-emu sensor-profile …`.
@@ -475,18 +516,8 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(Sub::Client(c)) => return crate::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
         Some(Sub::Allan(a)) => return crate::allan::run(&a),
-        Some(Sub::Completions { shell }) => {
-            let mut cmd = <Args as clap::CommandFactory>::command();
-            let mut text = Vec::new();
-            clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
-            return print_all(&text);
-        }
-        Some(Sub::Man) => {
-            let cmd = <Args as clap::CommandFactory>::command();
-            let mut text = Vec::new();
-            clap_mangen::Man::new(cmd).render(&mut text)?;
-            return print_all(&text);
-        }
+        Some(Sub::Completions { shell }) => return print_all(&completions(shell)),
+        Some(Sub::Man { command, dir }) => return man(&command, dir.as_deref()),
         None => {}
     }
     check_addresses(&args)?;
@@ -499,7 +530,8 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_timerslack(1);
     // A bad profile file stops the program before anything listens.
-    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))?;
+    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))
+        .map_err(as_usage)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -515,6 +547,100 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(path) => with_flash(FileNor::open(path)?, &args, &stop),
         None => with_flash(MemNor::new(), &args, &stop),
     }
+}
+
+/// The completion script for `shell`, from the command-line definition.
+///
+/// clap_complete's bash script (4.6.12) spells the states of a
+/// hyphenated program's subcommands two ways: the loop that walks the
+/// words sets `imu__emu__subcmd__client`, the case labels read
+/// `imu__subcmd__emu__subcmd__client`, so nothing past the first word
+/// completed. The labels are respelled the loop's way (zsh and fish keep
+/// the name verbatim; fish gets the positional values it lacks,
+/// `fish_positionals`).
+pub fn completions(shell: clap_complete::Shell) -> Vec<u8> {
+    let mut cmd = <Args as clap::CommandFactory>::command();
+    let mut text = Vec::new();
+    clap_complete::generate(shell, &mut cmd, "imu-emu", &mut text);
+    match shell {
+        clap_complete::Shell::Bash => String::from_utf8_lossy(&text)
+            .replace("imu__subcmd__emu", "imu__emu")
+            .into_bytes(),
+        clap_complete::Shell::Fish => {
+            text.extend_from_slice(fish_positionals().as_bytes());
+            text
+        }
+        _ => text,
+    }
+}
+
+/// clap_complete's fish script (4.6.12) completes options and
+/// subcommands but no positional argument's values (`completions
+/// <SHELL>`, `sensor-profile show <NAME>`): one line each, in the script's
+/// own conditions.
+fn fish_positionals() -> String {
+    let mut cmd = <Args as clap::CommandFactory>::command();
+    cmd.build();
+    let mut out = String::new();
+    let mut line = |cond: String, c: &clap::Command| {
+        for a in c.get_positionals() {
+            let vals: Vec<String> = a
+                .get_possible_values()
+                .iter()
+                .filter(|v| !v.is_hide_set())
+                .map(|v| v.get_name().to_owned())
+                .collect();
+            if !vals.is_empty() {
+                out.push_str(&format!(
+                    "complete -c imu-emu -n \"{cond}\" -f -a \"{}\"\n",
+                    vals.join(" ")
+                ));
+            }
+        }
+    };
+    for sub in cmd.get_subcommands() {
+        let name = sub.get_name();
+        line(format!("__fish_imu_emu_using_subcommand {name}"), sub);
+        for sub2 in sub.get_subcommands() {
+            line(
+                format!(
+                    "__fish_imu_emu_using_subcommand {name}; and __fish_seen_subcommand_from {}",
+                    sub2.get_name()
+                ),
+                sub2,
+            );
+        }
+    }
+    out
+}
+
+/// `imu-emu man [COMMAND…] [--dir DIR]`: the page of the command at that
+/// path, or every page into DIR. The `help` subcommands have no page (the
+/// pages list none).
+fn man(path: &[String], dir: Option<&std::path::Path>) -> anyhow::Result<()> {
+    let mut cmd = <Args as clap::CommandFactory>::command().disable_help_subcommand(true);
+    cmd.build();
+    if let Some(d) = dir {
+        clap_mangen::generate_to(cmd, d).with_context(|| format!("man --dir {}", d.display()))?;
+        return Ok(());
+    }
+    let mut page = &cmd;
+    for (i, w) in path.iter().enumerate() {
+        page = page.find_subcommand(w).ok_or_else(|| {
+            let names: Vec<&str> = page.get_subcommands().map(|c| c.get_name()).collect();
+            UsageError(format!(
+                "man: `{}` has no subcommand {w}; it has: {}",
+                std::iter::once("imu-emu")
+                    .chain(path[..i].iter().map(String::as_str))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                names.join(" ")
+            ))
+        })?;
+    }
+    let mut text = Vec::new();
+    clap_mangen::Man::new(page.clone()).render(&mut text)?;
+    print_all(&text)
 }
 
 /// The web view of `--web`, if asked for: its hub and its running server
@@ -541,9 +667,26 @@ fn print_all(text: &[u8]) -> anyhow::Result<()> {
     }
 }
 
+/// `e` as a usage error (exit status 2): a file named on the command line
+/// that cannot be read or is not what the option takes.
+fn as_usage(e: anyhow::Error) -> anyhow::Error {
+    if e.chain().any(|c| c.is::<UsageError>()) {
+        e
+    } else {
+        UsageError(format!("{e:#}")).into()
+    }
+}
+
 /// Options that parse but make no sense together: refused rather than
 /// ignored.
 fn check_combinations(args: &Args) -> anyhow::Result<()> {
+    if args.protocol == Protocol::Kernel && args.gps_time.is_some() {
+        return Err(UsageError(
+            "--gps-time sets an IMX-5's GPS time (--protocol isb); a KERNEL keeps no GPS time"
+                .into(),
+        )
+        .into());
+    }
     if args.protocol == Protocol::Isb {
         if let Some(m) = &args.model {
             return Err(UsageError(format!(
@@ -676,7 +819,10 @@ fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSou
     let Some(path) = &args.motion else {
         return Ok(None);
     };
-    let v = crate::vehicle::VehicleSource::load(path)?;
+    // A file that does not load is a bad argument, as a bad
+    // --sensor-profile is (exit status 2).
+    let v = crate::vehicle::VehicleSource::load(path)
+        .map_err(|e| as_usage(e.context(format!("--motion {}", path.display()))))?;
     eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
     Ok(Some(v))
 }

@@ -79,15 +79,22 @@ pub struct Panel {
     pub legend: Corner,
 }
 
-/// A corner of a panel.
+/// Where a panel's legend goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Corner {
-    /// Upper right (time series).
+    /// Upper right, inside the plot.
     #[default]
     UpperRight,
-    /// Lower left (curves falling from the upper left, an Allan plot).
+    /// Lower left, inside the plot (curves falling from the upper left,
+    /// an Allan plot).
     LowerLeft,
+    /// Beside the plot, right of it (time series: a legend inside would
+    /// cover the last data).
+    Right,
 }
+
+/// Width kept right of a plot for a [`Corner::Right`] legend, pixels.
+const LEGEND_WIDTH: u32 = 100;
 
 /// A figure: panels stacked vertically sharing one x axis.
 #[derive(Debug, Clone, Default)]
@@ -205,11 +212,14 @@ where
             p.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
             p.y_scale,
         );
+        let spans = (x.end - x.start, y.end - y.start);
         match (fig.x_scale, p.y_scale) {
-            (Scale::Linear, Scale::Linear) => panel(area, fig, p, x.clone(), y)?,
-            (Scale::Linear, Scale::Log) => panel(area, fig, p, x.clone(), y.log_scale())?,
-            (Scale::Log, Scale::Linear) => panel(area, fig, p, x.clone().log_scale(), y)?,
-            (Scale::Log, Scale::Log) => panel(area, fig, p, x.clone().log_scale(), y.log_scale())?,
+            (Scale::Linear, Scale::Linear) => panel(area, fig, p, x.clone(), y, spans)?,
+            (Scale::Linear, Scale::Log) => panel(area, fig, p, x.clone(), y.log_scale(), spans)?,
+            (Scale::Log, Scale::Linear) => panel(area, fig, p, x.clone().log_scale(), y, spans)?,
+            (Scale::Log, Scale::Log) => {
+                panel(area, fig, p, x.clone().log_scale(), y.log_scale(), spans)?
+            }
         }
     }
     Ok(())
@@ -221,6 +231,7 @@ fn panel<DB, X, Y>(
     p: &Panel,
     x: X,
     y: Y,
+    spans: (f64, f64),
 ) -> anyhow::Result<()>
 where
     DB: DrawingBackend,
@@ -230,9 +241,11 @@ where
     X::CoordDescType: ValueFormatter<f64>,
     Y::CoordDescType: ValueFormatter<f64>,
 {
+    let beside = p.legend == Corner::Right;
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, (FontFamily::SansSerif, 20))
         .margin(10)
+        .margin_right(10 + if beside { LEGEND_WIDTH } else { 0 })
         .x_label_area_size(45)
         .y_label_area_size(80)
         .build_cartesian_2d(x, y)?;
@@ -255,12 +268,16 @@ where
             String::new()
         }
     };
-    if fig.x_scale == Scale::Log {
-        mesh.x_label_formatter(&decade);
-    }
-    if p.y_scale == Scale::Log {
-        mesh.y_label_formatter(&decade);
-    }
+    let x_linear = |v: &f64| linear_label(*v, spans.0);
+    let y_linear = |v: &f64| linear_label(*v, spans.1);
+    match fig.x_scale {
+        Scale::Log => mesh.x_label_formatter(&decade),
+        Scale::Linear => mesh.x_label_formatter(&x_linear),
+    };
+    match p.y_scale {
+        Scale::Log => mesh.y_label_formatter(&decade),
+        Scale::Linear => mesh.y_label_formatter(&y_linear),
+    };
     mesh.draw()?;
     let keep = |&(x, y): &(f64, f64)| {
         x.is_finite()
@@ -269,6 +286,7 @@ where
             && (p.y_scale == Scale::Linear || y > 0.0)
     };
     let (mut measured, mut reference) = (COLORS.iter().cycle(), REFERENCE_COLORS.iter().cycle());
+    let mut entries = Vec::new();
     for s in &p.series {
         let points = s.points.iter().copied().filter(keep);
         let (color, width) = match s.reference {
@@ -284,13 +302,29 @@ where
         drawn
             .label(&s.name)
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], style));
+        entries.push((s.name.as_str(), style));
     }
+    let inside = match p.legend {
+        Corner::UpperRight => SeriesLabelPosition::UpperRight,
+        Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+        Corner::Right => {
+            // Beside the plotting area, from its top: a sample of each
+            // line and its name.
+            let (xs, ys) = chart.plotting_area().get_pixel_range();
+            let (bx, by) = area.get_base_pixel();
+            let x0 = xs.end - bx + 14;
+            let font = (FontFamily::SansSerif, 14).into_font();
+            for (k, (name, style)) in entries.into_iter().enumerate() {
+                let y = ys.start - by + 10 + 22 * k as i32;
+                area.draw(&PathElement::new([(x0, y), (x0 + 20, y)], style))?;
+                area.draw(&Text::new(name.to_owned(), (x0 + 26, y - 8), font.clone()))?;
+            }
+            return Ok(());
+        }
+    };
     chart
         .configure_series_labels()
-        .position(match p.legend {
-            Corner::UpperRight => SeriesLabelPosition::UpperRight,
-            Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
-        })
+        .position(inside)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font((FontFamily::SansSerif, 14))
@@ -298,8 +332,37 @@ where
     Ok(())
 }
 
+/// The tick label of `v` on a linear axis spanning `span`: as many
+/// decimals as ticks about a tenth of the span apart need (`0.004`,
+/// `575.5`), scientific below 10⁻⁴ (`-1.5e-5`: a PIMU's Δθ), and `0`
+/// rather than `-0.0`.
+fn linear_label(v: f64, span: f64) -> String {
+    let step = span / 10.0;
+    if !(step.is_finite() && step > 0.0) {
+        return format!("{v}");
+    }
+    // A tick at zero computed as ±1e-20 reads 0.
+    if v.abs() < step * 1e-6 {
+        return "0".to_owned();
+    }
+    let text = if step < 1e-4 {
+        format!("{v:.1e}")
+    } else {
+        let decimals = (-step.log10().floor()).max(0.0) as usize;
+        format!("{v:.decimals$}")
+    };
+    if text.parse::<f64>() == Ok(0.0) {
+        "0".to_owned()
+    } else {
+        text
+    }
+}
+
 /// The finite range of `v` (positive values only on a log scale), widened
-/// a little on a linear scale, and never empty.
+/// by 5 % of its span on a linear scale (of its size when all values are
+/// one, ±0.001 for zeros) and 4 % of its decades on a log scale, so the
+/// lines stay inside the panel's frame whatever their magnitude (a PIMU's
+/// Δθ of 10⁻⁵ rad is not drawn on ±0.001), and never empty.
 fn range(v: impl Iterator<Item = f64>, scale: Scale) -> Range<f64> {
     let (lo, hi) = v
         .filter(|x| x.is_finite() && (scale == Scale::Linear || *x > 0.0))
@@ -312,11 +375,20 @@ fn range(v: impl Iterator<Item = f64>, scale: Scale) -> Range<f64> {
             Scale::Log => 1.0..10.0,
         },
         Scale::Linear => {
-            let pad = ((hi - lo) * 0.05).max(1e-3);
+            let pad = if hi > lo {
+                (hi - lo) * 0.05
+            } else if lo != 0.0 {
+                lo.abs() * 0.05
+            } else {
+                1e-3
+            };
             lo - pad..hi + pad
         }
         Scale::Log if hi <= lo => lo / 2.0..hi * 2.0,
-        Scale::Log => lo..hi,
+        Scale::Log => {
+            let f = (hi / lo).powf(0.04);
+            lo / f..hi * f
+        }
     }
 }
 
@@ -328,7 +400,25 @@ mod tests {
     fn ranges() {
         assert_eq!(range([1.0, 3.0].into_iter(), Scale::Linear), 0.9..3.1);
         assert_eq!(range([f64::NAN].into_iter(), Scale::Linear), 0.0..1.0);
-        assert_eq!(range([-1.0, 0.1, 10.0].into_iter(), Scale::Log), 0.1..10.0);
+        // Small values keep their own scale.
+        let r = range([-2e-5, 2e-5].into_iter(), Scale::Linear);
+        assert!((r.start + 2.2e-5).abs() < 1e-12 && (r.end - 2.2e-5).abs() < 1e-12);
+        assert_eq!(range([0.0, 0.0].into_iter(), Scale::Linear), -1e-3..1e-3);
+        let r = range([4.0].into_iter(), Scale::Linear);
+        assert!((r.start - 3.8).abs() < 1e-12 && (r.end - 4.2).abs() < 1e-12);
+        let r = range([-1.0, 0.1, 10.0].into_iter(), Scale::Log);
+        let f = 100f64.powf(0.04);
+        assert!((r.start - 0.1 / f).abs() < 1e-12 && (r.end - 10.0 * f).abs() < 1e-9);
         assert_eq!(range([2.0].into_iter(), Scale::Log), 1.0..4.0);
+    }
+
+    #[test]
+    fn tick_labels() {
+        assert_eq!(linear_label(575.4, 1.0), "575.4");
+        assert_eq!(linear_label(-0.000_000_1, 0.4), "0");
+        assert_eq!(linear_label(0.15, 0.4), "0.15");
+        assert_eq!(linear_label(-1.5e-5, 4e-5), "-1.5e-5");
+        assert_eq!(linear_label(1.0, 1.1), "1.0");
+        assert_eq!(linear_label(200.0, 2000.0), "200");
     }
 }

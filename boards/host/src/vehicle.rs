@@ -61,8 +61,14 @@ impl VehicleSource {
         };
         let mut rows: Vec<FullStateRow> = Vec::new();
         for (n, line) in lines {
-            let r = FullStateRow::parse(line, &layout)
-                .map_err(|e| anyhow::anyhow!("line {n}: {e}: {line:?}"))?;
+            let r = FullStateRow::parse_column(line, &layout).map_err(|(e, col)| match col {
+                Some(c) => anyhow::anyhow!(
+                    "line {n}, column {} (value {}): {e}: {line:?}",
+                    layout.column_name(c),
+                    c + 1
+                ),
+                None => anyhow::anyhow!("line {n}: {e} ({} expected): {line:?}", layout.columns()),
+            })?;
             if rows.last().is_some_and(|p| r.time_s <= p.time_s) {
                 bail!("line {n}: time {} does not increase", r.time_s);
             }

@@ -118,7 +118,7 @@ impl IsbLink {
 
     /// SET_DATA of `data` at `offset` of set `did`; an error unless ACKed.
     pub fn set(&mut self, did: u8, offset: u16, data: &[u8], what: &str) -> anyhow::Result<()> {
-        let mut buf = [0u8; 64];
+        let mut buf = vec![0u8; MAX_PACKET];
         let n = message::encode_set(did, offset, data, &mut buf).context("SET_DATA")?;
         let errors = self.checksum_errors();
         self.line.write(&buf[..n])?;
@@ -351,10 +351,44 @@ pub struct Recorder {
     pub rows: u64,
     /// Packets of another set (CSV) or not whole sets, skipped.
     pub skipped: u64,
-    /// Device time of the first row, s.
-    pub first_time: Option<f64>,
-    /// Device time of the last row, s.
-    pub last_time: Option<f64>,
+    /// Rows and device time span of each set, in the order first seen:
+    /// each set has its own clock (IMU sets time since boot, INS and GPS
+    /// sets GPS time of week), so spans are per set.
+    pub per_set: Vec<SetRows>,
+}
+
+/// The rows of one data set in a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetRows {
+    /// The set.
+    pub did: u8,
+    /// Rows written.
+    pub rows: u64,
+    /// Device time of its first and last row, s, if the set carries one.
+    pub span: Option<(f64, f64)>,
+}
+
+impl Recorder {
+    /// The rows of set `did` so far.
+    pub fn of(&self, did: u8) -> Option<&SetRows> {
+        self.per_set.iter().find(|s| s.did == did)
+    }
+
+    /// `IMU 250 over 0.996 s of device time, INS_1 …`: the summary of
+    /// each set recorded.
+    pub fn summary(&self) -> String {
+        self.per_set
+            .iter()
+            .map(|s| {
+                let name = fields::set(s.did).map_or("?", |x| x.0);
+                match s.span {
+                    Some((a, b)) => format!("{name} {} over {:.3} s of device time", s.rows, b - a),
+                    None => format!("{name} {}", s.rows),
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 impl Recorder {
@@ -365,8 +399,7 @@ impl Recorder {
             csv_did: None,
             rows: 0,
             skipped: 0,
-            first_time: None,
-            last_time: None,
+            per_set: Vec::new(),
         }
     }
 
@@ -403,9 +436,21 @@ impl Recorder {
                 Some(_) => {}
             }
         }
+        let k = match self.per_set.iter().position(|s| s.did == d) {
+            Some(k) => k,
+            None => {
+                self.per_set.push(SetRows {
+                    did: d,
+                    rows: 0,
+                    span: None,
+                });
+                self.per_set.len() - 1
+            }
+        };
+        let set = &mut self.per_set[k];
+        set.rows += 1;
         if let Some(x) = dt {
-            self.first_time.get_or_insert(x);
-            self.last_time = Some(x);
+            set.span = Some((set.span.map_or(x, |s| s.0), x));
         }
         let mut line = String::new();
         match self.to {
@@ -509,12 +554,14 @@ pub fn record(
         link.send_get(d, period.max(1))?;
     }
     let r = record_rows(link, w, to, dids, until, stop);
-    for &d in dids {
-        link.send_get(d, 0)?;
-    }
+    // The streams are stopped even when recording failed; that failure
+    // (a closed line) is the one reported.
+    let stopped: anyhow::Result<()> = dids.iter().try_for_each(|&d| link.send_get(d, 0));
     // The single packets those GETs answer with are not recorded.
     link.line.tee = None;
-    r
+    let rec = r?;
+    stopped?;
+    Ok(rec)
 }
 
 fn record_rows(
@@ -528,16 +575,29 @@ fn record_rows(
     let mut rec = Recorder::new(to);
     let t0 = Instant::now();
     let mut quiet_since = Instant::now();
-    while until.frames.is_none_or(|n| rec.rows < n) && !stop() {
+    // With --duration: the sets (each on its own clock) that reached it; a
+    // set without a clock follows host time.
+    let mut done: Vec<u8> = Vec::new();
+    let mut sets = dids.to_vec();
+    sets.sort_unstable();
+    sets.dedup();
+    while until.frames.is_none_or(|n| rec.rows < n) && done.len() < sets.len() && !stop() {
         match link.packet_before(Instant::now() + Duration::from_millis(100))? {
             Some(p) if p.whole_set().is_some_and(|(d, _)| dids.contains(&d)) => {
                 quiet_since = Instant::now();
                 if let (Some(dur), Some((d, b))) = (until.duration, p.whole_set()) {
-                    let end = rec.first_time.map(|f| f + dur - 1e-9);
-                    if let (Some(end), Some(t)) = (end, fields::device_time(d, b)) {
-                        if t >= end {
-                            break;
-                        }
+                    if done.contains(&d) {
+                        continue;
+                    }
+                    let elapsed = match (rec.of(d).and_then(|s| s.span), fields::device_time(d, b))
+                    {
+                        (Some((first, _)), Some(t)) => t - first,
+                        (None, Some(_)) => 0.0,
+                        (_, None) => t0.elapsed().as_secs_f64(),
+                    };
+                    if elapsed >= dur - 1e-9 {
+                        done.push(d);
+                        continue;
                     }
                 }
                 rec.row(w, &p, Some(t0.elapsed().as_secs_f64()))?;
@@ -553,6 +613,79 @@ fn record_rows(
         }
     }
     Ok(rec)
+}
+
+/// What `set` prints after a FLASH_CONFIG value that applies at the next
+/// start: a command that does it as printed.
+pub const RESET_HINT: &str = "(takes effect after a reset: `imu-emu client --protocol isb reset` \
+     (SYS_CMD 99 with its inverse), or a power cycle)";
+
+/// Sends system command `code` with its inverse in one SET_DATA
+/// (`DID_SYS_CMD`, docs/isb.md) and waits for the ACK.
+pub fn system_command(link: &mut IsbLink, code: u32, what: &str) -> anyhow::Result<()> {
+    let bytes = sets::SystemCommand::new(code).encode();
+    link.set(did::SYS_CMD, 0, &bytes, &format!("SYS_CMD {code} ({what})"))
+}
+
+/// The bytes of a whole set from `text`: every field's value in order,
+/// comma-separated (a vector takes 3 or 4); bytes no field names keep the
+/// unit's values (read first with GET_DATA). A text or version field
+/// cannot be written: such a set is refused.
+pub fn parse_set_value(
+    did: u8,
+    fs: &'static [FieldSpec],
+    text: &str,
+    link: &mut IsbLink,
+) -> anyhow::Result<Vec<u8>> {
+    let (name, _) = set_of(did)?;
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let width = |f: &FieldSpec| match f.kind {
+        Kind::F32x3 | Kind::F64x3 => 3,
+        Kind::F32x4 => 4,
+        _ => 1,
+    };
+    let want: usize = fs.iter().map(width).sum();
+    let names: Vec<String> = fs.iter().map(|f| f.name.to_owned()).collect();
+    if fs
+        .iter()
+        .any(|f| matches!(f.kind, Kind::Version | Kind::Str24))
+    {
+        return Err(UsageError(format!(
+            "set {name}: the set has text or version fields, not writable by the client; set \
+             its fields one by one ({name}.field)"
+        ))
+        .into());
+    }
+    if parts.len() != want {
+        return Err(UsageError(format!(
+            "set {name}: {} values given, the set takes {want} ({}, in order, comma-separated)",
+            parts.len(),
+            names.join(", ")
+        ))
+        .into());
+    }
+    let end = fs
+        .iter()
+        .map(|f| f.offset + f.kind.size())
+        .max()
+        .unwrap_or(0);
+    // Bytes between fields (reserved, padding) keep the unit's values.
+    let mut bytes = if fs.iter().map(|f| f.kind.size()).sum::<usize>() == end {
+        vec![0u8; end]
+    } else {
+        let mut b = link.get(did)?;
+        b.resize(end.max(b.len()), 0);
+        b.truncate(end);
+        b
+    };
+    let mut k = 0;
+    for f in fs {
+        let n = width(f);
+        let v = parse_field(f, &parts[k..k + n].join(","))?;
+        bytes[f.offset..f.offset + v.len()].copy_from_slice(&v);
+        k += n;
+    }
+    Ok(bytes)
 }
 
 /// The hdwBitStatus bits (`bit_t`, `data_sets.h`; `docs/isb-data-sets.md`).
@@ -601,7 +734,8 @@ pub fn run(
     let kernel_only = |what: &str| -> anyhow::Result<()> {
         Err(UsageError(format!(
             "{what} is a KERNEL command; an IMX-5 takes its line rate from \
-             FLASH_CONFIG.ser0BaudRate after a reset (set it, then `set SYS_CMD.command 99`)"
+             FLASH_CONFIG.ser0BaudRate after a reset (set it, then `imu-emu client --protocol \
+             isb reset`)"
         ))
         .into())
     };
@@ -658,27 +792,73 @@ pub fn run(
                 writeln!(out, "{}", show_field(f, &b))?;
             }
         },
-        C::Set { param, value } => {
-            let (d, f) = find_field(param)?;
-            let bytes = parse_field(f, value)?;
-            let (set_name, _) = set_of(d)?;
-            let what = format!("{set_name}.{} {value}", f.name);
-            link.set(d, f.offset as u16, &bytes, &what)?;
-            writeln!(out, "{set_name}.{} saved = {value}", f.name)?;
-            if d == did::FLASH_CONFIG
-                && matches!(
-                    f.offset,
-                    sets::flash::STARTUP_IMU_DT_MS
-                        | sets::flash::STARTUP_NAV_DT_MS
-                        | sets::flash::SER0_BAUD_RATE
-                )
-            {
-                writeln!(
-                    out,
-                    "(takes effect after a reset: `set SYS_CMD.command 99` with \
-                     SYS_CMD.invCommand, or a power cycle)"
-                )?;
+        C::Set { param, value } => match fields::set_by_name(param) {
+            Some(d) => {
+                let (set_name, fs) = set_of(d)?;
+                let bytes = parse_set_value(d, fs, value, &mut link)?;
+                link.set(d, 0, &bytes, &format!("{set_name} {value}"))?;
+                writeln!(out, "{set_name} saved = {value}")?;
+                if d == did::FLASH_CONFIG {
+                    writeln!(out, "{RESET_HINT}")?;
+                }
             }
+            None => {
+                let (d, f) = find_field(param)?;
+                let mut bytes = parse_field(f, value)?;
+                let (set_name, _) = set_of(d)?;
+                let what = format!("{set_name}.{} {value}", f.name);
+                // A system command runs only with its inverse written in
+                // the same SET_DATA (docs/isb.md): the client sends both.
+                let pair = d == did::SYS_CMD && f.offset == sets::sys_cmd::COMMAND;
+                if pair {
+                    let code = sets::le::u32(&bytes, 0);
+                    bytes = sets::SystemCommand::new(code).encode().to_vec();
+                }
+                link.set(d, f.offset as u16, &bytes, &what)?;
+                writeln!(out, "{set_name}.{} saved = {value}", f.name)?;
+                if pair {
+                    writeln!(
+                        out,
+                        "(sent with SYS_CMD.invCommand = {:#010x} in the same SET_DATA: a \
+                         command runs only with its inverse)",
+                        !sets::le::u32(&bytes, 0)
+                    )?;
+                }
+                if d == did::FLASH_CONFIG
+                    && matches!(
+                        f.offset,
+                        sets::flash::STARTUP_IMU_DT_MS
+                            | sets::flash::STARTUP_NAV_DT_MS
+                            | sets::flash::SER0_BAUD_RATE
+                    )
+                {
+                    writeln!(out, "{RESET_HINT}")?;
+                }
+            }
+        },
+        C::Reset => {
+            system_command(&mut link, sets::sys_cmd::SOFTWARE_RESET, "software reset")?;
+            writeln!(
+                out,
+                "reset (SYS_CMD 99): the unit restarts with its saved FLASH_CONFIG"
+            )?;
+        }
+        C::FactoryReset => {
+            system_command(
+                &mut link,
+                sets::sys_cmd::MANF_UNLOCK,
+                "manufacturing unlock",
+            )?;
+            system_command(
+                &mut link,
+                sets::sys_cmd::MANF_FACTORY_RESET,
+                "factory reset",
+            )?;
+            writeln!(
+                out,
+                "factory reset (SYS_CMD 1357924680 after the unlock): FLASH_CONFIG back to its \
+                 defaults, saved; the unit restarts"
+            )?;
         }
         C::Record {
             duration,
@@ -712,13 +892,10 @@ pub fn run(
             let r = record(&mut link, &mut w, *to, &dids, *period, until, stop);
             w.flush()?;
             let rec = r?;
-            let span = match (rec.first_time, rec.last_time) {
-                (Some(a), Some(b)) => format!(", {:.3} s of device time", b - a),
-                _ => String::new(),
-            };
             eprintln!(
-                "imu-emu: {} packets recorded{span}, {} failed their checksum{}",
+                "imu-emu: {} packets recorded ({}), {} failed their checksum{}",
                 rec.rows,
+                rec.summary(),
                 link.checksum_errors(),
                 if stop() {
                     " (interrupted; streams stopped)"

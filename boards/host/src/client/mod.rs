@@ -11,8 +11,9 @@
 //! | `get PARAM` / `set PARAM VALUE` | ReadRAM / SaveFlash (5.3.7, 5.3.8) by Table 5.24 name |
 //! | `commit-baud` | CommitBaudRate (5.3.9) |
 //! | `udd TYPE,…` | User_Def_Data_config (5.3.5) with the type codes, prints the device's check |
-//! | `record` | decoded frames to CSV or JSON lines, with a progress line on a terminal |
-//! | `decode FILE` | a raw capture decoded the same way |
+//! | `record` | decoded frames to CSV or JSON lines, each with its device time, for `--frames N` or `--duration S` of device time, with a progress line on a terminal |
+//! | `decode FILE` | a raw capture decoded the same way (its protocol detected) |
+//! | `reset`, `factory-reset` | IMX-5 only: SYS_CMD with its inverse in one packet |
 //! | `plot CSV` | a recording to PNG or SVG: rates, accelerations, attitude against device time |
 //!
 //! Errors are one line: the port cannot be opened, no answer within
@@ -56,9 +57,10 @@ pub struct ClientArgs {
     pub timeout: f64,
 
     /// The unit's protocol: `kernel` (an Inertial Labs KERNEL) or `isb`
-    /// (an Inertial Sense IMX-5).
-    #[arg(long, value_enum, default_value_t = Protocol::Kernel)]
-    pub protocol: Protocol,
+    /// (an Inertial Sense IMX-5) [default: kernel; `decode`: detected from
+    /// the capture].
+    #[arg(long, value_enum)]
+    pub protocol: Option<Protocol>,
 
     /// The unit's model (scale factors of the low-resolution fields,
     /// Table 5.6; KERNEL only).
@@ -79,6 +81,18 @@ fn parse_timeout(s: &str) -> Result<f64, String> {
         .filter(|t| *t > 0.0 && *t <= MAX_TIMEOUT_S)
         .ok_or_else(|| format!("not a time in seconds in (0, {MAX_TIMEOUT_S}]: {s}"))
 }
+
+/// `decode --rate`: a finite rate in (0, 4000] Hz.
+fn parse_rate(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|r| *r > 0.0 && *r <= 4000.0)
+        .ok_or_else(|| format!("not an output rate in (0, 4000] Hz: {s}"))
+}
+
+/// The output rate that times clockless frames in `decode` without
+/// `--rate`: the factory Data_Rate (ICD Table 5.24).
+pub const DEFAULT_DECODE_RATE_HZ: f64 = 100.0;
 
 /// Longest `--timeout`, seconds.
 pub const MAX_TIMEOUT_S: f64 = 3600.0;
@@ -116,15 +130,25 @@ pub enum ClientCmd {
         /// Name (e.g. Data_Rate) or ID (0x0012).
         param: String,
     },
-    /// Save a parameter (SaveFlash); the value as printed by `get`.
+    /// Save a parameter (SaveFlash); the value as printed by `get`. ISB: a
+    /// field (`SET.field`) or a whole set (`SET`, every field's value in
+    /// order, comma-separated, in one SET_DATA).
     Set {
-        /// Name (e.g. Data_Rate) or ID (0x0012).
+        /// Name (e.g. Data_Rate) or ID (0x0012); ISB: SET.field or SET.
         param: String,
         /// The value (three comma-separated numbers for Alignment_Angles).
         value: String,
     },
     /// CommitBaudRate: the saved Baud_Rate takes effect.
     CommitBaud,
+    /// IMX-5 (ISB): software reset, SYS_CMD 99 with its inverse in one
+    /// SET_DATA; saved FLASH_CONFIG values (startupNavDtMs, ser0BaudRate,
+    /// …) take effect.
+    Reset,
+    /// IMX-5 (ISB): factory reset, FLASH_CONFIG back to its defaults,
+    /// saved, then a reset (SYS_CMD manufacturing unlock, then factory
+    /// reset, each with its inverse in one SET_DATA).
+    FactoryReset,
     /// Configure User Defined Data: type codes, comma-separated (0x21,0x23).
     Udd {
         /// The types.
@@ -135,7 +159,10 @@ pub enum ClientCmd {
         /// Start this format first (and stop it at the end).
         #[arg(long, value_name = "FORMAT")]
         format: Option<String>,
-        /// Record this many seconds of output (frames = seconds × Data_Rate).
+        /// Record this many seconds of device time, counted from the
+        /// frames' own clock (counter, IMU time, ISB `time`; a format without
+        /// one from the rate the device runs, Formula 5.1, and the frames'
+        /// order), at whatever rate the device sends.
         #[arg(long, value_name = "S", conflicts_with = "frames")]
         duration: Option<f64>,
         /// Record this many frames.
@@ -171,6 +198,11 @@ pub enum ClientCmd {
         /// ISB: only this data set (a CSV holds the first set seen otherwise).
         #[arg(long, value_name = "SET")]
         did: Option<String>,
+        /// KERNEL: the output rate, Hz, that times the frames of a format
+        /// without a clock (Orientation, Quaternion, GAA, GAm, GAAm, a UDD
+        /// without IMU time) [default: 100, the factory Data_Rate].
+        #[arg(long, value_name = "HZ", value_parser = parse_rate)]
+        rate: Option<f64>,
     },
     /// Plot a CSV recording (rates, accelerations, attitude against device
     /// time) to PNG or SVG, by the output's extension.
@@ -280,7 +312,26 @@ impl Line {
         self.port
             .write_all(bytes)
             .and_then(|()| self.port.flush())
-            .map_err(|e| anyhow!("{}: write: {e}", self.what))
+            .map_err(|e| match e.kind() {
+                std::io::ErrorKind::BrokenPipe | std::io::ErrorKind::ConnectionReset => {
+                    self.closed()
+                }
+                _ => anyhow!("{}: write: {e}", self.what),
+            })
+    }
+
+    /// The error of a line the unit closed; over TCP it says why that
+    /// happens to an emulator's client.
+    fn closed(&self) -> anyhow::Error {
+        if self.what.starts_with("--tcp") {
+            anyhow!(
+                "{}: the unit closed the connection (the emulator serves one client at a \
+                 time: another client connecting took the line over, or the emulator stopped)",
+                self.what
+            )
+        } else {
+            anyhow!("{}: the unit closed the connection", self.what)
+        }
     }
 
     /// Appends what arrives within about 20 ms to the input (also to the
@@ -288,7 +339,7 @@ impl Line {
     fn read_more(&mut self) -> anyhow::Result<()> {
         let mut buf = [0u8; 4096];
         let n = match self.port.read(&mut buf) {
-            Ok(0) => bail!("{}: the unit closed the connection", self.what),
+            Ok(0) => return Err(self.closed()),
             Ok(n) => n,
             Err(e)
                 if matches!(
@@ -300,6 +351,7 @@ impl Line {
             {
                 0
             }
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => return Err(self.closed()),
             Err(e) => bail!("{}: read: {e}", self.what),
         };
         if let Some(t) = self.tee.as_mut() {
@@ -522,43 +574,10 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             out: o,
             to,
             did,
+            rate,
         } => {
-            let what = || format!("decode {}", file.display());
-            let mut src = std::fs::File::open(file).with_context(what)?;
-            let mut w = writer(o.as_ref())?;
-            if args.protocol == Protocol::Isb {
-                let only = did.as_deref().map(isb::parse_set).transpose()?;
-                let (rec, errors) = isb::decode(&mut src, &what, &mut w, *to, only)?;
-                w.flush()?;
-                eprintln!(
-                    "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
-                    rec.rows, rec.skipped
-                );
-                return Ok(());
-            }
-            if did.is_some() {
-                return Err(UsageError("decode --did goes with --protocol isb".into()).into());
-            }
-            let mut rec = Recorder::new(*to, args.model);
-            let mut d = Box::new(Decoder::<CAP>::new());
-            read_chunks(&mut src, &what, &mut |chunk| {
-                let mut input: &[u8] = chunk;
-                while let Some(f) = d.next_frame(&mut input) {
-                    if f.msg_type == TYPE_DATA {
-                        rec.row(&mut w, f.id, f.payload, None)?;
-                    }
-                }
-                Ok(())
-            })?;
-            w.flush()?;
-            eprintln!(
-                "imu-emu: {} frames decoded, {} failed their checksum, {} counter gaps, {} skipped",
-                rec.rows,
-                d.errors(),
-                rec.gaps,
-                rec.skipped
-            );
-            return Ok(());
+            let r = decode_file(&args, file, o.as_ref(), *to, did.as_deref(), *rate);
+            return quiet_on_closed_output(r);
         }
         ClientCmd::Plot { file, out: png } => {
             let n = plot::plot(file, png)?;
@@ -569,8 +588,16 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
     }
     let interrupted = interrupt_flag();
     let stop = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
-    if args.protocol == Protocol::Isb {
+    if args.protocol == Some(Protocol::Isb) {
         return isb::run(&args, &mut out, &stop);
+    }
+    if matches!(args.cmd, ClientCmd::Reset | ClientCmd::FactoryReset) {
+        return Err(UsageError(
+            "reset and factory-reset are IMX-5 (--protocol isb) commands; a KERNEL resets by a \
+             power cycle"
+                .into(),
+        )
+        .into());
     }
     let mut link = Link::open(&args)?;
     match &args.cmd {
@@ -626,6 +653,14 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                     p.name,
                     show_value(p, &v)
                 )?,
+                Ok(_) if p.id == params::DATA_RATE.id => {
+                    writeln!(out, "{} saved = {value}", p.name)?;
+                    let requested = u32::from(u16::from_le_bytes([v[0], v[1]]));
+                    let baud = params::baud_rate(get(&mut link, &params::BAUD_RATE)?[0]);
+                    if let Some(note) = lowered_rates(requested, baud, &args.model) {
+                        writeln!(out, "{note}")?;
+                    }
+                }
                 Ok(_) => writeln!(out, "{} saved = {value}", p.name)?,
                 Err(_) => bail!(
                     "{}: SaveFlash {} {value}: no acknowledgement within {:?}: the unit refused \
@@ -640,6 +675,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             link.send(Command::CommitBaudRate)?;
             writeln!(out, "baud rate committed")?;
         }
+        ClientCmd::Reset | ClientCmd::FactoryReset => unreachable!("refused before"),
         ClientCmd::Udd { types } => {
             let list = parse_types(types)?;
             link.send(Command::UddConfig)?;
@@ -684,6 +720,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             if did.is_some() {
                 return Err(UsageError("record --did goes with --protocol isb".into()).into());
             }
+            let rate = stream_rate(&mut link, &args.model);
             if let Some(r) = raw {
                 link.line.tee = Some(
                     std::fs::File::create(r).with_context(|| format!("--raw {}", r.display()))?,
@@ -693,28 +730,42 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                 Some(f) => Some(start(&mut link, f)?),
                 None => None,
             };
-            let want = match (frames, duration) {
-                (Some(n), _) => Some(*n),
-                (None, Some(s)) => {
-                    let v = get(&mut link, &params::DATA_RATE)?;
-                    let rate = u16::from_le_bytes([v[0], v[1]]);
-                    Some((s * f64::from(rate)).round() as u64)
-                }
-                (None, None) => None,
-            };
             let mut w = writer(o.as_ref())?;
-            let r = record(&mut link, &mut w, *to, args.model, want, &stop);
-            if started.is_some() {
-                link.send(Command::Stop)?;
+            let mut rec = Recorder::new(*to, args.model);
+            if let Some(r) = rate {
+                rec = rec.with_rate(r);
             }
-            w.flush()?;
-            let rec = r?;
+            rec.end_s = *duration;
+            let r = record(&mut link, &mut w, &mut rec, *frames, &stop);
+            // The stream is stopped even when recording failed; that
+            // failure (a closed line) is the one reported.
+            let stopped = match started {
+                Some(_) => link.send(Command::Stop),
+                None => Ok(()),
+            };
+            let flushed = w.flush();
+            let closed_output = r.as_ref().err().is_some_and(is_broken_pipe)
+                || flushed
+                    .as_ref()
+                    .err()
+                    .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe);
+            if !closed_output {
+                r?;
+                stopped?;
+                flushed?;
+            }
+            let span = match (rec.first_time, rec.last_time) {
+                (Some(a), Some(b)) => format!(", {:.3} s of device time", b - a),
+                _ => String::new(),
+            };
             eprintln!(
-                "imu-emu: {} frames recorded, {} failed their checksum, {} counter gaps{}",
+                "imu-emu: {} frames recorded{span}, {} failed their checksum, {} counter gaps{}",
                 rec.rows,
                 link.checksum_errors(),
                 rec.gaps,
-                if stop() {
+                if closed_output {
+                    " (the output was closed)"
+                } else if stop() {
                     if started.is_some() {
                         " (interrupted; stream stopped)"
                     } else {
@@ -728,6 +779,198 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         ClientCmd::Decode { .. } | ClientCmd::Plot { .. } => unreachable!(),
     }
     Ok(())
+}
+
+/// `client decode FILE`: the capture's protocol is `--protocol`, else
+/// detected from its first 64 KiB ([`protocol_of`]); bytes in which no
+/// data frame (no data-set packet) decodes are an error, not an empty
+/// output with status 0.
+fn decode_file(
+    args: &ClientArgs,
+    file: &std::path::Path,
+    o: Option<&PathBuf>,
+    to: OutFormat,
+    did: Option<&str>,
+    rate: Option<f64>,
+) -> anyhow::Result<()> {
+    let what = || format!("decode {}", file.display());
+    let mut file_src = std::fs::File::open(file).with_context(what)?;
+    // The first 64 KiB tell the protocol; they are read once and decoded
+    // ahead of the rest (a pipe or a FIFO cannot be read twice).
+    let mut head = Vec::new();
+    (&mut file_src)
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .with_context(what)?;
+    let empty = head.is_empty();
+    let mut src = std::io::Cursor::new(head).chain(file_src);
+    let protocol = match args.protocol {
+        Some(p) => p,
+        None => {
+            let p = protocol_of(src.get_ref().0.get_ref()).unwrap_or(Protocol::Kernel);
+            if p == Protocol::Isb {
+                eprintln!(
+                    "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb",
+                    file.display()
+                );
+            }
+            p
+        }
+    };
+    let mut w = writer(o)?;
+    if protocol == Protocol::Isb {
+        if rate.is_some() {
+            return Err(UsageError(
+                "decode --rate is for KERNEL frames: ISB sets carry their own time".into(),
+            )
+            .into());
+        }
+        let only = did.map(isb::parse_set).transpose()?;
+        let (rec, errors) = isb::decode(&mut src, &what, &mut w, to, only)?;
+        w.flush()?;
+        if rec.rows == 0 && !empty {
+            bail!(
+                "{}: no ISB data set packet{} ({errors} packets failed their checksum): not an \
+                 IMX-5's capture? (--protocol kernel for a KERNEL's)",
+                what(),
+                only.map_or(String::new(), |d| format!(" of set {d}"))
+            );
+        }
+        eprintln!(
+            "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
+            rec.rows, rec.skipped
+        );
+        return Ok(());
+    }
+    if did.is_some() {
+        return Err(UsageError("decode --did goes with --protocol isb".into()).into());
+    }
+    let mut rec =
+        Recorder::new(to, args.model).with_rate(RateOf::Hz(rate.unwrap_or(DEFAULT_DECODE_RATE_HZ)));
+    let mut d = Box::new(Decoder::<CAP>::new());
+    let mut bytes = 0u64;
+    read_chunks(&mut src, &what, &mut |chunk| {
+        bytes += chunk.len() as u64;
+        let mut input: &[u8] = chunk;
+        while let Some(f) = d.next_frame(&mut input) {
+            if f.msg_type == TYPE_DATA {
+                rec.row(&mut w, f.id, f.payload, None)?;
+            }
+        }
+        Ok(())
+    })?;
+    w.flush()?;
+    if rec.rows == 0 && bytes > 0 {
+        bail!(
+            "{}: no KERNEL data frame in {bytes} bytes ({} frames failed their checksum): not a \
+             KERNEL capture? (--protocol isb for an IMX-5's)",
+            what(),
+            d.errors()
+        );
+    }
+    if rec.timed_by_rate && rate.is_none() {
+        eprintln!(
+            "imu-emu: {}: {} frames carry no clock: device_time_s counts them at \
+             {DEFAULT_DECODE_RATE_HZ} Hz, the factory Data_Rate (--rate HZ for another)",
+            file.display(),
+            rec.format_name()
+        );
+    }
+    eprintln!(
+        "imu-emu: {} frames decoded, {} failed their checksum, {} counter gaps, {} skipped",
+        rec.rows,
+        d.errors(),
+        rec.gaps,
+        rec.skipped
+    );
+    Ok(())
+}
+
+/// Whether `e` is a write to a reader that went away (`… | head`).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// `r`, but a reader of the output that went away (`decode … | head`) is
+/// the end of the output, as for any filter, not an error.
+fn quiet_on_closed_output(r: anyhow::Result<()>) -> anyhow::Result<()> {
+    match r {
+        Err(e) if is_broken_pipe(&e) => Ok(()),
+        r => r,
+    }
+}
+
+/// The protocol whose frames or packets `head` holds more of (KERNEL on
+/// a tie), or `None` when it holds neither.
+pub fn protocol_of(head: &[u8]) -> Option<Protocol> {
+    let mut k = Box::new(Decoder::<CAP>::new());
+    let mut input = head;
+    let mut frames = 0usize;
+    while k.next_frame(&mut input).is_some() {
+        frames += 1;
+    }
+    let mut i = Box::new(imu_emu::isb::packet::Decoder::<
+        { imu_emu::isb::packet::MAX_PACKET },
+    >::new());
+    let mut input = head;
+    let mut packets = 0usize;
+    while i.next_packet(&mut input).is_some() {
+        packets += 1;
+    }
+    match (frames, packets) {
+        (0, 0) => None,
+        (f, p) if p > f => Some(Protocol::Isb),
+        _ => Some(Protocol::Kernel),
+    }
+}
+
+/// What `set Data_Rate` adds when the device will send slower than
+/// `requested` Hz at `baud` bit/s (Formula 5.1, ICD 5.5): the formats it
+/// lowers and their rates, or `None` when every format runs at it.
+pub fn lowered_rates(requested: u32, baud: u32, product: &Product) -> Option<String> {
+    use imu_emu::kernel::{formats, rate};
+    let internal = product.model.internal_rate_hz;
+    let mut groups: Vec<(u32, Vec<&str>)> = Vec::new();
+    for f in formats::FORMATS {
+        let eff = rate::effective_rate(requested, baud, f.payload_len(), internal);
+        if eff == requested {
+            continue;
+        }
+        match groups.iter_mut().find(|g| g.0 == eff) {
+            Some(g) => g.1.push(f.name),
+            None => groups.push((eff, vec![f.name])),
+        }
+    }
+    if groups.is_empty() {
+        return None;
+    }
+    groups.sort_by_key(|g| std::cmp::Reverse(g.0));
+    let list: Vec<String> = groups
+        .iter()
+        .map(|(r, names)| format!("{} at {r} Hz", names.join(", ")))
+        .collect();
+    Some(format!(
+        "at {baud} bit/s the device lowers it (ICD 5.5, Formula 5.1): it sends {} \
+         (a UDD by its length; a faster line rate keeps {requested} Hz)",
+        list.join("; ")
+    ))
+}
+
+/// The rate the device sends at, read from the unit (Data_Rate lowered by
+/// Formula 5.1 for a frame's length at the running line rate): it times
+/// the frames of a format without a clock. `None` when the unit does not
+/// answer ReadRAM (such frames then get no `device_time_s`).
+fn stream_rate(link: &mut Link, product: &Product) -> Option<RateOf> {
+    let data_rate = get(link, &params::DATA_RATE).ok()?;
+    let baud = get(link, &params::BAUD_RATE).ok()?;
+    Some(RateOf::Line {
+        data_rate: u32::from(u16::from_le_bytes([data_rate[0], data_rate[1]])),
+        baud: params::baud_rate(baud[0]),
+        internal_hz: product.model.internal_rate_hz,
+    })
 }
 
 fn parse_types(s: &str) -> anyhow::Result<Vec<u8>> {
@@ -829,30 +1072,98 @@ pub struct Recorder {
     pub gaps: u64,
     last_counter: Option<u16>,
     step: Option<u16>,
-    /// Whether rows carry `device_time_s` (the first frame had a clock).
+    /// Whether rows carry `device_time_s` (the first frame had a clock,
+    /// or the rate is known).
     timed: bool,
     clock: DeviceClock,
+    /// The output rate that times frames without a clock.
+    rate: Option<RateOf>,
+    /// Whether the rows are timed by that rate (the format has no clock).
+    pub timed_by_rate: bool,
+    /// Stop before a row this much device time after the first, s.
+    pub end_s: Option<f64>,
+    /// A row reached `end_s`.
+    pub done: bool,
+    /// Device time of the first and the last row written, s.
+    pub first_time: Option<f64>,
+    /// Device time of the last row written, s.
+    pub last_time: Option<f64>,
+}
+
+/// The output rate of a stream, for frames without a clock.
+#[derive(Debug, Clone, Copy)]
+pub enum RateOf {
+    /// This rate, Hz (`decode --rate`).
+    Hz(f64),
+    /// The device's: Data_Rate lowered by Formula 5.1 for the frame's
+    /// length at the line rate (what `record` reads from the unit).
+    Line {
+        /// Data_Rate, Hz.
+        data_rate: u32,
+        /// Running line rate, bit/s.
+        baud: u32,
+        /// The model's internal rate, Hz.
+        internal_hz: u32,
+    },
+}
+
+impl RateOf {
+    /// The rate of frames with `payload_len` bytes, Hz.
+    pub fn hz(self, payload_len: usize) -> f64 {
+        match self {
+            RateOf::Hz(h) => h,
+            RateOf::Line {
+                data_rate,
+                baud,
+                internal_hz,
+            } => f64::from(imu_emu::kernel::rate::effective_rate(
+                data_rate,
+                baud,
+                payload_len,
+                internal_hz,
+            )),
+        }
+    }
 }
 
 /// Device time from the frames themselves: seconds since the first frame,
 /// from `imu_time_ns` (ns since power-on) when a frame has it, else from
 /// the counter (2 kHz ticks, ICD Tables 5.7, 5.10 note 3) unwrapped, which
-/// holds while frames are less than 32.768 s apart.
+/// holds while frames are less than 32.768 s apart; a frame with neither
+/// (Orientation, Quaternion, GAA, GAm, GAAm, a UDD without IMU time) is
+/// timed by its place in the stream at the known output rate
+/// ([`DeviceClock::with_rate`]), which cannot see frames lost on the line.
 #[derive(Debug, Clone, Default)]
 pub struct DeviceClock {
     t0_ns: Option<f64>,
     last_counter: Option<u16>,
     ticks: u64,
+    rate_hz: Option<f64>,
+    untimed: u64,
 }
 
 impl DeviceClock {
-    /// The device time of frame `d`, s, or `None` if it carries no clock.
+    /// A clock that times frames without a clock field at `hz`.
+    pub fn with_rate(hz: f64) -> Self {
+        DeviceClock {
+            rate_hz: Some(hz),
+            ..Self::default()
+        }
+    }
+
+    /// The device time of frame `d`, s, or `None` if it carries no clock
+    /// and no rate was given.
     pub fn time(&mut self, d: &decode::Decoded) -> Option<f64> {
         if let Some(ns) = d.get("imu_time_ns") {
             let t0 = *self.t0_ns.get_or_insert(ns);
             return Some((ns - t0) / 1e9);
         }
-        let c = d.get("counter")? as u16;
+        let Some(c) = d.get("counter") else {
+            let t = self.untimed as f64 / self.rate_hz?;
+            self.untimed += 1;
+            return Some(t);
+        };
+        let c = c as u16;
         if let Some(last) = self.last_counter {
             self.ticks += u64::from(c.wrapping_sub(last));
         }
@@ -875,7 +1186,26 @@ impl Recorder {
             step: None,
             timed: false,
             clock: DeviceClock::default(),
+            rate: None,
+            timed_by_rate: false,
+            end_s: None,
+            done: false,
+            first_time: None,
+            last_time: None,
         }
+    }
+
+    /// Frames without a clock are timed at `rate`.
+    pub fn with_rate(mut self, rate: RateOf) -> Self {
+        self.rate = Some(rate);
+        self
+    }
+
+    /// The name of the format recorded (`GA`), or `none`.
+    pub fn format_name(&self) -> String {
+        self.columns
+            .as_ref()
+            .map_or_else(|| "none".to_owned(), |c| decode::format_name(c.0))
     }
 
     /// Writes the frame as a row (with the host time `t`, seconds since
@@ -894,7 +1224,19 @@ impl Recorder {
         let cols: Vec<&'static str> = d.values.iter().map(|v| v.0).collect();
         match &self.columns {
             None => {
-                self.timed = d.get("imu_time_ns").is_some() || d.get("counter").is_some();
+                let clocked = d.get("imu_time_ns").is_some() || d.get("counter").is_some();
+                if let (false, Some(r)) = (clocked, self.rate) {
+                    self.clock = DeviceClock::with_rate(r.hz(payload.len()));
+                    self.timed_by_rate = true;
+                }
+                self.timed = clocked || self.timed_by_rate;
+                if !self.timed && self.end_s.is_some() {
+                    bail!(
+                        "record --duration: {} frames carry no clock and the unit did not say its \
+                         rate (ReadRAM Data_Rate): record --frames N instead",
+                        decode::format_name(id)
+                    );
+                }
                 if self.to == OutFormat::Csv {
                     let mut h = vec!["frame", "format"];
                     if self.timed {
@@ -919,6 +1261,16 @@ impl Recorder {
         } else {
             None
         };
+        if let (Some(t), Some(end)) = (device_t, self.end_s) {
+            if t >= end - 1e-9 {
+                self.done = true;
+                return Ok(false);
+            }
+        }
+        if let Some(t) = device_t {
+            self.first_time.get_or_insert(t);
+            self.last_time = Some(t);
+        }
         if let Some(c) = d.get("counter") {
             let c = c as u16;
             if let Some(last) = self.last_counter {
@@ -966,22 +1318,21 @@ impl Recorder {
     }
 }
 
-/// Records data frames until `want` rows were written (or forever); a
-/// progress line on stderr when it is a terminal.
+/// Records data frames with `rec` until `want` rows were written or a
+/// frame reaches its `end_s` of device time (or forever); a progress line
+/// on stderr when it is a terminal.
 fn record(
     link: &mut Link,
     w: &mut dyn Write,
-    to: OutFormat,
-    product: Product,
+    rec: &mut Recorder,
     want: Option<u64>,
     stop: &dyn Fn() -> bool,
-) -> anyhow::Result<Recorder> {
-    let mut rec = Recorder::new(to, product);
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let tty = std::io::stderr().is_terminal();
     let mut shown = t0;
     let mut quiet_since = Instant::now();
-    while want.is_none_or(|n| rec.rows < n) && !stop() {
+    while want.is_none_or(|n| rec.rows < n) && !rec.done && !stop() {
         let row = match link.frame_before(Instant::now() + Duration::from_millis(100))? {
             Some(f) if f.msg_type == TYPE_DATA => {
                 rec.row(w, f.id, &f.payload, Some(t0.elapsed().as_secs_f64()))?
@@ -1016,5 +1367,5 @@ fn record(
     if tty {
         eprintln!();
     }
-    Ok(rec)
+    Ok(())
 }

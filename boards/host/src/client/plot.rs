@@ -126,7 +126,7 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
                 y_label: (*y_label).to_owned(),
                 y_scale: Scale::Linear,
                 series,
-                legend: Corner::UpperRight,
+                legend: Corner::Right,
             })
         })
         .collect();
