@@ -3,6 +3,7 @@
 //! back with the ISB packet decoder (`src/isb/device.rs`; `docs/isb.md`).
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::earth;
 use imu_emu::isb::did;
 use imu_emu::isb::ins::{self, NavFaults};
 use imu_emu::isb::message::{self, GetRequest};
@@ -978,9 +979,11 @@ fn gps1_sat_follows_the_fix() {
 }
 
 /// MAGNETOMETER every 10 ms and BAROMETER every 8 ms by their time fields;
-/// the field's inclination at 45° N is the dipole's atan(2) = 63.4°; the
-/// pressure is the ISA's at 0 m; a magnetic disturbance and a barometer
-/// failure reach insStatus / hdwStatus.
+/// the field is the World Magnetic Model's at the site and the GPS date —
+/// unit length, its declination and inclination the model's (mean of the
+/// minute's samples, level and facing north) — the pressure the ISA's at
+/// the site's MSL height (ellipsoid height − EGM96 undulation); a magnetic
+/// disturbance and a barometer failure reach insStatus / hdwStatus.
 #[test]
 fn magnetometer_and_barometer() {
     let mut b = Bench::new();
@@ -1005,15 +1008,24 @@ fn magnetometer_and_barometer() {
     let m = mags.last().unwrap().mag.map(f64::from);
     let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
     assert!((n - 1.0).abs() < 0.01, "{m:?}");
-    // Body down = −(chain z): at rest the vertical component is m[2].
-    let incl = (m[2] / n).asin().to_degrees();
-    assert!((incl - 2f64.atan().to_degrees()).abs() < 0.5, "{incl}");
-    // The built-in site's height (where normal gravity is the ICD's g).
-    let h = nav::truth_of(b.dev.chain()).h_m;
+    // Level, facing north: body forward, right, down are north, east, down.
+    let mean = [0, 1, 2].map(|k| mags.iter().map(|s| f64::from(s.mag[k])).sum::<f64>() / 600.0);
+    let t = nav::truth_of(b.dev.chain());
+    // The default GPS clock starts 2026-01-01; the minute run is 2026.0.
+    let (decl, incl) = (
+        earth::declination_deg(t.lat_deg, t.lon_deg, t.h_m, 2026.0),
+        earth::inclination_deg(t.lat_deg, t.lon_deg, t.h_m, 2026.0),
+    );
+    let got_decl = mean[1].atan2(mean[0]).to_degrees();
+    let got_incl = mean[2].atan2(mean[0].hypot(mean[1])).to_degrees();
+    assert!((got_decl - decl).abs() < 0.1, "{got_decl} vs WMM {decl}");
+    assert!((got_incl - incl).abs() < 0.1, "{got_incl} vs WMM {incl}");
+    // The site's MSL height: its ellipsoid height less the undulation.
+    let msl = t.h_m - earth::geoid_undulation_m(t.lat_deg, t.lon_deg);
     let p = baros.last().unwrap();
     assert!(
-        (f64::from(p.bar) - ins::isa_kpa(h)).abs() < 0.01,
-        "{p:?} at {h} m"
+        (f64::from(p.bar) - ins::isa_kpa(msl)).abs() < 0.01,
+        "{p:?} at {msl} m MSL"
     );
     // mslBar is the SDK's baro2msl of the pressure (an exponential
     // atmosphere: 22 m from the ISA at this height).
@@ -1169,8 +1181,9 @@ fn imu_mag_pimu_mag_and_sys_sensors() {
     }
     let s = SysSensors::decode(&b.get_once(did::SYS_SENSORS).try_into().unwrap());
     assert!((s.acc[2] + 9.81).abs() < 0.1, "{s:?}");
-    let h = nav::truth_of(b.dev.chain()).h_m;
-    assert!((f64::from(s.bar) - ins::isa_kpa(h)).abs() < 0.01);
+    let t = nav::truth_of(b.dev.chain());
+    let msl = t.h_m - earth::geoid_undulation_m(t.lat_deg, t.lon_deg);
+    assert!((f64::from(s.bar) - ins::isa_kpa(msl)).abs() < 0.01);
     assert!((f64::from(s.msl_bar) + 8434.668 * (f64::from(s.bar) / 101.325).ln()).abs() < 0.01);
     let m = s.mag.map(f64::from);
     assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);

@@ -147,6 +147,13 @@ impl GpsTime {
     pub const fn tow_ms(&self) -> u32 {
         (self.tow_ns / 1_000_000) as u32
     }
+    /// The UTC date as a decimal year (GPS − [`LEAP_SECONDS`]): what the
+    /// magnetic field model is read at.
+    pub fn decimal_year(&self) -> f64 {
+        let gps_s = u64::from(self.week) * WEEK_S + self.tow_ns / 1_000_000_000;
+        let unix_s = gps_s + GPS_EPOCH_UNIX_S - u64::from(LEAP_SECONDS);
+        crate::earth::decimal_year_of_unix_s(unix_s as i64)
+    }
 }
 
 /// GPS seconds since the GPS epoch of a UTC Unix time (`leap` = GPS − UTC).
