@@ -12,12 +12,6 @@ use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
 use crate::math::double::quat_from_euler;
 
-/// Longitude of the built-in site, degrees east (the motions carry only a
-/// latitude; the emulator's choice, `docs/isb.md`).
-pub const DEFAULT_LON_DEG: f64 = 0.0;
-/// Height of the built-in site above the WGS84 ellipsoid, m.
-pub const DEFAULT_HEIGHT_M: f64 = 0.0;
-
 /// WGS84 semi-major axis, m.
 pub const WGS84_A: f64 = 6_378_137.0;
 /// WGS84 first eccentricity squared.
@@ -52,29 +46,18 @@ pub struct NavTruth {
 
 /// The navigation truth of `chain` now: the unit's vehicle
 /// ([`SignalChain::vehicle`]: a board's vehicle source — manoeuvre script,
-/// full-state rows, live feed — or the built-in motion's site and
-/// attitude). Its body frame (forward, right, down) is the IMX's. A
-/// built-in motion's site is placed at longitude [`DEFAULT_LON_DEG`] and
-/// height [`DEFAULT_HEIGHT_M`]: the vehicle puts it where normal gravity is
-/// the ICD's 1 g (≈ 1.4 km below the ellipsoid at 45° N, so the KERNEL at
-/// rest reads exactly 1 g), which is no place to report an INS at.
+/// full-state rows, live feed — or the built-in motion's state at the
+/// built-in site, the one both personalities share: docs/motion.md "The
+/// built-in site"). Its body frame (forward, right, down) is the IMX's.
 pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
-    let (v, builtin) = match chain.vehicle_source() {
-        Some(v) => (*v, false),
-        None => (chain.vehicle(), true),
+    let v = match chain.vehicle_source() {
+        Some(v) => *v,
+        None => chain.vehicle(),
     };
     NavTruth {
         lat_deg: v.lat_rad.to_degrees(),
-        lon_deg: if builtin {
-            DEFAULT_LON_DEG
-        } else {
-            v.lon_rad.to_degrees()
-        },
-        h_m: if builtin {
-            DEFAULT_HEIGHT_M
-        } else {
-            v.height_m
-        },
+        lon_deg: v.lon_rad.to_degrees(),
+        h_m: v.height_m,
         v_ned: v.vel_ned,
         q_nb: v.q_nb,
     }
