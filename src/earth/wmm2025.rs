@@ -11,11 +11,12 @@ pub const VALID_UNTIL: f64 = 2030.0;
 /// Highest degree and order.
 pub const N_MAX: usize = 12;
 /// The geomagnetic reference radius, m (WMM2025 report, eq. 4).
-pub const RADIUS_M: f64 = 6_371_200.0;
+pub const RADIUS_M: f32 = 6_371_200.0;
 
 /// One row of `WMM.COF`: degree n, order m, the Schmidt semi-normalised
 /// Gauss coefficients g, h (nT) at the epoch and their secular variation
-/// ġ, ḣ (nT/year).
+/// ġ, ḣ (nT/year). `f32`: the synthesis is `f32` (docs/earth.md), and the
+/// file's 0.1 nT decimals are within 0.001 nT of their `f32`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Coef {
     /// Degree n.
@@ -23,16 +24,16 @@ pub struct Coef {
     /// Order m.
     pub m: u8,
     /// g, nT.
-    pub g: f64,
+    pub g: f32,
     /// h, nT.
-    pub h: f64,
+    pub h: f32,
     /// ġ, nT/year.
-    pub g_dot: f64,
+    pub g_dot: f32,
     /// ḣ, nT/year.
-    pub h_dot: f64,
+    pub h_dot: f32,
 }
 
-const fn c(n: u8, m: u8, g: f64, h: f64, g_dot: f64, h_dot: f64) -> Coef {
+const fn c(n: u8, m: u8, g: f32, h: f32, g_dot: f32, h_dot: f32) -> Coef {
     Coef {
         n,
         m,
