@@ -1314,3 +1314,46 @@ fn the_ins_reports_the_vehicle_it_rides_on() {
     let e = imu_emu::math::double::euler_from_quat(&i2.qn2b.map(f64::from));
     assert!((e[2].to_degrees() - 90.0).abs() < 1.0, "{e:?}");
 }
+
+/// The magnetometer reads the WMM2025 field where the vehicle is and when
+/// the unit's GPS clock says: at 80° N 0° E (the report's first test
+/// place, where the declination moves half a degree a year) on
+/// 2029-07-02 12:00 UTC (2029.5), level and facing north, the mean of 4 s
+/// of samples has the model's declination and inclination of that date,
+/// not of the default 2026.
+#[test]
+fn the_magnetometer_reads_the_field_at_the_vehicle_and_the_gps_date() {
+    use imu_emu::vehicle::{Manoeuvres, Script};
+    let mut m = Manoeuvres::new(Script::parse("start 80 0 0 0 0; hold 100").unwrap());
+    let mut b = Bench::new();
+    // GPS time at device instant 0: 2029-07-02 12:00 UTC (+18 leap s).
+    let unix_s: u64 = 1_877_688_000;
+    b.dev
+        .personality_mut()
+        .set_gps_time((unix_s - nav::GPS_EPOCH_UNIX_S + 18) * 1_000_000_000);
+    let period = b.dev.tick_period_ns();
+    b.send(&get(did::MAGNETOMETER, 1));
+    let mut mags = Vec::new();
+    for _ in 0..8_000 {
+        let s = m.at((b.ticks + 1) as f64 * period as f64 * 1e-9);
+        b.dev.chain_mut().set_vehicle(s, s.truth());
+        for p in of_did(&b.run_ticks(1), did::MAGNETOMETER) {
+            mags.push(Magnetometer::decode(&p.payload.clone().try_into().unwrap()));
+        }
+    }
+    assert_eq!(mags.len(), 400);
+    let n = mags.len() as f64;
+    let mean = [0, 1, 2].map(|k| mags.iter().map(|s| f64::from(s.mag[k])).sum::<f64>() / n);
+    let decl = mean[1].atan2(mean[0]).to_degrees();
+    let incl = mean[2].atan2(mean[0].hypot(mean[1])).to_degrees();
+    let year = 2029.5;
+    let (want_d, want_i) = (
+        earth::declination_deg(80.0, 0.0, 0.0, year),
+        earth::inclination_deg(80.0, 0.0, 0.0, year),
+    );
+    assert!((decl - want_d).abs() < 0.25, "D {decl} vs WMM {want_d}");
+    assert!((incl - want_i).abs() < 0.05, "I {incl} vs WMM {want_i}");
+    // The default date's declination is more than a degree away.
+    let d_2026 = earth::declination_deg(80.0, 0.0, 0.0, 2026.0);
+    assert!((want_d - d_2026).abs() > 1.0, "{want_d} vs {d_2026}");
+}
