@@ -42,14 +42,16 @@ pub fn inclination_deg(lat_deg: f64, lon_deg: f64, h_m: f64, year: f64) -> f64 {
     atan2(f[2], sqrt(f[0] * f[0] + f[1] * f[1])).to_degrees()
 }
 
-/// The field's grid in latitude and longitude, degrees (0.001°: 111 m,
-/// where the main field changes by under 2 nT).
-const MEMO_DEG: f64 = 1e-3;
-/// The field's grid in height, m (under 0.3 nT).
-const MEMO_M: f64 = 10.0;
-/// The field's grid in time, years (0.001: 9 h, under 0.2 nT of secular
-/// variation).
-const MEMO_YEAR: f64 = 1e-3;
+/// The field's grid in latitude and longitude, steps a degree (0.001°:
+/// 111 m, where the main field changes by under 2 nT). Steps per unit, so
+/// the key is a multiplication (a division costs several times as much in
+/// soft double precision).
+const MEMO_PER_DEG: f64 = 1e3;
+/// The field's grid in height, steps a metre (10 m: under 0.3 nT).
+const MEMO_PER_M: f64 = 0.1;
+/// The field's grid in time, steps a year (0.001 year: 9 h, under 0.2 nT
+/// of secular variation).
+const MEMO_PER_YEAR: f64 = 1e3;
 
 /// The main field evaluated on a fine grid of place and date and
 /// remembered: one synthesis costs about a thousand floating-point
@@ -77,24 +79,24 @@ impl FieldMemo {
     pub fn field_ned_nt(&self, lat_deg: f64, lon_deg: f64, h_m: f64, year: f64) -> [f64; 3] {
         // Non-finite values key as 0 or the largest integer; the synthesis
         // sanitises and clamps what they give back.
-        let q = |v: f64, step: f64| round(v / step) as i64;
+        let q = |v: f64, per: f64| round(v * per) as i64;
         let key = [
-            q(lat_deg, MEMO_DEG),
-            q(lon_deg, MEMO_DEG),
-            q(h_m, MEMO_M),
-            q(year, MEMO_YEAR),
+            q(lat_deg, MEMO_PER_DEG),
+            q(lon_deg, MEMO_PER_DEG),
+            q(h_m, MEMO_PER_M),
+            q(year, MEMO_PER_YEAR),
         ];
         if let Some((k, f)) = self.last.get() {
             if k == key {
                 return f;
             }
         }
-        let at = |k: i64, step: f64| k as f64 * step;
+        let at = |k: i64, per: f64| k as f64 / per;
         let f = magnetic_field_ned_nt(
-            at(key[0], MEMO_DEG),
-            at(key[1], MEMO_DEG),
-            at(key[2], MEMO_M),
-            at(key[3], MEMO_YEAR),
+            at(key[0], MEMO_PER_DEG),
+            at(key[1], MEMO_PER_DEG),
+            at(key[2], MEMO_PER_M),
+            at(key[3], MEMO_PER_YEAR),
         );
         self.last.set(Some((key, f)));
         f
