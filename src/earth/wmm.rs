@@ -7,8 +7,10 @@
 //! functions (eq. 10–12), rotated back to the geodetic NED frame (eq. 17).
 //!
 //! Written here rather than taken from a crate: the one `no_std` WMM2025
-//! crate found (`world_magnetic_model` 0.2) computes in `f32` behind `uom`
-//! and `time` types, with a date to the day; docs/earth.md says more.
+//! crate found (`world_magnetic_model` 0.2) works behind `uom` quantities
+//! and a `time::Date` (a day's resolution) and refuses heights outside
+//! −1…850 km; docs/earth.md says more. In `f32` (docs/earth.md: in `f64`
+//! a synthesis costs six ticks of the Cortex-M4F).
 
 use libm::{cosf, sinf, sqrtf};
 
