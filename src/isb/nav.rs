@@ -12,6 +12,16 @@ use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
 use crate::math::double::quat_from_euler;
 
+/// Longitude of the built-in site (Newlyn), degrees east: the vehicle's
+/// ([`crate::vehicle::DEFAULT_LONGITUDE_DEG`], docs/motion.md "The
+/// built-in site").
+pub const DEFAULT_LON_DEG: f64 = crate::vehicle::DEFAULT_LONGITUDE_DEG;
+/// Height of the built-in site above the WGS84 ellipsoid, m: where WGS84
+/// normal gravity is the ICD's g at its latitude (the vehicle computes it,
+/// [`crate::vehicle::wgs84::height_of_gravity`]; a unit test pins this
+/// copy to it), 8.9 m above EGM96 mean sea level.
+pub const DEFAULT_HEIGHT_M: f64 = 62.494_064;
+
 /// WGS84 semi-major axis, m.
 pub const WGS84_A: f64 = 6_378_137.0;
 /// WGS84 first eccentricity squared.
@@ -148,6 +158,16 @@ pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
 mod tests {
     use super::*;
     use crate::math::double::{dcm_from_quat, euler_from_quat, quat_from_dcm, rotate};
+
+    /// The site constants are the vehicle's built-in site.
+    #[test]
+    fn the_built_in_site_is_the_vehicles() {
+        use crate::sensor::motion::DEFAULT_LATITUDE_DEG;
+        use crate::vehicle::{wgs84::height_of_gravity, G_ICD};
+        let lat = f64::from(DEFAULT_LATITUDE_DEG).to_radians();
+        assert!((height_of_gravity(lat, G_ICD) - DEFAULT_HEIGHT_M).abs() < 1e-6);
+        assert_eq!(DEFAULT_LON_DEG, -5.541_667);
+    }
 
     #[test]
     fn the_sdk_frame_rules() {
