@@ -98,7 +98,7 @@ fn comments_are_datasheet_figures_and_only_aux_models_have_aux() {
         ("K220", true),
     ] {
         let shown = std::fs::read_to_string(show(name, &dir)).unwrap();
-        assert_eq!(shown.contains("[aux]"), aux, "{name}: {shown}");
+        assert_eq!(shown.contains("\n[aux]\n"), aux, "{name}: {shown}");
         assert!(shown.contains("(VRW 0.0"), "{name}: {shown}");
         for wrong in ["0.0199999", "1000.00006", "0.99999", "00001 "] {
             assert!(!shown.contains(wrong), "{name}: {wrong} in {shown}");

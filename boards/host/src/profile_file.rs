@@ -200,7 +200,7 @@ pub fn to_toml(p: &SensorProfile, aux: bool, title: &str, source: &str) -> Strin
     let _ = writeln!(s, "# source: {source}");
     let _ = writeln!(
         s,
-        "# Every key is required ([aux] only on a model with an aux accelerometer); units and allowed ranges in the comments (docs/sensors.md)."
+        "# Every key is required (the aux section only on a model with an aux accelerometer); units and allowed ranges in the comments (docs/sensors.md)."
     );
     let sensors: &[Sensor] = if aux {
         &[Sensor::Gyro, Sensor::Acc, Sensor::Aux]
