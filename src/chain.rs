@@ -57,8 +57,8 @@
 //! - Incremental output = Δθ/T and Δv/T with coning/sculling corrections,
 //!   °/s and g ([`crate::dsp::variant`]); Average_Output_Data = 1 forces the
 //!   average.
-//! - Physics: g = 9.8106 m/s², Earth rate 15.041 °/h, default site 45° N,
-//!   heading 0, level ([`crate::sensor::motion`]). The built-in motion moves
+//! - Physics: g = 9.8106 m/s², Earth rate 15.041 °/h, default site 50.1° N
+//!   (Newlyn), heading 0, level ([`crate::sensor::motion`]). The built-in motion moves
 //!   the unit itself ([`TruthFrame::Sensor`]); Alignment_Angles rotate what it
 //!   reports.
 //! - Errors and temperature model: the model's built-in sensor profile
@@ -386,8 +386,8 @@ fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
 /// equality bit for bit).
 pub const EARTH_ASSUMED: Vec3 = [
     0.0,
-    f32::from_bits(0x3858_4525), // 5.156281e-5 rad/s
-    f32::from_bits(0x3858_4525),
+    f32::from_bits(0x3844_2E90), // 4.6773406e-5 rad/s
+    f32::from_bits(0x386A_A511), // 5.5943678e-5 rad/s
 ];
 
 /// What an output interval gives, carrier axes, °/s and g (the core's

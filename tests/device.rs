@@ -54,15 +54,23 @@ fn static_level_ga_payload_has_1g_on_z_and_a_2khz_counter() {
 }
 
 #[test]
-fn with_ideal_sensors_the_gyros_read_earth_rate_at_45_degrees_north() {
+fn with_ideal_sensors_the_gyros_read_earth_rate_at_the_built_in_site() {
     let mut b = Bench::new("K110");
     *b.dev.chain_mut().errors_mut() = imu_emu::sensor::errors::ErrorModel::IDEAL;
     b.cmd(Command::Data(GA));
     b.drain();
     let p = &b.run_ticks(20)[0].payload;
-    // 15.041 deg/h = 0.0041781 deg/s; level, Y north: north component on Y
-    // and up component on Z, each 0.0041781 * cos 45 = 0.0029543 deg/s.
-    assert_eq!((i32_at(p, 0), i32_at(p, 4), i32_at(p, 8)), (0, 295, 295));
+    // 15.041 deg/h = 0.0041781 deg/s at Newlyn, 50.10167 deg N; level, Y
+    // north: north component on Y, 0.0041781 * cos 50.10167 = 0.0026790
+    // deg/s, and up component on Z, 0.0041781 * sin 50.10167 = 0.0032056
+    // (the fixed-point build's integer truth reads it one unit lower:
+    // 0.0032056 is just above the half unit).
+    let up = if cfg!(feature = "fixed-point") {
+        320
+    } else {
+        321
+    };
+    assert_eq!((i32_at(p, 0), i32_at(p, 4), i32_at(p, 8)), (0, 268, up));
     assert_eq!(
         (i32_at(p, 12), i32_at(p, 16), i32_at(p, 20)),
         (0, 0, 1_000_000)

@@ -3,6 +3,7 @@
 //! back with the ISB packet decoder (`src/isb/device.rs`; `docs/isb.md`).
 
 use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::earth;
 use imu_emu::isb::did;
 use imu_emu::isb::ins::{self, NavFaults};
 use imu_emu::isb::message::{self, GetRequest};
@@ -838,8 +839,15 @@ fn ins_phases_gps_time_and_periods() {
 #[test]
 fn the_navigation_data_sets_agree() {
     let mut b = Bench::new();
+    // 0.1° south and east of the built-in site (Newlyn).
+    let site_lat = f64::from(imu_emu::sensor::motion::DEFAULT_LATITUDE_DEG);
+    let reference = [
+        site_lat - 0.1,
+        imu_emu::vehicle::DEFAULT_LONGITUDE_DEG + 0.1,
+        40.0,
+    ];
     let mut ref_lla = Vec::new();
-    for v in [44.9f64, 0.1, -20.0] {
+    for v in reference {
         ref_lla.extend_from_slice(&v.to_le_bytes());
     }
     let r = b.send(&set(did::FLASH_CONFIG, flash::REF_LLA as u16, &ref_lla));
@@ -850,7 +858,7 @@ fn the_navigation_data_sets_agree() {
     let i2 = Ins2::decode(&one(&mut b, did::INS_2).try_into().unwrap());
     let i4 = Ins4::decode(&one(&mut b, did::INS_4).try_into().unwrap());
     let g = GpsPos::decode(&one(&mut b, did::GPS1_POS).try_into().unwrap());
-    let want = nav::ned_from_ref(&i1.lla, &[44.9, 0.1, -20.0]);
+    let want = nav::ned_from_ref(&i1.lla, &reference);
     close(&i1.ned.map(f64::from), &want, 0.01);
     assert!((f64::from(i1.ned[0]) - 0.1f64.to_radians() * 6_366_707.019_5).abs() < 5.0);
     assert_eq!(i1.lla, i2.lla);
@@ -868,8 +876,8 @@ fn the_navigation_data_sets_agree() {
     assert!(d[0].hypot(d[1]) < 4.0 * 1.22 * 2f64.sqrt(), "{d:?}");
     assert!(d[2].abs() < 4.0 * 1.8, "{d:?}");
     assert_eq!(g.ecef, nav::ecef_of(&g.lla));
-    // The truth: 45° N, level; heading error ≤ 4σ (0.3°).
-    assert!((i2.lla[0] - 45.0).abs() < 1e-4);
+    // The truth: the built-in site, level; heading error ≤ 4σ (0.3°).
+    assert!((i2.lla[0] - site_lat).abs() < 1e-4);
 }
 
 /// `fault gps off` (Isb::set_nav_faults): the fix drops, insStatus says
@@ -978,9 +986,11 @@ fn gps1_sat_follows_the_fix() {
 }
 
 /// MAGNETOMETER every 10 ms and BAROMETER every 8 ms by their time fields;
-/// the field's inclination at 45° N is the dipole's atan(2) = 63.4°; the
-/// pressure is the ISA's at 0 m; a magnetic disturbance and a barometer
-/// failure reach insStatus / hdwStatus.
+/// the field is the World Magnetic Model's at the site and the GPS date —
+/// unit length, its declination and inclination the model's (mean of the
+/// minute's samples, level and facing north) — the pressure the ISA's at
+/// the site's MSL height (ellipsoid height − EGM96 undulation); a magnetic
+/// disturbance and a barometer failure reach insStatus / hdwStatus.
 #[test]
 fn magnetometer_and_barometer() {
     let mut b = Bench::new();
@@ -1005,20 +1015,31 @@ fn magnetometer_and_barometer() {
     let m = mags.last().unwrap().mag.map(f64::from);
     let n = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
     assert!((n - 1.0).abs() < 0.01, "{m:?}");
-    // Body down = −(chain z): at rest the vertical component is m[2].
-    let incl = (m[2] / n).asin().to_degrees();
-    assert!((incl - 2f64.atan().to_degrees()).abs() < 0.5, "{incl}");
-    // The built-in site's height (where normal gravity is the ICD's g).
-    let h = nav::truth_of(b.dev.chain()).h_m;
+    // Level, facing north: body forward, right, down are north, east, down.
+    let mean = [0, 1, 2].map(|k| mags.iter().map(|s| f64::from(s.mag[k])).sum::<f64>() / 600.0);
+    let t = nav::truth_of(b.dev.chain());
+    // The default GPS clock starts 2026-01-01; the minute run is 2026.0.
+    let (decl, incl) = (
+        earth::declination_deg(t.lat_deg, t.lon_deg, t.h_m, 2026.0),
+        earth::inclination_deg(t.lat_deg, t.lon_deg, t.h_m, 2026.0),
+    );
+    let got_decl = mean[1].atan2(mean[0]).to_degrees();
+    let got_incl = mean[2].atan2(mean[0].hypot(mean[1])).to_degrees();
+    assert!((got_decl - decl).abs() < 0.1, "{got_decl} vs WMM {decl}");
+    assert!((got_incl - incl).abs() < 0.1, "{got_incl} vs WMM {incl}");
+    // The site's MSL height: its ellipsoid height less the undulation.
+    let msl = t.h_m - earth::geoid_undulation_m(t.lat_deg, t.lon_deg);
     let p = baros.last().unwrap();
     assert!(
-        (f64::from(p.bar) - ins::isa_kpa(h)).abs() < 0.01,
-        "{p:?} at {h} m"
+        (f64::from(p.bar) - ins::isa_kpa(msl)).abs() < 0.01,
+        "{p:?} at {msl} m MSL"
     );
     // mslBar is the SDK's baro2msl of the pressure (an exponential
-    // atmosphere: 22 m from the ISA at this height).
+    // atmosphere, which near sea level agrees with the ISA: the site's
+    // 8.9 m MSL within the noise).
     let sdk = -8434.668 * (f64::from(p.bar) / 101.325).ln();
     assert!((f64::from(p.msl_bar) - sdk).abs() < 0.01, "{p:?}");
+    assert!((sdk - msl).abs() < 1.0, "{sdk} vs {msl} m MSL");
     b.dev.personality_mut().set_nav_faults(NavFaults {
         mag_disturbed: true,
         baro_failed: true,
@@ -1169,8 +1190,9 @@ fn imu_mag_pimu_mag_and_sys_sensors() {
     }
     let s = SysSensors::decode(&b.get_once(did::SYS_SENSORS).try_into().unwrap());
     assert!((s.acc[2] + 9.81).abs() < 0.1, "{s:?}");
-    let h = nav::truth_of(b.dev.chain()).h_m;
-    assert!((f64::from(s.bar) - ins::isa_kpa(h)).abs() < 0.01);
+    let t = nav::truth_of(b.dev.chain());
+    let msl = t.h_m - earth::geoid_undulation_m(t.lat_deg, t.lon_deg);
+    assert!((f64::from(s.bar) - ins::isa_kpa(msl)).abs() < 0.01);
     assert!((f64::from(s.msl_bar) + 8434.668 * (f64::from(s.bar) / 101.325).ln()).abs() < 0.01);
     let m = s.mag.map(f64::from);
     assert!(((m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt() - 1.0).abs() < 0.01);
@@ -1291,4 +1313,47 @@ fn the_ins_reports_the_vehicle_it_rides_on() {
     // Heading east (90°) within a degree.
     let e = imu_emu::math::double::euler_from_quat(&i2.qn2b.map(f64::from));
     assert!((e[2].to_degrees() - 90.0).abs() < 1.0, "{e:?}");
+}
+
+/// The magnetometer reads the WMM2025 field where the vehicle is and when
+/// the unit's GPS clock says: at 80° N 0° E (the report's first test
+/// place, where the declination moves half a degree a year) on
+/// 2029-07-02 12:00 UTC (2029.5), level and facing north, the mean of 4 s
+/// of samples has the model's declination and inclination of that date,
+/// not of the default 2026.
+#[test]
+fn the_magnetometer_reads_the_field_at_the_vehicle_and_the_gps_date() {
+    use imu_emu::vehicle::{Manoeuvres, Script};
+    let mut m = Manoeuvres::new(Script::parse("start 80 0 0 0 0; hold 100").unwrap());
+    let mut b = Bench::new();
+    // GPS time at device instant 0: 2029-07-02 12:00 UTC (+18 leap s).
+    let unix_s: u64 = 1_877_688_000;
+    b.dev
+        .personality_mut()
+        .set_gps_time((unix_s - nav::GPS_EPOCH_UNIX_S + 18) * 1_000_000_000);
+    let period = b.dev.tick_period_ns();
+    b.send(&get(did::MAGNETOMETER, 1));
+    let mut mags = Vec::new();
+    for _ in 0..8_000 {
+        let s = m.at((b.ticks + 1) as f64 * period as f64 * 1e-9);
+        b.dev.chain_mut().set_vehicle(s, s.truth());
+        for p in of_did(&b.run_ticks(1), did::MAGNETOMETER) {
+            mags.push(Magnetometer::decode(&p.payload.clone().try_into().unwrap()));
+        }
+    }
+    assert_eq!(mags.len(), 400);
+    let n = mags.len() as f64;
+    let mean = [0, 1, 2].map(|k| mags.iter().map(|s| f64::from(s.mag[k])).sum::<f64>() / n);
+    let decl = mean[1].atan2(mean[0]).to_degrees();
+    let incl = mean[2].atan2(mean[0].hypot(mean[1])).to_degrees();
+    let year = 2029.5;
+    let (want_d, want_i) = (
+        earth::declination_deg(80.0, 0.0, 0.0, year),
+        earth::inclination_deg(80.0, 0.0, 0.0, year),
+    );
+    assert!((decl - want_d).abs() < 0.25, "D {decl} vs WMM {want_d}");
+    assert!((incl - want_i).abs() < 0.05, "I {incl} vs WMM {want_i}");
+    // The default date's declination is more than a degree away.
+    let d_2026 = earth::declination_deg(80.0, 0.0, 0.0, 2026.0);
+    assert!((want_d - d_2026).abs() > 1.0, "{want_d} vs {d_2026}");
 }

@@ -302,8 +302,9 @@ fn rotation_with_default_errors_stays_within_half_a_degree() {
 fn earth_rate_is_removed_from_the_bias_and_a_static_unit_stays_put() {
     for heading in [0.0, 90.0] {
         let (mut c, mut t) = chain("K110", true);
+        // The AHRS assumes the built-in site's Earth rate.
         c.set_motion(Motion::Static {
-            lat_deg: 45.0,
+            lat_deg: imu_emu::sensor::motion::DEFAULT_LATITUDE_DEG,
             heading_deg: heading,
         });
         run(&mut c, &mut t, 10);

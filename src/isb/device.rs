@@ -321,6 +321,7 @@ impl Personality for Isb {
         }
         if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
             let truth = st.truth(cx);
+            st.nav.set_year(st.gps_time(cx).1.decimal_year());
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
         }
         if st.save_pending {

@@ -12,12 +12,15 @@
 
 use libm::{exp, log, pow, sqrt};
 
-use super::nav::{ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, LEAP_SECONDS};
+use super::nav::{
+    ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, DEFAULT_GPS_S_AT_ZERO,
+    LEAP_SECONDS,
+};
 use super::nav_sets::{
     gps_status, hdw_nav, ins_status, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, GpsVel, Ins1,
     Ins2, Ins3, Ins4, InsHeader, Magnetometer, MAX_NUM_SATELLITES,
 };
-use crate::earth::geoid_undulation_m;
+use crate::earth::{geoid_undulation_m, FieldMemo};
 use crate::math::double::{
     euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
 };
@@ -91,7 +94,8 @@ pub const GNSS_VEL: Gm = Gm {
 pub const DR_ACCEL_H: f64 = 0.02;
 /// The same, down (the barometer holds the vertical), m/s².
 pub const DR_ACCEL_V: f64 = 0.005;
-/// Magnetometer noise, normalized units (1σ per axis).
+/// Magnetometer noise, normalized units (1σ per axis: 0.2 % of the local
+/// field).
 pub const MAG_NOISE: f64 = 0.002;
 /// Barometer noise, kPa (1σ: 2 Pa ≈ 0.17 m).
 pub const BARO_NOISE_KPA: f64 = 0.002;
@@ -186,6 +190,10 @@ pub struct NavState {
     dr_vel: [f64; 3],
     dr_pos: [f64; 3],
     baro_frozen: Option<f32>,
+    /// The date the magnetic field is read at, decimal year (UTC).
+    year: f64,
+    /// The main field at the truth, remembered ([`FieldMemo`]).
+    field: FieldMemo,
 }
 
 fn gm_step(x: &mut f64, g: &Gm, dt: f64, w: f64) {
@@ -221,7 +229,15 @@ impl NavState {
             dr_vel: [0.0; 3],
             dr_pos: [0.0; 3],
             baro_frozen: None,
+            year: GpsTime::of_ns(DEFAULT_GPS_S_AT_ZERO * 1_000_000_000).decimal_year(),
+            field: FieldMemo::new(),
         }
+    }
+
+    /// Sets the date the magnetometer reads the field at (decimal year,
+    /// UTC: [`GpsTime::decimal_year`] of the unit's GPS clock).
+    pub fn set_year(&mut self, year: f64) {
+        self.year = year;
     }
 
     /// The faults in force.
@@ -454,14 +470,17 @@ impl NavState {
         f64::from(r.gaussian())
     }
 
-    /// The magnetometer's reading (body axes, normalized units): the axial
-    /// dipole's field direction at the truth latitude (declination 0,
-    /// inclination `atan(2 tan lat)`), plus the disturbance, plus noise.
+    /// The magnetometer's reading (body axes, normalized units): the
+    /// World Magnetic Model's field at the truth position and the date set
+    /// by [`NavState::set_year`], scaled to unit length (the IMX reports a
+    /// calibrated field "normalized": `docs/isb.md` "Magnetometer"), plus
+    /// the disturbance, rotated into body axes, plus noise.
     pub fn magnetometer(&self, truth: &NavTruth, tick: u64) -> [f32; 3] {
-        let lat = truth.lat_deg.to_radians();
-        let (h, z) = (libm::cos(lat), 2.0 * libm::sin(lat));
-        let n = sqrt(h * h + z * z);
-        let mut f = [h / n, 0.0, z / n];
+        let b = self
+            .field
+            .field_ned_nt(truth.lat_deg, truth.lon_deg, truth.h_m, self.year);
+        let n = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        let mut f = if n > 0.0 { b.map(|x| x / n) } else { [0.0; 3] };
         if self.faults.mag_disturbed {
             for (x, d) in f.iter_mut().zip(MAG_DISTURBANCE) {
                 *x += d;

@@ -12,11 +12,15 @@ use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
 use crate::math::double::quat_from_euler;
 
-/// Longitude of the built-in site, degrees east (the motions carry only a
-/// latitude; the emulator's choice, `docs/isb.md`).
-pub const DEFAULT_LON_DEG: f64 = 0.0;
-/// Height of the built-in site above the WGS84 ellipsoid, m.
-pub const DEFAULT_HEIGHT_M: f64 = 0.0;
+/// Longitude of the built-in site (Newlyn), degrees east: the vehicle's
+/// ([`crate::vehicle::DEFAULT_LONGITUDE_DEG`], docs/motion.md "The
+/// built-in site").
+pub const DEFAULT_LON_DEG: f64 = crate::vehicle::DEFAULT_LONGITUDE_DEG;
+/// Height of the built-in site above the WGS84 ellipsoid, m: where WGS84
+/// normal gravity is the ICD's g at its latitude (the vehicle computes it,
+/// [`crate::vehicle::wgs84::height_of_gravity`]; a unit test pins this
+/// copy to it), 8.9 m above EGM96 mean sea level.
+pub const DEFAULT_HEIGHT_M: f64 = 62.494_064;
 
 /// WGS84 semi-major axis, m.
 pub const WGS84_A: f64 = 6_378_137.0;
@@ -52,29 +56,18 @@ pub struct NavTruth {
 
 /// The navigation truth of `chain` now: the unit's vehicle
 /// ([`SignalChain::vehicle`]: a board's vehicle source — manoeuvre script,
-/// full-state rows, live feed — or the built-in motion's site and
-/// attitude). Its body frame (forward, right, down) is the IMX's. A
-/// built-in motion's site is placed at longitude [`DEFAULT_LON_DEG`] and
-/// height [`DEFAULT_HEIGHT_M`]: the vehicle puts it where normal gravity is
-/// the ICD's 1 g (≈ 1.4 km below the ellipsoid at 45° N, so the KERNEL at
-/// rest reads exactly 1 g), which is no place to report an INS at.
+/// full-state rows, live feed — or the built-in motion's state at the
+/// built-in site, the one both personalities share: docs/motion.md "The
+/// built-in site"). Its body frame (forward, right, down) is the IMX's.
 pub fn truth_of<I: Integrate>(chain: &SignalChain<I>) -> NavTruth {
-    let (v, builtin) = match chain.vehicle_source() {
-        Some(v) => (*v, false),
-        None => (chain.vehicle(), true),
+    let v = match chain.vehicle_source() {
+        Some(v) => *v,
+        None => chain.vehicle(),
     };
     NavTruth {
         lat_deg: v.lat_rad.to_degrees(),
-        lon_deg: if builtin {
-            DEFAULT_LON_DEG
-        } else {
-            v.lon_rad.to_degrees()
-        },
-        h_m: if builtin {
-            DEFAULT_HEIGHT_M
-        } else {
-            v.height_m
-        },
+        lon_deg: v.lon_rad.to_degrees(),
+        h_m: v.height_m,
         v_ned: v.vel_ned,
         q_nb: v.q_nb,
     }
@@ -147,6 +140,13 @@ impl GpsTime {
     pub const fn tow_ms(&self) -> u32 {
         (self.tow_ns / 1_000_000) as u32
     }
+    /// The UTC date as a decimal year (GPS − [`LEAP_SECONDS`]): what the
+    /// magnetic field model is read at.
+    pub fn decimal_year(&self) -> f64 {
+        let gps_s = u64::from(self.week) * WEEK_S + self.tow_ns / 1_000_000_000;
+        let unix_s = gps_s + GPS_EPOCH_UNIX_S - u64::from(LEAP_SECONDS);
+        crate::earth::decimal_year_of_unix_s(unix_s as i64)
+    }
 }
 
 /// GPS seconds since the GPS epoch of a UTC Unix time (`leap` = GPS − UTC).
@@ -158,6 +158,16 @@ pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
 mod tests {
     use super::*;
     use crate::math::double::{dcm_from_quat, euler_from_quat, quat_from_dcm, rotate};
+
+    /// The site constants are the vehicle's built-in site.
+    #[test]
+    fn the_built_in_site_is_the_vehicles() {
+        use crate::sensor::motion::DEFAULT_LATITUDE_DEG;
+        use crate::vehicle::{wgs84::height_of_gravity, G_ICD};
+        let lat = f64::from(DEFAULT_LATITUDE_DEG).to_radians();
+        assert!((height_of_gravity(lat, G_ICD) - DEFAULT_HEIGHT_M).abs() < 1e-6);
+        assert_eq!(DEFAULT_LON_DEG, -5.541_667);
+    }
 
     #[test]
     fn the_sdk_frame_rules() {

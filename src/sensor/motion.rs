@@ -15,7 +15,8 @@
 //! - Earth rate Ω = 15.041 °/h; in the local ENU frame at latitude φ it is
 //!   `Ω · (0, cos φ, sin φ)`. Transport rate is zero (the built-ins rotate
 //!   and vibrate in place);
-//! - the default site is latitude [`DEFAULT_LATITUDE_DEG`] = 45° N, heading 0
+//! - the default site is latitude [`DEFAULT_LATITUDE_DEG`] = 50.1° N
+//!   (Newlyn, Cornwall, where normal gravity is the ICD's g), heading 0
 //!   (the housing's y axis points north), level, z up.
 //!
 //! [`BuiltinMotionFixed`] plays the same motions in integers for the
@@ -36,9 +37,11 @@ use crate::time::Instant;
 pub const EARTH_RATE_DEG_PER_H: f32 = 15.041;
 /// Earth rotation rate, rad/s.
 pub const EARTH_RATE_RAD_S: f32 = EARTH_RATE_DEG_PER_H / 3600.0 * DEG;
-/// Latitude of the default site, degrees north. 45° gives the Earth rate
-/// equal horizontal and vertical parts, so both show in the gyros.
-pub const DEFAULT_LATITUDE_DEG: f32 = 45.0;
+/// Latitude of the default site, degrees north: the Newlyn Tidal
+/// Observatory, Cornwall (50° 06.1′ N, docs/motion.md "The built-in
+/// site"), where WGS84 normal gravity equals the ICD's g a few metres above
+/// the pier, so the built-ins' +1 g at rest is physics there.
+pub const DEFAULT_LATITUDE_DEG: f32 = 50.101_67;
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 const RAD: f32 = 180.0 / core::f32::consts::PI;

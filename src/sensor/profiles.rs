@@ -3,15 +3,24 @@
 //! file; docs/sensors.md has the table and the figures measured from the
 //! emulator's own output.
 //!
-//! - **IMX-5**: the Inertial Sense IMX-5 IMU datasheet's figures, as
-//!   quoted in issue 19 ("Inertial Sense IMX-5 IMU datasheet"): ±4000 °/s,
-//!   ±16 g, gyro bias instability 1.5 °/h, ARW 0.16 °/√h, accelerometer
-//!   bias instability 19 µg, VRW 0.02 m/s/√h, bandwidth 539 Hz gyro /
-//!   416 Hz accelerometer. The revision could not be checked: the public
-//!   material searched (Inertial Sense user manual, ©2022, chapter 2 "Data
-//!   Sheets") lists the data sheet but not its figures. The terms the quote
-//!   does not give (turn-on bias, scale factor, misalignment, temperature
-//!   coefficients) are the emulator's mid-grade values below.
+//! - **IMX-5** (built in): the current figures of Inertial Sense's
+//!   documentation, release 3.1.1 (1 October 2026: the
+//!   `docs.inertialsense.com` repository, `docs/index.md`, "Performance
+//!   Specifications", IMX-5 column, "per IEEE-STD-952-1997"): gyro bias
+//!   instability 2.0 °/h, ARW 0.23 °/√h, accelerometer bias instability
+//!   27 µg, VRW 0.020 m/s/√h. Range ±4000 °/s, ±16 g and bandwidth 539 Hz
+//!   gyro / 416 Hz accelerometer, which that table does not give, are the
+//!   datasheet quote of issue 19.
+//! - **IMX-5-2022**: the earlier figures, those of the IMX-5 hardware
+//!   repository's product page (`IS-hdw`, `Products/IMX-5-0/README.md`,
+//!   © 2014–2022, "Tactical Grade IMU"): 1.5 °/h, 0.16 °/√h, 19 µg,
+//!   0.02 m/s/√h — the ones issue 19 quoted and the emulator used until
+//!   now (the user manual of release 1.9.0, September 2022, read 2.0 °/h,
+//!   0.2 °/√h, 20 µg, 0.04 m/s/√h in between). Same ranges and bandwidths.
+//!
+//!   For both, the terms the vendor does not give (turn-on bias, scale
+//!   factor, misalignment, temperature coefficients) are the emulator's
+//!   mid-grade values below.
 //! - **KERNEL models**: Inertial Labs publishes no noise figures for the
 //!   KERNEL family that we could find (the ICD gives none; the search found
 //!   only an Inertial Labs knowledge-base page on how they measure ARW, VRW
@@ -28,10 +37,11 @@
 //! | mid (K108, K110, K110M, K120) | 0.2 | 2 | 0.03 | 7 |
 //! | high (K210, K220) | 0.1 | 1 | 0.02 | 5 |
 //! | aux (K120, K220) | — | — | 0.3 | 200 |
-//! | IMX-5 | 0.16 | 1.5 | 0.02 | 19 |
+//! | IMX-5 | 0.23 | 2.0 | 0.02 | 27 |
+//! | IMX-5-2022 | 0.16 | 1.5 | 0.02 | 19 |
 
 use super::profile::{arw_to_density, vrw_to_density, SensorProfile, SensorSpec, TemperatureSpec};
-use crate::model::{Product, IMX5};
+use crate::model::{Capability, Product, IMX5, MODELS};
 
 /// ICD 2.2: "non-orthogonality between axes … in the order of 0.01°".
 const MISALIGN_SIGMA: f32 = 0.01 * core::f32::consts::PI / 180.0;
@@ -78,8 +88,9 @@ const fn acc(range: f32, vrw: f32, bias_inst_ug: f32, bandwidth_hz: f32) -> Sens
     }
 }
 
-/// The aux (±90 g) accelerometer of K120/K220 (the emulator's figures).
-const AUX: SensorSpec = SensorSpec {
+/// The aux (±90 g) accelerometer of K120/K220 (the emulator's figures);
+/// the unused aux part of every other profile.
+pub const AUX: SensorSpec = SensorSpec {
     range: 90.0,
     noise_density: vrw_to_density(0.3),
     bias_instability: 200e-6,
@@ -119,10 +130,20 @@ pub static KERNEL_HIGH: SensorProfile = SensorProfile {
     temperature: TemperatureSpec::DEFAULT,
 };
 
-/// The IMX-5 (module doc): datasheet figures for range, ARW, VRW, bias
-/// instability and bandwidth; mid-grade values for the rest. It has no aux
-/// accelerometer (the aux spec is unused).
+/// The IMX-5 (module doc): the vendor's current figures (release 3.1.1)
+/// for ARW, VRW and bias instability, the datasheet quote's range and
+/// bandwidth; mid-grade values for the rest. It has no aux accelerometer
+/// (the aux spec is unused).
 pub static IMX5_PROFILE: SensorProfile = SensorProfile {
+    gyro: gyro(4000.0, 0.23, 2.0, 539.0),
+    acc: acc(16.0, 0.02, 27.0, 416.0),
+    aux: AUX,
+    temperature: TemperatureSpec::DEFAULT,
+};
+
+/// The IMX-5 with the earlier figures (module doc: `IS-hdw`'s product
+/// page, © 2014–2022): ARW 0.16 °/√h, 1.5 °/h, VRW 0.02 m/s/√h, 19 µg.
+pub static IMX5_2022_PROFILE: SensorProfile = SensorProfile {
     gyro: gyro(4000.0, 0.16, 1.5, 539.0),
     acc: acc(16.0, 0.02, 19.0, 416.0),
     aux: AUX,
@@ -143,10 +164,15 @@ pub struct Builtin {
 
 const KERNEL_SOURCE: &str = "emulator figures (Inertial Labs publishes none found); \
 misalignment ICD 2.2; ranges ICD 3.2.2";
-const IMX5_SOURCE: &str = "Inertial Sense IMX-5 IMU datasheet as quoted in issue 19 \
-(revision not verified); other terms emulator mid grade";
+const IMX5_SOURCE: &str = "Inertial Sense documentation release 3.1.1 (2026-10-01), \
+docs/index.md Performance Specifications (ARW, VRW, bias instability); range and \
+bandwidth the datasheet quote of issue 19; other terms emulator mid grade";
+const IMX5_2022_SOURCE: &str = "Inertial Sense IS-hdw Products/IMX-5-0/README.md \
+(c 2014-2022; the figures the emulator used before release 3.1.1's); range and \
+bandwidth the datasheet quote of issue 19; other terms emulator mid grade";
 
-/// Every built-in profile, KERNEL models in ICD 2.1 order, then the IMX-5.
+/// Every built-in profile, KERNEL models in ICD 2.1 order, then the IMX-5
+/// and its earlier figures.
 pub static BUILTIN: &[Builtin] = &[
     Builtin {
         name: "K100",
@@ -198,7 +224,22 @@ pub static BUILTIN: &[Builtin] = &[
         source: IMX5_SOURCE,
         profile: &IMX5_PROFILE,
     },
+    Builtin {
+        name: "IMX-5-2022",
+        source: IMX5_2022_SOURCE,
+        profile: &IMX5_2022_PROFILE,
+    },
 ];
+
+impl Builtin {
+    /// Whether the model of this name has an aux accelerometer (K120,
+    /// K220: ICD 2.1); the others' profiles carry an unused one.
+    pub fn has_aux(&self) -> bool {
+        MODELS
+            .iter()
+            .any(|m| m.short == self.name && m.has(Capability::AuxAccel))
+    }
+}
 
 /// The built-in profile named `name` (case-insensitive; `IMX5` = `IMX-5`).
 pub fn builtin(name: &str) -> Option<&'static Builtin> {
@@ -223,7 +264,6 @@ pub fn for_product(product: &Product) -> SensorProfile {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::MODELS;
 
     #[test]
     fn every_model_has_the_builtin_profile_of_its_name() {
@@ -235,7 +275,10 @@ mod tests {
             builtin("imx5").unwrap().profile,
             IMX5.profile
         ));
-        assert_eq!(BUILTIN.len(), MODELS.len() + 1);
+        assert_eq!(BUILTIN.len(), MODELS.len() + 2);
+        for b in BUILTIN {
+            assert_eq!(b.has_aux(), matches!(b.name, "K120" | "K220"), "{}", b.name);
+        }
     }
 
     #[test]
@@ -244,6 +287,10 @@ mod tests {
         assert_eq!((p.gyro.range, p.acc.range), (2000.0, 8.0));
         let p = for_product(&Product::imx5());
         assert_eq!((p.gyro.range, p.acc.range), (4000.0, 16.0));
-        assert_eq!(p.gyro.noise_density, 0.16 / 60.0);
+        assert_eq!(p.gyro.noise_density, 0.23 / 60.0);
+        assert_eq!(
+            builtin("imx-5-2022").unwrap().profile.gyro.noise_density,
+            0.16 / 60.0
+        );
     }
 }

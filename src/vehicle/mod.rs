@@ -58,6 +58,12 @@ pub use crate::math::double::{
 /// specific force handed to the chain.
 pub const G_ICD: f64 = 9.8106;
 
+/// Longitude of the built-in site, degrees east: the Newlyn Tidal
+/// Observatory, Cornwall (5° 32.5′ W; its latitude is
+/// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`], docs/motion.md "The
+/// built-in site").
+pub const DEFAULT_LONGITUDE_DEG: f64 = -5.541_667;
+
 /// One instant of the vehicle: where it is, how it moves, and what a
 /// perfect IMU on it measures (module doc for the frames).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,8 +177,8 @@ pub fn housing_to_body(v: &V3) -> V3 {
 }
 
 /// The state of a built-in [`Motion`] at `time_s`: its site (latitude,
-/// longitude 0, the height where WGS84 normal gravity is the ICD's g:
-/// [`wgs84::height_of_gravity`]), at rest, with the attitude the motion
+/// [`DEFAULT_LONGITUDE_DEG`], the height where WGS84 normal gravity is the
+/// ICD's g: [`wgs84::height_of_gravity`]), at rest, with the attitude the motion
 /// reports (housing → ENU, Appendix C; `None`: level at the site's
 /// heading) and its truth as the measurement (housing axes, °/s and g).
 /// The built-ins rotate and vibrate in place (docs/motion.md).
@@ -193,7 +199,7 @@ pub fn builtin_state(
     VehicleState {
         time_s,
         lat_rad: lat,
-        lon_rad: 0.0,
+        lon_rad: DEFAULT_LONGITUDE_DEG.to_radians(),
         height_m: wgs84::height_of_gravity(lat, G_ICD),
         vel_ned: [0.0; 3],
         q_nb,

@@ -195,7 +195,8 @@ fn dev_info_over_a_pty() {
 /// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the
 /// fix after the cold start carries GPS week 2400 (2026-01-04 is a
 /// Sunday, the first of week 2400), INS_1 navigates with its NED offset
-/// from the default `refLla` (0, 0, 0): north ≈ 45° × 111 120 m.
+/// from the default `refLla` (0, 0, 0): north ≈ 50.1° × 111 120 m (the
+/// built-in site, Newlyn).
 #[test]
 fn navigation_over_a_pty() {
     let emu = Emu::start(&[
@@ -233,7 +234,7 @@ fn navigation_over_a_pty() {
             .unwrap(),
     );
     assert_eq!(i.header.ins_status, 0x0103_5970);
-    assert!((f64::from(i.ned[0]) - 45f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
+    assert!((f64::from(i.ned[0]) - 50.10167f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
 }
 
 /// The INS_2 and GPS1_POS of `--gps-time` over TCP at `--speed 20`: no
@@ -309,7 +310,7 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         "{}",
         last.header.time_of_week
     );
-    assert!((last.lla[0] - 45.0).abs() < 1e-4);
+    assert!((last.lla[0] - 50.10167).abs() < 1e-4);
 
     assert!(ctl.cmd("fault gps off").starts_with("ok"));
     let mut dr = None;

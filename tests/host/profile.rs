@@ -52,7 +52,17 @@ fn show(name: &str, dir: &Path) -> PathBuf {
 fn every_builtin_profile_prints_as_a_file_that_reads_back_the_same() {
     let dir = temp_dir("show");
     for name in [
-        "K100", "K102", "K108", "K110", "K110M", "K120", "K201", "K210", "K220", "IMX-5",
+        "K100",
+        "K102",
+        "K108",
+        "K110",
+        "K110M",
+        "K120",
+        "K201",
+        "K210",
+        "K220",
+        "IMX-5",
+        "IMX-5-2022",
     ] {
         let path = show(name, &dir);
         let shown = std::fs::read_to_string(&path).unwrap();
@@ -63,8 +73,52 @@ fn every_builtin_profile_prints_as_a_file_that_reads_back_the_same() {
     }
     let imx = std::fs::read_to_string(dir.join("IMX-5.toml")).unwrap();
     assert!(
-        imx.contains("range = 4000.0") && imx.contains("ARW 0.16 °/√h"),
+        imx.contains("range = 4000.0") && imx.contains("ARW 0.23 °/√h"),
         "{imx}"
+    );
+    let old = std::fs::read_to_string(dir.join("IMX-5-2022.toml")).unwrap();
+    assert!(
+        old.contains("ARW 0.16 °/√h") && old.contains("(19 µg)"),
+        "{old}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The comments give the figures as a datasheet writes them (the shortest
+/// decimal that gives the stored `f32` back: `0.02`, not `0.019999998`;
+/// `1000 ppm`, not `1000.00006`), and only the models with an aux
+/// accelerometer (K120, K220) have an `[aux]` section.
+#[test]
+fn comments_are_datasheet_figures_and_only_aux_models_have_aux() {
+    let dir = temp_dir("figures");
+    for (name, aux) in [
+        ("K110", false),
+        ("IMX-5", false),
+        ("K120", true),
+        ("K220", true),
+    ] {
+        let shown = std::fs::read_to_string(show(name, &dir)).unwrap();
+        assert_eq!(shown.contains("\n[aux]\n"), aux, "{name}: {shown}");
+        assert!(shown.contains("(VRW 0.0"), "{name}: {shown}");
+        for wrong in ["0.0199999", "1000.00006", "0.99999", "00001 "] {
+            assert!(!shown.contains(wrong), "{name}: {wrong} in {shown}");
+        }
+    }
+    let imx = std::fs::read_to_string(dir.join("IMX-5.toml")).unwrap();
+    for want in [
+        "(ARW 0.23 °/√h)",
+        "(VRW 0.02 m/s/√h)",
+        "(2 °/h)",
+        "(27 µg)",
+        "(300 ppm)",
+        "(0.01 °)",
+    ] {
+        assert!(imx.contains(want), "{want} in {imx}");
+    }
+    let k120 = std::fs::read_to_string(dir.join("K120.toml")).unwrap();
+    assert!(
+        k120.contains("(1000 ppm)") && k120.contains("(200 µg)"),
+        "{k120}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

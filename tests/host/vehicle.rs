@@ -187,8 +187,9 @@ fn a_manoeuvre_script_moves_the_unit() {
     );
 }
 
-/// The built-in static motion reports its site (45° N, where normal
-/// gravity is the ICD's g: 1426 m below the ellipsoid) and what it
+/// The built-in static motion reports its site (Newlyn, 50° 06.1′ N
+/// 5° 32.5′ W, 62.5 m above the ellipsoid, where normal gravity is the
+/// ICD's g) and what it
 /// measures; `motion script …` flies from the command's time, `motion
 /// file …` loads a full-state CSV, and bad ones are refused with the
 /// reason.
@@ -197,12 +198,13 @@ fn truth_and_motion_over_the_control_socket() {
     let (_emu, _c, mut ctl) = start(&[]);
     let t = ctl.cmd("truth");
     assert!(t.starts_with("ok source=static "), "{t}");
-    assert_eq!(num(&t, "lat"), 45.0);
-    assert!((num(&t, "height") + 1426.0).abs() < 1.0, "{t}");
+    assert!((num(&t, "lat") - 50.10167).abs() < 1e-5, "{t}");
+    assert!((num(&t, "lon") + 5.541667).abs() < 1e-6, "{t}");
+    assert!((num(&t, "height") - 62.49).abs() < 0.01, "{t}");
     assert!((num(&t, "fz") + 9.8106).abs() < 1e-5, "{t}");
     // The Earth's rate Ω (cos φ, 0, −sin φ) at heading 0, °/s.
-    assert!((num(&t, "wx") - 0.0029543).abs() < 1e-7, "{t}");
-    assert!((num(&t, "wz") + 0.0029543).abs() < 1e-7, "{t}");
+    assert!((num(&t, "wx") - 0.0026799).abs() < 1e-7, "{t}");
+    assert!((num(&t, "wz") + 0.0032053).abs() < 1e-7, "{t}");
 
     assert_eq!(
         ctl.cmd("motion script start 10 20 1000 180 30; turn 5 100"),

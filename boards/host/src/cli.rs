@@ -267,7 +267,7 @@ pub enum Sub {
         dir: Option<PathBuf>,
     },
     /// Sensor profiles: `show NAME` prints a built-in one (K100 … K220,
-    /// IMX-5) as a file to start from; `check FILE` reads one.
+    /// IMX-5, IMX-5-2022) as a file to start from; `check FILE` reads one.
     #[command(name = "sensor-profile", subcommand)]
     SensorProfile(ProfileSub),
     /// The Allan deviation of a unit run in process (or of a `client
@@ -280,7 +280,7 @@ pub enum Sub {
 #[derive(clap::Subcommand, Debug, Clone)]
 pub enum ProfileSub {
     /// Print the built-in profile NAME (K100 K102 K108 K110 K110M K120
-    /// K201 K210 K220 IMX-5) as a TOML file.
+    /// K201 K210 K220 IMX-5 IMX-5-2022) as a TOML file.
     Show {
         /// Model name.
         #[arg(value_parser = ProfileName)]
@@ -328,11 +328,11 @@ fn sensor_profile(sub: &ProfileSub) -> anyhow::Result<()> {
     let text = match sub {
         ProfileSub::Show { name } => {
             let b = crate::profile_file::builtin(name)?;
-            crate::profile_file::to_toml(b.profile, b.name, b.source)
+            crate::profile_file::to_toml(b.profile, b.has_aux(), b.name, b.source)
         }
         ProfileSub::Check { file } => {
-            let p = crate::profile_file::load(file)?;
-            crate::profile_file::to_toml(&p, &file.display().to_string(), "this file")
+            let (p, aux) = crate::profile_file::load_with_aux(file)?;
+            crate::profile_file::to_toml(&p, aux, &file.display().to_string(), "this file")
         }
     };
     let mut out = std::io::stdout().lock();

@@ -14,7 +14,8 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use imu_emu::sensor::profile::{
-    density_to_arw, density_to_vrw, Sensor, SensorProfile, SensorSpec, TemperatureSpec,
+    arw_to_density, density_to_arw, density_to_vrw, vrw_to_density, Sensor, SensorProfile,
+    SensorSpec, TemperatureSpec,
 };
 use imu_emu::sensor::profiles::{self, Builtin};
 use serde::Deserialize;
@@ -50,7 +51,9 @@ struct FileTemperature {
 struct FileProfile {
     gyro: FileSpec,
     acc: FileSpec,
-    aux: FileSpec,
+    /// Only for the models with an aux accelerometer (K120, K220); absent,
+    /// the built-in aux figures ([`profiles::AUX`]) stand.
+    aux: Option<FileSpec>,
     temperature: FileTemperature,
 }
 
@@ -76,6 +79,11 @@ impl From<FileSpec> for SensorSpec {
 
 /// Parses and checks a profile's text (`what` names it in errors).
 pub fn parse(text: &str, what: &str) -> anyhow::Result<SensorProfile> {
+    parse_with_aux(text, what).map(|(p, _)| p)
+}
+
+/// [`parse`], and whether the text has an `[aux]` section.
+pub fn parse_with_aux(text: &str, what: &str) -> anyhow::Result<(SensorProfile, bool)> {
     let f: FileProfile = toml::from_str(text).map_err(|e| {
         // "line N (`[gyro]`): missing field `range`": the line the parser
         // points at, and its message (which names the key).
@@ -86,10 +94,11 @@ pub fn parse(text: &str, what: &str) -> anyhow::Result<SensorProfile> {
         });
         usage(format!("{what}: {at}{}", e.message().trim_end()))
     })?;
+    let has_aux = f.aux.is_some();
     let p = SensorProfile {
         gyro: f.gyro.into(),
         acc: f.acc.into(),
-        aux: f.aux.into(),
+        aux: f.aux.map_or(profiles::AUX, Into::into),
         temperature: TemperatureSpec {
             ambient_c: f.temperature.ambient_c,
             self_heating_c: f.temperature.self_heating_c,
@@ -97,7 +106,7 @@ pub fn parse(text: &str, what: &str) -> anyhow::Result<SensorProfile> {
         },
     };
     p.validate().map_err(|e| usage(format!("{what}: {e}")))?;
-    Ok(p)
+    Ok((p, has_aux))
 }
 
 /// A bad profile is a bad argument (exit status 2).
@@ -107,9 +116,25 @@ fn usage(msg: String) -> anyhow::Error {
 
 /// Reads and checks the profile in `path`.
 pub fn load(path: &Path) -> anyhow::Result<SensorProfile> {
+    load_with_aux(path).map(|(p, _)| p)
+}
+
+/// [`load`], and whether the file has an `[aux]` section.
+pub fn load_with_aux(path: &Path) -> anyhow::Result<(SensorProfile, bool)> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("--sensor-profile {}", path.display()))?;
-    parse(&text, &format!("--sensor-profile {}", path.display()))
+    parse_with_aux(&text, &format!("--sensor-profile {}", path.display()))
+}
+
+/// The shortest decimal (at most 9 significant digits) of the figure `x`
+/// derived from the stored `v` that gives `v` back through `back` (the
+/// way a profile writes the figure: `arw_to_density(0.16)`, `300e-6`), so
+/// a comment reads `0.02`, not `0.019999998`; else `x` in full.
+fn figure(v: f32, x: f64, back: impl Fn(f64) -> f32) -> String {
+    (1..=9)
+        .filter_map(|digits| format!("{:.*e}", digits - 1, x).parse::<f64>().ok())
+        .find(|&d| back(d).to_bits() == v.to_bits())
+        .map_or_else(|| format!("{x}"), |d| format!("{d}"))
 }
 
 /// Units of each key of `sensor`, and the datasheet figure of a value in
@@ -122,18 +147,40 @@ fn comment(sensor: Sensor, key: &str, v: f32) -> String {
     match key {
         "range" => format!("± {u}"),
         "noise_density" => match sensor {
-            Sensor::Gyro => format!("{u}/√Hz (ARW {} °/√h)", density_to_arw(v)),
-            _ => format!("{u}/√Hz (VRW {} m/s/√h)", density_to_vrw(v)),
+            Sensor::Gyro => {
+                let x = f64::from(density_to_arw(v));
+                let arw = figure(v, x, |d| arw_to_density(d as f32));
+                format!("{u}/√Hz (ARW {arw} °/√h)")
+            }
+            _ => {
+                let x = f64::from(density_to_vrw(v));
+                let vrw = figure(v, x, |d| vrw_to_density(d as f32));
+                format!("{u}/√Hz (VRW {vrw} m/s/√h)")
+            }
         },
         "bias_instability" => match sensor {
-            Sensor::Gyro => format!("{u}, Allan floor / 0.6643 ({} °/h)", v * 3600.0),
-            _ => format!("{u}, Allan floor / 0.6643 ({} µg)", v * 1e6),
+            Sensor::Gyro => {
+                let b = figure(v, f64::from(v) * 3600.0, |d| d as f32 / 3600.0);
+                format!("{u}, Allan floor / 0.6643 ({b} °/h)")
+            }
+            _ => {
+                let b = figure(v, f64::from(v) * 1e6, |d| d as f32 * 1e-6);
+                format!("{u}, Allan floor / 0.6643 ({b} µg)")
+            }
         },
         "rate_random_walk" => format!("{u}/√s (Allan +½ slope: K·√(τ/3))"),
         "turn_on_bias_sigma" => format!("{u}, 1σ"),
-        "scale_factor_sigma" => format!("fraction, 1σ ({} ppm)", v * 1e6),
+        "scale_factor_sigma" => {
+            let ppm = figure(v, f64::from(v) * 1e6, |d| (d * 1e-6) as f32);
+            format!("fraction, 1σ ({ppm} ppm)")
+        }
         "nonlinearity" => "fraction of full scale".to_owned(),
-        "misalignment_sigma" => format!("rad, 1σ ({} °)", v.to_degrees()),
+        "misalignment_sigma" => {
+            let deg = figure(v, f64::from(v).to_degrees(), |d| {
+                d as f32 * core::f32::consts::PI / 180.0
+            });
+            format!("rad, 1σ ({deg} °)")
+        }
         "g_sensitivity" => format!("{per}/g"),
         "temp_bias" => format!("{u}/°C"),
         "temp_scale" => "1/°C".to_owned(),
@@ -144,17 +191,23 @@ fn comment(sensor: Sensor, key: &str, v: f32) -> String {
 }
 
 /// The profile as a file (every key, with its units and range in
-/// comments): what `sensor-profile show` prints; [`parse`] reads it back
-/// to the same values.
-pub fn to_toml(p: &SensorProfile, title: &str, source: &str) -> String {
+/// comments; `[aux]` only if `aux`: a model without an aux accelerometer
+/// has no use for one): what `sensor-profile show` prints; [`parse`]
+/// reads it back to the same values.
+pub fn to_toml(p: &SensorProfile, aux: bool, title: &str, source: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# imu-emu sensor profile: {title}");
     let _ = writeln!(s, "# source: {source}");
     let _ = writeln!(
         s,
-        "# Every key is required; units and allowed ranges in the comments (docs/sensors.md)."
+        "# Every key is required (the aux section only on a model with an aux accelerometer); units and allowed ranges in the comments (docs/sensors.md)."
     );
-    for sensor in [Sensor::Gyro, Sensor::Acc, Sensor::Aux] {
+    let sensors: &[Sensor] = if aux {
+        &[Sensor::Gyro, Sensor::Acc, Sensor::Aux]
+    } else {
+        &[Sensor::Gyro, Sensor::Acc]
+    };
+    for &sensor in sensors {
         let spec = p.sensor(sensor);
         let _ = writeln!(s, "\n[{}]", sensor.key());
         for (key, v) in SensorSpec::keys().iter().zip(spec.values()) {
@@ -259,15 +312,16 @@ mod tests {
     #[test]
     fn every_builtin_round_trips_through_its_file() {
         for b in profiles::BUILTIN {
-            let text = to_toml(b.profile, b.name, b.source);
-            let p = parse(&text, b.name).unwrap();
+            let text = to_toml(b.profile, b.has_aux(), b.name, b.source);
+            let (p, aux) = parse_with_aux(&text, b.name).unwrap();
             assert_eq!(&p, b.profile, "{}", b.name);
+            assert_eq!(aux, b.has_aux(), "{}", b.name);
         }
     }
 
     #[test]
     fn errors_name_the_key() {
-        let text = to_toml(&profiles::IMX5_PROFILE, "x", "y");
+        let text = to_toml(&profiles::IMX5_PROFILE, false, "x", "y");
         let bad = text.replace("range = 16.0", "range = 500.0");
         let e = parse(&bad, "f").unwrap_err().to_string();
         assert!(
@@ -277,6 +331,24 @@ mod tests {
         let bad = text.replace("[temperature]\nambient_c", "[temperature]\nambient");
         let e = parse(&bad, "f").unwrap_err().to_string();
         assert!(e.contains("ambient"), "{e}");
+    }
+
+    /// The comments' figures are the short decimals a datasheet writes.
+    #[test]
+    fn figures_print_as_written() {
+        let text = to_toml(&profiles::KERNEL_HIGH, true, "x", "y");
+        for want in [
+            "(VRW 0.02 m/s/√h)",
+            "(ARW 0.1 °/√h)",
+            "(1000 ppm)",
+            "(300 ppm)",
+            "(0.01 °)",
+            "(5 µg)",
+            "(1 °/h)",
+        ] {
+            assert!(text.contains(want), "{want} in {text}");
+        }
+        assert!(!text.contains("0.0199999") && !text.contains("1000.00006"));
     }
 
     #[test]

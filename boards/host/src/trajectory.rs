@@ -12,7 +12,7 @@
 //!
 //! The vehicle state of such a file (`truth`, docs/motion.md) is the
 //! strapdown integration of its values ([`Trajectory::vehicle_at`]) from
-//! the built-in motions' site (45° N, at rest, heading 0); the truth the
+//! the built-in motions' site (Newlyn, 50.1° N, at rest, heading 0); the truth the
 //! chain measures stays the file's values, byte for byte.
 
 use std::path::Path;
