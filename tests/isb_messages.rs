@@ -571,6 +571,7 @@ fn info_reply_has_the_sdk_fields() {
 enum Ev {
     Pkt(u8, u8, Vec<u8>),
     Nmea(Command),
+    Asce(Vec<u8>),
 }
 
 fn feed_all(input: &mut Input, bytes: &[u8], chunks: &[usize]) -> Vec<Ev> {
@@ -584,6 +585,7 @@ fn feed_all(input: &mut Input, bytes: &[u8], chunks: &[usize]) -> Vec<Ev> {
             out.push(match e {
                 Event::Packet(p) => Ev::Pkt(p.flags, p.did, p.payload.to_vec()),
                 Event::Nmea(c) => Ev::Nmea(c),
+                Event::Asce(b) => Ev::Asce(b.to_vec()),
             })
         });
     }

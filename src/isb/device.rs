@@ -77,7 +77,9 @@ use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime, NavTruth};
 use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
+use crate::isb::asce;
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
+use crate::isb::nmea_stream::{Epochs, NmeaStreams, Snapshot};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
@@ -98,14 +100,19 @@ const ENTRY: usize = 8;
 /// Where the persistent streams start in the image (after FLASH_CONFIG):
 /// `u32 count`, then [`MAX_STREAMS`] entries.
 const PERSIST: usize = flash::SIZE;
-/// The ISB image in flash: FLASH_CONFIG, then the persistent streams.
-pub const IMAGE_LEN: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// Where the persistent NMEA table starts ([`asce::Table::to_image`]).
+const PERSIST_NMEA: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// The ISB image in flash: FLASH_CONFIG, the persistent streams, the
+/// persistent NMEA table.
+pub const IMAGE_LEN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
 /// How the ISB image is stored ([`crate::store`]): its own magic, so a
-/// flash written by the KERNEL personality is not taken for it.
+/// flash written by the KERNEL personality is not taken for it. Version 2
+/// added the NMEA table (a version-1 image loads as none: factory
+/// defaults).
 pub const IMAGE: ImageSpec = ImageSpec {
     len: IMAGE_LEN as u16,
     magic: *b"ISB1",
-    version: 1,
+    version: 2,
 };
 /// An incomplete packet or sentence with no new byte for this long is
 /// dropped (as the KERNEL does with a frame cut short).
@@ -137,6 +144,10 @@ struct State {
     cfg: FlashConfig,
     /// The persistent streams as saved (`u32 count` + entries).
     persist: [u8; 4 + MAX_STREAMS * ENTRY],
+    /// The persistent NMEA table as saved.
+    persist_nmea: [u8; asce::IMAGE_LEN],
+    /// The NMEA streams (`$ASCE`).
+    nmea: NmeaStreams,
     /// `startupImuDtMs`, `startupNavDtMs`, `ser0BaudRate` at boot (what
     /// runs until the next reset).
     imu_dt_ms: u32,
@@ -191,6 +202,8 @@ impl Personality for Isb {
             st: State {
                 cfg: FlashConfig([0; flash::SIZE]),
                 persist: [0; 4 + MAX_STREAMS * ENTRY],
+                persist_nmea: [0; asce::IMAGE_LEN],
+                nmea: NmeaStreams::default(),
                 imu_dt_ms: flash::DEFAULT_IMU_DT_MS,
                 nav_dt_ms: flash::DEFAULT_NAV_DT_MS,
                 baud: flash::DEFAULT_BAUD_RATE,
@@ -229,11 +242,14 @@ impl Personality for Isb {
         // the factory defaults (docs/isb-data-sets.md).
         if loaded && cfg.is_valid() && cfg.key() == flash::FACTORY_KEY {
             st.cfg = cfg;
-            st.persist.copy_from_slice(&image[PERSIST..]);
+            st.persist.copy_from_slice(&image[PERSIST..PERSIST_NMEA]);
+            st.persist_nmea.copy_from_slice(&image[PERSIST_NMEA..]);
         } else {
             st.cfg = FlashConfig::factory();
             st.persist = [0; 4 + MAX_STREAMS * ENTRY];
+            st.persist_nmea = [0; asce::IMAGE_LEN];
         }
+        st.nmea = NmeaStreams::default();
         st.imu_dt_ms = st.cfg.startup_imu_dt_ms().clamp(1, 1000);
         st.nav_dt_ms = st.cfg.startup_nav_dt_ms().clamp(st.imu_dt_ms, 1000);
         st.baud = st.cfg.u32_at(flash::SER0_BAUD_RATE).clamp(300, 10_000_000);
@@ -262,6 +278,7 @@ impl Personality for Isb {
         if cx.firmware_update() {
             return;
         }
+        st.nmea.table = asce::Table::from_image(&st.persist_nmea);
         let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
         for k in 0..n {
             let e = &st.persist[4 + k * ENTRY..4 + (k + 1) * ENTRY];
@@ -290,6 +307,7 @@ impl Personality for Isb {
         self.input.feed(bytes, |ev| match ev {
             Input_::Packet(p) => st.packet(cx, &p, now),
             Input_::Nmea(c) => st.nmea(cx, c, now),
+            Input_::Asce(body) => st.asce(cx, body),
         });
         st.parse_errors = self.input.isb_errors();
     }
@@ -343,6 +361,7 @@ impl Personality for Isb {
             // Saturation is reported since the previous packet.
             cx.chain_mut().restart_health_interval();
         }
+        st.nmea_tick(cx, now);
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
@@ -356,10 +375,12 @@ impl Personality for Isb {
         if let Some(i) = st.find(did::STROBE_IN_TIME) {
             st.send_stream(cx, i, at);
         }
+        let due = st.nmea.due_on_strobe();
+        st.send_nmea(cx, due, at);
     }
 
     fn mode(&self) -> Mode {
-        if self.st.streams.iter().any(|s| s.every > 0) {
+        if self.st.streams.iter().any(|s| s.every > 0) || self.st.nmea.streaming() {
             Mode::Continuous
         } else {
             Mode::Idle
@@ -379,12 +400,19 @@ impl Personality for Isb {
     }
 
     fn ticks_to_next_output(&self) -> Option<u64> {
-        self.st
+        let isb = self
+            .st
             .streams
             .iter()
             .filter(|s| s.every > 0)
             .map(|s| u64::from(s.countdown))
-            .min()
+            .min();
+        // NMEA: looked at every tick (its epochs are on several clocks).
+        let nmea = self.st.nmea.streaming().then_some(1);
+        match (isb, nmea) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 }
 
@@ -410,6 +438,17 @@ impl Isb {
     /// `--gps-time`; firmware keeps [`nav::DEFAULT_GPS_S_AT_ZERO`]).
     pub fn set_gps_time(&mut self, gps_ns_at_zero: u64) {
         self.st.gps_ns_at_zero = gps_ns_at_zero;
+    }
+
+    /// The `$ASCE` table in force.
+    pub fn nmea_table(&self) -> &asce::Table {
+        &self.st.nmea.table
+    }
+
+    /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
+    /// missing periods, more than 20 pairs).
+    pub fn asce_rejected(&self) -> u32 {
+        self.st.nmea.rejected
     }
 
     /// DIDs streaming now, in the order they were started.
@@ -454,6 +493,80 @@ fn last_measurement(cx: &impl Context<Integrals>) -> ([f32; 3], [f32; 3]) {
 /// so an IMX on a vehicle reads forward motion on its x axis.
 fn frd(v: [f64; 3]) -> [f32; 3] {
     crate::vehicle::housing_to_body(&v).map(|x| x as f32)
+}
+
+/// The NMEA side (`docs/isb.md` "NMEA"; [`crate::isb::nmea_stream`]).
+impl State {
+    /// `$ASCE`: the table reply for `$ASCE` alone, else the table set (and
+    /// saved with the persistent option); dropped pairs are counted.
+    fn asce(&mut self, cx: &mut impl Context<Integrals>, body: &[u8]) {
+        if body == b"ASCE" {
+            let mut l = crate::isb::nmea_out::Line::new();
+            if self.nmea.table.reply(&mut l).is_ok() {
+                if let Some(b) = l.finish() {
+                    push_line(cx, b);
+                }
+            }
+            return;
+        }
+        let a = self.nmea.table.apply(body);
+        self.nmea.rejected = self.nmea.rejected.wrapping_add(u32::from(a.rejected));
+        if a.persistent {
+            self.save_persistent(cx);
+        }
+    }
+
+    /// The NMEA sentences due at this tick.
+    fn nmea_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
+        if self.nmea.table.bits == 0 {
+            return;
+        }
+        let ticks = cx.time().ticks();
+        let on_grid = |ms: u32| {
+            let g = u64::from(self.grid_ticks(cx, ms));
+            ticks.is_multiple_of(g).then_some(ticks / g)
+        };
+        let (nav, imu, ms) = (on_grid(self.nav_dt_ms), on_grid(self.imu_dt_ms), on_grid(1));
+        let (since, gps) = self.gps_time(cx);
+        let ns = if self.nav.gps_time_valid() {
+            gps.week as u64 * nav::WEEK_S * 1_000_000_000 + gps.tow_ns
+        } else {
+            since
+        };
+        let gps_dt_ns = u64::from(self.gps_dt_ms) * 1_000_000;
+        let (gps, gps_second) = self.nmea.gps_epochs(ns / gps_dt_ns, ns / 1_000_000_000);
+        let e = Epochs {
+            nav,
+            imu,
+            ms,
+            gps,
+            gps_second,
+        };
+        let due = self.nmea.due(&e);
+        self.send_nmea(cx, due, now);
+    }
+
+    /// Sends the sentences of `due` now.
+    fn send_nmea(&mut self, cx: &mut impl Context<Integrals>, due: u32, now: Instant) {
+        if due == 0 {
+            return;
+        }
+        let decl = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
+        let sigma = [ins::INS_TILT.sigma, ins::INS_TILT.sigma, ins::INS_HEADING.sigma];
+        let snap = Snapshot::fill(due, decl, sigma.map(|x| x as f32), |d, b| {
+            self.image_of(cx, d, b, now)
+        });
+        self.nmea.render(due, &snap, |line| push_line(cx, line));
+    }
+}
+
+/// Queues one NMEA sentence as one frame (whole, or dropped and counted
+/// when the line is full).
+fn push_line(cx: &mut impl Context<Integrals>, line: &[u8]) {
+    cx.push_frame(line.len(), |f| {
+        f.copy_from_slice(line);
+        true
+    });
 }
 
 impl State {
@@ -548,6 +661,7 @@ impl State {
             Request::Set(req) => self.set(cx, &req, now),
             Request::StopAllPorts | Request::StopCurrentPort => {
                 self.streams.clear();
+                self.nmea.table.stop();
                 send_ack(cx, &AckInfo::of(p.flags, p.did), false);
             }
             Request::StopDid(did) => self.stop_stream(did),
@@ -692,7 +806,10 @@ impl State {
                     });
                 }
             }
-            Nmea::StopAllPorts | Nmea::StopCurrentPort => self.streams.clear(),
+            Nmea::StopAllPorts | Nmea::StopCurrentPort => {
+                self.streams.clear();
+                self.nmea.table.stop();
+            }
             Nmea::SavePersistent => self.save_persistent(cx),
             Nmea::SoftwareReset => cx.request_reset(),
         }
@@ -714,6 +831,7 @@ impl State {
             le::put(e, 4, &s.offset.to_le_bytes());
             le::put(e, 6, &s.period.max(1).to_le_bytes());
         }
+        self.persist_nmea = self.nmea.table.to_image();
         self.save(cx);
     }
 
@@ -722,7 +840,8 @@ impl State {
     fn save(&mut self, cx: &mut impl Context<Integrals>) {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
-        image[PERSIST..].copy_from_slice(&self.persist);
+        image[PERSIST..PERSIST_NMEA].copy_from_slice(&self.persist);
+        image[PERSIST_NMEA..].copy_from_slice(&self.persist_nmea);
         self.save_pending = cx.save_image(&image).is_err();
     }
 
