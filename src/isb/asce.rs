@@ -181,8 +181,7 @@ impl Table {
         // The one line is ser0 (module doc of `docs/isb.md` "NMEA").
         let here = mask == 0 || mask == OPT_PORT_MASK || mask & PORT_SER0 != 0;
         let mut taken = 0usize;
-        loop {
-            let Some(idf) = fields.next() else { break };
+        while let Some(idf) = fields.next() {
             let Some(pf) = fields.next() else {
                 // An ID with no period drops that pair.
                 a.rejected = a.rejected.saturating_add(1);
@@ -205,7 +204,10 @@ impl Table {
             };
             let i = match target {
                 Target::Id(i) => i,
-                Target::Gsv { constellations, bands } => {
+                Target::Gsv {
+                    constellations,
+                    bands,
+                } => {
                     if period != 0 {
                         for (g, m) in self.gsv_masks.iter_mut().enumerate() {
                             if constellations & (1 << g) != 0 {
@@ -237,7 +239,10 @@ enum Target {
     Id(u8),
     /// GSV with its constellation set (bits of [`GSV_CONSTELLATIONS`]) and
     /// band mask.
-    Gsv { constellations: u8, bands: u8 },
+    Gsv {
+        constellations: u8,
+        bands: u8,
+    },
 }
 
 /// The release's options field: decimal, or hex after `0x`/`0X`; what does

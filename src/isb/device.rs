@@ -72,12 +72,12 @@ use heapless::Vec;
 use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
+use crate::isb::asce;
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime, NavTruth};
 use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
-use crate::isb::asce;
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
 use crate::isb::nmea_stream::{Epochs, NmeaStreams, Snapshot};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
@@ -533,8 +533,11 @@ impl State {
         } else {
             since
         };
-        let gps_dt_ns = u64::from(self.gps_dt_ms) * 1_000_000;
-        let (gps, gps_second) = self.nmea.gps_epochs(ns / gps_dt_ns, ns / 1_000_000_000);
+        // An epoch begins at this tick when the previous tick was in another.
+        let before = ns.saturating_sub(1_000_000_000 / u64::from(rate(cx)));
+        let begins = |len: u64| (ns / len != before / len || ticks == 0).then_some(ns / len);
+        let gps = begins(u64::from(self.gps_dt_ms) * 1_000_000);
+        let gps_second = begins(1_000_000_000);
         let e = Epochs {
             nav,
             imu,
@@ -552,7 +555,11 @@ impl State {
             return;
         }
         let decl = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
-        let sigma = [ins::INS_TILT.sigma, ins::INS_TILT.sigma, ins::INS_HEADING.sigma];
+        let sigma = [
+            ins::INS_TILT.sigma,
+            ins::INS_TILT.sigma,
+            ins::INS_HEADING.sigma,
+        ];
         let snap = Snapshot::fill(due, decl, sigma.map(|x| x as f32), |d, b| {
             self.image_of(cx, d, b, now)
         });

@@ -318,10 +318,7 @@ pub fn vel_ne(p: &GpsPos, v: &GpsVel) -> (f64, f64) {
 /// Course over ground, degrees (−180…180, never wrapped) and 2-D speed,
 /// m/s.
 pub fn course_speed(vn: f64, ve: f64) -> (f64, f64) {
-    (
-        libm::atan2(ve, vn) * RAD2DEG,
-        libm::sqrt(vn * vn + ve * ve),
-    )
+    (libm::atan2(ve, vn) * RAD2DEG, libm::sqrt(vn * vn + ve * ve))
 }
 
 /// `$GNRMC`: UTC without decimals, status, position, knots, course, date

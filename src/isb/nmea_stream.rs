@@ -104,9 +104,6 @@ pub struct NmeaStreams {
     /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
     /// missing periods, more than 20 pairs).
     pub rejected: u32,
-    /// The last receiver epoch and GPS second seen (epoch changes).
-    last_gps: Option<u64>,
-    last_second: Option<u64>,
     /// Speed filter: the last speeds (m/s) and the epoch they belong to.
     speeds: [f64; FILTER_LEN],
     speed_n: usize,
@@ -215,19 +212,8 @@ impl Snapshot {
 impl NmeaStreams {
     /// Whether any periodic sentence is on (the device is streaming).
     pub fn streaming(&self) -> bool {
-        (1..id::COUNT as u8).any(|i| {
-            self.table.on(i) && !matches!(clock_of(i), Clock::Strobe | Clock::Never)
-        })
-    }
-
-    /// Marks the receiver epoch and GPS second of this tick (`gps_index`,
-    /// `second`): `Some` where a new one began.
-    pub fn gps_epochs(&mut self, gps_index: u64, second: u64) -> (Option<u64>, Option<u64>) {
-        let g = (self.last_gps != Some(gps_index)).then_some(gps_index);
-        let s = (self.last_second != Some(second)).then_some(second);
-        self.last_gps = Some(gps_index);
-        self.last_second = Some(second);
-        (g, s)
+        (1..id::COUNT as u8)
+            .any(|i| self.table.on(i) && !matches!(clock_of(i), Clock::Strobe | Clock::Never))
     }
 
     /// The IDs (bit `id`) due at the epochs `e`.
@@ -329,9 +315,9 @@ impl NmeaStreams {
                 id::PASHR => out::pashr(&mut l, &s.pos, &s.ins1, s.att_sigma_rad),
                 id::PSTRB => out::pstrb(&mut l, &s.strobe),
                 id::INTEL => {
-                    let fw = s.dev_info.map_or(super::sets::dev_info::FIRMWARE_2_7_1, |d| {
-                        d.firmware_ver
-                    });
+                    let fw = s
+                        .dev_info
+                        .map_or(super::sets::dev_info::FIRMWARE_2_7_1, |d| d.firmware_ver);
                     out::intel(&mut l, fw, &s.pos, &s.vel, (vn, ve))
                 }
                 id::POWGPS => out::powgps(&mut l, &s.pos),
