@@ -1,0 +1,160 @@
+//! The emulated IMX-5's NMEA read by real NMEA consumers: Debian's `gpsd`
+//! on the emulator's pty (`gpspipe -w`), through the binary
+//! (`docs/isb.md` "NMEA"; README "ISB").
+
+// Shared with the other host suites; not every helper is used here.
+#[allow(dead_code)]
+mod support;
+
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use imu_emu::isb::did;
+use imu_emu::isb::ins::SAT_PRNS;
+use imu_emu::isb::nmea::checksum;
+use imu_emu::isb::sets::flash;
+use support::{free_port, isb_packet, isb_set, Conn, Emu};
+
+fn sentence(body: &str) -> Vec<u8> {
+    format!("${body}*{:02X}\r\n", checksum(body.as_bytes())).into_bytes()
+}
+
+/// Whether `prog` runs; in CI (`CI=true`) its absence fails the test
+/// loudly, elsewhere it is reported and the test returns.
+fn have(prog: &str) -> bool {
+    let ok = Command::new(prog)
+        .arg("-V")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok();
+    if !ok {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{prog} is not installed (apt-get install gpsd gpsd-clients): CI must run this test"
+        );
+        eprintln!("NOT RUN: {prog} is not installed (apt-get install gpsd gpsd-clients)");
+    }
+    ok
+}
+
+/// Kills the gpsd it holds (by its pid) when dropped.
+struct Gpsd(Child);
+
+impl Drop for Gpsd {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// gpsd on the emulator's pty reports a 3-D fix at the truth position
+/// (45° N, 0° E, the built-in site) within the GNSS error model (σ 1 m
+/// per horizontal axis: 5 m), the UTC time of `--gps-time` from RMC/ZDA,
+/// and the 12 satellites of GSV with their PRNs. The line is first set to
+/// 115 200 bit/s (gpsd's speeds stop at 460 800) and the sentences made
+/// persistent with `$ASCE` option 0x200, then the unit is reset: gpsd only
+/// reads (`-b`), on a private control socket and port so tests run in
+/// parallel.
+#[test]
+fn gpsd_reads_a_3d_fix_the_time_and_the_satellites() {
+    if !have("gpsd") || !have("gpspipe") {
+        return;
+    }
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--speed",
+        "10",
+        "--gps-time",
+        "2026-01-04",
+    ]);
+    {
+        let mut c = Conn::serial(&emu.pty_path());
+        c.send(&isb_set(
+            did::FLASH_CONFIG,
+            flash::SER0_BAUD_RATE as u16,
+            &115_200u32.to_le_bytes(),
+        ));
+        assert_eq!(isb_packet(&mut c).flags, 1, "ACK");
+        c.send(&sentence(
+            "ASCE,512,GNGGA,5,GNGLL,5,GNGSA,5,GNRMC,5,GNZDA,5,GPGSV,5,GNVTG,5",
+        ));
+        c.send(b"$SRST*06\r\n");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_port();
+    let _gpsd = Gpsd(
+        Command::new("gpsd")
+            .args(["-N", "-n", "-b", "-s", "115200", "-F"])
+            .arg(dir.path().join("gpsd.sock"))
+            .args(["-S", &port.to_string()])
+            .arg(emu.pty_path())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn gpsd"),
+    );
+    // gpsd listens within a moment; gpspipe retries until it does.
+    let mut reports = Vec::new();
+    for _ in 0..50 {
+        let out = Command::new("timeout")
+            .args(["60", "gpspipe", "-w", "-n", "120"])
+            .arg(format!("127.0.0.1:{port}"))
+            .output()
+            .expect("run gpspipe");
+        reports = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+            .collect::<Vec<_>>();
+        if !reports.is_empty() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let class = |c: &str| {
+        reports
+            .iter()
+            .filter(|r| r["class"] == c)
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let fixes: Vec<_> = class("TPV")
+        .into_iter()
+        .filter(|t| t["mode"] == 3)
+        .collect();
+    assert!(!fixes.is_empty(), "no 3-D fix in {reports:#?}");
+    for t in &fixes {
+        let (lat, lon) = (t["lat"].as_f64().unwrap(), t["lon"].as_f64().unwrap());
+        let north = (lat - 45.0) * 111_132.0;
+        let east = lon * 78_847.0;
+        assert!(north.hypot(east) < 5.0, "{t}");
+        assert!(t["time"].as_str().unwrap().ends_with(".000Z"), "{t}");
+    }
+    // The UTC of `--gps-time` 2026-01-04 00:00:00 + the 30 s cold start,
+    // once gpsd has its date from RMC/ZDA (its first fix may carry a
+    // time of day only).
+    let last = fixes.last().unwrap();
+    assert!(
+        last["time"]
+            .as_str()
+            .unwrap()
+            .starts_with("2026-01-04T00:0"),
+        "{last}"
+    );
+    let sky = class("SKY");
+    let sats = sky
+        .iter()
+        .rev()
+        .find_map(|s| s["satellites"].as_array().filter(|a| !a.is_empty()))
+        .unwrap_or_else(|| panic!("no satellites in {sky:#?}"));
+    let mut prns: Vec<u64> = sats.iter().map(|s| s["PRN"].as_u64().unwrap()).collect();
+    prns.sort_unstable();
+    let want: Vec<u64> = SAT_PRNS.iter().map(|&p| u64::from(p)).collect();
+    assert_eq!(prns, want);
+    assert!(sats.iter().all(|s| s["used"] == true), "{sats:?}");
+}
