@@ -371,3 +371,49 @@ fn persistence_stops_and_interleaving_with_isb() {
     let mut b = b.power_cycle();
     assert!(b.run(400).is_empty(), "cleared by stop + $PERS");
 }
+
+/// `$PERS` of DEV_INFO and SYS_CMD streams, `$SRST`: they resume, and
+/// the first `$STPB` stops them (with NMEA ones beside them).
+#[test]
+fn the_first_stpb_after_pers_and_a_reset_stops_everything() {
+    let mut b = Bench::new();
+    b.send(&get(did::DEV_INFO, 1000));
+    b.send(&get(did::SYS_CMD, 1000));
+    b.send(&sentence("ASCE,0,PINS2,25"));
+    b.send(b"$PERS*14\r\n");
+    b.send(b"$SRST*06\r\n");
+    let out = b.run(4000);
+    assert_eq!(isb_of(&out, did::DEV_INFO).len(), 2);
+    assert_eq!(isb_of(&out, did::SYS_CMD).len(), 2);
+    assert_eq!(lines(&out, "$PINS2").len(), 20);
+    assert!(b.send(b"$STPB*15\r\n").is_empty());
+    assert!(b.run(5000).is_empty());
+}
+
+/// Host DATA (packet type 4) is applied as SET_DATA and answered with
+/// nothing (no ACK, no NACK): here FLASH_CONFIG `magDeclination`, which
+/// RMC then prints as the magnetic variation.
+#[test]
+fn host_data_packets_apply_as_set_data_without_an_ack() {
+    use imu_emu::isb::packet::{self, FLAG_OFFSET};
+    use imu_emu::isb::sets::flash;
+    let mut b = Bench::new();
+    let mut payload = (flash::MAG_DECLINATION as u16).to_le_bytes().to_vec();
+    payload.extend(0.2059f32.to_le_bytes());
+    let mut out = [0u8; 64];
+    let n = packet::encode(4 | FLAG_OFFSET, did::FLASH_CONFIG, &payload, &mut out).unwrap();
+    assert!(b.send(&out[..n]).is_empty(), "no ACK");
+    // A DATA the device refuses (a read-only set) gets no NACK either.
+    let n = packet::encode(4, did::INS_1, &[0xFF; 8], &mut out).unwrap();
+    assert!(b.send(&out[..n]).is_empty(), "no NACK");
+    let r = b.send(&get(did::FLASH_CONFIG, 0));
+    let Out::Isb { payload, .. } = &r[0] else {
+        panic!("{r:?}")
+    };
+    let at = flash::MAG_DECLINATION;
+    assert_eq!(payload[at..at + 4], 0.2059f32.to_le_bytes());
+    b.run(62_000);
+    b.send(&sentence("ASCE,0,GNRMC,0"));
+    let rmc = lines(&b.run(400), "$GNRMC");
+    assert_eq!(&rmc[0].1[10..], ["011.8", "E"]);
+}

@@ -665,7 +665,8 @@ impl State {
             Request::BadGet { rx_flags, rx_did } => {
                 send_ack(cx, &AckInfo::of(rx_flags, rx_did), true)
             }
-            Request::Set(req) => self.set(cx, &req, now),
+            Request::Set(req) => self.set(cx, &req, now, true),
+            Request::Data(req) => self.set(cx, &req, now, false),
             Request::StopAllPorts | Request::StopCurrentPort => {
                 self.streams.clear();
                 self.nmea.table.stop();
@@ -708,10 +709,17 @@ impl State {
         cx: &mut impl Context<Integrals>,
         req: &message::SetRequest<'_>,
         now: Instant,
+        reply: bool,
     ) {
         let mut image = [0u8; did::MAX_SIZE];
         let n = self.image_of(cx, req.did, &mut image, now);
         let outcome = message::apply_set(req, &mut image[..n]);
+        // Host DATA: the same effect, no ACK or NACK.
+        let send_ack = |cx: &mut _, info: &AckInfo, nack| {
+            if reply {
+                send_ack(cx, info, nack);
+            }
+        };
         match outcome {
             SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(cx, &info, true),
             SetOutcome::Silent => {}

@@ -158,3 +158,24 @@ fn gpsd_reads_a_3d_fix_the_time_and_the_satellites() {
     assert_eq!(prns, want);
     assert!(sats.iter().all(|s| s["used"] == true), "{sats:?}");
 }
+
+/// `$PERS` of DEV_INFO and SYS_CMD streams, `$SRST`, then `$STPB`: the
+/// persistent streams resume after the reset and the first `$STPB` stops
+/// them (a reported defect: the first one was ignored).
+#[test]
+fn the_first_stpb_after_pers_and_a_reset_stops_the_streams() {
+    let emu = Emu::tcp(&["--protocol", "isb"]);
+    let mut c = emu.connect();
+    c.send(&support::isb_get(did::DEV_INFO, 1000));
+    c.send(&support::isb_get(did::SYS_CMD, 1000));
+    std::thread::sleep(Duration::from_millis(300));
+    c.send(b"$PERS*14\r\n");
+    std::thread::sleep(Duration::from_millis(300));
+    c.send(b"$SRST*06\r\n");
+    std::thread::sleep(Duration::from_millis(1000));
+    assert!(c.drain_for(Duration::from_millis(2500)) > 0, "resumed");
+    c.send(b"$STPB*15\r\n");
+    std::thread::sleep(Duration::from_millis(100));
+    c.drain_for(Duration::from_millis(200));
+    assert_eq!(c.drain_for(Duration::from_millis(2500)), 0, "stopped");
+}
