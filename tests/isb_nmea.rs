@@ -417,3 +417,27 @@ fn host_data_packets_apply_as_set_data_without_an_ack() {
     let rmc = lines(&b.run(400), "$GNRMC");
     assert_eq!(&rmc[0].1[10..], ["011.8", "E"]);
 }
+
+/// One-shot GETs of INS, MAGNETOMETER and BAROMETER are stamped on their
+/// output grid, as IMU and PIMU are (a GET between two navigation periods
+/// reads the last one's time, not "now").
+#[test]
+fn one_shot_gets_are_stamped_on_their_grid() {
+    use imu_emu::isb::nav_sets::{Barometer, Magnetometer};
+    use imu_emu::isb::sets::Imu;
+    let mut b = Bench::new();
+    b.run(62_003);
+    let one = |b: &mut Bench, d: u8| match &b.send(&get(d, 0))[0] {
+        Out::Isb { payload, .. } => payload.clone(),
+        o => panic!("{o:?}"),
+    };
+    let imu = Imu::decode(&one(&mut b, did::IMU).try_into().unwrap());
+    let ins = Ins2::decode(&one(&mut b, did::INS_2).try_into().unwrap());
+    let pos = GpsPos::decode(&one(&mut b, did::GPS1_POS).try_into().unwrap());
+    let mag = Magnetometer::decode(&one(&mut b, did::MAGNETOMETER).try_into().unwrap());
+    let bar = Barometer::decode(&one(&mut b, did::BAROMETER).try_into().unwrap());
+    // Tick 62 003 is 31.0015 s: the 4 ms grid's 31.000, 10 ms 31.000, 8 ms 31.000.
+    assert_eq!(imu.time, 31.0);
+    assert!((ins.header.time_of_week - pos.tow_offset - 31.0).abs() < 1e-6);
+    assert_eq!((mag.time, bar.time), (31.0, 31.0));
+}

@@ -999,6 +999,32 @@ impl State {
         let truth = self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
+        // INS, magnetometer, barometer: stamped on their output grid (the
+        // last multiple of the source period), as streams are, also in a
+        // one-shot GET.
+        let back = match did::lookup(u16::from(did)) {
+            Some(set)
+                if matches!(
+                    did,
+                    did::INS_1
+                        | did::INS_2
+                        | did::INS_3
+                        | did::INS_4
+                        | did::MAGNETOMETER
+                        | did::BAROMETER
+                ) =>
+            {
+                let ms = set
+                    .source
+                    .period_ms(self.imu_dt_ms, self.nav_dt_ms, self.gps_dt_ms);
+                since_ns % (u64::from(ms.max(1)) * 1_000_000)
+            }
+            _ => 0,
+        };
+        let since_ns = since_ns - back;
+        let gps = GpsTime::of_ns(
+            (u64::from(gps.week) * nav::WEEK_S * 1_000_000_000 + gps.tow_ns).saturating_sub(back),
+        );
         let since_s = since_ns as f64 / 1e9;
         let valid = self.nav.gps_time_valid();
         let h = InsHeader {
