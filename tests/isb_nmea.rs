@@ -441,3 +441,53 @@ fn one_shot_gets_are_stamped_on_their_grid() {
     assert!((ins.header.time_of_week - pos.tow_offset - 31.0).abs() < 1e-6);
     assert_eq!((mag.time, bar.time), (31.0, 31.0));
 }
+
+/// BIT runs at start-up as the release's does (DID_BIT filled, hdwStatus
+/// BIT passed) unless `sysCfgBits` has
+/// `SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP`; GPS1_POS, GPS1_VEL and
+/// hdwStatus agree on PPS time sync once the receiver has its fix.
+#[test]
+fn bit_at_start_up_and_pps_flags_in_step() {
+    use imu_emu::isb::nav_sets::{gps_status, hdw_nav, GpsVel};
+    use imu_emu::isb::sets::{bit, flash, hdw_status, Bit, SysParams};
+    let mut b = Bench::new();
+    let one = |b: &mut Bench, d: u8| match &b.send(&get(d, 0))[0] {
+        Out::Isb { payload, .. } => payload.clone(),
+        o => panic!("{o:?}"),
+    };
+    let r = Bit::decode(&one(&mut b, did::BIT).try_into().unwrap());
+    assert_eq!(
+        (r.state, r.last_command, r.hdw_bit_status),
+        (
+            bit::STATE_DONE,
+            bit::CMD_BASIC_MOVING,
+            bit::HDW_PASSED_NO_GPS
+        )
+    );
+    let sp = SysParams::decode(&one(&mut b, did::SYS_PARAMS).try_into().unwrap());
+    assert_eq!(sp.hdw_status & hdw_status::BIT_MASK, hdw_status::BIT_PASSED);
+    b.run(62_000);
+    let sp = SysParams::decode(&one(&mut b, did::SYS_PARAMS).try_into().unwrap());
+    let pos = GpsPos::decode(&one(&mut b, did::GPS1_POS).try_into().unwrap());
+    let vel = GpsVel::decode(&one(&mut b, did::GPS1_VEL).try_into().unwrap());
+    assert_ne!(sp.hdw_status & hdw_nav::GPS_PPS_TIMESYNC, 0);
+    assert_ne!(pos.status & gps_status::TIME_PPS_SYNC, 0);
+    assert_eq!(vel.status, pos.status);
+    // Disabled: no BIT at the next boot.
+    let bits = flash::SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP.to_le_bytes();
+    let mut out = [0u8; 64];
+    let n = message::encode_set(
+        did::FLASH_CONFIG,
+        flash::SYS_CFG_BITS as u16,
+        &bits,
+        &mut out,
+    )
+    .unwrap();
+    b.send(&out[..n]);
+    b.run(10);
+    let mut b = b.power_cycle();
+    let r = Bit::decode(&one(&mut b, did::BIT).try_into().unwrap());
+    assert_eq!(r.state, bit::STATE_OFF);
+    let sp = SysParams::decode(&one(&mut b, did::SYS_PARAMS).try_into().unwrap());
+    assert_eq!(sp.hdw_status & hdw_status::BIT_MASK, 0);
+}

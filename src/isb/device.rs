@@ -279,6 +279,12 @@ impl Personality for Isb {
             return;
         }
         st.nmea.table = asce::Table::from_image(&st.persist_nmea);
+        // The release's BIT at start-up (a moving-unit BIT: the unit may
+        // not be at rest), unless sysCfgBits disables it.
+        if st.cfg.u32_at(flash::SYS_CFG_BITS) & flash::SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP == 0
+        {
+            st.run_bit(cx, bit::CMD_BASIC_MOVING);
+        }
         let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
         for k in 0..n {
             let e = &st.persist[4 + k * ENTRY..4 + (k + 1) * ENTRY];

@@ -187,8 +187,10 @@ const FLASH_W: &[Range] = &[Range::new(
     sets::flash::CHECKSUM as u16,
     sets::flash::SIZE as u16,
 )];
-/// BIT: the `command` byte starts a test; the rest is the result.
-const BIT_W: &[Range] = &[Range::new(0, 1)];
+/// BIT: the `command` byte starts a test; `lastCommand`, `state` and
+/// the reserved byte beside it may be written with it (a host writes the
+/// first `u32`; the test's run rewrites them); the rest is the result.
+const BIT_W: &[Range] = &[Range::new(0, 4)];
 
 /// A read-only navigation data set (`docs/isb-data-sets.md` "Navigation
 /// data sets").
