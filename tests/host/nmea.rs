@@ -179,3 +179,60 @@ fn the_first_stpb_after_pers_and_a_reset_stops_the_streams() {
     c.drain_for(Duration::from_millis(200));
     assert_eq!(c.drain_for(Duration::from_millis(2500)), 0, "stopped");
 }
+
+/// `strobe` on the control socket is a rising EXTRIG edge: the IMX-5
+/// answers with STROBE_IN_TIME and, with ID 13 on, `$PSTRB` carrying the
+/// same GPS week, time of week and count.
+#[test]
+fn a_strobe_on_the_control_socket_gives_strobe_in_time_and_pstrb() {
+    use imu_emu::isb::nav_sets::GpsPos;
+    use imu_emu::isb::sets::StrobeInTime;
+    use support::{isb_get, isb_packet_of, Control};
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = Emu::tcp(&[
+        "--protocol",
+        "isb",
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+        "--gps-time",
+        "2026-03-13T15:27:26Z",
+    ]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
+    c.send(&isb_get(did::GPS1_POS, 1));
+    while GpsPos::decode(
+        &isb_packet_of(&mut c, did::GPS1_POS)
+            .payload
+            .try_into()
+            .unwrap(),
+    )
+    .status
+        == 0
+    {}
+    c.send(b"$STPC*14\r\n");
+    c.send(&isb_get(did::STROBE_IN_TIME, 1));
+    c.send(&sentence("ASCE,0,13,1"));
+    std::thread::sleep(Duration::from_millis(300));
+    c.drain_for(Duration::from_millis(300));
+    assert!(ctl.cmd("strobe").starts_with("ok"));
+    let p = isb_packet_of(&mut c, did::STROBE_IN_TIME);
+    let s = StrobeInTime::decode(&p.payload.try_into().unwrap());
+    let mut line = Vec::new();
+    while !line.ends_with(b"\n") {
+        line.extend(c.read_bytes(1));
+    }
+    let line = String::from_utf8(line).unwrap();
+    assert_eq!(
+        line,
+        String::from_utf8(sentence(&format!(
+            "PSTRB,{},{},{},{}",
+            s.week, s.time_of_week_ms, s.pin, s.count
+        )))
+        .unwrap()
+    );
+    // 2026-03-13 is in GPS week 2409; the edge after the 30 s cold start.
+    assert_eq!((s.week, s.count), (2409, 1));
+}
