@@ -236,3 +236,51 @@ fn a_strobe_on_the_control_socket_gives_strobe_in_time_and_pstrb() {
     // 2026-03-13 is in GPS week 2409; the edge after the 30 s cold start.
     assert_eq!((s.week, s.count), (2409, 1));
 }
+
+/// `client --protocol isb record --nmea GNGGA,GNRMC --period 5`: one
+/// `$ASCE`, then an NMEA log of whole sentences with valid checksums, GGA
+/// and RMC of each whole GPS second in turn; `$STPC` at the end.
+#[test]
+fn client_records_an_nmea_log() {
+    let emu = Emu::tcp(&["--protocol", "isb", "--speed", "5"]);
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.nmea");
+    let out = Command::new(env!("CARGO_BIN_EXE_imu-emu"))
+        .args(["client", "--protocol", "isb", "--tcp"])
+        .arg(emu.addr().to_string())
+        .args([
+            "record",
+            "--nmea",
+            "GNGGA,GNRMC",
+            "--period",
+            "5",
+            "--frames",
+            "6",
+            "-o",
+        ])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = text.split_inclusive("\r\n").collect();
+    assert_eq!(lines.len(), 6, "{text}");
+    let mut seconds = Vec::new();
+    for (k, l) in lines.iter().enumerate() {
+        let star = l.rfind('*').unwrap();
+        let sum = checksum(&l.as_bytes()[1..star]);
+        assert_eq!(&l[star + 1..], format!("{sum:02X}\r\n"), "{l}");
+        let f: Vec<&str> = l[..star].split(',').collect();
+        assert_eq!(f[0], ["$GNGGA", "$GNRMC"][k % 2], "{text}");
+        seconds.push(f[1][..6].to_owned());
+    }
+    // GGA and RMC of one second carry the same time; seconds follow on.
+    for p in seconds.chunks(2) {
+        assert_eq!(p[0], p[1]);
+    }
+    assert!(String::from_utf8_lossy(&out.stderr).contains("6 NMEA sentences recorded"));
+}
