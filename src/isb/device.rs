@@ -55,9 +55,12 @@
 //!   and are ACKed; STOP_DID_BROADCAST stops one, no reply; `$STPB` and
 //!   `$STPC` stop every stream, no reply.
 //! - **NMEA**: `$INFO` is answered with the `$INFO` sentence, `$PERS`
-//!   saves the running streams as persistent, `$SRST` resets (after the
-//!   bytes already queued have been handed out). Persistent streams start
-//!   by themselves at every boot.
+//!   saves the running streams (ISB and NMEA) as persistent, `$SRST`
+//!   resets (after the bytes already queued have been handed out),
+//!   `$ASCE` sets or reads the NMEA streams ([`crate::isb::asce`],
+//!   [`crate::isb::nmea_stream`]). Persistent streams start by themselves
+//!   at every boot.
+//! - **Host DATA** packets apply as SET_DATA, unanswered.
 //! - **Status words** (IMU `status`, SYS_PARAMS `hdwStatus`) come from the
 //!   chain's neutral health — the conditions behind the KERNEL's USW:
 //!   saturation (since the previous packet), sensor faults, over-
