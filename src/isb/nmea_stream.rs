@@ -332,3 +332,28 @@ impl NmeaStreams {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With the speed filter on (`$ASCE` options 0x400) RMC and VTG print
+    /// the median of the last five epochs' speeds; off, the epoch's own.
+    #[test]
+    fn the_speed_filter_is_a_five_epoch_median() {
+        let mut n = NmeaStreams::default();
+        let mut s = Snapshot::fill(0, 0.0, [0.0; 3], |_, _| 0);
+        let mut last = 0.0;
+        for (k, v) in [1.0, 100.0, 2.0, 3.0, 4.0].into_iter().enumerate() {
+            s.pos.time_of_week_ms = 200 * k as u32;
+            last = n.speed(&s, v);
+        }
+        assert_eq!(last, 4.0, "off: as measured");
+        n.table.speed_filter = true;
+        assert_eq!(n.speed(&s, 4.0), 3.0, "the same epoch: not pushed again");
+        s.pos.time_of_week_ms = 1000;
+        assert_eq!(n.speed(&s, 0.5), 3.0, "100, 2, 3, 4, 0.5");
+        s.pos.time_of_week_ms = 1200;
+        assert_eq!(n.speed(&s, 0.2), 2.0, "2, 3, 4, 0.5, 0.2");
+    }
+}
