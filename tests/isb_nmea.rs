@@ -11,6 +11,10 @@ use imu_emu::isb::nmea::checksum;
 use imu_emu::isb::Isb;
 use imu_emu::{Instant, Product, RamNor};
 
+#[allow(dead_code)]
+mod common;
+use common::xorshift::XorShift;
+
 type Flash = RamNor<16384>;
 
 /// What came out of the line, split into whole ISB packets and whole
@@ -490,4 +494,58 @@ fn bit_at_start_up_and_pps_flags_in_step() {
     assert_eq!(r.state, bit::STATE_OFF);
     let sp = SysParams::decode(&one(&mut b, did::SYS_PARAMS).try_into().unwrap());
     assert_eq!(sp.hdw_status & hdw_status::BIT_MASK, 0);
+}
+
+/// Malformed `$ASCE` with valid checksums — random fields of digits,
+/// names, signs, `0x`, underscores, empty fields, up to the receive limit —
+/// never crash the device; every request leaves a table the `$ASCE*14`
+/// reply reads back as `$ASCE,0` and ascending `id,period` pairs of IDs
+/// 0…19, and every sentence it then sends is whole.
+#[test]
+fn malformed_asce_never_crashes() {
+    const WORDS: [&str; 16] = [
+        "",
+        "0",
+        "7",
+        "19",
+        "20",
+        "255",
+        "300",
+        "-1",
+        "0x2FF",
+        "3857",
+        "99999999999999999999",
+        "PINS1",
+        "GxGSV_5_1",
+        "GNGGA",
+        "PSTRB",
+        "G?RMC",
+    ];
+    let mut b = Bench::new();
+    let mut r = XorShift(0x5EED_0028);
+    for round in 0..400 {
+        let mut body = String::from("ASCE");
+        for _ in 0..r.below(50) {
+            body.push(',');
+            body.push_str(WORDS[r.below(WORDS.len() as u32) as usize]);
+        }
+        body.truncate(190);
+        b.send(&sentence(&body));
+        b.run(20);
+        let reply = b.send(b"$ASCE*14\r\n");
+        let Some(Out::Nmea(t)) = reply
+            .iter()
+            .find(|o| matches!(o, Out::Nmea(s) if s.starts_with("$ASCE")))
+        else {
+            panic!("round {round}: no table reply to {body}: {reply:?}")
+        };
+        let f: Vec<u32> = t.split(',').skip(2).map(|x| x.parse().unwrap()).collect();
+        assert_eq!(&t[..7], "$ASCE,0", "round {round}");
+        for p in f.chunks(2) {
+            assert!(p[0] < 20 && (1..=255).contains(&p[1]), "round {round}: {t}");
+        }
+        if round % 50 == 49 {
+            b.send(b"$STPB*15\r\n");
+        }
+    }
 }
