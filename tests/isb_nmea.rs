@@ -11,7 +11,6 @@ use imu_emu::isb::nmea::checksum;
 use imu_emu::isb::Isb;
 use imu_emu::{Instant, Product, RamNor};
 
-#[allow(dead_code)]
 mod common;
 use common::xorshift::XorShift;
 
