@@ -548,3 +548,27 @@ fn malformed_asce_never_crashes() {
         }
     }
 }
+
+/// `ticks_to_next_output` (when a board wakes) names the very tick the
+/// next sentence goes out at: navigation-period and GNSS (GPS-second)
+/// streams alike.
+#[test]
+fn the_next_output_is_the_next_sentence() {
+    let mut b = Bench::new();
+    b.run(62_001);
+    for asce in ["ASCE,0,PINS2,25", "ASCE,0,PINS2,0,GNGGA,5"] {
+        b.send(&sentence(asce));
+        b.run(1);
+        for _ in 0..3 {
+            let k = b.dev.ticks_to_next_output().expect("streaming");
+            let out = b.run(k);
+            let firsts: Vec<u64> = out.iter().map(|(t, _)| *t).collect();
+            assert!(!firsts.is_empty(), "{asce}: nothing after {k} ticks");
+            assert!(
+                firsts.iter().all(|&t| t == b.ticks),
+                "{asce}: {firsts:?} {}",
+                b.ticks
+            );
+        }
+    }
+}

@@ -416,8 +416,11 @@ impl Personality for Isb {
             .filter(|s| s.every > 0)
             .map(|s| u64::from(s.countdown))
             .min();
-        // NMEA: looked at every tick (its epochs are on several clocks).
-        let nmea = self.st.nmea.streaming().then_some(1);
+        let nmea = self
+            .st
+            .nmea
+            .streaming()
+            .then_some(self.st.nmea.next_in.unwrap_or(1));
         match (isb, nmea) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
@@ -519,6 +522,8 @@ impl State {
             return;
         }
         let a = self.nmea.table.apply(body);
+        // Looked at from the next tick on.
+        self.nmea.next_in = Some(1);
         self.nmea.rejected = self.nmea.rejected.wrapping_add(u32::from(a.rejected));
         if a.persistent {
             self.save_persistent(cx);
@@ -556,6 +561,11 @@ impl State {
         };
         let due = self.nmea.due(&e);
         self.send_nmea(cx, due, now);
+        let tick_ns = 1_000_000_000 / u64::from(rate(cx));
+        let grids =
+            [self.nav_dt_ms, self.imu_dt_ms, 1].map(|ms| u64::from(self.grid_ticks(cx, ms)));
+        let gps_ns = u64::from(self.gps_dt_ms) * 1_000_000;
+        self.nmea.plan(ticks, ns, tick_ns, grids, gps_ns);
     }
 
     /// Sends the sentences of `due` now.

@@ -104,6 +104,9 @@ pub struct NmeaStreams {
     /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
     /// missing periods, more than 20 pairs).
     pub rejected: u32,
+    /// Ticks from the last tick to the next sentence due (`None`: none is
+    /// periodic), for the board's wake-up ([`NmeaStreams::plan`]).
+    pub next_in: Option<u64>,
     /// Speed filter: the last speeds (m/s) and the epoch they belong to.
     speeds: [f64; FILTER_LEN],
     speed_n: usize,
@@ -232,6 +235,38 @@ impl NmeaStreams {
             }
         }
         due
+    }
+
+    /// Plans the next wake-up after tick `ticks` (at `ns` on the epochs'
+    /// clock, ticks `tick_ns` apart; `grids` = ticks per navigation period,
+    /// IMU period and ms; `gps_ns` the receiver epoch): the ticks until the
+    /// first sentence due, into [`NmeaStreams::next_in`].
+    pub fn plan(&mut self, ticks: u64, ns: u64, tick_ns: u64, grids: [u64; 3], gps_ns: u64) {
+        let mut next: Option<u64> = None;
+        for i in 1..id::COUNT as u8 {
+            if !self.table.on(i) {
+                continue;
+            }
+            let p = u64::from(self.table.periods[usize::from(i)].max(1));
+            let on_ticks = |g: u64| {
+                let step = g.max(1).saturating_mul(p);
+                step - ticks % step
+            };
+            let on_ns = |len: u64| {
+                let step = len.max(1).saturating_mul(p);
+                (step - ns % step).div_ceil(tick_ns.max(1)).max(1)
+            };
+            let k = match clock_of(i) {
+                Clock::Nav => on_ticks(grids[0]),
+                Clock::Imu => on_ticks(grids[1]),
+                Clock::Millisecond => on_ticks(grids[2]),
+                Clock::Gps => on_ns(gps_ns),
+                Clock::GpsSecond => on_ns(1_000_000_000),
+                Clock::Strobe | Clock::Never => continue,
+            };
+            next = Some(next.map_or(k, |n| n.min(k)));
+        }
+        self.next_in = next;
     }
 
     /// The IDs due on a strobe (PSTRB when on).
