@@ -572,3 +572,28 @@ fn the_next_output_is_the_next_sentence() {
         }
     }
 }
+
+/// DID 8 (NMEA_BCAST_PERIOD, `nmea_msgs_t`): a SET of options and
+/// `{msgID, period}` pairs (ID 0 ends the list) sets the table as `$ASCE`
+/// does, is ACKed, and a GET reads the table back in that form.
+#[test]
+fn nmea_bcast_period_sets_and_reads_the_table() {
+    let mut b = Bench::new();
+    let mut msgs = vec![0u8; 44];
+    msgs[4..10].copy_from_slice(&[4, 2, 7, 1, 0, 9]);
+    let mut out = [0u8; 128];
+    let n = message::encode_set(8, 0, &msgs, &mut out).unwrap();
+    let r = b.send(&out[..n]);
+    assert!(matches!(&r[..], [Out::Isb { did: 0, .. }]), "an ACK: {r:?}");
+    assert_eq!(
+        b.send(b"$ASCE*14\r\n"),
+        [Out::Nmea("$ASCE,0,4,2,7,1".into())]
+    );
+    let r = b.send(&get(8, 0));
+    let Out::Isb { did: 8, payload } = &r[0] else {
+        panic!("{r:?}")
+    };
+    assert_eq!(payload[..10], [0, 0, 0, 0, 4, 2, 7, 1, 0, 0]);
+    assert_eq!(payload.len(), 44);
+    assert_eq!(lines(&b.run(32), "$PINS1").len(), 2, "every 2 × 4 ms");
+}

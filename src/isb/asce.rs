@@ -230,6 +230,51 @@ impl Table {
     }
 }
 
+/// `nmea_msgs_t` (DID 8, `NMEA_BCAST_PERIOD`; SDK 2.7.1 `data_sets.h`):
+/// `u32 options`, then [`MAX_PAIRS`] × `{u8 msgID, u8 period}`; an ID 0
+/// ends the list.
+pub mod nmea_msgs {
+    /// Struct size, bytes.
+    pub const SIZE: usize = 44;
+    /// Offset of `options`.
+    pub const OPTIONS: usize = 0;
+    /// Offset of the first `{msgID, period}` pair.
+    pub const MSGS: usize = 4;
+}
+
+impl Table {
+    /// The table as `nmea_msgs_t` (decision: options 0, then the IDs on
+    /// with a period > 0, ascending, as the `$ASCE*14` reply lists them).
+    pub fn to_msgs(&self) -> [u8; nmea_msgs::SIZE] {
+        let mut b = [0u8; nmea_msgs::SIZE];
+        let mut at = nmea_msgs::MSGS;
+        for i in 1..id::COUNT as u8 {
+            let p = self.periods[usize::from(i)];
+            if self.on(i) && p > 0 && at + 2 <= nmea_msgs::SIZE {
+                b[at] = i;
+                b[at + 1] = p;
+                at += 2;
+            }
+        }
+        b
+    }
+
+    /// A write of `nmea_msgs_t`: the options and pairs applied as an
+    /// `$ASCE` with them would be (decision), up to the first ID 0.
+    pub fn apply_msgs(&mut self, b: &[u8; nmea_msgs::SIZE]) -> Applied {
+        let options = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let mut body: heapless::String<160> = heapless::String::new();
+        let _ = write!(body, "ASCE,{options}");
+        for pair in b[nmea_msgs::MSGS..].chunks_exact(2) {
+            if pair[0] == 0 {
+                break;
+            }
+            let _ = write!(body, ",{},{}", pair[0], pair[1]);
+        }
+        self.apply(body.as_bytes())
+    }
+}
+
 /// Every constellation GSV can show but NavIC (the release's `GN`/15).
 const ALL_CONSTELLATIONS: u8 = 0b01_1111;
 

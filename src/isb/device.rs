@@ -793,6 +793,16 @@ impl State {
             did::SYS_PARAMS => {
                 self.gen_fault_code = le::u32(image, sets::sys_params::GEN_FAULT_CODE);
             }
+            did::NMEA_BCAST_PERIOD => {
+                let mut b = [0u8; asce::nmea_msgs::SIZE];
+                b.copy_from_slice(&image[..asce::nmea_msgs::SIZE]);
+                let a = self.nmea.table.apply_msgs(&b);
+                self.nmea.rejected = self.nmea.rejected.wrapping_add(u32::from(a.rejected));
+                self.nmea.next_in = Some(1);
+                if a.persistent {
+                    self.save_persistent(cx);
+                }
+            }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);
             }
@@ -926,6 +936,7 @@ impl State {
             }
             .encode()),
             did::SYS_CMD => put(&SystemCommand::default().encode()),
+            did::NMEA_BCAST_PERIOD => put(&self.nmea.table.to_msgs()),
             did::BIT => put(&self.bit.encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
