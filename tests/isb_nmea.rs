@@ -597,3 +597,27 @@ fn nmea_bcast_period_sets_and_reads_the_table() {
     assert_eq!(payload.len(), 44);
     assert_eq!(lines(&b.run(32), "$PINS1").len(), 2, "every 2 × 4 ms");
 }
+
+/// GPS1_RCVR_POS (DID 6): without RTK the receiver's solution is GPS1_POS,
+/// byte for byte, at the same epoch; its RMC bit (0x400000) streams it.
+#[test]
+fn gps1_rcvr_pos_is_the_receivers_gps1_pos() {
+    let mut b = Bench::new();
+    b.run(62_000);
+    let one = |b: &mut Bench, d: u8| match &b.send(&get(d, 0))[0] {
+        Out::Isb { payload, .. } => payload.clone(),
+        o => panic!("{o:?}"),
+    };
+    let (rcvr, pos) = (one(&mut b, 6), one(&mut b, did::GPS1_POS));
+    assert_eq!(rcvr, pos);
+    assert_ne!(GpsPos::decode(&rcvr.try_into().unwrap()).status, 0);
+    let rmc = imu_emu::isb::sets::Rmc {
+        bits: 0x40_0000,
+        options: 0,
+    }
+    .encode();
+    let mut out = [0u8; 64];
+    let n = message::encode_set(did::RMC, 0, &rmc, &mut out).unwrap();
+    b.send(&out[..n]);
+    assert_eq!(isb_of(&b.run(2000), 6).len(), 5, "every 200 ms");
+}

@@ -875,6 +875,7 @@ impl State {
             | did::INS_3
             | did::INS_4
             | did::GPS1_POS
+            | did::GPS1_RCVR_POS
             | did::GPS1_VEL
             | did::GPS1_SAT
             | did::MAGNETOMETER
@@ -999,7 +1000,10 @@ impl State {
             did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
             did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
+            // Without RTK the receiver's solution is GPS1_POS.
+            did::GPS1_POS | did::GPS1_RCVR_POS => {
+                put(&ins::gps_pos(&epoch, fix, tow_offset).encode())
+            }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             did::MAGNETOMETER => {

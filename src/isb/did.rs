@@ -48,6 +48,9 @@ pub const PIMU_MAG: u8 = 86;
 pub const SYS_CMD: u8 = 7;
 /// `DID_NMEA_BCAST_PERIOD` (`nmea_msgs_t`: the NMEA stream table).
 pub const NMEA_BCAST_PERIOD: u8 = 8;
+/// `gps_pos_t` of the GNSS receiver (GPS1_POS is the better of it and the
+/// RTK solution: without RTK, the same).
+pub const GPS1_RCVR_POS: u8 = 6;
 /// `rmc_t`: realtime message controller.
 pub const RMC: u8 = 9;
 /// `sys_params_t`: system parameters.
@@ -210,7 +213,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 23] = [
+pub const DATA_SETS: [DataSet; 24] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -333,6 +336,13 @@ pub const DATA_SETS: [DataSet; 23] = [
         gps_pos::SIZE,
         Source::GpsDt,
         rmc_nav::BITS_GPS1_POS,
+    ),
+    nav(
+        GPS1_RCVR_POS,
+        "gps_pos_t",
+        gps_pos::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_RCVR_POS,
     ),
     nav(
         GPS1_VEL,

@@ -703,7 +703,7 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 23] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 24] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
@@ -720,6 +720,7 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 23] = [
     (did::INS_3, "INS_3", INS_3),
     (did::INS_4, "INS_4", INS_4),
     (did::GPS1_POS, "GPS1_POS", GPS_POS),
+    (did::GPS1_RCVR_POS, "GPS1_RCVR_POS", GPS_POS),
     (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
     (did::GPS1_SAT, "GPS1_SAT", GPS_SAT),
     (did::MAGNETOMETER, "MAGNETOMETER", MAGNETOMETER),
@@ -808,7 +809,9 @@ pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
         | did::SYS_SENSORS => Some(le::f64(b, 0)),
         // GPS seconds of the week.
         did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => Some(le::f64(b, 4)),
-        did::GPS1_POS => Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3),
+        did::GPS1_POS | did::GPS1_RCVR_POS => {
+            Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3)
+        }
         did::GPS1_VEL => Some(f64::from(le::u32(b, nav::gps_vel::TIME_OF_WEEK_MS)) / 1e3),
         did::GPS1_SAT => Some(f64::from(le::u32(b, nav::gps_sat::TIME_OF_WEEK_MS)) / 1e3),
         did::STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),
