@@ -809,7 +809,7 @@ fn ins_phases_gps_time_and_periods() {
         assert_eq!(w[1].time_of_week_ms % 200, 0);
     }
     let g = fixes.last().unwrap();
-    assert_eq!(g.status, 0x0001_030C);
+    assert_eq!(g.status, 0x1001_030C);
     assert_eq!((g.week, g.leap_s, g.sats_used), (2399, 18, 12));
     let ins = of_did(&r, did::INS_2);
     let last = ins2_of(ins.last().unwrap());

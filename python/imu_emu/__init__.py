@@ -9,6 +9,8 @@ Standard library only (pytest for the fixture). The parts:
   (:func:`decode_kernel`).
 * :mod:`imu_emu.isb` -- the ISB packet codec and every data set the
   emulated IMX-5 serves decoded (:func:`decode_set`).
+* :mod:`imu_emu.nmea` -- the IMX-5's NMEA: ``$ASCE`` and the other
+  commands, whole checksum-checked sentences cut out of a mixed stream.
 * :class:`Emulator` -- start the ``imu-emu`` binary on a free TCP port with
   a control socket, connect to its UART, stop it.
 * :class:`Fleet` -- N devices in one ``imu-emu --count N``, each a
@@ -43,6 +45,7 @@ from .kernel import (  # noqa: F401
     stop,
 )
 from . import isb  # noqa: F401
+from . import nmea  # noqa: F401
 from .decode import decode_kernel  # noqa: F401
 from .emulator import (  # noqa: F401
     Control,

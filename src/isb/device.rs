@@ -55,9 +55,12 @@
 //!   and are ACKed; STOP_DID_BROADCAST stops one, no reply; `$STPB` and
 //!   `$STPC` stop every stream, no reply.
 //! - **NMEA**: `$INFO` is answered with the `$INFO` sentence, `$PERS`
-//!   saves the running streams as persistent, `$SRST` resets (after the
-//!   bytes already queued have been handed out). Persistent streams start
-//!   by themselves at every boot.
+//!   saves the running streams (ISB and NMEA) as persistent, `$SRST`
+//!   resets (after the bytes already queued have been handed out),
+//!   `$ASCE` sets or reads the NMEA streams ([`crate::isb::asce`],
+//!   [`crate::isb::nmea_stream`]). Persistent streams start by themselves
+//!   at every boot.
+//! - **Host DATA** packets apply as SET_DATA, unanswered.
 //! - **Status words** (IMU `status`, SYS_PARAMS `hdwStatus`) come from the
 //!   chain's neutral health — the conditions behind the KERNEL's USW:
 //!   saturation (since the previous packet), sensor faults, over-
@@ -72,12 +75,14 @@ use heapless::Vec;
 use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
+use crate::isb::asce;
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime, NavTruth};
 use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
 use crate::isb::nmea::{self, Command as Nmea, Event as Input_, Input};
+use crate::isb::nmea_stream::{Epochs, NmeaStreams, Snapshot};
 use crate::isb::packet::{Packet, PacketType, MAX_PACKET, OVERHEAD};
 use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
@@ -86,6 +91,9 @@ use crate::isb::sets::{
 use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
+
+// The NMEA streams' hooks (`$ASCE`, the sentences due at a tick).
+mod nmea_hooks;
 
 /// Persistent streams the image holds (the first ten running streams are
 /// saved; the image layout is unchanged since the IMU-mode device).
@@ -98,14 +106,19 @@ const ENTRY: usize = 8;
 /// Where the persistent streams start in the image (after FLASH_CONFIG):
 /// `u32 count`, then [`MAX_STREAMS`] entries.
 const PERSIST: usize = flash::SIZE;
-/// The ISB image in flash: FLASH_CONFIG, then the persistent streams.
-pub const IMAGE_LEN: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// Where the persistent NMEA table starts ([`asce::Table::to_image`]).
+const PERSIST_NMEA: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// The ISB image in flash: FLASH_CONFIG, the persistent streams, the
+/// persistent NMEA table.
+pub const IMAGE_LEN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
 /// How the ISB image is stored ([`crate::store`]): its own magic, so a
-/// flash written by the KERNEL personality is not taken for it.
+/// flash written by the KERNEL personality is not taken for it. Version 2
+/// added the NMEA table (a version-1 image loads as none: factory
+/// defaults).
 pub const IMAGE: ImageSpec = ImageSpec {
     len: IMAGE_LEN as u16,
     magic: *b"ISB1",
-    version: 1,
+    version: 2,
 };
 /// An incomplete packet or sentence with no new byte for this long is
 /// dropped (as the KERNEL does with a frame cut short).
@@ -137,6 +150,10 @@ struct State {
     cfg: FlashConfig,
     /// The persistent streams as saved (`u32 count` + entries).
     persist: [u8; 4 + MAX_STREAMS * ENTRY],
+    /// The persistent NMEA table as saved.
+    persist_nmea: [u8; asce::IMAGE_LEN],
+    /// The NMEA streams (`$ASCE`).
+    nmea: NmeaStreams,
     /// `startupImuDtMs`, `startupNavDtMs`, `ser0BaudRate` at boot (what
     /// runs until the next reset).
     imu_dt_ms: u32,
@@ -191,6 +208,8 @@ impl Personality for Isb {
             st: State {
                 cfg: FlashConfig([0; flash::SIZE]),
                 persist: [0; 4 + MAX_STREAMS * ENTRY],
+                persist_nmea: [0; asce::IMAGE_LEN],
+                nmea: NmeaStreams::default(),
                 imu_dt_ms: flash::DEFAULT_IMU_DT_MS,
                 nav_dt_ms: flash::DEFAULT_NAV_DT_MS,
                 baud: flash::DEFAULT_BAUD_RATE,
@@ -229,11 +248,14 @@ impl Personality for Isb {
         // the factory defaults (docs/isb-data-sets.md).
         if loaded && cfg.is_valid() && cfg.key() == flash::FACTORY_KEY {
             st.cfg = cfg;
-            st.persist.copy_from_slice(&image[PERSIST..]);
+            st.persist.copy_from_slice(&image[PERSIST..PERSIST_NMEA]);
+            st.persist_nmea.copy_from_slice(&image[PERSIST_NMEA..]);
         } else {
             st.cfg = FlashConfig::factory();
             st.persist = [0; 4 + MAX_STREAMS * ENTRY];
+            st.persist_nmea = [0; asce::IMAGE_LEN];
         }
+        st.nmea = NmeaStreams::default();
         st.imu_dt_ms = st.cfg.startup_imu_dt_ms().clamp(1, 1000);
         st.nav_dt_ms = st.cfg.startup_nav_dt_ms().clamp(st.imu_dt_ms, 1000);
         st.baud = st.cfg.u32_at(flash::SER0_BAUD_RATE).clamp(300, 10_000_000);
@@ -261,6 +283,13 @@ impl Personality for Isb {
         cx.set_line_rate(st.baud);
         if cx.firmware_update() {
             return;
+        }
+        st.nmea.table = asce::Table::from_image(&st.persist_nmea);
+        // The release's BIT at start-up (a moving-unit BIT: the unit may
+        // not be at rest), unless sysCfgBits disables it.
+        if st.cfg.u32_at(flash::SYS_CFG_BITS) & flash::SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP == 0
+        {
+            st.run_bit(cx, bit::CMD_BASIC_MOVING);
         }
         let n = (le::u32(&st.persist, 0) as usize).min(MAX_STREAMS);
         for k in 0..n {
@@ -290,6 +319,7 @@ impl Personality for Isb {
         self.input.feed(bytes, |ev| match ev {
             Input_::Packet(p) => st.packet(cx, &p, now),
             Input_::Nmea(c) => st.nmea(cx, c, now),
+            Input_::Asce(body) => st.asce(cx, body),
         });
         st.parse_errors = self.input.isb_errors();
     }
@@ -344,6 +374,7 @@ impl Personality for Isb {
             // Saturation is reported since the previous packet.
             cx.chain_mut().restart_health_interval();
         }
+        st.nmea_tick(cx, now);
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
@@ -357,10 +388,12 @@ impl Personality for Isb {
         if let Some(i) = st.find(did::STROBE_IN_TIME) {
             st.send_stream(cx, i, at);
         }
+        let due = st.nmea.due_on_strobe();
+        st.send_nmea(cx, due, at);
     }
 
     fn mode(&self) -> Mode {
-        if self.st.streams.iter().any(|s| s.every > 0) {
+        if self.st.streams.iter().any(|s| s.every > 0) || self.st.nmea.streaming() {
             Mode::Continuous
         } else {
             Mode::Idle
@@ -380,12 +413,22 @@ impl Personality for Isb {
     }
 
     fn ticks_to_next_output(&self) -> Option<u64> {
-        self.st
+        let isb = self
+            .st
             .streams
             .iter()
             .filter(|s| s.every > 0)
             .map(|s| u64::from(s.countdown))
-            .min()
+            .min();
+        let nmea = self
+            .st
+            .nmea
+            .streaming()
+            .then_some(self.st.nmea.next_in.unwrap_or(1));
+        match (isb, nmea) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 }
 
@@ -411,6 +454,17 @@ impl Isb {
     /// `--gps-time`; firmware keeps [`nav::DEFAULT_GPS_S_AT_ZERO`]).
     pub fn set_gps_time(&mut self, gps_ns_at_zero: u64) {
         self.st.gps_ns_at_zero = gps_ns_at_zero;
+    }
+
+    /// The `$ASCE` table in force.
+    pub fn nmea_table(&self) -> &asce::Table {
+        &self.st.nmea.table
+    }
+
+    /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
+    /// missing periods, more than 20 pairs).
+    pub fn asce_rejected(&self) -> u32 {
+        self.st.nmea.rejected
     }
 
     /// DIDs streaming now, in the order they were started.
@@ -546,9 +600,11 @@ impl State {
             Request::BadGet { rx_flags, rx_did } => {
                 send_ack(cx, &AckInfo::of(rx_flags, rx_did), true)
             }
-            Request::Set(req) => self.set(cx, &req, now),
+            Request::Set(req) => self.set(cx, &req, now, true),
+            Request::Data(req) => self.set(cx, &req, now, false),
             Request::StopAllPorts | Request::StopCurrentPort => {
                 self.streams.clear();
+                self.nmea.table.stop();
                 send_ack(cx, &AckInfo::of(p.flags, p.did), false);
             }
             Request::StopDid(did) => self.stop_stream(did),
@@ -588,10 +644,17 @@ impl State {
         cx: &mut impl Context<Integrals>,
         req: &message::SetRequest<'_>,
         now: Instant,
+        reply: bool,
     ) {
         let mut image = [0u8; did::MAX_SIZE];
         let n = self.image_of(cx, req.did, &mut image, now);
         let outcome = message::apply_set(req, &mut image[..n]);
+        // Host DATA: the same effect, no ACK or NACK.
+        let send_ack = |cx: &mut _, info: &AckInfo, nack| {
+            if reply {
+                send_ack(cx, info, nack);
+            }
+        };
         match outcome {
             SetOutcome::Nack(info) | SetOutcome::Refused(info) => send_ack(cx, &info, true),
             SetOutcome::Silent => {}
@@ -646,6 +709,16 @@ impl State {
             did::SYS_PARAMS => {
                 self.gen_fault_code = le::u32(image, sets::sys_params::GEN_FAULT_CODE);
             }
+            did::NMEA_BCAST_PERIOD => {
+                let mut b = [0u8; asce::nmea_msgs::SIZE];
+                b.copy_from_slice(&image[..asce::nmea_msgs::SIZE]);
+                let a = self.nmea.table.apply_msgs(&b);
+                self.nmea.rejected = self.nmea.rejected.wrapping_add(u32::from(a.rejected));
+                self.nmea.next_in = Some(1);
+                if a.persistent {
+                    self.save_persistent(cx);
+                }
+            }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);
             }
@@ -693,7 +766,10 @@ impl State {
                     });
                 }
             }
-            Nmea::StopAllPorts | Nmea::StopCurrentPort => self.streams.clear(),
+            Nmea::StopAllPorts | Nmea::StopCurrentPort => {
+                self.streams.clear();
+                self.nmea.table.stop();
+            }
             Nmea::SavePersistent => self.save_persistent(cx),
             Nmea::SoftwareReset => cx.request_reset(),
         }
@@ -715,6 +791,7 @@ impl State {
             le::put(e, 4, &s.offset.to_le_bytes());
             le::put(e, 6, &s.period.max(1).to_le_bytes());
         }
+        self.persist_nmea = self.nmea.table.to_image();
         self.save(cx);
     }
 
@@ -723,7 +800,8 @@ impl State {
     fn save(&mut self, cx: &mut impl Context<Integrals>) {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
-        image[PERSIST..].copy_from_slice(&self.persist);
+        image[PERSIST..PERSIST_NMEA].copy_from_slice(&self.persist);
+        image[PERSIST_NMEA..].copy_from_slice(&self.persist_nmea);
         self.save_pending = cx.save_image(&image).is_err();
     }
 
@@ -774,6 +852,7 @@ impl State {
             }
             .encode()),
             did::SYS_CMD => put(&SystemCommand::default().encode()),
+            did::NMEA_BCAST_PERIOD => put(&self.nmea.table.to_msgs()),
             did::BIT => put(&self.bit.encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
@@ -797,6 +876,7 @@ impl State {
             | did::INS_3
             | did::INS_4
             | did::GPS1_POS
+            | did::GPS1_RCVR_POS
             | did::GPS1_VEL
             | did::GPS1_SAT
             | did::MAGNETOMETER
@@ -866,6 +946,32 @@ impl State {
         let truth = self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
+        // INS, magnetometer, barometer: stamped on their output grid (the
+        // last multiple of the source period), as streams are, also in a
+        // one-shot GET.
+        let back = match did::lookup(u16::from(did)) {
+            Some(set)
+                if matches!(
+                    did,
+                    did::INS_1
+                        | did::INS_2
+                        | did::INS_3
+                        | did::INS_4
+                        | did::MAGNETOMETER
+                        | did::BAROMETER
+                ) =>
+            {
+                let ms = set
+                    .source
+                    .period_ms(self.imu_dt_ms, self.nav_dt_ms, self.gps_dt_ms);
+                since_ns % (u64::from(ms.max(1)) * 1_000_000)
+            }
+            _ => 0,
+        };
+        let since_ns = since_ns - back;
+        let gps = GpsTime::of_ns(
+            (u64::from(gps.week) * nav::WEEK_S * 1_000_000_000 + gps.tow_ns).saturating_sub(back),
+        );
         let since_s = since_ns as f64 / 1e9;
         let valid = self.nav.gps_time_valid();
         let h = InsHeader {
@@ -895,7 +1001,10 @@ impl State {
             did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
             did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::GPS1_POS => put(&ins::gps_pos(&epoch, fix, tow_offset).encode()),
+            // Without RTK the receiver's solution is GPS1_POS.
+            did::GPS1_POS | did::GPS1_RCVR_POS => {
+                put(&ins::gps_pos(&epoch, fix, tow_offset).encode())
+            }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             did::MAGNETOMETER => {

@@ -46,6 +46,11 @@ pub const IMU_MAG: u8 = 85;
 pub const PIMU_MAG: u8 = 86;
 /// `system_command_t`: system commands.
 pub const SYS_CMD: u8 = 7;
+/// `DID_NMEA_BCAST_PERIOD` (`nmea_msgs_t`: the NMEA stream table).
+pub const NMEA_BCAST_PERIOD: u8 = 8;
+/// `gps_pos_t` of the GNSS receiver (GPS1_POS is the better of it and the
+/// RTK solution: without RTK, the same).
+pub const GPS1_RCVR_POS: u8 = 6;
 /// `rmc_t`: realtime message controller.
 pub const RMC: u8 = 9;
 /// `sys_params_t`: system parameters.
@@ -173,6 +178,8 @@ impl DataSet {
 const NONE: &[Range] = &[];
 const ALL_RMC: &[Range] = &[Range::new(0, sets::rmc::SIZE as u16)];
 const ALL_SYS_CMD: &[Range] = &[Range::new(0, sets::sys_cmd::SIZE as u16)];
+/// NMEA_BCAST_PERIOD: all (options and pairs).
+const ALL_NMEA_MSGS: &[Range] = &[Range::new(0, crate::isb::asce::nmea_msgs::SIZE as u16)];
 /// SYS_PARAMS: only `genFaultCode` ("set to zero to reset fault code",
 /// `data_sets.h`); the rest is the device's report.
 const SYS_PARAMS_W: &[Range] = &[Range::new(
@@ -187,8 +194,10 @@ const FLASH_W: &[Range] = &[Range::new(
     sets::flash::CHECKSUM as u16,
     sets::flash::SIZE as u16,
 )];
-/// BIT: the `command` byte starts a test; the rest is the result.
-const BIT_W: &[Range] = &[Range::new(0, 1)];
+/// BIT: the `command` byte starts a test; `lastCommand`, `state` and
+/// the reserved byte beside it may be written with it (a host writes the
+/// first `u32`; the test's run rewrites them); the rest is the result.
+const BIT_W: &[Range] = &[Range::new(0, 4)];
 
 /// A read-only navigation data set (`docs/isb-data-sets.md` "Navigation
 /// data sets").
@@ -204,7 +213,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 22] = [
+pub const DATA_SETS: [DataSet; 24] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -227,6 +236,14 @@ pub const DATA_SETS: [DataSet; 22] = [
         size: sets::sys_cmd::SIZE as u16,
         source: Source::Millisecond,
         writable: ALL_SYS_CMD,
+        rmc_bit: 0,
+    },
+    DataSet {
+        did: NMEA_BCAST_PERIOD,
+        name: "nmea_msgs_t",
+        size: crate::isb::asce::nmea_msgs::SIZE as u16,
+        source: Source::Millisecond,
+        writable: ALL_NMEA_MSGS,
         rmc_bit: 0,
     },
     DataSet {
@@ -319,6 +336,13 @@ pub const DATA_SETS: [DataSet; 22] = [
         gps_pos::SIZE,
         Source::GpsDt,
         rmc_nav::BITS_GPS1_POS,
+    ),
+    nav(
+        GPS1_RCVR_POS,
+        "gps_pos_t",
+        gps_pos::SIZE,
+        Source::GpsDt,
+        rmc_nav::BITS_GPS1_RCVR_POS,
     ),
     nav(
         GPS1_VEL,

@@ -5,6 +5,7 @@
 //! device never uses this table; `imu-emu client --protocol isb` and the
 //! tests read and write data sets by field name through it.
 
+use crate::isb::asce;
 use crate::isb::did;
 use crate::isb::nav_sets as nav;
 use crate::isb::sets::{self, le};
@@ -125,6 +126,246 @@ const PIMU: &[FieldSpec] = &[
 const RMC: &[FieldSpec] = &[
     f("bits", sets::rmc::BITS, U64, ""),
     f("options", sets::rmc::OPTIONS, U32, ""),
+];
+
+/// `nmea_msgs_t`: options, then 20 `{msgID, period}` pairs.
+const NMEA_MSGS: &[FieldSpec] = &[
+    f("options", asce::nmea_msgs::OPTIONS, U32, ""),
+    f("nmeaBroadcastMsgs[0].msgID", asce::nmea_msgs::MSGS, U8, ""),
+    f(
+        "nmeaBroadcastMsgs[0].period",
+        asce::nmea_msgs::MSGS + 1,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[1].msgID",
+        asce::nmea_msgs::MSGS + 2,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[1].period",
+        asce::nmea_msgs::MSGS + 3,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[2].msgID",
+        asce::nmea_msgs::MSGS + 4,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[2].period",
+        asce::nmea_msgs::MSGS + 5,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[3].msgID",
+        asce::nmea_msgs::MSGS + 6,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[3].period",
+        asce::nmea_msgs::MSGS + 7,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[4].msgID",
+        asce::nmea_msgs::MSGS + 8,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[4].period",
+        asce::nmea_msgs::MSGS + 9,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[5].msgID",
+        asce::nmea_msgs::MSGS + 10,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[5].period",
+        asce::nmea_msgs::MSGS + 11,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[6].msgID",
+        asce::nmea_msgs::MSGS + 12,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[6].period",
+        asce::nmea_msgs::MSGS + 13,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[7].msgID",
+        asce::nmea_msgs::MSGS + 14,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[7].period",
+        asce::nmea_msgs::MSGS + 15,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[8].msgID",
+        asce::nmea_msgs::MSGS + 16,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[8].period",
+        asce::nmea_msgs::MSGS + 17,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[9].msgID",
+        asce::nmea_msgs::MSGS + 18,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[9].period",
+        asce::nmea_msgs::MSGS + 19,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[10].msgID",
+        asce::nmea_msgs::MSGS + 20,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[10].period",
+        asce::nmea_msgs::MSGS + 21,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[11].msgID",
+        asce::nmea_msgs::MSGS + 22,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[11].period",
+        asce::nmea_msgs::MSGS + 23,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[12].msgID",
+        asce::nmea_msgs::MSGS + 24,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[12].period",
+        asce::nmea_msgs::MSGS + 25,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[13].msgID",
+        asce::nmea_msgs::MSGS + 26,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[13].period",
+        asce::nmea_msgs::MSGS + 27,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[14].msgID",
+        asce::nmea_msgs::MSGS + 28,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[14].period",
+        asce::nmea_msgs::MSGS + 29,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[15].msgID",
+        asce::nmea_msgs::MSGS + 30,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[15].period",
+        asce::nmea_msgs::MSGS + 31,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[16].msgID",
+        asce::nmea_msgs::MSGS + 32,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[16].period",
+        asce::nmea_msgs::MSGS + 33,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[17].msgID",
+        asce::nmea_msgs::MSGS + 34,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[17].period",
+        asce::nmea_msgs::MSGS + 35,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[18].msgID",
+        asce::nmea_msgs::MSGS + 36,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[18].period",
+        asce::nmea_msgs::MSGS + 37,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[19].msgID",
+        asce::nmea_msgs::MSGS + 38,
+        U8,
+        "",
+    ),
+    f(
+        "nmeaBroadcastMsgs[19].period",
+        asce::nmea_msgs::MSGS + 39,
+        U8,
+        "",
+    ),
 ];
 
 const SYS_CMD: &[FieldSpec] = &[
@@ -462,10 +703,11 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 22] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 24] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
+    (did::NMEA_BCAST_PERIOD, "NMEA_BCAST_PERIOD", NMEA_MSGS),
     (did::RMC, "RMC", RMC),
     (did::SYS_PARAMS, "SYS_PARAMS", SYS_PARAMS),
     (did::FLASH_CONFIG, "FLASH_CONFIG", FLASH),
@@ -478,6 +720,7 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 22] = [
     (did::INS_3, "INS_3", INS_3),
     (did::INS_4, "INS_4", INS_4),
     (did::GPS1_POS, "GPS1_POS", GPS_POS),
+    (did::GPS1_RCVR_POS, "GPS1_RCVR_POS", GPS_POS),
     (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
     (did::GPS1_SAT, "GPS1_SAT", GPS_SAT),
     (did::MAGNETOMETER, "MAGNETOMETER", MAGNETOMETER),
@@ -566,7 +809,9 @@ pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
         | did::SYS_SENSORS => Some(le::f64(b, 0)),
         // GPS seconds of the week.
         did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => Some(le::f64(b, 4)),
-        did::GPS1_POS => Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3),
+        did::GPS1_POS | did::GPS1_RCVR_POS => {
+            Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3)
+        }
         did::GPS1_VEL => Some(f64::from(le::u32(b, nav::gps_vel::TIME_OF_WEEK_MS)) / 1e3),
         did::GPS1_SAT => Some(f64::from(le::u32(b, nav::gps_sat::TIME_OF_WEEK_MS)) / 1e3),
         did::STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),

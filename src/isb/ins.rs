@@ -581,9 +581,11 @@ pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) 
         Some((lla, _)) => GpsPos {
             week: t.week,
             time_of_week_ms: t.tow_ms(),
+            // Time synchronised by the PPS, as hdwStatus says with a fix.
             status: u32::from(SATS)
                 | (gps_status::FIX_3D << gps_status::FIX_SHIFT)
-                | gps_status::FIX_OK,
+                | gps_status::FIX_OK
+                | gps_status::TIME_PPS_SYNC,
             ecef: ecef_of(&lla),
             lla,
             h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,

@@ -211,11 +211,12 @@ pub struct SetRequest<'a> {
 }
 
 impl<'a> SetRequest<'a> {
-    /// The SET_DATA in `p`; `None` if `p` is not a SET_DATA or its offset
-    /// flag is set on a payload shorter than the offset (decision: dropped
-    /// without a reply, as the SDK drops a malformed packet).
+    /// The SET_DATA (or host DATA, which the release applies alike:
+    /// `docs/isb-nmea.md` §7) in `p`; `None` if `p` is neither or its
+    /// offset flag is set on a payload shorter than the offset (decision:
+    /// dropped without a reply, as the SDK drops a malformed packet).
     pub fn parse(p: &Packet<'a>) -> Option<Self> {
-        if p.kind() != Some(PacketType::SetData) {
+        if !matches!(p.kind(), Some(PacketType::SetData | PacketType::Data)) {
             return None;
         }
         let (offset, data) = p.offset_and_data()?;
@@ -355,6 +356,9 @@ pub enum Request<'a> {
     },
     /// SET_DATA ([`apply_set`]).
     Set(SetRequest<'a>),
+    /// DATA from the host: applied as SET_DATA, neither ACKed nor NACKed
+    /// (the release's `com_manager.cpp` ACKs only SET_DATA).
+    Data(SetRequest<'a>),
     /// STOP_BROADCASTS_ALL_PORTS: stop every stream, ACK
     /// ([`AckInfo::of`] with flags 6).
     StopAllPorts,
@@ -363,8 +367,8 @@ pub enum Request<'a> {
     StopCurrentPort,
     /// STOP_DID_BROADCAST of the header DID: stop that stream, no ACK.
     StopDid(u8),
-    /// Anything else (ACK, NACK, DATA from a host, unknown type, a SET
-    /// with a truncated offset): ignored.
+    /// Anything else (ACK, NACK, unknown type, a SET or DATA with a
+    /// truncated offset): ignored.
     Ignored,
 }
 
@@ -381,6 +385,10 @@ impl<'a> Request<'a> {
             },
             Some(PacketType::SetData) => match SetRequest::parse(p) {
                 Some(s) => Request::Set(s),
+                None => Request::Ignored,
+            },
+            Some(PacketType::Data) => match SetRequest::parse(p) {
+                Some(s) => Request::Data(s),
                 None => Request::Ignored,
             },
             Some(PacketType::StopBroadcastsAllPorts) => Request::StopAllPorts,

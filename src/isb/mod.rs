@@ -13,8 +13,11 @@
 //!   encoders;
 //! - [`fields`]: the data sets' fields by `data_sets.h` name, for hosts;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
-//!   and [`nmea::Input`], the one place every received byte goes.
+//!   and [`nmea::Input`], the one place every received byte goes;
+//! - [`asce`]: the `$ASCE` table and parser; [`nmea_out`]: the sentences
+//!   the IMX-5 prints; [`nmea_stream`]: when each is due.
 
+pub mod asce;
 pub mod device;
 pub mod did;
 pub mod fields;
@@ -24,6 +27,8 @@ pub mod message;
 pub mod nav;
 pub mod nav_sets;
 pub mod nmea;
+pub mod nmea_out;
+pub mod nmea_stream;
 pub mod packet;
 pub mod sets;
 

@@ -381,6 +381,8 @@ pub mod rmc_nav {
     pub const BITS_GPS1_POS: u64 = 0x400;
     /// DID_GPS1_SAT.
     pub const BITS_GPS1_SAT: u64 = 0x4000;
+    /// DID_GPS1_RCVR_POS.
+    pub const BITS_GPS1_RCVR_POS: u64 = 0x40_0000;
     /// DID_GPS1_VEL.
     pub const BITS_GPS1_VEL: u64 = 0x10_0000;
     /// DID_IMU_MAG.

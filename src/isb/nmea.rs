@@ -27,9 +27,11 @@ use super::packet::{Decoder, Packet, MAX_PACKET};
 use super::sets::DevInfo;
 use core::fmt::Write as _;
 
-/// Longest sentence body kept (bytes between `$` and `*`). NMEA 0183
-/// allows 82 bytes per sentence; longer bodies are dropped as junk.
-pub const MAX_BODY: usize = 80;
+/// Longest sentence body kept (bytes between `$` and `*`): the release's
+/// receive limit `MAX_MSG_LENGTH_NMEA` (200 bytes for the whole sentence,
+/// `$`, `*`, two hex digits and CR LF included; `docs/isb-nmea.md`);
+/// longer bodies are dropped as bad sentences.
+pub const MAX_BODY: usize = 200 - 6;
 
 /// XOR of `body` (the bytes between `$` and `*`).
 pub fn checksum(body: &[u8]) -> u8 {
@@ -166,6 +168,9 @@ pub enum Event<'a> {
     Packet(Packet<'a>),
     /// A valid command sentence.
     Nmea(Command),
+    /// A valid `$ASCE` sentence: its body (between `$` and `*`, starting
+    /// `ASCE`), borrowing the classifier ([`super::asce`]).
+    Asce(&'a [u8]),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -190,7 +195,7 @@ pub struct Dropped {
     pub junk_bytes: u32,
     /// Sentences cut short, too long, or with a wrong checksum.
     pub bad_sentences: u32,
-    /// Valid sentences that are not one of the five commands.
+    /// Valid sentences that are not one of the five commands nor `$ASCE`.
     pub unknown_sentences: u32,
 }
 
@@ -300,6 +305,8 @@ impl<const CAP: usize> Input<CAP> {
                         self.dropped.bad_sentences = self.dropped.bad_sentences.wrapping_add(1);
                     } else if let Some(c) = Command::from_body(body) {
                         on(Event::Nmea(c));
+                    } else if body.starts_with(b"ASCE") {
+                        on(Event::Asce(body));
                     } else {
                         self.dropped.unknown_sentences =
                             self.dropped.unknown_sentences.wrapping_add(1);

@@ -500,6 +500,9 @@ pub mod flash {
     pub const GNSS_SAT_SIG_CONST: usize = 66;
     /// `u32 sysCfgBits`.
     pub const SYS_CFG_BITS: usize = 68;
+    /// `sysCfgBits`: no BIT at start-up
+    /// (`SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP`, SDK 2.7.1).
+    pub const SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP: u32 = 0x0008_0000;
     /// `f64 refLla[3]`.
     pub const REF_LLA: usize = 72;
     /// `f64 lastLla[3]`.

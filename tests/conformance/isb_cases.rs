@@ -325,3 +325,136 @@ pub fn a_fed_rotation_shows_in_the_imu_packets(kind: Kind) {
         }
     }
 }
+
+/// What the line carries: a whole ISB packet or a whole NMEA sentence.
+#[derive(Debug)]
+enum Item {
+    Packet { did: u8, payload: Vec<u8> },
+    Sentence(String),
+}
+
+/// The next whole item on the line; a sentence's checksum is checked.
+fn next_item(c: &mut Conn) -> Item {
+    match c.read_bytes(1)[0] {
+        0xEF => {
+            let h = c.read_bytes(5);
+            let size = usize::from(u16::from_le_bytes([h[3], h[4]]));
+            let rest = c.read_bytes(size + 2);
+            Item::Packet {
+                did: h[2],
+                payload: rest[..size].to_vec(),
+            }
+        }
+        b'$' => {
+            let mut s = vec![b'$'];
+            while !s.ends_with(b"\r\n") {
+                s.extend(c.read_bytes(1));
+                assert!(s.len() <= 256, "an over-long sentence");
+            }
+            let s = String::from_utf8(s).unwrap();
+            let star = s.rfind('*').expect("a checksum");
+            let sum = imu_emu::isb::nmea::checksum(&s.as_bytes()[1..star]);
+            assert_eq!(&s[star + 1..], format!("{sum:02X}\r\n"), "{s}");
+            Item::Sentence(s[..star].to_owned())
+        }
+        b => panic!("byte {b:#04x} starts no packet and no sentence"),
+    }
+}
+
+fn sentence(body: &str) -> Vec<u8> {
+    let sum = imu_emu::isb::nmea::checksum(body.as_bytes());
+    format!("${body}*{sum:02X}\r\n").into_bytes()
+}
+
+/// `$ASCE` on the IMX-5 image: PPIMU every 25 navigation periods (100 ms
+/// of its own time, dt 4 ms) and GGA every 5 receiver epochs (whole
+/// seconds), interleaved whole with an ISB IMU stream every 25 periods;
+/// `$ASCE*14` reads the table back as the release writes it; `$STPC`
+/// stops both.
+pub fn asce_streams_nmea_beside_isb(kind: Kind) {
+    let mut d = start(kind);
+    d.c.send(&sentence("ASCE,0,PPIMU,25,GNGGA,5"));
+    d.c.send(b"$ASCE*14\r\n");
+    d.c.send(&isb_get(did::IMU, 25));
+    let (mut ppimu, mut gga, mut imu, mut reply) = (vec![], vec![], vec![], None);
+    let deadline = Instant::now() + 4 * TIMEOUT;
+    while ppimu.len() < 12 || gga.len() < 2 || imu.len() < 12 {
+        assert!(Instant::now() < deadline, "streams too slow");
+        match next_item(&mut d.c) {
+            Item::Packet {
+                did: did::IMU,
+                payload,
+            } => imu.push(Imu::decode(&payload.try_into().unwrap()).time),
+            Item::Packet { did, .. } => panic!("unexpected DID {did}"),
+            Item::Sentence(s) => {
+                let f: Vec<String> = s.split(',').map(str::to_owned).collect();
+                match f[0].as_str() {
+                    "$PPIMU" => ppimu.push(f),
+                    "$GNGGA" => gga.push(f),
+                    "$ASCE" => reply = Some(s),
+                    _ => panic!("unexpected sentence {s}"),
+                }
+            }
+        }
+    }
+    assert_eq!(reply.as_deref(), Some("$ASCE,0,2,25,7,5"));
+    for w in ppimu.windows(2) {
+        let t = |f: &[String]| f[1].parse::<f64>().unwrap();
+        assert!((t(&w[1]) - t(&w[0]) - 0.1).abs() < 1e-6, "{w:?}");
+        assert_eq!(w[1][8], "0.004");
+    }
+    for w in imu[1..].windows(2) {
+        assert!((w[1] - w[0] - 0.1).abs() < 1e-9);
+    }
+    // No fix yet: quality 0, on whole seconds of the local time.
+    for f in &gga {
+        assert!(f[1].ends_with(".000"), "{f:?}");
+        assert_eq!(f[6], "0");
+    }
+    d.c.send(b"$STPC*14\r\n");
+    assert_silent(
+        &mut d.c,
+        Duration::from_millis(300),
+        Duration::from_millis(500),
+        "$STPC stops NMEA and ISB",
+    );
+}
+
+/// A rising EXTRIG edge (the host's control socket, the image's pin
+/// bridge) is a strobe: STROBE_IN_TIME with its count and time, and
+/// `$PSTRB` (ID 13) with the same fields.
+pub fn an_extrig_edge_gives_strobe_in_time_and_pstrb(kind: Kind) {
+    use imu_emu::isb::sets::StrobeInTime;
+    let mut d = start(kind);
+    d.c.send(&isb_get(did::STROBE_IN_TIME, 1));
+    d.c.send(&sentence("ASCE,0,13,1"));
+    d.c.send(b"$ASCE*14\r\n");
+    loop {
+        if let Item::Sentence(s) = next_item(&mut d.c) {
+            assert_eq!(s, "$ASCE,0,13,1");
+            break;
+        }
+    }
+    d.pins().extrig(true);
+    let mut got = (None, None);
+    while got.0.is_none() || got.1.is_none() {
+        match next_item(&mut d.c) {
+            Item::Packet {
+                did: did::STROBE_IN_TIME,
+                payload,
+            } => got.0 = Some(StrobeInTime::decode(&payload.try_into().unwrap())),
+            Item::Sentence(s) => got.1 = Some(s),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    let (s, line) = (got.0.unwrap(), got.1.unwrap());
+    assert_eq!(s.count, 1);
+    assert_eq!(
+        line,
+        format!(
+            "$PSTRB,{},{},{},{}",
+            s.week, s.time_of_week_ms, s.pin, s.count
+        )
+    );
+    d.pins().extrig(false);
+}

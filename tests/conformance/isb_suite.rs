@@ -55,4 +55,6 @@ both!(
     bad_checksum_then_a_good_packet_is_answered,
     navigation_streams_on_device_time_while_aligning,
     a_fed_rotation_shows_in_the_imu_packets,
+    asce_streams_nmea_beside_isb,
+    an_extrig_edge_gives_strobe_in_time_and_pstrb,
 );

@@ -619,3 +619,28 @@ fn the_imx_page_plots_navigation_and_its_gps_outage_reaches_the_wire() {
 fn ins2(p: &support::IsbPacket) -> Ins2 {
     Ins2::decode(&p.payload.clone().try_into().unwrap())
 }
+
+/// The page's strobe button is a rising EXTRIG edge: the IMX answers on
+/// its line with STROBE_IN_TIME (count 1; the GET's own reply is count 0).
+#[test]
+fn the_imx_pages_strobe_button_reaches_the_wire() {
+    use imu_emu::isb::sets::StrobeInTime;
+    let emu = Emu::tcp(&["--protocol", "isb", "--web", "127.0.0.1:0", "--seed", "1"]);
+    let web = web_url(&emu, 1);
+    let mut uart = Conn::tcp(emu.addr());
+    uart.send(&isb_get(did::INS_2, 25));
+    uart.send(&isb_get(did::STROBE_IN_TIME, 1));
+    let (_browser, mut page) = open(&web);
+    page.press("strobe");
+    let deadline = Instant::now() + TIMEOUT;
+    loop {
+        assert!(Instant::now() < deadline, "no strobe on the wire");
+        let p = isb_packet(&mut uart);
+        if p.did == did::STROBE_IN_TIME {
+            let s = StrobeInTime::decode(&p.payload.try_into().unwrap());
+            if s.count == 1 {
+                break;
+            }
+        }
+    }
+}

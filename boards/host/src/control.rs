@@ -205,6 +205,12 @@ pub const COMMANDS: &[Form] = &[
         ["low"] => Some(Ok(Command::Edge(Pin::Extrig, Level::Low))),
         _ => None,
     }),
+    // A strobe: a rising EXTRIG edge (the IMX-5 answers with
+    // STROBE_IN_TIME and `$PSTRB` when they are on).
+    form("strobe", true, |w| {
+        w.is_empty()
+            .then_some(Ok(Command::Edge(Pin::Extrig, Level::High)))
+    }),
     form("power-cycle [boot=high|boot=low]", true, |w| match w {
         [] => Some(Ok(Command::PowerCycle(None))),
         ["boot=high"] => Some(Ok(Command::PowerCycle(Some(Level::High)))),
@@ -909,7 +915,7 @@ mod tests {
     fn the_table_gives_the_help_and_the_hints() {
         assert_eq!(
             help(),
-            "commands: help | status | pps | extrig high|low | power-cycle [boot=high|boot=low] \
+            "commands: help | status | pps | extrig high|low | strobe | power-cycle [boot=high|boot=low] \
              | fault gps off|on | fault mag|baro on|off \
              | fault comm|config|gyro-bit|accel-bit|flash on|off | fault temperature <degC>|off \
              | motion static [<lat> <heading>] | motion rotate <x> <y> <z> \

@@ -869,6 +869,7 @@ pub fn run(
             did: dids,
             period,
             format,
+            nmea,
         } => {
             if format.is_some() {
                 return Err(UsageError(
@@ -877,6 +878,16 @@ pub fn run(
                         .into(),
                 )
                 .into());
+            }
+            if let Some(names) = nmea {
+                let mut w = super::writer(o.as_ref())?;
+                let period = u8::try_from(*period)
+                    .map_err(|_| UsageError("record --nmea: --period is 0…255".into()))?;
+                let r =
+                    super::nmea::record(&mut link, &mut w, names, period, *frames, *duration, stop);
+                w.flush()?;
+                eprintln!("imu-emu: {} NMEA sentences recorded", r?);
+                return Ok(());
             }
             let dids = parse_sets(dids.as_deref().unwrap_or("IMU"))?;
             if let Some(r) = raw {

@@ -21,6 +21,7 @@
 
 pub mod decode;
 pub mod isb;
+pub mod nmea;
 pub mod plot;
 
 use std::io::{IsTerminal as _, Read, Write};
@@ -184,6 +185,11 @@ pub enum ClientCmd {
         /// ISB: stream every N source periods of the set (GET_DATA period).
         #[arg(long, value_name = "N", default_value_t = 1)]
         period: u16,
+        /// ISB: record these NMEA sentences instead (`$ASCE` names or
+        /// numbers, comma-separated: GNGGA,GNRMC,GPGSV), every --period
+        /// source periods, as an NMEA log (each sentence as received).
+        #[arg(long, value_name = "SENTENCES", conflicts_with_all = ["did", "to"])]
+        nmea: Option<String>,
     },
     /// Decode a raw capture (the bytes of a line) to CSV or JSON lines.
     Decode {
@@ -716,9 +722,12 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
             raw,
             did,
             period: _,
+            nmea,
         } => {
-            if did.is_some() {
-                return Err(UsageError("record --did goes with --protocol isb".into()).into());
+            if did.is_some() || nmea.is_some() {
+                return Err(
+                    UsageError("record --did and --nmea go with --protocol isb".into()).into(),
+                );
             }
             let rate = stream_rate(&mut link, &args.model);
             if let Some(r) = raw {
