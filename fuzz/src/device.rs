@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 
 use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, TX_CAP};
+use imu_emu::Kernel;
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
 use imu_emu::kernel::frame;
 use imu_emu::kernel::params::{self, PARAMS};
@@ -86,7 +87,7 @@ fn save_flash_frames(rx: &[u8]) -> Vec<(u16, u16, Vec<u8>)> {
 /// The device harness: the device, its clock, what it was sent and what
 /// it must hold.
 struct Harness {
-    dev: Device<RamNor<8192>>,
+    dev: Device<RamNor<8192>, Kernel>,
     product: Product,
     now: u64,
     ticks_left: u32,
