@@ -187,7 +187,6 @@ use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
 use crate::sensor::profile::SensorProfile;
-use crate::sensor::profiles;
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
@@ -432,7 +431,7 @@ impl SignalChain {
     /// The unit is static, level, z up, heading 0 at
     /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
-    /// built-in profile ([`crate::sensor::profiles::for_product`]); the configuration is
+    /// built-in profile ([`Product::sensor_profile`]); the configuration is
     /// [`ChainConfig::defaults`] until [`SignalChain::configure`]. The AHRS
     /// starts levelled, unaligned (bias 0), not aligning.
     pub fn new(product: Product, seed: u64) -> Self {
@@ -512,7 +511,7 @@ impl<I: Integrate> SignalChain<I> {
         let mut rng = Rng::new(seed);
         let profile = match self.profile {
             Some(p) => *p,
-            None => profiles::for_product(&product),
+            None => product.sensor_profile(),
         };
         let errors = ErrorModel::from_profile(&profile, &mut rng);
         let temp_model = TemperatureModel::from_spec(&profile.temperature);

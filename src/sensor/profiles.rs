@@ -20,7 +20,7 @@
 //!   before profiles existed; misalignment 0.01° 1σ is ICD 2.2
 //!   ("non-orthogonality … in the order of 0.01°"). Ranges are those of the
 //!   model's first product code (ICD 3.2.2); a product code's range option
-//!   replaces them ([`for_product`]).
+//!   replaces them (`crate::model::Product::sensor_profile`).
 //!
 //! | profile | gyro ARW °/√h | gyro B °/h | acc VRW m/s/√h | acc B µg |
 //! |---|---|---|---|---|
@@ -31,7 +31,6 @@
 //! | IMX-5 | 0.16 | 1.5 | 0.02 | 19 |
 
 use super::profile::{arw_to_density, vrw_to_density, SensorProfile, SensorSpec, TemperatureSpec};
-use crate::model::{Product, IMX5};
 
 /// ICD 2.2: "non-orthogonality between axes … in the order of 0.01°".
 const MISALIGN_SIGMA: f32 = 0.01 * core::f32::consts::PI / 180.0;
@@ -206,44 +205,4 @@ pub fn builtin(name: &str) -> Option<&'static Builtin> {
         b.name.eq_ignore_ascii_case(name)
             || (b.name == "IMX-5" && name.eq_ignore_ascii_case("IMX5"))
     })
-}
-
-/// The profile of `product`: its model's ([`crate::model::ModelSpec::profile`]),
-/// with a KERNEL product code's range options (ICD 3.2.2) as the gyro and
-/// accelerometer ranges. The IMX-5 has one range, its profile's.
-pub fn for_product(product: &Product) -> SensorProfile {
-    let mut p = *product.model.profile;
-    if !core::ptr::eq(product.model, &IMX5) {
-        p.gyro.range = product.gyro.full_scale() as f32;
-        p.acc.range = product.accel.full_scale() as f32;
-    }
-    p
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::MODELS;
-
-    #[test]
-    fn every_model_has_the_builtin_profile_of_its_name() {
-        for m in MODELS {
-            let b = builtin(m.short).unwrap();
-            assert!(core::ptr::eq(b.profile, m.profile), "{}", m.short);
-        }
-        assert!(core::ptr::eq(
-            builtin("imx5").unwrap().profile,
-            IMX5.profile
-        ));
-        assert_eq!(BUILTIN.len(), MODELS.len() + 1);
-    }
-
-    #[test]
-    fn a_product_code_chooses_the_kernel_ranges_and_the_imx5_keeps_its_own() {
-        let p = for_product(&Product::parse("KERNEL-110-G2000-A8").unwrap());
-        assert_eq!((p.gyro.range, p.acc.range), (2000.0, 8.0));
-        let p = for_product(&Product::imx5());
-        assert_eq!((p.gyro.range, p.acc.range), (4000.0, 16.0));
-        assert_eq!(p.gyro.noise_density, 0.16 / 60.0);
-    }
 }
