@@ -397,6 +397,37 @@ fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
     [x[3 * i], x[3 * i + 1], x[3 * i + 2]]
 }
 
+/// The three sensors' measurement of a tick's truth, one sequence for
+/// both number paths (`chain/float.rs`, `chain/fixed.rs`): the truth
+/// `(rate, force)` given in `frame` is turned into sensor axes
+/// (`to_sensor`: the mounting), then the gyro, the accelerometer and — on a
+/// unit with one — the aux accelerometer measure it in that order (the
+/// order of their random draws; `measure(i, input, force)` is engine `i`),
+/// `zero` standing for an absent aux. Returns the triads and the gyro
+/// (bits 0–2) and accelerometer (bits 3–5) axes beyond their range.
+#[inline(always)]
+fn measure_sensors<T: Copy>(
+    (rate, force): (T, T),
+    frame: TruthFrame,
+    to_sensor: impl Fn(&T) -> T,
+    has_aux: bool,
+    zero: T,
+    mut measure: impl FnMut(usize, &T, &T) -> (T, u8),
+) -> ([T; 3], u8) {
+    let (rate, force) = match frame {
+        TruthFrame::Sensor => (rate, force),
+        TruthFrame::Carrier => (to_sensor(&rate), to_sensor(&force)),
+    };
+    let (g, over) = measure(0, &rate, &force);
+    let (a, over_a) = measure(1, &force, &force);
+    let aux = if has_aux {
+        measure(2, &force, &force).0
+    } else {
+        zero
+    };
+    ([g, a, aux], over | over_a << 3)
+}
+
 /// The Earth rate the AHRS assumes (module doc of [`crate::ahrs::alignment`]):
 /// `earth_enu(DEFAULT_LATITUDE_DEG)`, as a constant (a unit test pins the
 /// equality bit for bit).
