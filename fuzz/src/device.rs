@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 
 use imu_emu::device::{Device, Level, Mode, Pin, PowerOn, TX_CAP};
-use imu_emu::Kernel;
 use imu_emu::kernel::command::{Command, SAVE_FLASH};
 use imu_emu::kernel::frame;
 use imu_emu::kernel::params::{self, PARAMS};
@@ -12,6 +11,7 @@ use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 use crate::script::{drain_tx, Cursor};
 
