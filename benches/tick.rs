@@ -37,6 +37,7 @@ use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 use std::hint::black_box;
 
 fn worst() -> SignalChain {
@@ -99,7 +100,7 @@ fn bench(cr: &mut Criterion) {
     });
 }
 
-type Dev = Device<RamNor<8192>>;
+type Dev = Device<RamNor<8192>, Kernel>;
 
 /// A powered-on device with a clock and a frame counter.
 struct Rig {

@@ -187,7 +187,6 @@ use crate::model::{Capability, Product};
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
 use crate::sensor::profile::SensorProfile;
-use crate::sensor::profiles;
 use crate::sensor::rng::Rng;
 use crate::sensor::temperature::{TemperatureModel, OPERATING_RANGE_C, UPDATE_TICKS};
 use crate::sensor::Sample;
@@ -381,6 +380,37 @@ fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
     [x[3 * i], x[3 * i + 1], x[3 * i + 2]]
 }
 
+/// The three sensors' measurement of a tick's truth, one sequence for
+/// both number paths (`chain/float.rs`, `chain/fixed.rs`): the truth
+/// `(rate, force)` given in `frame` is turned into sensor axes
+/// (`to_sensor`: the mounting), then the gyro, the accelerometer and — on a
+/// unit with one — the aux accelerometer measure it in that order (the
+/// order of their random draws; `measure(i, input, force)` is engine `i`),
+/// `zero` standing for an absent aux. Returns the triads and the gyro
+/// (bits 0–2) and accelerometer (bits 3–5) axes beyond their range.
+#[inline(always)]
+fn measure_sensors<T: Copy>(
+    (rate, force): (T, T),
+    frame: TruthFrame,
+    to_sensor: impl Fn(&T) -> T,
+    has_aux: bool,
+    zero: T,
+    mut measure: impl FnMut(usize, &T, &T) -> (T, u8),
+) -> ([T; 3], u8) {
+    let (rate, force) = match frame {
+        TruthFrame::Sensor => (rate, force),
+        TruthFrame::Carrier => (to_sensor(&rate), to_sensor(&force)),
+    };
+    let (g, over) = measure(0, &rate, &force);
+    let (a, over_a) = measure(1, &force, &force);
+    let aux = if has_aux {
+        measure(2, &force, &force).0
+    } else {
+        zero
+    };
+    ([g, a, aux], over | over_a << 3)
+}
+
 /// The Earth rate the AHRS assumes (module doc of [`crate::ahrs::alignment`]):
 /// `earth_enu(DEFAULT_LATITUDE_DEG)`, as a constant (a unit test pins the
 /// equality bit for bit).
@@ -415,7 +445,7 @@ impl SignalChain {
     /// The unit is static, level, z up, heading 0 at
     /// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] (the gyros read the Earth rate plus their
     /// errors, AccZ +1 g); errors are one unit drawn from the model's
-    /// built-in profile ([`crate::sensor::profiles::for_product`]); the configuration is
+    /// built-in profile ([`Product::sensor_profile`]); the configuration is
     /// [`ChainConfig::defaults`] until [`SignalChain::configure`]. The AHRS
     /// starts levelled, unaligned (bias 0), not aligning.
     pub fn new(product: Product, seed: u64) -> Self {
@@ -495,7 +525,7 @@ impl<I: Integrate> SignalChain<I> {
         let mut rng = Rng::new(seed);
         let profile = match self.profile {
             Some(p) => *p,
-            None => profiles::for_product(&product),
+            None => product.sensor_profile(),
         };
         let errors = ErrorModel::from_profile(&profile, &mut rng);
         let temp_model = TemperatureModel::from_spec(&profile.temperature);

@@ -16,8 +16,11 @@
 //! the flash and its store, the serial line ([`crate::line::Line`]: TX
 //! queue and wire time at the current rate), the board events, the time
 //! base (power-on time, tick count, 1PPS) and the signal chain, which it
-//! ticks. The personality ([`crate::personality::Personality`]; the
-//! KERNEL's is [`crate::kernel::Kernel`]) owns the protocol.
+//! ticks. The personality ([`crate::personality::Personality`]) owns the
+//! protocol and sizes what depends on it (the TX queue's room for its
+//! largest frame, its image in the store). The shell names no personality:
+//! the KERNEL's conveniences (`power_on*`, `param_ram`) are an
+//! `impl Device<F, Kernel>` in its own folder.
 
 use core::mem::MaybeUninit;
 
@@ -25,9 +28,6 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 
 use crate::chain::SignalChain;
-// The default personality, and only that: its convenience constructors
-// live beside it (`kernel/device.rs`).
-use crate::kernel::Kernel;
 use crate::line::Line;
 use crate::model::Product;
 use crate::personality::{Context, Personality};
@@ -61,7 +61,7 @@ pub struct Shell<F: NorFlash, P: Personality> {
     store: ParamStore<P::Image>,
     cfg: PowerOn,
     firmware_update: bool,
-    line: Line,
+    line: Line<P::TxBuffer>,
     events: Deque<Event, EVENTS>,
     time: TimeBase,
     /// What the device measures and computes (ICD 5.3.6, 5.6–5.8, App. B/C).
@@ -173,8 +173,8 @@ impl<F: NorFlash, P: Personality> Context<P::Integrate> for Shell<F, P> {
 }
 
 /// An emulated IMU owning its flash: the [`Shell`] and one personality
-/// (the KERNEL by default).
-pub struct Device<F: NorFlash, P: Personality = Kernel> {
+/// `P` (e.g. `Device<F, Kernel>`, `Device<F, Isb>`).
+pub struct Device<F: NorFlash, P: Personality> {
     shell: Shell<F, P>,
     personality: P,
 }

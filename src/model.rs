@@ -367,7 +367,7 @@ impl core::fmt::Display for ProductError {
 /// ±16 g and the datasheet's noise figures). The product-code column keeps
 /// the nearest KERNEL options (G2000, A15) for the code that reads them;
 /// the sensors saturate at the profile's ranges
-/// ([`profiles::for_product`]). The KERNEL columns (formats, LPF codes,
+/// ([`Product::sensor_profile`]). The KERNEL columns (formats, LPF codes,
 /// IMU_type) are empty or zero.
 pub static IMX5: ModelSpec = ModelSpec {
     short: "IMX-5",
@@ -455,6 +455,19 @@ impl Product {
         s
     }
 
+    /// The sensor profile of this product: its model's
+    /// ([`ModelSpec::profile`]), with a KERNEL product code's range options
+    /// (ICD 3.2.2) as the gyro and accelerometer ranges. The IMX-5 has one
+    /// range, its profile's.
+    pub fn sensor_profile(&self) -> SensorProfile {
+        let mut p = *self.model.profile;
+        if !core::ptr::eq(self.model, &IMX5) {
+            p.gyro.range = self.gyro.full_scale() as f32;
+            p.acc.range = self.accel.full_scale() as f32;
+        }
+        p
+    }
+
     /// The read-only Sensors_Measurement_Range byte (ID 0x028F, Table 5.24).
     pub const fn measurement_range(&self) -> u8 {
         (self.gyro.nibble() << 4) | self.accel.nibble()
@@ -485,6 +498,46 @@ mod tests {
             assert!(core::ptr::eq(m.profile, p), "{short}");
         }
         assert!(core::ptr::eq(IMX5.profile, &profiles::IMX5_PROFILE));
+    }
+
+    #[test]
+    fn every_model_has_the_builtin_profile_of_its_name() {
+        use profiles::{builtin, BUILTIN};
+        for m in MODELS {
+            let b = builtin(m.short).unwrap();
+            assert!(core::ptr::eq(b.profile, m.profile), "{}", m.short);
+        }
+        assert!(core::ptr::eq(
+            builtin("imx5").unwrap().profile,
+            IMX5.profile
+        ));
+        assert_eq!(BUILTIN.len(), MODELS.len() + 2);
+        for b in BUILTIN {
+            assert_eq!(b.has_aux(), matches!(b.name, "K120" | "K220"), "{}", b.name);
+        }
+        for m in MODELS {
+            let b = builtin(m.short).unwrap();
+            assert_eq!(b.has_aux(), m.has(Capability::AuxAccel), "{}", m.short);
+        }
+    }
+
+    #[test]
+    fn a_product_code_chooses_the_kernel_ranges_and_the_imx5_keeps_its_own() {
+        let p = Product::parse("KERNEL-110-G2000-A8")
+            .unwrap()
+            .sensor_profile();
+        assert_eq!((p.gyro.range, p.acc.range), (2000.0, 8.0));
+        let p = Product::imx5().sensor_profile();
+        assert_eq!((p.gyro.range, p.acc.range), (4000.0, 16.0));
+        assert_eq!(p.gyro.noise_density, 0.23 / 60.0);
+        assert_eq!(
+            profiles::builtin("imx-5-2022")
+                .unwrap()
+                .profile
+                .gyro
+                .noise_density,
+            0.16 / 60.0
+        );
     }
 
     #[test]

@@ -21,6 +21,7 @@
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
 use crate::io::{Event, Level, Mode, Pin};
+use crate::line::TxBuffer;
 use crate::model::Product;
 use crate::store::{Image, StoreError};
 use crate::time::{Instant, TimeBase};
@@ -92,6 +93,10 @@ pub trait Personality: Sized {
     /// Its value (a type like [`crate::store::KernelImage`] folds it into
     /// constants).
     const IMAGE: Self::Image;
+    /// The storage of the shell's TX queue: `[u8; TX_CAP + N]`, `N` the
+    /// largest frame this personality writes in one piece
+    /// ([`crate::line::TX_CAP`], [`TxBuffer::MAX_FRAME`]).
+    type TxBuffer: TxBuffer;
 
     /// The personality before power-on: every field a placeholder that
     /// [`Personality::boot`] sets. Cheap to build (mostly zeros).

@@ -40,14 +40,13 @@
 use embedded_storage::nor_flash::NorFlash;
 
 use crate::device::{Device, Event, Level};
-use crate::kernel::Kernel;
 use crate::line::Pacer;
 use crate::personality::Personality;
 use crate::time::Instant;
 
 /// What the board lends the schedule: its UART and pins. Every method must
 /// return at once (never block).
-pub trait Port<F: NorFlash, K: Personality = Kernel> {
+pub trait Port<F: NorFlash, K: Personality> {
     /// What the board's I/O can fail with (`Infallible` on an MCU).
     type Error;
 
@@ -336,10 +335,12 @@ mod tests {
     use std::vec::Vec;
 
     use super::*;
+    // A real personality to drive: the KERNEL.
+    use crate::kernel::Kernel;
     use crate::model::Product;
     use crate::nor::RamNor;
 
-    type Dev = Device<RamNor<8192>>;
+    type Dev = Device<RamNor<8192>, Kernel>;
 
     /// A board that records what the schedule did.
     #[derive(Default)]
@@ -353,7 +354,7 @@ mod tests {
         busy: bool,
     }
 
-    impl Port<RamNor<8192>> for Fake {
+    impl Port<RamNor<8192>, Kernel> for Fake {
         type Error = core::convert::Infallible;
         fn tx_room(&mut self) -> usize {
             usize::MAX

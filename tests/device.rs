@@ -7,6 +7,7 @@ use imu_emu::device::{Device, Event, Level, Mode, PowerOn};
 use imu_emu::kernel::command::Command;
 use imu_emu::model::Product;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 const GA: u8 = 0x8F;
 
@@ -575,7 +576,7 @@ fn vendor_sdk_device_parameters_request_gets_60_bytes() {
 }
 
 /// The same command script, from power-on at `t0` ns: every byte sent.
-fn script(dev: &mut Device<Flash>, t0: u64) -> Vec<u8> {
+fn script(dev: &mut Device<Flash, Kernel>, t0: u64) -> Vec<u8> {
     let mut out = Vec::new();
     let mut buf = [0u8; 512];
     let period = dev.tick_period_ns();

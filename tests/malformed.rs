@@ -26,6 +26,7 @@ use imu_emu::kernel::params::PARAMS;
 use imu_emu::kernel::rate::max_rate;
 use imu_emu::kernel::{RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 /// GetBIT, the good frame every case ends with (ICD 5.3.4 example).
 const GET_BIT: [u8; 9] = [0xAA, 0x55, 0x00, 0x00, 0x07, 0x00, 0x1A, 0x21, 0x00];
@@ -95,7 +96,7 @@ struct State {
     tx_dropped: u32,
 }
 
-fn state(dev: &Device<Flash>) -> State {
+fn state(dev: &Device<Flash, Kernel>) -> State {
     State {
         params: PARAMS
             .iter()

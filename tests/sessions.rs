@@ -41,6 +41,7 @@ use imu_emu::device::{Device, Event, Level, Pin, PowerOn};
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 type Flash = RamNor<8192>;
 
@@ -120,7 +121,7 @@ const UDD: u8 = 0x95;
 
 /// One device, its time line and the transcript of what it did.
 struct Session {
-    dev: Option<Device<Flash>>,
+    dev: Option<Device<Flash, Kernel>>,
     product: Product,
     seed: u64,
     period: u64,
@@ -172,7 +173,7 @@ impl Session {
         s
     }
 
-    fn dev(&mut self) -> &mut Device<Flash> {
+    fn dev(&mut self) -> &mut Device<Flash, Kernel> {
         self.dev.as_mut().unwrap()
     }
 

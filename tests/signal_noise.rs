@@ -320,7 +320,7 @@ fn fixed_point_engine_tracks_the_float_engine() {
     use imu_emu::sensor::errors::TriadEngineFixed;
     let product = Product::parse("K120").unwrap();
     let mut draw = Rng::new(5);
-    let mut errors = ErrorModel::for_product(&product, &mut draw).gyro;
+    let mut errors = ErrorModel::from_profile(&product.sensor_profile(), &mut draw).gyro;
     // Every term of the model, the new ones too (the built-in profiles
     // have no non-linearity, g-sensitivity, random walk or resolution).
     for (i, a) in errors.axes.iter_mut().enumerate() {

@@ -28,6 +28,7 @@ use imu_emu::kernel::frame::{encode, Decoder};
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 /// Tick period at 2 kHz.
 const TICK_NS: u64 = 500_000;
@@ -69,7 +70,7 @@ fn reply(id: u8, payload: &[u8]) -> Vec<u8> {
 }
 
 struct Soak {
-    dev: Device<RamNor<8192>>,
+    dev: Device<RamNor<8192>, Kernel>,
     tick: u64,
     reader: Decoder<512>,
     /// Replies still expected, in order.

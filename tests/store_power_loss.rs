@@ -27,6 +27,7 @@ use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::store::{ImageSpec, ParamStore, KERNEL_IMAGE};
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 mod common;
 use common::xorshift::XorShift;
@@ -320,7 +321,7 @@ fn candidates() -> Vec<(u16, Vec<Vec<u8>>)> {
 }
 
 /// Every Table 5.24 parameter's RAM value.
-fn params(dev: &Device<RamNor<8192>>) -> Vec<Vec<u8>> {
+fn params(dev: &Device<RamNor<8192>, Kernel>) -> Vec<Vec<u8>> {
     PARAMS
         .iter()
         .map(|p| dev.param_ram(p.id).unwrap().to_vec())

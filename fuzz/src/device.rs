@@ -11,6 +11,7 @@ use imu_emu::kernel::RX_FRAME_CAP;
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 use crate::script::{drain_tx, Cursor};
 
@@ -86,7 +87,7 @@ fn save_flash_frames(rx: &[u8]) -> Vec<(u16, u16, Vec<u8>)> {
 /// The device harness: the device, its clock, what it was sent and what
 /// it must hold.
 struct Harness {
-    dev: Device<RamNor<8192>>,
+    dev: Device<RamNor<8192>, Kernel>,
     product: Product,
     now: u64,
     ticks_left: u32,

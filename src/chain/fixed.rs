@@ -3,7 +3,7 @@
 //! `float.rs`, on `i32` samples ([`super`] doc, "Fixed point"). [`super`]
 //! picks one of the two, in one place.
 
-use super::{triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
+use super::{measure_sensors, triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
 use crate::ahrs::alignment::{level_from, AlignConfig, AlignResult, Alignment};
 use crate::ahrs::attitude::AttitudeFixed;
 use crate::ahrs::mounting::{Mounting, MountingFixed};
@@ -230,21 +230,14 @@ impl Core {
         has_aux: bool,
         rng: &mut Rng,
     ) -> (Sensor, u8) {
-        let (rate, force) = match frame {
-            TruthFrame::Sensor => (truth.rate, truth.force),
-            TruthFrame::Carrier => (
-                self.mounting.to_sensor(&truth.rate),
-                self.mounting.to_sensor(&truth.force),
-            ),
-        };
-        let (g, over) = self.engines[0].measure(&rate, &force, rng);
-        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
-        let aux = if has_aux {
-            self.engines[2].measure(&force, &force, rng).0
-        } else {
-            [0; 3]
-        };
-        ([g, a, aux], over | over_a << 3)
+        measure_sensors(
+            (truth.rate, truth.force),
+            frame,
+            |v| self.mounting.to_sensor(v),
+            has_aux,
+            [0; 3],
+            |i, x, f| self.engines[i].measure(x, f, rng),
+        )
     }
 
     /// Gyro and acc of a measurement in carrier axes.

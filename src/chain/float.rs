@@ -3,7 +3,7 @@
 //! items, with the same signatures, as `fixed.rs` (the `fixed-point` build);
 //! [`super`] picks one of the two, in one place.
 
-use super::{triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
+use super::{measure_sensors, triad, ChainConfig, Outputs, AUX_RANGE_G, EARTH_ASSUMED, RAD};
 use crate::ahrs::alignment::{level_from, AlignConfig, AlignResult, Alignment};
 use crate::ahrs::attitude::Attitude as AttitudeFilter;
 use crate::ahrs::mounting::Mounting;
@@ -175,21 +175,15 @@ impl Core {
         has_aux: bool,
         rng: &mut Rng,
     ) -> (Sensor, u8) {
-        let (rate, force) = match frame {
-            TruthFrame::Sensor => (truth.rate_dps, truth.specific_force_g),
-            TruthFrame::Carrier => (
-                self.mounting.to_sensor(&truth.rate_dps),
-                self.mounting.to_sensor(&truth.specific_force_g),
-            ),
-        };
-        let (g, over) = self.engines[0].measure(&rate, &force, rng);
-        let (a, over_a) = self.engines[1].measure(&force, &force, rng);
-        let aux = if has_aux {
-            self.engines[2].measure(&force, &force, rng).0
-        } else {
-            [0.0; 3]
-        };
-        (pack(&[g, a, aux]), over | over_a << 3)
+        let (m, over) = measure_sensors(
+            (truth.rate_dps, truth.specific_force_g),
+            frame,
+            |v| self.mounting.to_sensor(v),
+            has_aux,
+            [0.0; 3],
+            |i, x, f| self.engines[i].measure(x, f, rng),
+        );
+        (pack(&m), over)
     }
 
     /// Gyro and acc of a measurement in carrier axes.

@@ -104,6 +104,12 @@ pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// u16 size, u16 offset, u16 period`.
 const ENTRY: usize = 8;
 /// Where the persistent streams start in the image (after FLASH_CONFIG):
+/// Largest frame the IMX writes in one piece: the largest data set
+/// (GPS1_SAT, 408 bytes) with an offset (+ 2 payload bytes + 8 of
+/// framing); the `$INFO` sentence is at most 200. The shell's TX queue is
+/// sized by it ([`Isb`]'s `TxBuffer`).
+pub const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
+
 /// `u32 count`, then [`MAX_STREAMS`] entries.
 const PERSIST: usize = flash::SIZE;
 /// Where the persistent NMEA table starts ([`asce::Table::to_image`]).
@@ -201,6 +207,7 @@ impl Personality for Isb {
     type Integrate = Integrals;
     type Image = ImageSpec;
     const IMAGE: ImageSpec = IMAGE;
+    type TxBuffer = [u8; crate::line::TX_CAP + MAX_FRAME];
 
     fn unpowered() -> Self {
         Isb {

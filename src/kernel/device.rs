@@ -16,10 +16,18 @@ use crate::kernel::formats::{self, UDD};
 use crate::kernel::frame::{self, Decoder, TYPE_COMMAND, TYPE_DATA};
 use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
 use crate::kernel::{config, rate, status, udd};
+use crate::line::TX_CAP;
 use crate::model::{Capability, Product};
 use crate::personality::{Context, Personality};
 use crate::store::KernelImage;
 use crate::time::Instant;
+
+/// Largest device → host frame: a UDD frame of [`params::UDD_MAX_TYPES`]
+/// types of the largest field, 217 bytes (Table 5.13); GetDevInfo's is 174.
+/// The shell's TX queue is sized by it ([`Kernel`]'s `TxBuffer`).
+pub const MAX_FRAME: usize = 217;
+/// A KERNEL device ([`Device`] carrying the [`Kernel`] personality).
+pub type KernelDevice<F> = Device<F, Kernel>;
 
 /// Largest host → device frame: a UDD config message `96 N` + 255 types.
 pub const RX_FRAME_CAP: usize = frame::OVERHEAD + 2 + 255;
@@ -76,6 +84,7 @@ impl Personality for Kernel {
     type Integrate = NoIntegrals;
     type Image = KernelImage;
     const IMAGE: KernelImage = KernelImage;
+    type TxBuffer = [u8; TX_CAP + MAX_FRAME];
 
     #[inline(always)]
     fn unpowered() -> Self {
@@ -671,6 +680,19 @@ mod tests {
         let mut k = Kernel::unpowered();
         k.boot(&mut cx, Instant::ZERO);
         (k, cx)
+    }
+
+    #[test]
+    fn the_tx_queue_takes_the_largest_udd_frame_and_dev_info() {
+        let largest = udd::UDD_TYPES.iter().map(|t| t.field.size()).max().unwrap();
+        let n = params::UDD_MAX_TYPES;
+        assert_eq!(frame::OVERHEAD + 1 + n + n * largest, MAX_FRAME);
+        let (_, cx) = booted();
+        assert!(frame::OVERHEAD + dev_info(&cx).len() <= MAX_FRAME);
+        assert_eq!(
+            <<Kernel as Personality>::TxBuffer as crate::line::TxBuffer>::MAX_FRAME,
+            MAX_FRAME
+        );
     }
 
     fn command(c: Command<'_>) -> Vec<u8> {

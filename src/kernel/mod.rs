@@ -13,4 +13,4 @@ pub mod rate;
 pub mod status;
 pub mod udd;
 
-pub use device::{Kernel, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+pub use device::{Kernel, KernelDevice, MAX_FRAME, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};

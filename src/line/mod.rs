@@ -10,4 +10,4 @@ mod pacer;
 mod ring;
 
 pub use pacer::{byte_time_ps, wire_ns, Pacer, BITS_PER_BYTE, BURST_NS, MIN_BURST_BYTES};
-pub use ring::{Line, Queued, MAX_FRAME, TX_CAP};
+pub use ring::{Line, Queued, TxBuffer, TX_CAP};

@@ -7,19 +7,51 @@ use crate::time::Instant;
 /// whole, as a device whose line is too slow would.
 pub const TX_CAP: usize = 2048;
 
-/// Largest frame a personality writes into the queue in one piece: the
-/// largest ISB data set (GPS1_SAT, 408 bytes) with an offset (+ 2 payload
-/// bytes + 8 of framing); the KERNEL's largest, a UDD frame, is 217 bytes
-/// (ICD Table 5.13), the ISB `$INFO` sentence at most 200.
-pub const MAX_FRAME: usize = crate::isb::did::MAX_SIZE + 2 + 8;
+/// The storage of the TX queue: [`TX_CAP`] bytes and, after them, room for
+/// the largest frame the personality writes in one piece
+/// ([`TxBuffer::MAX_FRAME`]). A personality chooses it
+/// (`crate::personality::Personality::TxBuffer`) as
+/// `[u8; TX_CAP + its largest frame]`, so the line is sized by the protocol
+/// it carries and names none. (A type, not a `const` of the personality:
+/// stable Rust cannot size an array from a generic parameter's constant.)
+pub trait TxBuffer: Sized {
+    /// The buffer zeroed.
+    const EMPTY: Self;
+    /// The largest frame the queue takes in one piece: the buffer's length
+    /// less [`TX_CAP`] (a buffer no longer than [`TX_CAP`] does not compile).
+    const MAX_FRAME: usize;
+    /// The bytes.
+    fn bytes(&self) -> &[u8];
+    /// The bytes, mutably.
+    fn bytes_mut(&mut self) -> &mut [u8];
+}
+
+impl<const N: usize> TxBuffer for [u8; N] {
+    const EMPTY: Self = [0; N];
+    const MAX_FRAME: usize = {
+        assert!(N > TX_CAP, "a TX buffer holds TX_CAP bytes and one frame");
+        N - TX_CAP
+    };
+
+    #[inline(always)]
+    fn bytes(&self) -> &[u8] {
+        self
+    }
+
+    #[inline(always)]
+    fn bytes_mut(&mut self) -> &mut [u8] {
+        self
+    }
+}
 
 /// The UART transmit queue: [`TX_CAP`] bytes (what [`TxRing::free`]
-/// counts) in a buffer [`MAX_FRAME`] bytes longer, so that a frame is always
-/// written in place in one piece ([`TxRing::push_frame`]): one that starts
-/// near the end runs on past [`TX_CAP`], that point becomes the end of the
-/// ring until the reader has passed it, and the next frame starts at 0.
-struct TxRing {
-    buf: [u8; TX_CAP + MAX_FRAME],
+/// counts) in a buffer [`TxBuffer::MAX_FRAME`] bytes longer, so that a frame
+/// is always written in place in one piece ([`TxRing::push_frame`]): one
+/// that starts near the end runs on past [`TX_CAP`], that point becomes the
+/// end of the ring until the reader has passed it, and the next frame
+/// starts at 0.
+struct TxRing<B: TxBuffer> {
+    buf: B,
     head: usize,
     len: usize,
     /// Where the bytes wrap to 0: [`TX_CAP`], or the end of a frame that ran
@@ -27,10 +59,10 @@ struct TxRing {
     end: usize,
 }
 
-impl TxRing {
+impl<B: TxBuffer> TxRing<B> {
     const fn new() -> Self {
         TxRing {
-            buf: [0; TX_CAP + MAX_FRAME],
+            buf: B::EMPTY,
             head: 0,
             len: 0,
             end: TX_CAP,
@@ -49,21 +81,21 @@ impl TxRing {
 
     /// Appends an `n`-byte frame that `fill` writes in place (the caller
     /// checked [`TxRing::free`]); nothing is queued if `fill` returns
-    /// `false` or the frame is longer than [`MAX_FRAME`].
+    /// `false` or the frame is longer than [`TxBuffer::MAX_FRAME`].
     ///
     /// The tail is always below [`TX_CAP`]; written after the reader's
     /// bytes it may run into the extra bytes, written before them (wrapped)
     /// it ends at or below `head − (end − TX_CAP)` since at most [`TX_CAP`]
     /// bytes are queued, so it never meets them.
     fn push_frame(&mut self, n: usize, fill: impl FnOnce(&mut [u8]) -> bool) -> bool {
-        if n > self.free().min(MAX_FRAME) {
+        if n > self.free().min(B::MAX_FRAME) {
             return false;
         }
         let mut tail = self.head + self.len;
         if tail >= self.end {
             tail -= self.end;
         }
-        let Some(f) = self.buf.get_mut(tail..tail + n) else {
+        let Some(f) = self.buf.bytes_mut().get_mut(tail..tail + n) else {
             return false;
         };
         if !fill(f) {
@@ -80,8 +112,9 @@ impl TxRing {
     fn pop(&mut self, out: &mut [u8]) -> usize {
         let n = out.len().min(self.len);
         let first = n.min(self.end - self.head);
-        out[..first].copy_from_slice(&self.buf[self.head..self.head + first]);
-        out[first..n].copy_from_slice(&self.buf[..n - first]);
+        let buf = self.buf.bytes();
+        out[..first].copy_from_slice(&buf[self.head..self.head + first]);
+        out[first..n].copy_from_slice(&buf[..n - first]);
         self.head += n;
         if self.head >= self.end {
             self.head -= self.end;
@@ -116,8 +149,9 @@ impl Queued {
 /// The device's serial line: the TX queue, the line rate, when the UART
 /// will have sent everything queued (assuming it sends back to back at the
 /// current rate), and a rate switch waiting for the bytes queued before it.
-pub struct Line {
-    tx: TxRing,
+/// `B` is the queue's storage, chosen by the personality ([`TxBuffer`]).
+pub struct Line<B: TxBuffer> {
+    tx: TxRing<B>,
     dropped: u32,
     rate: u32,
     /// Time one byte occupies the line at `rate`, ps.
@@ -128,7 +162,7 @@ pub struct Line {
     switch: Option<(u32, usize)>,
 }
 
-impl Line {
+impl<B: TxBuffer> Line<B> {
     /// An empty line at 115 200 bit/s, idle from `now`.
     pub(crate) const fn new(now: Instant) -> Self {
         Line {
@@ -240,6 +274,10 @@ impl Line {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The largest frame of the tests' queue.
+    const MAX_FRAME: usize = 418;
+    type Line = super::Line<[u8; TX_CAP + MAX_FRAME]>;
 
     #[test]
     fn wire_time_is_ten_bit_times_a_byte() {

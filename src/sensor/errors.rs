@@ -63,7 +63,6 @@ use super::rng::Rng;
 use crate::math::fixed::{mul64, Coef, Recip};
 use crate::math::rotation::{Mat3, Vec3};
 use crate::math::{ACC_BITS, RATE_TRUTH_LIMIT, TRUTH_LIMIT};
-use crate::model::Product;
 use libm::sqrtf;
 
 pub use super::profile::{arw_to_density, vrw_to_density};
@@ -213,12 +212,6 @@ impl ErrorModel {
             acc: SensorErrors::draw(&profile.acc, rng),
             aux: SensorErrors::draw(&profile.aux, rng),
         }
-    }
-
-    /// One unit of `product`'s built-in profile
-    /// ([`crate::sensor::profiles::for_product`]).
-    pub fn for_product(product: &Product, rng: &mut Rng) -> Self {
-        Self::from_profile(&super::profiles::for_product(product), rng)
     }
 }
 

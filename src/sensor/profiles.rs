@@ -29,7 +29,7 @@
 //!   before profiles existed; misalignment 0.01° 1σ is ICD 2.2
 //!   ("non-orthogonality … in the order of 0.01°"). Ranges are those of the
 //!   model's first product code (ICD 3.2.2); a product code's range option
-//!   replaces them ([`for_product`]).
+//!   replaces them (`crate::model::Product::sensor_profile`).
 //!
 //! | profile | gyro ARW °/√h | gyro B °/h | acc VRW m/s/√h | acc B µg |
 //! |---|---|---|---|---|
@@ -41,7 +41,6 @@
 //! | IMX-5-2022 | 0.16 | 1.5 | 0.02 | 19 |
 
 use super::profile::{arw_to_density, vrw_to_density, SensorProfile, SensorSpec, TemperatureSpec};
-use crate::model::{Capability, Product, IMX5, MODELS};
 
 /// ICD 2.2: "non-orthogonality between axes … in the order of 0.01°".
 const MISALIGN_SIGMA: f32 = 0.01 * core::f32::consts::PI / 180.0;
@@ -160,6 +159,10 @@ pub struct Builtin {
     pub source: &'static str,
     /// The profile.
     pub profile: &'static SensorProfile,
+    /// Whether the unit has an aux accelerometer (K120, K220: ICD 2.1; the
+    /// other profiles carry an unused one). `model.rs` checks it against
+    /// the model table's capability.
+    pub aux: bool,
 }
 
 const KERNEL_SOURCE: &str = "emulator figures (Inertial Labs publishes none found); \
@@ -178,56 +181,67 @@ pub static BUILTIN: &[Builtin] = &[
         name: "K100",
         source: KERNEL_SOURCE,
         profile: &KERNEL_ENTRY,
+        aux: false,
     },
     Builtin {
         name: "K102",
         source: KERNEL_SOURCE,
         profile: &KERNEL_ENTRY,
+        aux: false,
     },
     Builtin {
         name: "K108",
         source: KERNEL_SOURCE,
         profile: &KERNEL_MID,
+        aux: false,
     },
     Builtin {
         name: "K110",
         source: KERNEL_SOURCE,
         profile: &KERNEL_MID,
+        aux: false,
     },
     Builtin {
         name: "K110M",
         source: KERNEL_SOURCE,
         profile: &KERNEL_MID,
+        aux: false,
     },
     Builtin {
         name: "K120",
         source: KERNEL_SOURCE,
         profile: &KERNEL_MID,
+        aux: true,
     },
     Builtin {
         name: "K201",
         source: KERNEL_SOURCE,
         profile: &KERNEL_ENTRY,
+        aux: false,
     },
     Builtin {
         name: "K210",
         source: KERNEL_SOURCE,
         profile: &KERNEL_HIGH,
+        aux: false,
     },
     Builtin {
         name: "K220",
         source: KERNEL_SOURCE,
         profile: &KERNEL_HIGH,
+        aux: true,
     },
     Builtin {
         name: "IMX-5",
         source: IMX5_SOURCE,
         profile: &IMX5_PROFILE,
+        aux: false,
     },
     Builtin {
         name: "IMX-5-2022",
         source: IMX5_2022_SOURCE,
         profile: &IMX5_2022_PROFILE,
+        aux: false,
     },
 ];
 
@@ -235,9 +249,7 @@ impl Builtin {
     /// Whether the model of this name has an aux accelerometer (K120,
     /// K220: ICD 2.1); the others' profiles carry an unused one.
     pub fn has_aux(&self) -> bool {
-        MODELS
-            .iter()
-            .any(|m| m.short == self.name && m.has(Capability::AuxAccel))
+        self.aux
     }
 }
 
@@ -247,50 +259,4 @@ pub fn builtin(name: &str) -> Option<&'static Builtin> {
         b.name.eq_ignore_ascii_case(name)
             || (b.name == "IMX-5" && name.eq_ignore_ascii_case("IMX5"))
     })
-}
-
-/// The profile of `product`: its model's ([`crate::model::ModelSpec::profile`]),
-/// with a KERNEL product code's range options (ICD 3.2.2) as the gyro and
-/// accelerometer ranges. The IMX-5 has one range, its profile's.
-pub fn for_product(product: &Product) -> SensorProfile {
-    let mut p = *product.model.profile;
-    if !core::ptr::eq(product.model, &IMX5) {
-        p.gyro.range = product.gyro.full_scale() as f32;
-        p.acc.range = product.accel.full_scale() as f32;
-    }
-    p
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_model_has_the_builtin_profile_of_its_name() {
-        for m in MODELS {
-            let b = builtin(m.short).unwrap();
-            assert!(core::ptr::eq(b.profile, m.profile), "{}", m.short);
-        }
-        assert!(core::ptr::eq(
-            builtin("imx5").unwrap().profile,
-            IMX5.profile
-        ));
-        assert_eq!(BUILTIN.len(), MODELS.len() + 2);
-        for b in BUILTIN {
-            assert_eq!(b.has_aux(), matches!(b.name, "K120" | "K220"), "{}", b.name);
-        }
-    }
-
-    #[test]
-    fn a_product_code_chooses_the_kernel_ranges_and_the_imx5_keeps_its_own() {
-        let p = for_product(&Product::parse("KERNEL-110-G2000-A8").unwrap());
-        assert_eq!((p.gyro.range, p.acc.range), (2000.0, 8.0));
-        let p = for_product(&Product::imx5());
-        assert_eq!((p.gyro.range, p.acc.range), (4000.0, 16.0));
-        assert_eq!(p.gyro.noise_density, 0.23 / 60.0);
-        assert_eq!(
-            builtin("imx-5-2022").unwrap().profile.gyro.noise_density,
-            0.16 / 60.0
-        );
-    }
 }

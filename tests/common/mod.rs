@@ -8,6 +8,7 @@ use imu_emu::kernel::frame::Decoder;
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 pub mod xorshift;
 
@@ -23,7 +24,7 @@ pub struct Rx {
 }
 
 pub struct Bench {
-    pub dev: Device<Flash>,
+    pub dev: Device<Flash, Kernel>,
     pub now: u64,
     pub ticks: u64,
     reader: Decoder<1024>,

@@ -42,6 +42,7 @@
 #![forbid(unsafe_code)]
 
 pub mod feed;
+pub mod image;
 #[cfg(feature = "defmt")]
 pub mod panic;
 

@@ -44,7 +44,6 @@ use imu_emu::dsp::variant::OutputVariant;
 use imu_emu::kernel::Kernel;
 use imu_emu::model::{Capability, Product};
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
-use imu_emu::sensor::profiles;
 use imu_emu::time::Instant;
 
 use crate::flash::MemNor;
@@ -348,9 +347,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
     let outputs = (seconds * f64::from(a.rate)).round() as usize;
     let aux = !imx && product.model.has(Capability::AuxAccel);
     let mut phases = Phases::new(1.0 / f64::from(a.rate), outputs, if aux { 9 } else { 6 });
-    let used = profile
-        .copied()
-        .unwrap_or_else(|| profiles::for_product(&product));
+    let used = profile.copied().unwrap_or_else(|| product.sensor_profile());
     let title;
     if imx {
         title = format!("IMX-5, seed {}, chain averaged at {} Hz", a.seed, a.rate);

@@ -22,6 +22,7 @@ use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, PowerOn};
 use imu_emu::model::Product;
 use imu_emu::time::Instant;
+use imu_emu::Kernel;
 
 use crate::flash::MemNor;
 
@@ -30,7 +31,7 @@ pub const DEFAULT_READ_TIMEOUT_NS: u64 = 100_000_000;
 
 /// A virtual KERNEL on the other end of a byte pipe (module docs).
 pub struct VirtualDevice<F: NorFlash = MemNor> {
-    dev: Device<F>,
+    dev: Device<F, Kernel>,
     /// Device time now, ns since power-on.
     now: u64,
     /// Ticks run (tick `k` runs at `k × period`).
@@ -75,12 +76,12 @@ impl<F: NorFlash> VirtualDevice<F> {
     }
 
     /// The device (mode, output rate, parameters, flash).
-    pub fn device(&self) -> &Device<F> {
+    pub fn device(&self) -> &Device<F, Kernel> {
         &self.dev
     }
 
     /// The device, to change its motion, faults or pins.
-    pub fn device_mut(&mut self) -> &mut Device<F> {
+    pub fn device_mut(&mut self) -> &mut Device<F, Kernel> {
         &mut self.dev
     }
 

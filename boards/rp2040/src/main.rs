@@ -45,10 +45,10 @@ mod app {
 
     use embedded_hal::digital::{InputPin, OutputPin};
     use fw_shell::feed::FeedIn;
+    use fw_shell::image::{self, Proto};
     use fw_shell::{Edge, Shell, TovPin};
     use heapless::spsc::{Consumer, Producer, Queue};
-    use imu_emu::device::{Device, Level, Pin, PowerOn};
-    use imu_emu::model::Product;
+    use imu_emu::device::{Device, Level, Pin};
     use rp2040_hal::clocks::{self, Clock as _};
     use rp2040_hal::fugit::RateExtU32;
     use rp2040_hal::gpio::{
@@ -75,12 +75,6 @@ mod app {
     }
 
     type BoardDevice = Device<RomFlash, Proto>;
-    /// The image's protocol personality: the KERNEL.
-    #[cfg(not(feature = "isb"))]
-    type Proto = imu_emu::kernel::Kernel;
-    /// The image's protocol personality (feature `isb`): the IMX-5 over ISB.
-    #[cfg(feature = "isb")]
-    type Proto = imu_emu::isb::Isb;
     type BoardShell =
         Shell<'static, RomFlash, Uart0, TimerClock, Tov, Consumer<'static, Edge>, Proto>;
     /// The RX ring between the UART interrupt and the tick: ≈ 5 ms of the
@@ -141,19 +135,14 @@ mod app {
         // Out of reset; the shell reads the counter directly.
         let _timer = Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
 
-        // BOOT: pulled up and then down; a driven pin reads the same both
-        // times, a floating one follows the pull.
+        // BOOT: read pulled up and then down (`image::boot_from_pulls`).
         let mut boot_pin = pins.gpio5.into_pull_up_input();
         cortex_m::asm::delay(2000);
         let up = boot_pin.is_high().unwrap_or(false);
         let mut boot_pin = boot_pin.into_pull_down_input();
         cortex_m::asm::delay(2000);
         let down = boot_pin.is_high().unwrap_or(false);
-        let boot = if up == down {
-            fw_shell::boot_level(Some(up))
-        } else {
-            None
-        };
+        let boot = image::boot_from_pulls(up, down);
 
         let clk_hz = clocks.peripheral_clock.freq().to_Hz();
         let uart_pins = (
@@ -188,26 +177,10 @@ mod app {
         }
         let tov = Tov(pins.gpio4.into_push_pull_output());
 
-        #[cfg(not(feature = "isb"))]
-        let product = Product::parse(option_env!("IMU_EMU_MODEL").unwrap_or("K110"))
-            .unwrap_or_else(|_| panic!("IMU_EMU_MODEL is not a KERNEL model"));
-        // The ISB image is always an IMX-5; its line starts at FLASH_CONFIG's
-        // ser0BaudRate (921 600 bit/s), set by `Shell::new`.
-        #[cfg(feature = "isb")]
-        let product = Product::imx5();
-        let seed = option_env!("IMU_EMU_SEED")
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(0);
+        // The product, seed and personality the image is built as.
+        let cfg = image::power_on_config(boot);
         let flash = RomFlash::new(cx.local.boot2);
-        let dev = fw_shell::power_on(
-            cx.local.device,
-            PowerOn {
-                product,
-                boot,
-                seed,
-            },
-            flash,
-        );
+        let dev = fw_shell::power_on(cx.local.device, cfg, flash);
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (edges_in, edges_out) = cx.local.edgeq.split();
         let uart = Uart0 { rx: rx_out, clk_hz };
@@ -215,7 +188,7 @@ mod app {
         let tick = Tick::start(shell.tick_hz());
         defmt::info!(
             "imu-emu: {} on RP2040, tick {} Hz",
-            product.code().as_str(),
+            cfg.product.code().as_str(),
             shell.tick_hz()
         );
         (

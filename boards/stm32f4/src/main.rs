@@ -51,10 +51,10 @@ mod app {
     use core::mem::MaybeUninit;
 
     use fw_shell::feed::FeedIn;
+    use fw_shell::image::{self, Proto};
     use fw_shell::{Edge, Shell};
     use heapless::spsc::{Consumer, Producer, Queue};
-    use imu_emu::device::{Device, Level, Pin, PowerOn};
-    use imu_emu::model::Product;
+    use imu_emu::device::{Device, Level, Pin};
     use stm32f4xx_hal::flash::LockedFlash;
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::Config;
@@ -69,12 +69,6 @@ mod app {
     const BOARD: &str = "Nucleo-F446RE";
 
     type BoardDevice = Device<ParamFlash, Proto>;
-    /// The image's protocol personality: the KERNEL.
-    #[cfg(not(feature = "isb"))]
-    type Proto = imu_emu::kernel::Kernel;
-    /// The image's protocol personality (feature `isb`): the IMX-5 over ISB.
-    #[cfg(feature = "isb")]
-    type Proto = imu_emu::isb::Isb;
     type BoardShell =
         Shell<'static, ParamFlash, Usart1Dma, Tim2Clock, TovPb0, Consumer<'static, Edge>, Proto>;
 
@@ -120,40 +114,19 @@ mod app {
         let _feed_rx = gpioa.pa3.into_alternate::<7>();
         let tov = TovPb0(gpiob.pb0.into_push_pull_output());
 
-        // BOOT: pulled up and then down; a driven pin reads the same both
-        // times, a floating one follows the pull.
+        // BOOT: read pulled up and then down (`image::boot_from_pulls`).
         let boot_pin = gpiob.pb1.into_pull_up_input();
         cortex_m::asm::delay(1000);
         let up = boot_pin.is_high();
         let boot_pin = boot_pin.into_pull_down_input();
         cortex_m::asm::delay(1000);
         let down = boot_pin.is_high();
-        let boot = if up == down {
-            fw_shell::boot_level(Some(up))
-        } else {
-            None
-        };
+        let boot = image::boot_from_pulls(up, down);
 
-        #[cfg(not(feature = "isb"))]
-        let product = Product::parse(option_env!("IMU_EMU_MODEL").unwrap_or("K110"))
-            .unwrap_or_else(|_| panic!("IMU_EMU_MODEL is not a KERNEL model"));
-        // The ISB image is always an IMX-5; its line starts at FLASH_CONFIG's
-        // ser0BaudRate (921 600 bit/s), set by `Shell::new`.
-        #[cfg(feature = "isb")]
-        let product = Product::imx5();
-        let seed = option_env!("IMU_EMU_SEED")
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(0);
+        // The product, seed and personality the image is built as.
+        let cfg = image::power_on_config(boot);
         let flash = ParamFlash(LockedFlash::new(dp.FLASH));
-        let dev = fw_shell::power_on(
-            cx.local.device,
-            PowerOn {
-                product,
-                boot,
-                seed,
-            },
-            flash,
-        );
+        let dev = fw_shell::power_on(cx.local.device, cfg, flash);
 
         hw::start_time_base();
         let uart = Usart1Dma::new(cx.local.rx, cx.local.tx, dev.line_rate());
@@ -164,7 +137,7 @@ mod app {
         hw::start_tick(shell.tick_hz());
         defmt::info!(
             "imu-emu: {} on {}, BOOT {}, tick {} Hz",
-            product.code().as_str(),
+            cfg.product.code().as_str(),
             BOARD,
             match boot {
                 None => "floating",
