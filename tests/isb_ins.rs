@@ -217,3 +217,113 @@ fn a_gps_outage_drifts_as_the_profile_says_and_recovers() {
     assert!(dc > 0.2 * ec && dc < 4.0 * ec, "consumer {dc} vs {ec}");
     assert!(a5 < 3.0 && ac < 3.0, "{a5} {ac}");
 }
+
+fn ins1(p: &[u8]) -> Ins1 {
+    Ins1::decode(&p.to_vec().try_into().unwrap())
+}
+
+/// Every INS_1 of the navigation period, through a coordinated turn with
+/// the fix: the change of position between two outputs is the mean of
+/// their velocities (body velocity rotated by the Euler attitude) times the
+/// period, to 2 mm/s, except on the outputs that carry
+/// GPS_UPDATE_IN_SOLUTION (a GNSS update stepped the state), where the
+/// step stays under 0.3 m.
+#[test]
+fn the_position_is_the_integral_of_the_velocity() {
+    let mut r = Run::new(&IMX5_PROFILE, 7);
+    r.fly_s(120.0);
+    r.send(&get(did::INS_1, 1));
+    let out = r.fly_s(10.0);
+    let ins: Vec<Ins1> = out
+        .iter()
+        .filter(|p| p.0 == did::INS_1)
+        .map(|p| ins1(&p.1))
+        .collect();
+    assert_eq!(ins.len(), 2500);
+    let v_ned = |i: &Ins1| {
+        let e = i.theta.map(f64::from);
+        let q = imu_emu::math::double::quat_from_euler(e[0], e[1], e[2]);
+        rotate(&q, &i.uvw.map(f64::from))
+    };
+    let (mut worst, mut steps, mut worst_step) = (0.0f64, 0, 0.0f64);
+    for w in ins.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        let dt = b.header.time_of_week - a.header.time_of_week;
+        assert!((dt - 0.004).abs() < 1e-6, "{dt}");
+        let lat = a.lla[0].to_radians();
+        let (m, n) = imu_emu::vehicle::wgs84::radii(lat);
+        let d = [
+            (b.lla[0] - a.lla[0]).to_radians() * (m + a.lla[2]),
+            (b.lla[1] - a.lla[1]).to_radians() * (n + a.lla[2]) * lat.cos(),
+            -(b.lla[2] - a.lla[2]),
+        ];
+        let (va, vb) = (v_ned(a), v_ned(b));
+        let miss = (0..3)
+            .map(|k| (d[k] / dt - 0.5 * (va[k] + vb[k])).abs())
+            .fold(0.0, f64::max);
+        if b.header.ins_status & ins_status::GPS_UPDATE_IN_SOLUTION != 0 {
+            steps += 1;
+            worst_step = worst_step.max(miss * dt);
+        } else {
+            worst = worst.max(miss);
+        }
+    }
+    eprintln!("worst {worst} m/s; {steps} GNSS steps, the largest {worst_step} m");
+    assert_eq!(steps, 50, "one a GNSS epoch (200 ms)");
+    assert!(worst < 0.002, "{worst} m/s");
+    assert!(worst_step < 0.3, "{worst_step} m");
+}
+
+/// Aided and moving (the flight's first five minutes: take-off run,
+/// turns, climb, descent), the filter's bias estimates (INL2_STATES, body
+/// axes) converge toward the unit's drawn turn-on biases (the chain's
+/// error model, housing axes, with the temperature term and the vertical
+/// accelerometer's scale factor at 1 g): each within 3 of the filter's own σ
+/// (INL2_NED_SIGMA) plus the bias instability, and every σ well below the
+/// turn-on σ it started from.
+#[test]
+fn estimated_biases_converge_toward_the_turn_on_biases() {
+    let mut r = Run::new(&IMX5_PROFILE, 5);
+    r.fly_s(300.0);
+    let st = r.send(&get(did::INL2_STATES, 0));
+    let st = Inl2States::decode(&st[0].1.clone().try_into().unwrap());
+    let sg = r.send(&get(did::INL2_NED_SIGMA, 0));
+    let sg = Inl2NedSigma::decode(&sg[0].1.clone().try_into().unwrap());
+    // The bias each sensor has now: turn-on plus temperature coefficient ×
+    // (T − 25 °C); on the vertical accelerometer (housing z, up, reading
+    // +1 g in level flight) its scale-factor error × g reads as a bias too.
+    let e = r.dev.chain().errors();
+    let dtemp = f64::from(r.dev.chain().temperature()) - 25.0;
+    let housing = |f: &dyn Fn(usize) -> f64| [f(0), f(1), f(2)];
+    let g_true = imu_emu::vehicle::housing_to_body(&housing(&|k| {
+        let a = &e.gyro.axes[k];
+        (f64::from(a.bias) + f64::from(a.temp_bias) * dtemp).to_radians()
+    }));
+    let a_true = imu_emu::vehicle::housing_to_body(&housing(&|k| {
+        let a = &e.acc.axes[k];
+        let sf = if k == 2 { f64::from(a.scale_factor) } else { 0.0 };
+        (f64::from(a.bias) + f64::from(a.temp_bias) * dtemp + sf) * 9.80665
+    }));
+    let p = &IMX5_PROFILE;
+    let bi_g = f64::from(p.gyro.bias_instability).to_radians();
+    let bi_a = f64::from(p.acc.bias_instability) * 9.80665;
+    let (g0, a0) = (
+        f64::from(p.gyro.turn_on_bias_sigma).to_radians(),
+        f64::from(p.acc.turn_on_bias_sigma) * 9.80665,
+    );
+    for k in 0..3 {
+        let (eg, ea) = (f64::from(st.bias_pqr[k]), f64::from(st.bias_acc[k]));
+        let (sg_, sa) = (f64::from(sg.std_gyr_bias[k]), f64::from(sg.std_acc_bias[k]));
+        eprintln!(
+            "axis {k}: gyro {eg:.3e} vs {:.3e} (σ {sg_:.1e}); acc {ea:.3e} vs {:.3e} (σ {sa:.1e})",
+            g_true[k], a_true[k]
+        );
+    }
+    for k in 0..3 {
+        let (eg, ea) = (f64::from(st.bias_pqr[k]), f64::from(st.bias_acc[k]));
+        let (sg_, sa) = (f64::from(sg.std_gyr_bias[k]), f64::from(sg.std_acc_bias[k]));
+        assert!((eg - g_true[k]).abs() < 3.0 * sg_ + bi_g, "gyro {k}");
+        assert!((ea - a_true[k]).abs() < 3.0 * sa + bi_a, "acc {k}");
+        assert!(sg_ < 0.2 * g0 && sa < 0.5 * a0, "σ {sg_} {sa}");
+    }
+}

@@ -50,8 +50,6 @@ pub const LAST_LLA_DEFAULT_DISTANCE_M: f64 = 1000.0;
 /// The covariance is propagated at least this often, s (the mechanisation
 /// runs every navigation period; the covariance needs less).
 pub const PROPAGATE_S: f64 = 0.020;
-/// Barometer and magnetometer aiding period, s.
-pub const AIDING_S: f64 = 0.100;
 
 /// One Gauss–Markov figure: standard deviation and correlation time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -123,8 +121,8 @@ pub const BARO_SIGMA_M: f32 = 0.5;
 /// latitudes is 0.3°, plus residual calibration).
 pub const MAG_HEADING_SIGMA: f32 = 0.017_45;
 /// While no GNSS fix was ever had (AHRS), the filter assumes the unit's
-/// mean velocity is zero with this 1σ (a pseudo-measurement every
-/// [`AIDING_S`]), m/s: what levels an AHRS's attitude.
+/// mean velocity is zero with this 1σ (a pseudo-measurement at each
+/// receiver epoch), m/s: what levels an AHRS's attitude.
 pub const AHRS_VEL_SIGMA: f32 = 0.5;
 /// A magnetometer sample whose magnitude differs from the one learnt in
 /// alignment by more than this fraction is interference (not fused).
@@ -255,14 +253,15 @@ pub struct NavState {
     /// Since the last covariance propagation: time, Σ Δv in NED.
     prop_dt: f64,
     prop_dv_n: V3,
-    /// Index of the last GNSS epoch and aiding slot fused.
+    /// Index of the last receiver epoch (aiding instant).
     gnss_epoch: u64,
-    aid_slot: u64,
     /// The magnetometer field learnt in alignment: magnitude, dip (rad).
     mag_ref: Option<(f64, f64)>,
     mag_ok: bool,
     mag_aiding: bool,
     gps_heading: bool,
+    /// A GNSS update entered the solution in the last period.
+    gps_step: bool,
     declination: f64,
     /// The position to save as `lastLla` (taken by the device).
     save_lla: Option<[f64; 3]>,
@@ -346,11 +345,11 @@ impl NavState {
             prop_dt: 0.0,
             prop_dv_n: [0.0; 3],
             gnss_epoch: 0,
-            aid_slot: 0,
             mag_ref: None,
             mag_ok: false,
             mag_aiding: false,
             gps_heading: false,
+            gps_step: false,
             declination: 0.0,
             save_lla: None,
             saved_lla: None,
@@ -483,6 +482,7 @@ impl NavState {
         cfg: &NavConfig,
     ) {
         self.nav_t = t_s;
+        self.gps_step = false;
         if !(inc.dt > 0.0) {
             return;
         }
@@ -498,15 +498,14 @@ impl NavState {
         }
         let fuse_gps = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
         let epoch = (t_s / gps_dt_s.max(1e-3) + 1e-6) as u64;
+        // Every aiding source enters at the receiver's epochs, so the state
+        // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix);
+        // between them the position is the integral of the velocity.
         if epoch != self.gnss_epoch {
             self.gnss_epoch = epoch;
             if let (Some(fix), true) = (gnss, fuse_gps) {
                 self.fuse_gnss(&fix, cfg);
             }
-        }
-        let slot = (t_s / AIDING_S + 1e-6) as u64;
-        if slot != self.aid_slot {
-            self.aid_slot = slot;
             self.fuse_aiding(aid, cfg);
         }
         self.mag_aiding &= self.mag_ok;
@@ -638,6 +637,7 @@ impl NavState {
             }
             self.correct();
         }
+        self.gps_step = true;
         // Heading from the course over ground once moving, when nothing
         // else has given one.
         if hdg_sigma > status::HDG_COARSE_RAD && speed > GPS_HEADING_MIN_SPEED {
@@ -715,6 +715,7 @@ impl NavState {
             mag_aiding: self.mag_aiding,
             mag_interference: self.mag_ref.is_some() && !self.mag_ok,
             gps_heading: self.gps_heading && self.fixed,
+            gps_step: self.gps_step,
         })
     }
 

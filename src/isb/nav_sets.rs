@@ -319,6 +319,8 @@ pub mod ins_status {
     pub const GPS_AIDING_HEADING: u32 = 0x0000_0080;
     /// Position aided by GPS.
     pub const GPS_AIDING_POS: u32 = 0x0000_0100;
+    /// A GPS update just entered the solution (the position may step).
+    pub const GPS_UPDATE_IN_SOLUTION: u32 = 0x0000_0200;
     /// Heading aided by the magnetometer.
     pub const MAG_AIDING_HEADING: u32 = 0x0000_0800;
     /// Position and velocity estimated (NAV); clear: AHRS.

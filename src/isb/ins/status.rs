@@ -9,6 +9,7 @@
 //! | VEL_ALIGN_FINE / COARSE | NAV, horizontal velocity σ (larger axis) < [`VEL_FINE_MPS`] / < [`VEL_COARSE_MPS`] |
 //! | POS_ALIGN_FINE / COARSE | NAV, horizontal position σ (larger axis) < [`POS_FINE_M`] / < [`POS_COARSE_M`] |
 //! | GPS_AIDING_POS, _VEL, fix 3D | NAV and the receiver has a fix (its updates enter the filter) |
+//! | GPS_UPDATE_IN_SOLUTION | a GNSS update corrected the state in the last navigation period (the position may step there; everywhere else it is the integral of the velocity) |
 //! | GPS_AIDING_HEADING | the above while moving faster than [`super::GPS_HEADING_MIN_SPEED`] |
 //! | MAG_AIDING_HEADING | the last magnetometer heading entered the filter |
 //! | MAG_INTERFERENCE_OR_BAD_CAL | the last magnetometer sample was refused (field or dip unlike alignment's, or gated) |
@@ -59,6 +60,8 @@ pub struct Inputs<'a> {
     pub mag_interference: bool,
     /// Heading observable from GNSS (moving with a fix).
     pub gps_heading: bool,
+    /// A GNSS update entered the solution in the last period.
+    pub gps_step: bool,
 }
 
 /// `insStatus` of `x` (module doc).
@@ -107,6 +110,9 @@ pub fn ins_status(x: &Inputs<'_>) -> u32 {
         s |= GPS_AIDING_POS | GPS_AIDING_VEL | (GPS_NAV_FIX_3D << GPS_NAV_FIX_SHIFT);
         if x.gps_heading {
             s |= GPS_AIDING_HEADING;
+        }
+        if x.gps_step {
+            s |= GPS_UPDATE_IN_SOLUTION;
         }
     }
     let sol = if fine {
