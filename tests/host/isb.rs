@@ -519,3 +519,118 @@ fn status_counts_isb_packets() {
     assert_eq!(field("frames-sent"), "1", "{s}");
     assert_eq!(field("bytes-sent"), len.to_string(), "{s}");
 }
+
+/// The flight of the end-to-end tests: 45 s at rest (alignment, the cold
+/// start's fix at 30 s), then north at 20 m/s.
+const FLIGHT: &str = "start 45.5 7.25 300 0 0\nhold 45\naccel 2 10\nhold 10000\n";
+
+fn ins1_of(c: &mut Conn) -> Ins1 {
+    Ins1::decode(
+        &isb_packet_of(c, did::INS_1)
+            .payload
+            .try_into()
+            .unwrap(),
+    )
+}
+
+/// A manoeuvre script flown by the real binary (`--motion`, `--speed 20`),
+/// INS_1 every second, the control socket's `fault gps` and `power-cycle`:
+/// NAV from the cold start's fix (30 s); moving north at 20 m/s, a 20 s
+/// outage is dead reckoning whose positions still advance 20 m a second by
+/// their own time fields; GPS aiding is back with the fix; a power cycle
+/// after NAV is a warm start: the saved `lastLla` from the alignment on,
+/// NAV 10 s after power-on instead of 30 s.
+fn flight_with_an_outage_and_a_power_cycle(c: &mut Conn, ctl: &mut Control) {
+    use ins_status::{GPS_AIDING_POS, NAV_MODE};
+    c.send(&isb_get(did::INS_1, 250));
+    // NAV, then moving.
+    let i = loop {
+        let i = ins1_of(c);
+        assert!(i.header.time_of_week < 1e5 || i.header.week != 0);
+        if i.header.ins_status & NAV_MODE != 0 && i.uvw[0] > 19.5 {
+            break i;
+        }
+    };
+    assert_ne!(i.header.ins_status & GPS_AIDING_POS, 0, "{i:?}");
+    assert!(ctl.cmd("fault gps off").starts_with("ok"));
+    let mut dr = Vec::new();
+    while dr.len() < 20 {
+        let i = ins1_of(c);
+        if ins_status::dead_reckoning(i.header.ins_status) {
+            dr.push(i);
+        }
+    }
+    for w in dr.windows(2) {
+        let dt = w[1].header.time_of_week - w[0].header.time_of_week;
+        assert!((dt - 1.0).abs() < 1e-6, "{dt}");
+        let north = (w[1].lla[0] - w[0].lla[0]) * 111_132.0;
+        assert!((north - 20.0).abs() < 1.0, "{north}");
+    }
+    assert!(ctl.cmd("fault gps on").starts_with("ok"));
+    let back = (0..5).any(|_| ins1_of(c).header.ins_status & GPS_AIDING_POS != 0);
+    assert!(back, "GPS aiding again once the fix is back");
+    assert_eq!(ctl.cmd("power-cycle"), "ok");
+    c.send(&isb_get(did::INS_1, 250));
+    // Time since boot until GPS time is known again.
+    let first = loop {
+        let i = ins1_of(c);
+        if i.header.week == 0 && i.header.time_of_week > 5.5 {
+            break i;
+        }
+    };
+    assert!((first.lla[0] - 45.5).abs() < 0.02, "lastLla: {first:?}");
+    assert_eq!(first.header.ins_status & NAV_MODE, 0);
+    let nav = loop {
+        let i = ins1_of(c);
+        if i.header.ins_status & NAV_MODE != 0 {
+            break i;
+        }
+        assert!(i.header.time_of_week < 11.5, "{i:?}");
+    };
+    assert_ne!(nav.header.week, 0);
+    assert!((nav.lla[0] - 45.5).abs() < 0.05, "{nav:?}");
+}
+
+#[test]
+fn a_flight_with_an_outage_and_a_warm_power_cycle_over_tcp() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.txt");
+    std::fs::write(&path, FLIGHT).unwrap();
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&[
+        "--motion",
+        path.to_str().unwrap(),
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+    ]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
+    flight_with_an_outage_and_a_power_cycle(&mut c, &mut ctl);
+}
+
+#[test]
+fn a_flight_with_an_outage_and_a_warm_power_cycle_over_a_pty() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.txt");
+    std::fs::write(&path, FLIGHT).unwrap();
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--motion",
+        path.to_str().unwrap(),
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+    ]);
+    let mut c = Conn::serial(&emu.pty_path());
+    let mut ctl = Control::connect(&addr);
+    flight_with_an_outage_and_a_power_cycle(&mut c, &mut ctl);
+}
