@@ -323,16 +323,18 @@ impl Personality for Isb {
             st.grid_ticks(cx, st.imu_dt_ms),
         );
         let ticks = cx.time().ticks();
+        // The receiver first (a fix due now enters the filter at once),
+        // then the INS.
+        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+            let truth = st.truth(cx);
+            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
         if ticks.is_multiple_of(u64::from(nav)) {
             st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
             st.navigate(cx);
         }
         if ticks.is_multiple_of(u64::from(imu)) {
             st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
-        }
-        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
-            let truth = st.truth(cx);
-            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
         }
         if st.save_pending {
             st.save(cx);
