@@ -71,7 +71,7 @@ fn bench(c: &mut Criterion) {
     let mut nav = NavState::new(1);
     nav.boot(&cfg, StartTimes::default());
     let mut t = 0.0;
-    let mut period = |nav: &mut NavState, t: &mut f64| {
+    let period = |nav: &mut NavState, t: &mut f64| {
         *t += dt;
         if ((*t / 0.02).round() * 0.02 - *t).abs() < 1e-9 {
             nav.step(*t, &truth);

@@ -930,7 +930,10 @@ fn a_gps_outage_and_its_recovery() {
     eprintln!("σ {aided} → {s2} → {s62}; error {e62}; high variance after {high_at:?} s");
     assert!(s62 > 5.0 && s62 > 10.0 * s2, "{s2} {s62}");
     assert!(high_at.is_some(), "high variance once σ > 5 m");
-    assert!(e62 < 3.0 * s62, "the error within the filter's σ: {e62} vs {s62}");
+    assert!(
+        e62 < 3.0 * s62,
+        "the error within the filter's σ: {e62} vs {s62}"
+    );
     b.dev.personality_mut().set_nav_faults(NavFaults::default());
     b.run_ticks(40_000);
     let sp = b.sys_params();

@@ -344,7 +344,11 @@ fn estimated_biases_converge_toward_the_turn_on_biases() {
     }));
     let a_true = imu_emu::vehicle::housing_to_body(&housing(&|k| {
         let a = &e.acc.axes[k];
-        let sf = if k == 2 { f64::from(a.scale_factor) } else { 0.0 };
+        let sf = if k == 2 {
+            f64::from(a.scale_factor)
+        } else {
+            0.0
+        };
         (f64::from(a.bias) + f64::from(a.temp_bias) * dtemp + sf) * 9.80665
     }));
     let p = &IMX5_PROFILE;

@@ -265,7 +265,9 @@ impl Personality for Isb {
         // from a `lastLla` an earlier NAV saved.
         match cx.chain().profile() {
             Some(p) => st.nav.set_profile(p),
-            None => st.nav.set_profile(&crate::sensor::profiles::for_product(&product)),
+            None => st
+                .nav
+                .set_profile(&crate::sensor::profiles::for_product(&product)),
         }
         st.nav.boot(&st.nav_config(), st.start_times);
         cx.set_line_rate(st.baud);
@@ -893,9 +895,7 @@ impl State {
         let aid = Aiding {
             mag: self.nav.magnetometer(&truth, tick),
             pressure_kpa: self.nav.pressure_kpa(&truth, tick),
-            year: ins::decimal_year(
-                gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s(),
-            ),
+            year: ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s()),
         };
         let fix = self.nav.gnss(&truth, &cfg);
         let gps_dt_s = f64::from(self.gps_dt_ms) / 1000.0;
@@ -905,8 +905,16 @@ impl State {
             for (k, x) in lla.iter().enumerate() {
                 le::put(&mut self.cfg.0, flash::LAST_LLA + 8 * k, &x.to_le_bytes());
             }
-            le::put(&mut self.cfg.0, flash::LAST_LLA_TIME_OF_WEEK_MS, &gps.tow_ms().to_le_bytes());
-            le::put(&mut self.cfg.0, flash::LAST_LLA_WEEK, &gps.week.to_le_bytes());
+            le::put(
+                &mut self.cfg.0,
+                flash::LAST_LLA_TIME_OF_WEEK_MS,
+                &gps.tow_ms().to_le_bytes(),
+            );
+            le::put(
+                &mut self.cfg.0,
+                flash::LAST_LLA_WEEK,
+                &gps.week.to_le_bytes(),
+            );
             self.cfg.update_checksum();
             self.save_pending = true;
         }

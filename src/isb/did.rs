@@ -9,8 +9,8 @@
 //! DID 95, silence for any other DID the table does not hold.
 
 use super::nav_sets::{
-    barometer, gps_pos, gps_sat, gps_vel, imu_mag, inl2_ned_sigma, inl2_states, ins1, ins2, ins3, ins4, magnetometer, pimu_mag,
-    rmc_nav, sys_sensors,
+    barometer, gps_pos, gps_sat, gps_vel, imu_mag, inl2_ned_sigma, inl2_states, ins1, ins2, ins3,
+    ins4, magnetometer, pimu_mag, rmc_nav, sys_sensors,
 };
 use super::sets;
 

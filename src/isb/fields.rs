@@ -360,14 +360,34 @@ const INL2_STATES: &[FieldSpec] = &[
 ];
 
 const INL2_NED_SIGMA: &[FieldSpec] = &[
-    f("timeOfWeekMs", nav::inl2_ned_sigma::TIME_OF_WEEK_MS, U32, "ms"),
+    f(
+        "timeOfWeekMs",
+        nav::inl2_ned_sigma::TIME_OF_WEEK_MS,
+        U32,
+        "ms",
+    ),
     f("StdPosNed", nav::inl2_ned_sigma::STD_POS_NED, F32x3, "m"),
     f("StdVelNed", nav::inl2_ned_sigma::STD_VEL_NED, F32x3, "m/s"),
     f("StdAttNed", nav::inl2_ned_sigma::STD_ATT_NED, F32x3, "rad"),
-    f("StdAccBias", nav::inl2_ned_sigma::STD_ACC_BIAS, F32x3, "m/s^2"),
-    f("StdGyrBias", nav::inl2_ned_sigma::STD_GYR_BIAS, F32x3, "rad/s"),
+    f(
+        "StdAccBias",
+        nav::inl2_ned_sigma::STD_ACC_BIAS,
+        F32x3,
+        "m/s^2",
+    ),
+    f(
+        "StdGyrBias",
+        nav::inl2_ned_sigma::STD_GYR_BIAS,
+        F32x3,
+        "rad/s",
+    ),
     f("StdBarBias", nav::inl2_ned_sigma::STD_BAR_BIAS, F32, "m"),
-    f("StdMagDeclination", nav::inl2_ned_sigma::STD_MAG_DECLINATION, F32, "rad"),
+    f(
+        "StdMagDeclination",
+        nav::inl2_ned_sigma::STD_MAG_DECLINATION,
+        F32,
+        "rad",
+    ),
 ];
 
 const GPS_POS: &[FieldSpec] = &[

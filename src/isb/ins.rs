@@ -23,8 +23,7 @@ use super::nav_sets::{
 };
 use crate::earth::{declination_deg, geoid_undulation_m};
 use crate::math::double::{
-    euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
-    V3,
+    euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv, V3,
 };
 use crate::sensor::profile::SensorProfile;
 use crate::sensor::rng::Rng;
@@ -483,7 +482,7 @@ impl NavState {
     ) {
         self.nav_t = t_s;
         self.gps_step = false;
-        if !(inc.dt > 0.0) {
+        if inc.dt.is_nan() || inc.dt <= 0.0 {
             return;
         }
         if self.phase == Phase::Aligning {
@@ -628,12 +627,12 @@ impl NavState {
             let h = H_ACC_M / core::f32::consts::SQRT_2;
             let r_pos = [h * h, h * h, V_ACC_M * V_ACC_M];
             let sv = S_ACC_MPS / 1.732;
-            for k in 0..3 {
-                self.kf.update(&[(POS + k, 1.0)], d[k] as f32, r_pos[k], 0.0);
+            for (k, (dk, r)) in d.iter().zip(r_pos).enumerate() {
+                self.kf.update(&[(POS + k, 1.0)], *dk as f32, r, 0.0);
             }
-            for k in 0..3 {
-                let y = (v[k] - self.nom.v[k]) as f32;
-                self.kf.update(&[(VEL + k, 1.0)], y, sv * sv, 0.0);
+            for (k, (vk, nk)) in v.iter().zip(self.nom.v).enumerate() {
+                self.kf
+                    .update(&[(VEL + k, 1.0)], (vk - nk) as f32, sv * sv, 0.0);
             }
             self.correct();
         }
@@ -656,7 +655,8 @@ impl NavState {
         if self.phase == Phase::Ahrs {
             for k in 0..3 {
                 let y = -self.nom.v[k] as f32;
-                self.kf.update(&[(VEL + k, 1.0)], y, AHRS_VEL_SIGMA * AHRS_VEL_SIGMA, 0.0);
+                self.kf
+                    .update(&[(VEL + k, 1.0)], y, AHRS_VEL_SIGMA * AHRS_VEL_SIGMA, 0.0);
             }
         }
         let lla = self.nom.lla();
@@ -665,7 +665,8 @@ impl NavState {
             if p > 0.0 {
                 let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
                 let y = (lla[2] - h) as f32;
-                self.kf.update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
+                self.kf
+                    .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
             }
         }
         self.mag_ok = false;
@@ -693,7 +694,7 @@ impl NavState {
         let (norm0, dip0) = self.mag_ref?;
         let m = aid.mag.map(f64::from);
         let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-        if !(norm > 0.0) || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
+        if norm.is_nan() || norm <= 0.0 || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
             return None;
         }
         let e = euler_from_quat(&self.nom.q);

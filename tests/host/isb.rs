@@ -237,7 +237,12 @@ fn navigation_over_a_pty() {
         | ins_status::GPS_AIDING_POS
         | ins_status::GPS_AIDING_VEL
         | (1 << ins_status::GPS_NAV_FIX_SHIFT);
-    assert_eq!(i.header.ins_status & want, want, "{:#x}", i.header.ins_status);
+    assert_eq!(
+        i.header.ins_status & want,
+        want,
+        "{:#x}",
+        i.header.ins_status
+    );
     assert_eq!(ins_status::solution(i.header.ins_status), 3);
     assert!((f64::from(i.ned[0]) - 45f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
 }
@@ -538,12 +543,7 @@ fn status_counts_isb_packets() {
 const FLIGHT: &str = "start 45.5 7.25 300 0 0\nhold 45\naccel 2 10\nhold 10000\n";
 
 fn ins1_of(c: &mut Conn) -> Ins1 {
-    Ins1::decode(
-        &isb_packet_of(c, did::INS_1)
-            .payload
-            .try_into()
-            .unwrap(),
-    )
+    Ins1::decode(&isb_packet_of(c, did::INS_1).payload.try_into().unwrap())
 }
 
 /// A manoeuvre script flown by the real binary (`--motion`, `--speed 20`),

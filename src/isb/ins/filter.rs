@@ -26,6 +26,9 @@
 //! No heap, no panic: fixed-size arrays, indices in range by
 //! construction; a degenerate innovation variance skips the update.
 
+// Matrix code indexes rows and columns by one index.
+#![allow(clippy::needless_range_loop)]
+
 use libm::sqrtf;
 
 /// Number of error states.
@@ -192,7 +195,7 @@ impl Filter {
     /// Symmetric, with a non-negative diagonal (f32 round-off).
     fn condition(&mut self) {
         for i in 0..N {
-            if !(self.p[i][i] >= 1e-20) {
+            if self.p[i][i].is_nan() || self.p[i][i] < 1e-20 {
                 self.p[i][i] = 1e-20;
             }
             for j in 0..i {
@@ -253,8 +256,14 @@ mod tests {
         assert!((f.p[POS][POS] - 2.0).abs() < 1e-6);
         assert!((f.take_correction()[POS] - 0.5).abs() < 1e-6);
         assert_eq!(f.take_correction()[POS], 0.0);
-        assert!(matches!(f.update(&[(POS, 1.0)], 100.0, 4.0, 5.0), Update::Gated(_)));
-        assert_eq!(f.update(&[(POS, 1.0)], f32::NAN, 4.0, 0.0), Update::Degenerate);
+        assert!(matches!(
+            f.update(&[(POS, 1.0)], 100.0, 4.0, 5.0),
+            Update::Gated(_)
+        ));
+        assert_eq!(
+            f.update(&[(POS, 1.0)], f32::NAN, 4.0, 0.0),
+            Update::Degenerate
+        );
     }
 
     /// Free inertial: a velocity uncertainty grows the position's as σ_v·t.
