@@ -188,7 +188,7 @@ pub struct Solution {
 }
 
 /// The start times of the receiver, s: to the first fix from a cold and
-/// from a warm start (configurable: [`NavState::set_start_times`]).
+/// from a warm start (configurable: `Isb::set_start_times`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StartTimes {
     /// Cold start (no saved position), s.
