@@ -325,9 +325,10 @@ impl Personality for Isb {
             st.grid_ticks(cx, st.imu_dt_ms),
         );
         let ticks = cx.time().ticks();
-        // The receiver first (a fix due now enters the filter at once),
-        // then the INS.
-        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+        // The receiver's models step half a navigation period after the
+        // grid, on a tick of their own (the firmware's tick budget): a fix
+        // enters the filter at the receiver's next epoch.
+        if ticks % u64::from(st.grid_ticks(cx, ins::STEP_MS)) == u64::from(nav / 2) {
             let truth = st.truth(cx);
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
         }
@@ -889,18 +890,20 @@ impl State {
             dv: crate::vehicle::housing_to_body(&w.dv_mps),
             dt: w.samples as f64 / f64::from(rate(cx)),
         };
-        let truth = self.truth(cx);
         let cfg = self.nav_config();
-        let (_, gps) = self.gps_time(cx);
-        let aid = Aiding {
-            mag: self.nav.magnetometer(&truth, tick),
-            pressure_kpa: self.nav.pressure_kpa(&truth, tick),
-            year: ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s()),
-        };
-        let fix = self.nav.gnss(&truth, &cfg);
         let gps_dt_s = f64::from(self.gps_dt_ms) / 1000.0;
-        self.nav.navigate(t_s, &inc, fix, gps_dt_s, &aid, &cfg);
-        self.nav.check_last_lla(&cfg);
+        let (_, gps) = self.gps_time(cx);
+        // The aiding sensors are read at the receiver's epochs only.
+        let aiding = self.nav.epoch_due(t_s, gps_dt_s).then(|| {
+            let truth = self.truth(cx);
+            let aid = Aiding {
+                mag: self.nav.magnetometer(&truth, tick),
+                pressure_kpa: self.nav.pressure_kpa(&truth, tick),
+                year: ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s()),
+            };
+            (self.nav.gnss(&truth, &cfg), aid)
+        });
+        self.nav.navigate(t_s, &inc, gps_dt_s, aiding, &cfg);
         if let Some(lla) = self.nav.take_last_lla() {
             for (k, x) in lla.iter().enumerate() {
                 le::put(&mut self.cfg.0, flash::LAST_LLA + 8 * k, &x.to_le_bytes());

@@ -232,6 +232,10 @@ pub struct NavState {
     gnss_pos: [f64; 3],
     gnss_vel: [f64; 3],
     baro_frozen: Option<f32>,
+    /// The receiver models' step and its [`gm_step`] coefficients
+    /// (horizontal position, vertical position, velocity): the step is
+    /// fixed, so they are computed once.
+    gm: (f64, [(f64, f64); 3]),
     start: StartTimes,
     warm: bool,
     // --- the INS ---
@@ -267,9 +271,15 @@ pub struct NavState {
     saved_lla: Option<[f64; 3]>,
 }
 
-fn gm_step(x: &mut f64, g: &Gm, dt: f64, w: f64) {
+/// One Gauss–Markov step with `a = e^(−Δt/τ)` and `b = σ·√(1 − a²)`.
+fn gm_step(x: &mut f64, (a, b): (f64, f64), w: f64) {
+    *x = a * *x + b * w;
+}
+
+/// `(a, b)` of [`gm_step`] for `g` over `dt`.
+fn gm_coefficients(g: &Gm, dt: f64) -> (f64, f64) {
     let a = exp(-dt / g.tau_s);
-    *x = a * *x + g.sigma * sqrt(1.0 - a * a) * w;
+    (a, g.sigma * sqrt(1.0 - a * a))
 }
 
 /// The filter's process noise and initial bias σ of `profile`
@@ -304,6 +314,12 @@ pub fn noise_of(profile: &SensorProfile) -> (ProcessNoise, f32, f32) {
     )
 }
 
+/// The index of the receiver epoch a time `t_s` falls in (`gps_dt_s`
+/// apart).
+fn epoch_of(t_s: f64, gps_dt_s: f64) -> u64 {
+    (t_s / gps_dt_s.max(1e-3) + 1e-6) as u64
+}
+
 /// The time over which the bias random walk of [`noise_of`] reaches the
 /// profile's bias instability (plus temperature drift), s.
 pub const BIAS_WALK_S: f32 = 100.0;
@@ -329,6 +345,7 @@ impl NavState {
             gnss_pos,
             gnss_vel,
             baro_frozen: None,
+            gm: (-1.0, [(0.0, 0.0); 3]),
             start: StartTimes::default(),
             warm: false,
             phase: Phase::Aligning,
@@ -442,10 +459,20 @@ impl NavState {
         for x in w.iter_mut() {
             *x = f64::from(self.rng.gaussian());
         }
+        if self.gm.0 != dt {
+            self.gm = (
+                dt,
+                [
+                    gm_coefficients(&GNSS_POS_H, dt),
+                    gm_coefficients(&GNSS_POS_V, dt),
+                    gm_coefficients(&GNSS_VEL, dt),
+                ],
+            );
+        }
+        let c = self.gm.1;
         for k in 0..3 {
-            let gp = if k < 2 { &GNSS_POS_H } else { &GNSS_POS_V };
-            gm_step(&mut self.gnss_pos[k], gp, dt, w[k]);
-            gm_step(&mut self.gnss_vel[k], &GNSS_VEL, dt, w[3 + k]);
+            gm_step(&mut self.gnss_pos[k], c[if k < 2 { 0 } else { 1 }], w[k]);
+            gm_step(&mut self.gnss_vel[k], c[2], w[3 + k]);
         }
         if self.phase == Phase::Nav && !self.fixed {
             if was_fixed || self.outage_at.is_none() {
@@ -454,8 +481,10 @@ impl NavState {
         } else {
             self.outage_at = None;
         }
-        // A failed barometer keeps its last good reading.
-        if !self.faults.baro_failed || self.baro_frozen.is_none() {
+        // A failed barometer keeps the reading it had when it failed.
+        if !self.faults.baro_failed {
+            self.baro_frozen = None;
+        } else if self.baro_frozen.is_none() {
             self.baro_frozen =
                 Some(isa_kpa(truth.h_m - geoid_undulation_m(truth.lat_deg, truth.lon_deg)) as f32);
         }
@@ -466,18 +495,25 @@ impl NavState {
         self.outage_at.map(|a| self.t_s - a)
     }
 
+    /// Whether the navigation period ending `t_s` begins a receiver epoch
+    /// (`gps_dt_s` apart): the aiding [`NavState::navigate`] then wants.
+    pub fn epoch_due(&self, t_s: f64, gps_dt_s: f64) -> bool {
+        epoch_of(t_s, gps_dt_s) != self.gnss_epoch
+    }
+
     /// One navigation period ending `t_s` seconds since boot: the
-    /// mechanisation of the unit's IMU increment `inc`, then whatever
-    /// aiding is due (`docs/navigation.md` "Phases"): the receiver's fix
-    /// (`gnss`, the antenna's position and NED velocity, at each of its
-    /// epochs `gps_dt_s` apart), the barometer and magnetometer `aid`.
+    /// mechanisation of the unit's IMU increment `inc`, then, at each
+    /// receiver epoch ([`NavState::epoch_due`]), the aiding
+    /// (`docs/navigation.md` "Phases"): `aiding` is the receiver's fix (the
+    /// antenna's position and NED velocity) and the barometer and
+    /// magnetometer, given at epochs only (reading them costs: the
+    /// firmware's tick budget).
     pub fn navigate(
         &mut self,
         t_s: f64,
         inc: &Increment,
-        gnss: Option<([f64; 3], [f64; 3])>,
         gps_dt_s: f64,
-        aid: &Aiding,
+        aiding: Option<(Option<([f64; 3], [f64; 3])>, Aiding)>,
         cfg: &NavConfig,
     ) {
         self.nav_t = t_s;
@@ -485,8 +521,12 @@ impl NavState {
         if inc.dt.is_nan() || inc.dt <= 0.0 {
             return;
         }
+        let epoch = epoch_of(t_s, gps_dt_s);
+        let due = epoch != self.gnss_epoch;
+        self.gnss_epoch = epoch;
+        let aiding = if due { aiding } else { None };
         if self.phase == Phase::Aligning {
-            self.align(t_s, inc, aid, cfg);
+            self.align(t_s, inc, aiding.map(|a| a.1), cfg);
             return;
         }
         let f_n = self.nom.mechanise(inc);
@@ -495,26 +535,30 @@ impl NavState {
         if self.prop_dt >= PROPAGATE_S - 1e-9 {
             self.propagate();
         }
-        let fuse_gps = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
-        let epoch = (t_s / gps_dt_s.max(1e-3) + 1e-6) as u64;
         // Every aiding source enters at the receiver's epochs, so the state
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix);
         // between them the position is the integral of the velocity.
-        if epoch != self.gnss_epoch {
-            self.gnss_epoch = epoch;
+        if let Some((gnss, aid)) = aiding {
+            let fuse_gps = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
             if let (Some(fix), true) = (gnss, fuse_gps) {
                 self.fuse_gnss(&fix, cfg);
             }
-            self.fuse_aiding(aid, cfg);
+            self.fuse_aiding(&aid, cfg);
+            self.check_last_lla(cfg);
         }
         self.mag_aiding &= self.mag_ok;
     }
 
-    /// Coarse alignment: sums until [`ALIGN_S`], then roll and pitch from
-    /// the mean specific force, heading from the levelled mean magnetometer
-    /// reading and the declination, the covariance from the profile.
-    fn align(&mut self, t_s: f64, inc: &Increment, aid: &Aiding, cfg: &NavConfig) {
+    /// Coarse alignment: sums until [`ALIGN_S`] (the magnetometer at the
+    /// receiver's epochs), then, at the first epoch from there, roll and
+    /// pitch from the mean specific force, heading from the levelled mean
+    /// magnetometer reading and the declination, the covariance from the
+    /// profile.
+    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<Aiding>, cfg: &NavConfig) {
         self.align_dv = [0, 1, 2].map(|k| self.align_dv[k] + inc.dv[k]);
+        let Some(aid) = aid else {
+            return;
+        };
         self.align_mag = [0, 1, 2].map(|k| self.align_mag[k] + f64::from(aid.mag[k]));
         self.align_n += 1;
         if t_s < ALIGN_S - 1e-9 {
@@ -556,7 +600,6 @@ impl NavState {
         self.kf = Filter::new(&s);
         self.mag_ok = use_mag;
         self.phase = Phase::Ahrs;
-        self.gnss_epoch = u64::MAX;
     }
 
     /// The covariance over the periods since the last propagation.
@@ -741,9 +784,13 @@ impl NavState {
     /// filter's attitude at `lastLla`, at rest. The truth is not read.
     pub fn solution(&self, truth: &NavTruth, cfg: &NavConfig) -> Solution {
         let _ = truth;
-        let [r, p, y] = cfg.ins_rotation.map(f64::from);
-        let q_rot = quat_from_euler(r, p, y);
-        let q_nb = normalize(&quat_mul(&self.nom.q, &q_rot));
+        // The usual insRotation is none: no trigonometry then.
+        let q_nb = if cfg.ins_rotation == [0.0; 3] {
+            self.nom.q
+        } else {
+            let [r, p, y] = cfg.ins_rotation.map(f64::from);
+            normalize(&quat_mul(&self.nom.q, &quat_from_euler(r, p, y)))
+        };
         match self.phase {
             Phase::Aligning => Solution {
                 lla: cfg.last_lla,
@@ -768,8 +815,8 @@ impl NavState {
 
     /// Asks for `lastLla` to be saved when in NAV with a fix and the INS
     /// has moved far enough from the saved one (`docs/navigation.md`
-    /// "Warm start"); call after [`NavState::navigate`].
-    pub fn check_last_lla(&mut self, cfg: &NavConfig) {
+    /// "Warm start"); at each receiver epoch.
+    fn check_last_lla(&mut self, cfg: &NavConfig) {
         if self.phase != Phase::Nav || !self.fixed {
             return;
         }

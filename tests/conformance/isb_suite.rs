@@ -56,3 +56,8 @@ both!(
     navigation_streams_on_device_time_while_aligning,
     a_fed_rotation_shows_in_the_imu_packets,
 );
+
+/// Cost figures exist on the QEMU image only.
+mod qemu_cost {
+    suite!(crate::target::Kind::Qemu; tick_cost_navigating);
+}
