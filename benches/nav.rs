@@ -76,13 +76,16 @@ fn bench(c: &mut Criterion) {
         if ((*t / 0.02).round() * 0.02 - *t).abs() < 1e-9 {
             nav.step(*t, &truth);
         }
-        let aid = Aiding {
-            mag: nav.magnetometer(&truth, (*t * 2000.0) as u64),
-            pressure_kpa: nav.pressure_kpa(&truth, (*t * 2000.0) as u64),
-            year: 2026.0,
-        };
-        let fix = nav.gnss(&truth, &cfg);
-        nav.navigate(*t, &inc, fix, 0.2, &aid, &cfg);
+        let aiding = nav.epoch_due(*t, 0.2).then(|| {
+            let tick = (*t * 2000.0) as u64;
+            let aid = Aiding {
+                mag: nav.magnetometer(&truth, tick),
+                pressure_kpa: nav.pressure_kpa(&truth, tick),
+                year: 2026.0,
+            };
+            (nav.gnss(&truth, &cfg), aid)
+        });
+        nav.navigate(*t, &inc, 0.2, aiding, &cfg);
     };
     while t < 40.0 {
         period(&mut nav, &mut t);

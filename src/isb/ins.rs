@@ -206,6 +206,10 @@ impl Default for StartTimes {
     }
 }
 
+/// A receiver fix: the antenna's position (deg, deg, m) and NED velocity
+/// (m/s).
+pub type Fix = ([f64; 3], [f64; 3]);
+
 /// What the aiding sensors read at a navigation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aiding {
@@ -513,7 +517,7 @@ impl NavState {
         t_s: f64,
         inc: &Increment,
         gps_dt_s: f64,
-        aiding: Option<(Option<([f64; 3], [f64; 3])>, Aiding)>,
+        aiding: Option<(Option<Fix>, Aiding)>,
         cfg: &NavConfig,
     ) {
         self.nav_t = t_s;
@@ -638,7 +642,7 @@ impl NavState {
     /// A GNSS epoch: the first fix starts NAV (position and velocity set
     /// from it); after that, six scalar updates (position and velocity
     /// NED), the antenna's lever arm taken out.
-    fn fuse_gnss(&mut self, fix: &([f64; 3], [f64; 3]), cfg: &NavConfig) {
+    fn fuse_gnss(&mut self, fix: &Fix, cfg: &NavConfig) {
         self.propagate();
         let (lla, v) = fix;
         let ant = rotate(&self.nom.q, &cfg.gps1_ant_offset.map(f64::from));
