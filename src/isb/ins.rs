@@ -135,6 +135,9 @@ pub const MAG_GATE: f32 = 5.0;
 /// horizontal speed above this, the heading is set from the course over
 /// ground (single antenna: heading needs motion), m/s.
 pub const GPS_HEADING_MIN_SPEED: f64 = 5.0;
+/// The declination is evaluated again after this long, s (at 250 m/s that
+/// is 2.5 km, where the declination changes by well under 0.1°).
+pub const DECLINATION_EVERY_S: f64 = 10.0;
 /// The heading σ after it was set from the course over ground, rad (5°).
 pub const GPS_HEADING_SIGMA: f32 = 0.087;
 /// `sysCfgBits`: no magnetometer fusion (`SYS_CFG_BITS_DISABLE_MAGNETOMETER_FUSION`).
@@ -270,6 +273,8 @@ pub struct NavState {
     /// A GNSS update entered the solution in the last period.
     gps_step: bool,
     declination: f64,
+    /// Seconds since boot when the declination was last evaluated.
+    declination_at: f64,
     /// The position to save as `lastLla` (taken by the device).
     save_lla: Option<[f64; 3]>,
     saved_lla: Option<[f64; 3]>,
@@ -371,6 +376,7 @@ impl NavState {
             gps_heading: false,
             gps_step: false,
             declination: 0.0,
+            declination_at: 0.0,
             save_lla: None,
             saved_lla: None,
         }
@@ -578,6 +584,7 @@ impl NavState {
         let use_mag = cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 && norm > 0.0;
         let lla = self.nom.lla();
         self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
+        self.declination_at = t_s;
         let yaw = if use_mag {
             self.mag_ref = Some((norm, libm::asin((lvl[2] / norm).clamp(-1.0, 1.0))));
             self.declination - atan2(lvl[1], lvl[0])
@@ -718,7 +725,13 @@ impl NavState {
         }
         self.mag_ok = false;
         if cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 {
-            self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
+            // The field model is dear (a spherical-harmonic sum) and the
+            // declination changes slowly: evaluated every
+            // DECLINATION_EVERY_S.
+            if self.nav_t - self.declination_at >= DECLINATION_EVERY_S {
+                self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
+                self.declination_at = self.nav_t;
+            }
             if let Some(y) = self.mag_residual(aid) {
                 let r = MAG_HEADING_SIGMA * MAG_HEADING_SIGMA;
                 match self.kf.update(&[(ATT + 2, 1.0)], y, r, MAG_GATE) {
