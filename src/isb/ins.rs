@@ -675,7 +675,11 @@ impl NavState {
             let p = self.nom.lla();
             let d = [
                 (lla[0] - p[0]).to_radians() * (m + p[2]) - ant[0],
-                (lla[1] - p[1]).to_radians() * (n + p[2]) * libm::cos(self.nom.lat) - ant[1],
+                // Across ±180° the difference of longitudes wraps.
+                crate::math::double::wrap_pi((lla[1] - p[1]).to_radians())
+                    * (n + p[2])
+                    * libm::cos(self.nom.lat)
+                    - ant[1],
                 -(lla[2] - p[2]) - ant[2],
             ];
             let h = H_ACC_M / core::f32::consts::SQRT_2;
