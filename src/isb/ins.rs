@@ -824,9 +824,15 @@ impl NavState {
                 q_nb,
             },
             Phase::Nav => {
-                let lever = rotate(&q_nb, &cfg.ins_offset.map(f64::from));
+                // The usual insOffset is none: no conversion then.
+                let lla = if cfg.ins_offset == [0.0; 3] {
+                    self.nom.lla()
+                } else {
+                    let lever = rotate(&q_nb, &cfg.ins_offset.map(f64::from));
+                    lla_plus_ned(&self.nom.lla(), &lever)
+                };
                 Solution {
-                    lla: lla_plus_ned(&self.nom.lla(), &lever),
+                    lla,
                     v_ned: self.nom.v,
                     q_nb,
                 }
