@@ -334,7 +334,7 @@ pub fn a_fed_rotation_shows_in_the_imu_packets(kind: Kind) {
 /// navigation (GNSS epochs with their updates, propagations, the
 /// mechanisation every period) is measured. The guide's budget, 50 000
 /// cycles a tick, is NOT met (docs/performance.md "Navigation filter":
-/// 425 640 instructions at the worst tick, a GNSS epoch's, measured
+/// 409 280 instructions at the worst tick, a GNSS epoch's, measured
 /// 2026-12-06); the bound here only catches a tick made markedly dearer
 /// still.
 pub fn tick_cost_navigating(kind: Kind) {
