@@ -430,7 +430,7 @@ fn every_served_set_goes_out_whole_and_in_parts_and_comes_back_through_the_class
         assert_eq!(
             p,
             match set.did {
-                3 | 4 | 5 | 58 | 65 | 66 | 85 | 86 => 4,
+                3 | 4 | 5 | 48 | 58 | 65 | 66 | 67 | 85 | 86 => 4,
                 6 | 13 | 30 => 200,
                 52 => 10,
                 53 => 8,

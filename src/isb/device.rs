@@ -77,7 +77,7 @@ use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
 use crate::isb::did::{self, DataSet};
-use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
+use crate::isb::ins::{self, mech, Aiding, NavConfig, NavFaults, NavState, StartTimes};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime, NavTruth};
 use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
@@ -189,6 +189,8 @@ struct State {
     gps_dt_ms: u32,
     /// The navigation side: INS, GNSS, magnetometer, barometer.
     nav: NavState,
+    /// The receiver's cold and warm start times (kept across resets).
+    start_times: StartTimes,
     /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
     /// board: `Isb::set_gps_time`).
     gps_ns_at_zero: u64,
@@ -234,6 +236,7 @@ impl Personality for Isb {
                 parse_errors: 0,
                 gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
                 nav: NavState::new(0),
+                start_times: StartTimes::default(),
                 gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
                 truth: Cell::new(None),
             },
@@ -287,6 +290,13 @@ impl Personality for Isb {
         st.truth.set(None);
         let product = cx.product();
         cx.chain_mut().configure(&ChainConfig::defaults(&product));
+        // The filter is tuned for the unit's own sensors, and starts warm
+        // from a `lastLla` an earlier NAV saved.
+        match cx.chain().profile() {
+            Some(p) => st.nav.set_profile(p),
+            None => st.nav.set_profile(&product.sensor_profile()),
+        }
+        st.nav.boot(&st.nav_config(), st.start_times);
         cx.set_line_rate(st.baud);
         if cx.firmware_update() {
             return;
@@ -350,16 +360,20 @@ impl Personality for Isb {
             st.grid_ticks(cx, st.imu_dt_ms),
         );
         let ticks = cx.time().ticks();
-        if ticks.is_multiple_of(u64::from(nav)) {
-            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
-        }
-        if ticks.is_multiple_of(u64::from(imu)) {
-            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
-        }
-        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+        // The receiver's models step half a navigation period after the
+        // grid, on a tick of their own (the firmware's tick budget): a fix
+        // enters the filter at the receiver's next epoch.
+        if ticks % u64::from(st.grid_ticks(cx, ins::STEP_MS)) == u64::from(nav / 2) {
             let truth = st.truth(cx);
             st.nav.set_year(st.gps_time(cx).1.decimal_year());
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
+            st.navigate(cx);
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
         }
         if st.save_pending {
             st.save(cx);
@@ -472,6 +486,12 @@ impl Isb {
     /// missing periods, more than 20 pairs).
     pub fn asce_rejected(&self) -> u32 {
         self.st.nmea.rejected
+    }
+
+    /// Sets the receiver's times to first fix from a cold and from a warm
+    /// start (from the next power-on or reset).
+    pub fn set_start_times(&mut self, t: StartTimes) {
+        self.st.start_times = t;
     }
 
     /// DIDs streaming now, in the order they were started.
@@ -887,7 +907,9 @@ impl State {
             | did::GPS1_VEL
             | did::GPS1_SAT
             | did::MAGNETOMETER
-            | did::BAROMETER => {
+            | did::BAROMETER
+            | did::INL2_STATES
+            | did::INL2_NED_SIGMA => {
                 let hdw = self.sys_params(cx, now).hdw_status;
                 self.nav_image(cx, did, hdw, out)
             }
@@ -934,6 +956,56 @@ impl State {
             ins_rotation: le::f32x3(b, flash::INS_ROTATION),
             ins_offset: le::f32x3(b, flash::INS_OFFSET),
             gps1_ant_offset: le::f32x3(b, flash::GPS1_ANT_OFFSET),
+            last_lla_week: le::u32(b, flash::LAST_LLA_WEEK),
+            last_lla_update_distance: le::f32(b, flash::LAST_LLA_UPDATE_DISTANCE),
+            sys_cfg_bits: le::u32(b, flash::SYS_CFG_BITS),
+        }
+    }
+
+    /// One navigation period of the INS (at each boundary of the
+    /// navigation grid): the chain's coning- and sculling-corrected
+    /// increments of the period — the Δθ, Δv a PIMU of that period reports
+    /// — in body axes, the receiver's fix, the magnetometer and barometer
+    /// as the unit reads them; then `lastLla` saved if the INS asks.
+    fn navigate(&mut self, cx: &mut impl Context<Integrals>) {
+        let w = integrals::window(&self.nav_grid[0], &self.nav_grid[1], rate(cx));
+        let tick = cx.time().ticks();
+        let t_s = tick as f64 / f64::from(rate(cx));
+        let inc = mech::Increment {
+            dtheta: crate::vehicle::housing_to_body(&w.dtheta_rad),
+            dv: crate::vehicle::housing_to_body(&w.dv_mps),
+            dt: w.samples as f64 / f64::from(rate(cx)),
+        };
+        let cfg = self.nav_config();
+        let gps_dt_s = f64::from(self.gps_dt_ms) / 1000.0;
+        let (_, gps) = self.gps_time(cx);
+        // The aiding sensors are read at the receiver's epochs only.
+        let aiding = self.nav.epoch_due(t_s, gps_dt_s).then(|| {
+            let truth = self.truth(cx);
+            let aid = Aiding {
+                mag: self.nav.magnetometer(&truth, tick),
+                pressure_kpa: self.nav.pressure_kpa(&truth, tick),
+                year: ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s()),
+            };
+            (self.nav.gnss(&truth, &cfg), aid)
+        });
+        self.nav.navigate(t_s, &inc, gps_dt_s, aiding, &cfg);
+        if let Some(lla) = self.nav.take_last_lla() {
+            for (k, x) in lla.iter().enumerate() {
+                le::put(&mut self.cfg.0, flash::LAST_LLA + 8 * k, &x.to_le_bytes());
+            }
+            le::put(
+                &mut self.cfg.0,
+                flash::LAST_LLA_TIME_OF_WEEK_MS,
+                &gps.tow_ms().to_le_bytes(),
+            );
+            le::put(
+                &mut self.cfg.0,
+                flash::LAST_LLA_WEEK,
+                &gps.week.to_le_bytes(),
+            );
+            self.cfg.update_checksum();
+            self.save_pending = true;
         }
     }
 
@@ -1020,6 +1092,15 @@ impl State {
             did::BAROMETER => {
                 let p = self.nav.pressure_kpa(&truth, tick);
                 put(&ins::barometer(since_s, p, cx.chain().temperature()).encode())
+            }
+            did::INL2_STATES => put(&self.nav.inl2_states(h.time_of_week).encode()),
+            did::INL2_NED_SIGMA => {
+                let ms = if valid {
+                    gps.tow_ms()
+                } else {
+                    (since_ns / 1_000_000) as u32
+                };
+                put(&self.nav.inl2_ned_sigma(ms).encode())
             }
             _ => 0,
         }

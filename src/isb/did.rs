@@ -9,8 +9,8 @@
 //! DID 95, silence for any other DID the table does not hold.
 
 use super::nav_sets::{
-    barometer, gps_pos, gps_sat, gps_vel, imu_mag, ins1, ins2, ins3, ins4, magnetometer, pimu_mag,
-    rmc_nav, sys_sensors,
+    barometer, gps_pos, gps_sat, gps_vel, imu_mag, inl2_ned_sigma, inl2_states, ins1, ins2, ins3,
+    ins4, magnetometer, pimu_mag, rmc_nav, sys_sensors,
 };
 use super::sets;
 
@@ -34,6 +34,10 @@ pub const INS_2: u8 = 5;
 pub const INS_3: u8 = 65;
 /// `ins_4_t`: INS output, ECEF.
 pub const INS_4: u8 = 66;
+/// `inl2_states_t`: the INS filter's states.
+pub const INL2_STATES: u8 = 48;
+/// `inl2_ned_sigma_t`: standard deviations of the INS filter's estimates.
+pub const INL2_NED_SIGMA: u8 = 67;
 /// `gps_pos_t`: GNSS position (the better of GPS1_RCVR_POS / RTK).
 pub const GPS1_POS: u8 = 13;
 /// `gps_sat_t`: the satellites the receiver tracks.
@@ -213,7 +217,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 24] = [
+pub const DATA_SETS: [DataSet; 26] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -329,6 +333,20 @@ pub const DATA_SETS: [DataSet; 24] = [
         ins4::SIZE,
         Source::NavDt,
         rmc_nav::BITS_INS4,
+    ),
+    nav(
+        INL2_STATES,
+        "inl2_states_t",
+        inl2_states::SIZE,
+        Source::NavDt,
+        0,
+    ),
+    nav(
+        INL2_NED_SIGMA,
+        "inl2_ned_sigma_t",
+        inl2_ned_sigma::SIZE,
+        Source::NavDt,
+        rmc_nav::BITS_INL2_NED_SIGMA,
     ),
     nav(
         GPS1_POS,

@@ -588,6 +588,49 @@ const INS_4: &[FieldSpec] = &[
     f("ecef", nav::ins4::ECEF, F64x3, "m"),
 ];
 
+const INL2_STATES: &[FieldSpec] = &[
+    f("timeOfWeek", nav::inl2_states::TIME_OF_WEEK, F64, "s"),
+    f("qe2b", nav::inl2_states::QE2B, F32x4, ""),
+    f("ve", nav::inl2_states::VE, F32x3, "m/s"),
+    f("ecef", nav::inl2_states::ECEF, F64x3, "m"),
+    f("biasPqr", nav::inl2_states::BIAS_PQR, F32x3, "rad/s"),
+    f("biasAcc", nav::inl2_states::BIAS_ACC, F32x3, "m/s^2"),
+    f("biasBaro", nav::inl2_states::BIAS_BARO, F32, "m"),
+    f("magDec", nav::inl2_states::MAG_DEC, F32, "rad"),
+    f("magInc", nav::inl2_states::MAG_INC, F32, "rad"),
+];
+
+const INL2_NED_SIGMA: &[FieldSpec] = &[
+    f(
+        "timeOfWeekMs",
+        nav::inl2_ned_sigma::TIME_OF_WEEK_MS,
+        U32,
+        "ms",
+    ),
+    f("StdPosNed", nav::inl2_ned_sigma::STD_POS_NED, F32x3, "m"),
+    f("StdVelNed", nav::inl2_ned_sigma::STD_VEL_NED, F32x3, "m/s"),
+    f("StdAttNed", nav::inl2_ned_sigma::STD_ATT_NED, F32x3, "rad"),
+    f(
+        "StdAccBias",
+        nav::inl2_ned_sigma::STD_ACC_BIAS,
+        F32x3,
+        "m/s^2",
+    ),
+    f(
+        "StdGyrBias",
+        nav::inl2_ned_sigma::STD_GYR_BIAS,
+        F32x3,
+        "rad/s",
+    ),
+    f("StdBarBias", nav::inl2_ned_sigma::STD_BAR_BIAS, F32, "m"),
+    f(
+        "StdMagDeclination",
+        nav::inl2_ned_sigma::STD_MAG_DECLINATION,
+        F32,
+        "rad",
+    ),
+];
+
 const GPS_POS: &[FieldSpec] = &[
     f("week", nav::gps_pos::WEEK, U32, ""),
     f("timeOfWeekMs", nav::gps_pos::TIME_OF_WEEK_MS, U32, "ms"),
@@ -703,7 +746,7 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 24] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 26] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
@@ -719,6 +762,8 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 24] = [
     (did::INS_2, "INS_2", INS_2),
     (did::INS_3, "INS_3", INS_3),
     (did::INS_4, "INS_4", INS_4),
+    (did::INL2_STATES, "INL2_STATES", INL2_STATES),
+    (did::INL2_NED_SIGMA, "INL2_NED_SIGMA", INL2_NED_SIGMA),
     (did::GPS1_POS, "GPS1_POS", GPS_POS),
     (did::GPS1_RCVR_POS, "GPS1_RCVR_POS", GPS_POS),
     (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
@@ -809,6 +854,10 @@ pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
         | did::SYS_SENSORS => Some(le::f64(b, 0)),
         // GPS seconds of the week.
         did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => Some(le::f64(b, 4)),
+        did::INL2_STATES => Some(le::f64(b, nav::inl2_states::TIME_OF_WEEK)),
+        did::INL2_NED_SIGMA => {
+            Some(f64::from(le::u32(b, nav::inl2_ned_sigma::TIME_OF_WEEK_MS)) / 1e3)
+        }
         did::GPS1_POS | did::GPS1_RCVR_POS => {
             Some(f64::from(le::u32(b, nav::gps_pos::TIME_OF_WEEK_MS)) / 1e3)
         }

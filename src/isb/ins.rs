@@ -1,43 +1,57 @@
-//! The IMX-5's navigation side: the INS and GNSS error models, the INS
-//! phases after power-on, the magnetometer and the barometer, and the
-//! navigation data sets built from the truth ([`super::nav::truth_of`]).
-//! Figures and decisions: `docs/isb.md` "Navigation".
-//!
-//! Errors are first-order Gauss–Markov processes per axis (`x ← a·x +
-//! σ·√(1−a²)·w`, `a = e^(−Δt/τ)`), stepped every [`STEP_MS`] from the
-//! unit's own seed, so they are correlated in time as a filter's are and the
-//! same seed gives the same errors whatever is streamed. Sensor noise of
-//! the magnetometer and barometer is white, drawn from the seed and the
-//! sample's tick (independent of what else is asked for).
+//! The IMX-5's navigation side: its INS — a strapdown mechanisation of
+//! the unit's own emulated IMU ([`mech`]) corrected by an error-state
+//! Kalman filter ([`filter`]) with the GNSS receiver, the barometer and
+//! the magnetometer, through the phases and status of [`status`] — and the
+//! emulated aiding sensors it reads: the GNSS receiver (the truth plus
+//! first-order Gauss–Markov errors, `x ← a·x + σ·√(1−a²)·w`, `a =
+//! e^(−Δt/τ)`, stepped every [`STEP_MS`] from the unit's own seed), the
+//! magnetometer and the barometer (white noise drawn from the seed and the
+//! sample's tick, independent of what else is asked for). The navigation
+//! data sets are built from the filter's state. Figures and decisions:
+//! `docs/navigation.md`, `docs/isb.md` "Navigation".
 
-use libm::{exp, log, pow, sqrt};
+pub mod filter;
+pub mod mech;
+pub mod status;
+
+use libm::{atan2, exp, log, pow, sqrt};
 
 use super::nav::{
     ecef_of, lla_plus_ned, ned_from_ref, quat_e2n, GpsTime, NavTruth, DEFAULT_GPS_S_AT_ZERO,
     LEAP_SECONDS,
 };
 use super::nav_sets::{
-    gps_status, hdw_nav, ins_status, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, GpsVel, Ins1,
-    Ins2, Ins3, Ins4, InsHeader, Magnetometer, MAX_NUM_SATELLITES,
+    gps_status, hdw_nav, sat_status, Barometer, GpsPos, GpsSat, GpsSatSv, GpsVel, Inl2NedSigma,
+    Inl2States, Ins1, Ins2, Ins3, Ins4, InsHeader, Magnetometer, MAX_NUM_SATELLITES,
 };
-use crate::earth::{geoid_undulation_m, FieldMemo};
+use crate::earth::{declination_deg, geoid_undulation_m, FieldMemo};
 use crate::math::double::{
-    euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv,
+    euler_from_quat, quat_from_euler, quat_mul, quat_normalize as normalize, rotate, rotate_inv, V3,
 };
+use crate::sensor::profile::SensorProfile;
 use crate::sensor::rng::Rng;
+use crate::vehicle::wgs84;
+use filter::{Filter, Interval, ProcessNoise, Update, ATT, BA, BG, N, POS, VEL};
+use mech::{Increment, Nominal};
+pub use status::Phase;
 
-/// The error models' step, ms.
+/// The receiver error models' step, ms.
 pub const STEP_MS: u32 = 20;
-/// Attitude alignment after power-on (solution "aligning" until then), s.
+/// Coarse alignment after power-on (solution "aligning" until then): the
+/// accelerometers and magnetometer are averaged over it, s.
 pub const ALIGN_S: f64 = 5.0;
-/// GNSS time to first fix from a cold start, s (a u-blox class receiver's
-/// cold-start TTFF).
+/// GNSS time to first fix from a cold start (no `lastLla`), s: a u-blox
+/// class receiver's cold-start TTFF.
 pub const COLD_START_S: f64 = 30.0;
-/// Dead reckoning longer than this reports "NAV, high variance", s.
-pub const HIGH_VARIANCE_AFTER_S: f64 = 10.0;
-/// Time constant with which the dead-reckoning error shrinks once the fix
-/// is back, s.
-pub const RECOVERY_TAU_S: f64 = 5.0;
+/// GNSS time to first fix from a warm start (`lastLla` and its week saved
+/// by an earlier NAV: position and time known), s.
+pub const WARM_START_S: f64 = 10.0;
+/// `lastLla` is rewritten when the INS has moved this far from it and
+/// `lastLlaUpdateDistance` is 0 (its factory value), m.
+pub const LAST_LLA_DEFAULT_DISTANCE_M: f64 = 1000.0;
+/// The covariance is propagated at least this often, s (the mechanisation
+/// runs every navigation period; the covariance needs less).
+pub const PROPAGATE_S: f64 = 0.020;
 
 /// One Gauss–Markov figure: standard deviation and correlation time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,31 +62,6 @@ pub struct Gm {
     pub tau_s: f64,
 }
 
-/// INS position error while GPS-aided, north/east, m (1σ per axis).
-pub const INS_POS_H: Gm = Gm {
-    sigma: 0.7,
-    tau_s: 60.0,
-};
-/// INS position error, down, m.
-pub const INS_POS_V: Gm = Gm {
-    sigma: 1.0,
-    tau_s: 60.0,
-};
-/// INS velocity error per NED axis, m/s.
-pub const INS_VEL: Gm = Gm {
-    sigma: 0.03,
-    tau_s: 10.0,
-};
-/// INS roll and pitch error, rad (0.1°).
-pub const INS_TILT: Gm = Gm {
-    sigma: 0.001_745,
-    tau_s: 100.0,
-};
-/// INS heading error, rad (0.3°).
-pub const INS_HEADING: Gm = Gm {
-    sigma: 0.005_236,
-    tau_s: 100.0,
-};
 /// GNSS position error, north/east, m (1σ per axis: hAcc ≈ 1.4 m).
 pub const GNSS_POS_H: Gm = Gm {
     sigma: 1.0,
@@ -88,12 +77,6 @@ pub const GNSS_VEL: Gm = Gm {
     sigma: 0.05,
     tau_s: 1.0,
 };
-/// Acceleration error driving the dead reckoning during an outage, per
-/// horizontal axis, m/s² (1σ, drawn at the outage's start: 0.1° tilt × g
-/// plus accelerometer bias).
-pub const DR_ACCEL_H: f64 = 0.02;
-/// The same, down (the barometer holds the vertical), m/s².
-pub const DR_ACCEL_V: f64 = 0.005;
 /// Magnetometer noise, normalized units (1σ per axis: 0.2 % of the local
 /// field).
 pub const MAG_NOISE: f64 = 0.002;
@@ -132,6 +115,42 @@ pub const SAT_STATUS_USED: u16 =
 /// A magnetic disturbance adds this field (normalized units, NED).
 pub const MAG_DISTURBANCE: [f64; 3] = [0.6, -0.4, 0.3];
 
+/// The filter's measurement noise (1σ) of the barometer's height, m: the
+/// emulated barometer's 2 Pa noise is 0.17 m; the rest allows for the
+/// height an ISA barometer misreads in weather the model does not have.
+pub const BARO_SIGMA_M: f32 = 0.5;
+/// The filter's measurement noise (1σ) of a magnetometer heading, rad (1°:
+/// the emulated magnetometer's noise over the horizontal field at mid
+/// latitudes is 0.3°, plus residual calibration).
+pub const MAG_HEADING_SIGMA: f32 = 0.017_45;
+/// While no GNSS fix was ever had (AHRS), the filter assumes the unit's
+/// mean velocity is zero with this 1σ (a pseudo-measurement at each
+/// receiver epoch), m/s: what levels an AHRS's attitude.
+pub const AHRS_VEL_SIGMA: f32 = 0.5;
+/// A magnetometer sample whose magnitude differs from the one learnt in
+/// alignment by more than this fraction is interference (not fused).
+pub const MAG_NORM_TOLERANCE: f64 = 0.10;
+/// … or whose dip angle differs by more than this, rad (5°).
+pub const MAG_DIP_TOLERANCE: f64 = 0.087;
+/// A magnetometer heading whose residual exceeds this many standard
+/// deviations of its prediction is not fused.
+pub const MAG_GATE: f32 = 5.0;
+/// With a heading σ above [`status::HDG_COARSE_RAD`] and the GNSS
+/// horizontal speed above this, the heading is set from the course over
+/// ground (single antenna: heading needs motion), m/s.
+pub const GPS_HEADING_MIN_SPEED: f64 = 5.0;
+/// The declination is evaluated again after this long, s (at 250 m/s that
+/// is 2.5 km, where the declination changes by well under 0.1°).
+pub const DECLINATION_EVERY_S: f64 = 10.0;
+/// The heading σ after it was set from the course over ground, rad (5°).
+pub const GPS_HEADING_SIGMA: f32 = 0.087;
+/// `sysCfgBits`: no magnetometer fusion (`SYS_CFG_BITS_DISABLE_MAGNETOMETER_FUSION`).
+pub const SYS_CFG_NO_MAG_FUSION: u32 = 0x1000;
+/// `sysCfgBits`: no barometer fusion.
+pub const SYS_CFG_NO_BARO_FUSION: u32 = 0x2000;
+/// `sysCfgBits`: no GPS1 fusion.
+pub const SYS_CFG_NO_GPS1_FUSION: u32 = 0x4000;
+
 /// Faults injected from outside (the host's control socket).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct NavFaults {
@@ -156,6 +175,12 @@ pub struct NavConfig {
     pub ins_offset: [f32; 3],
     /// `gps1AntOffset`, m (sensor frame).
     pub gps1_ant_offset: [f32; 3],
+    /// `lastLlaWeek`: 0 when no position was ever saved.
+    pub last_lla_week: u32,
+    /// `lastLlaUpdateDistance`, m.
+    pub last_lla_update_distance: f32,
+    /// `sysCfgBits` (the fusion switches, [`SYS_CFG_NO_MAG_FUSION`] …).
+    pub sys_cfg_bits: u32,
 }
 
 /// What the INS reports: position, velocity, attitude of its output point.
@@ -169,49 +194,163 @@ pub struct Solution {
     pub q_nb: [f64; 4],
 }
 
+/// The start times of the receiver, s: to the first fix from a cold and
+/// from a warm start (configurable: `Isb::set_start_times`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartTimes {
+    /// Cold start (no saved position), s.
+    pub cold_s: f64,
+    /// Warm start (a position saved by an earlier NAV), s.
+    pub warm_s: f64,
+}
+
+impl Default for StartTimes {
+    fn default() -> Self {
+        StartTimes {
+            cold_s: COLD_START_S,
+            warm_s: WARM_START_S,
+        }
+    }
+}
+
+/// A receiver fix: the antenna's position (deg, deg, m) and NED velocity
+/// (m/s).
+pub type Fix = ([f64; 3], [f64; 3]);
+
+/// What the aiding sensors read at a navigation step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aiding {
+    /// The magnetometer's reading, body axes (what MAGNETOMETER reports).
+    pub mag: [f32; 3],
+    /// The barometer's pressure, kPa (what BAROMETER reports).
+    pub pressure_kpa: f32,
+    /// Decimal year of the GPS date (for the declination).
+    pub year: f64,
+}
+
 /// The navigation state of one unit (module doc).
 #[derive(Debug, Clone)]
 pub struct NavState {
     rng: Rng,
     seed: u64,
-    /// Seconds since boot at the last step.
+    /// Seconds since boot at the last receiver-model step.
     t_s: f64,
     faults: NavFaults,
     fixed: bool,
     ever_fixed: bool,
     /// Seconds since boot when the current outage began.
     outage_at: Option<f64>,
-    ins_pos: [f64; 3],
-    ins_vel: [f64; 3],
-    ins_att: [f64; 3],
     gnss_pos: [f64; 3],
     gnss_vel: [f64; 3],
-    dr_acc: [f64; 3],
-    dr_vel: [f64; 3],
-    dr_pos: [f64; 3],
     baro_frozen: Option<f32>,
     /// The date the magnetic field is read at, decimal year (UTC).
     year: f64,
     /// The main field at the truth, remembered ([`FieldMemo`]).
     field: FieldMemo,
+    /// The receiver models' step and its [`gm_step`] coefficients
+    /// (horizontal position, vertical position, velocity): the step is
+    /// fixed, so they are computed once.
+    gm: (f64, [(f64, f64); 3]),
+    start: StartTimes,
+    warm: bool,
+    // --- the INS ---
+    phase: Phase,
+    /// Seconds since boot at the last navigation step.
+    nav_t: f64,
+    nom: Nominal,
+    kf: Filter,
+    q: ProcessNoise,
+    /// Initial 1σ of the biases (the profile's turn-on biases), rad/s and
+    /// m/s².
+    bg0: f32,
+    ba0: f32,
+    /// Alignment sums: Δv and magnetometer readings, and their count.
+    align_dv: V3,
+    align_mag: V3,
+    align_n: u32,
+    /// Since the last covariance propagation: time, Σ Δv in NED.
+    prop_dt: f64,
+    prop_dv_n: V3,
+    /// Index of the last receiver epoch (aiding instant).
+    gnss_epoch: u64,
+    /// The magnetometer field learnt in alignment: magnitude, dip (rad).
+    mag_ref: Option<(f64, f64)>,
+    mag_ok: bool,
+    mag_aiding: bool,
+    gps_heading: bool,
+    /// A GNSS update entered the solution in the last period.
+    gps_step: bool,
+    declination: f64,
+    /// Seconds since boot when the declination was last evaluated.
+    declination_at: f64,
+    /// The position to save as `lastLla` (taken by the device).
+    save_lla: Option<[f64; 3]>,
+    saved_lla: Option<[f64; 3]>,
 }
 
-fn gm_step(x: &mut f64, g: &Gm, dt: f64, w: f64) {
-    let a = exp(-dt / g.tau_s);
-    *x = a * *x + g.sigma * sqrt(1.0 - a * a) * w;
+/// One Gauss–Markov step with `a = e^(−Δt/τ)` and `b = σ·√(1 − a²)`.
+fn gm_step(x: &mut f64, (a, b): (f64, f64), w: f64) {
+    *x = a * *x + b * w;
 }
+
+/// `(a, b)` of [`gm_step`] for `g` over `dt`.
+fn gm_coefficients(g: &Gm, dt: f64) -> (f64, f64) {
+    let a = exp(-dt / g.tau_s);
+    (a, g.sigma * sqrt(1.0 - a * a))
+}
+
+/// The filter's process noise and initial bias σ of `profile`
+/// (`docs/navigation.md` "Noise"): the white noise of each sensor as its
+/// random walk; its bias instability B as a bias random walk reaching B in
+/// [`BIAS_WALK_S`] (plus the profile's rate random walk); the turn-on
+/// biases as the initial bias σ.
+pub fn noise_of(profile: &SensorProfile) -> (ProcessNoise, f32, f32) {
+    let g = crate::math::G;
+    let d2r = core::f32::consts::PI / 180.0;
+    let (gy, ac) = (&profile.gyro, &profile.acc);
+    let arw = gy.noise_density * d2r;
+    let vrw = ac.noise_density * g;
+    let bi_g = gy.bias_instability * d2r;
+    let bi_a = ac.bias_instability * g;
+    let rrw_g = gy.rate_random_walk * d2r;
+    let rrw_a = ac.rate_random_walk * g;
+    // Temperature: the bias moves with the sensor's warm-up (temp_bias per
+    // °C over the self-heating): folded into the walk's size.
+    let heat = profile.temperature.self_heating_c.abs().max(1.0);
+    let drift_g = bi_g + gy.temp_bias * d2r * heat;
+    let drift_a = bi_a + ac.temp_bias * g * heat;
+    (
+        ProcessNoise {
+            vel: vrw * vrw,
+            att: arw * arw,
+            bg: drift_g * drift_g / BIAS_WALK_S + rrw_g * rrw_g,
+            ba: drift_a * drift_a / BIAS_WALK_S + rrw_a * rrw_a,
+        },
+        gy.turn_on_bias_sigma * d2r,
+        ac.turn_on_bias_sigma * g,
+    )
+}
+
+/// The index of the receiver epoch a time `t_s` falls in (`gps_dt_s`
+/// apart).
+fn epoch_of(t_s: f64, gps_dt_s: f64) -> u64 {
+    (t_s / gps_dt_s.max(1e-3) + 1e-6) as u64
+}
+
+/// The time over which the bias random walk of [`noise_of`] reaches the
+/// profile's bias instability (plus temperature drift), s.
+pub const BIAS_WALK_S: f32 = 100.0;
 
 impl NavState {
-    /// Power-on state for `seed` (errors drawn at their steady state).
+    /// Power-on state for `seed` (receiver errors drawn at their steady
+    /// state), with the IMX-5's profile until [`NavState::set_profile`].
     pub fn new(seed: u64) -> Self {
         let mut rng = Rng::new(seed ^ 0x4E41_5600);
         let mut draw = |g: &Gm| g.sigma * f64::from(rng.gaussian());
         let h3 = |d: &mut dyn FnMut(&Gm) -> f64, h: &Gm, v: &Gm| [d(h), d(h), d(v)];
-        let ins_pos = h3(&mut draw, &INS_POS_H, &INS_POS_V);
-        let ins_vel = h3(&mut draw, &INS_VEL, &INS_VEL);
-        let ins_att = h3(&mut draw, &INS_TILT, &INS_HEADING);
         let gnss_pos = h3(&mut draw, &GNSS_POS_H, &GNSS_POS_V);
         let gnss_vel = h3(&mut draw, &GNSS_VEL, &GNSS_VEL);
+        let (q, bg0, ba0) = noise_of(&crate::sensor::profiles::IMX5_PROFILE);
         NavState {
             rng,
             seed,
@@ -220,17 +359,36 @@ impl NavState {
             fixed: false,
             ever_fixed: false,
             outage_at: None,
-            ins_pos,
-            ins_vel,
-            ins_att,
             gnss_pos,
             gnss_vel,
-            dr_acc: [0.0; 3],
-            dr_vel: [0.0; 3],
-            dr_pos: [0.0; 3],
             baro_frozen: None,
             year: GpsTime::of_ns(DEFAULT_GPS_S_AT_ZERO * 1_000_000_000).decimal_year(),
             field: FieldMemo::new(),
+            gm: (-1.0, [(0.0, 0.0); 3]),
+            start: StartTimes::default(),
+            warm: false,
+            phase: Phase::Aligning,
+            nav_t: 0.0,
+            nom: Nominal::at(&[0.0; 3]),
+            kf: Filter::new(&[0.0; N]),
+            q,
+            bg0,
+            ba0,
+            align_dv: [0.0; 3],
+            align_mag: [0.0; 3],
+            align_n: 0,
+            prop_dt: 0.0,
+            prop_dv_n: [0.0; 3],
+            gnss_epoch: 0,
+            mag_ref: None,
+            mag_ok: false,
+            mag_aiding: false,
+            gps_heading: false,
+            gps_step: false,
+            declination: 0.0,
+            declination_at: 0.0,
+            save_lla: None,
+            saved_lla: None,
         }
     }
 
@@ -238,6 +396,39 @@ impl NavState {
     /// UTC: [`GpsTime::decimal_year`] of the unit's GPS clock).
     pub fn set_year(&mut self, year: f64) {
         self.year = year;
+    }
+
+    /// The sensor profile the filter is tuned for (the unit's own).
+    pub fn set_profile(&mut self, profile: &SensorProfile) {
+        let (q, bg0, ba0) = noise_of(profile);
+        self.q = q;
+        self.bg0 = bg0;
+        self.ba0 = ba0;
+    }
+
+    /// Boots the INS from FLASH_CONFIG: at `lastLla`; a warm start if an
+    /// earlier NAV saved it (`lastLlaWeek` ≠ 0), else cold.
+    pub fn boot(&mut self, cfg: &NavConfig, start: StartTimes) {
+        self.start = start;
+        self.warm = cfg.last_lla_week != 0;
+        self.nom = Nominal::at(&cfg.last_lla);
+        if self.warm {
+            self.saved_lla = Some(cfg.last_lla);
+        }
+    }
+
+    /// The receiver's time to first fix for this power-on, s.
+    pub fn ttff_s(&self) -> f64 {
+        if self.warm {
+            self.start.warm_s
+        } else {
+            self.start.cold_s
+        }
+    }
+
+    /// Whether this power-on is a warm start.
+    pub fn warm_start(&self) -> bool {
+        self.warm
     }
 
     /// The faults in force.
@@ -260,98 +451,365 @@ impl NavState {
         self.ever_fixed
     }
 
-    /// Advances the models to `t_s` seconds since boot at `truth` (called
-    /// every [`STEP_MS`]).
+    /// The INS phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// The filter's nominal state (position, velocity, attitude of the IMU,
+    /// estimated biases).
+    pub fn nominal(&self) -> &Nominal {
+        &self.nom
+    }
+
+    /// The filter's covariance.
+    pub fn filter(&self) -> &Filter {
+        &self.kf
+    }
+
+    /// A position to save as `lastLla` now (the INS moved far enough from
+    /// the saved one, or none was saved), taken once.
+    pub fn take_last_lla(&mut self) -> Option<[f64; 3]> {
+        self.save_lla.take()
+    }
+
+    /// Advances the receiver, barometer and fault models to `t_s` seconds
+    /// since boot at `truth` (called every [`STEP_MS`]).
     pub fn step(&mut self, t_s: f64, truth: &NavTruth) {
         let dt = (t_s - self.t_s).max(0.0);
         self.t_s = t_s;
         let was_fixed = self.fixed;
-        self.fixed = !self.faults.gps_off && t_s >= COLD_START_S;
+        self.fixed = !self.faults.gps_off && t_s >= self.ttff_s();
         self.ever_fixed |= self.fixed;
-        let mut w = [0.0f64; 15];
+        let mut w = [0.0f64; 6];
         for x in w.iter_mut() {
             *x = f64::from(self.rng.gaussian());
         }
-        for k in 0..3 {
-            let (ph, pv) = (&INS_POS_H, &INS_POS_V);
-            gm_step(&mut self.ins_pos[k], if k < 2 { ph } else { pv }, dt, w[k]);
-            gm_step(&mut self.ins_vel[k], &INS_VEL, dt, w[3 + k]);
-            let att = if k < 2 { &INS_TILT } else { &INS_HEADING };
-            gm_step(&mut self.ins_att[k], att, dt, w[6 + k]);
-            let gp = if k < 2 { &GNSS_POS_H } else { &GNSS_POS_V };
-            gm_step(&mut self.gnss_pos[k], gp, dt, w[9 + k]);
-            gm_step(&mut self.gnss_vel[k], &GNSS_VEL, dt, w[12 + k]);
+        if self.gm.0 != dt {
+            self.gm = (
+                dt,
+                [
+                    gm_coefficients(&GNSS_POS_H, dt),
+                    gm_coefficients(&GNSS_POS_V, dt),
+                    gm_coefficients(&GNSS_VEL, dt),
+                ],
+            );
         }
-        let navigating = self.ever_fixed && t_s >= ALIGN_S;
-        if navigating && !self.fixed {
+        let c = self.gm.1;
+        for k in 0..3 {
+            gm_step(&mut self.gnss_pos[k], c[if k < 2 { 0 } else { 1 }], w[k]);
+            gm_step(&mut self.gnss_vel[k], c[2], w[3 + k]);
+        }
+        if self.phase == Phase::Nav && !self.fixed {
             if was_fixed || self.outage_at.is_none() {
                 self.outage_at = Some(t_s);
-                let h = [DR_ACCEL_H, DR_ACCEL_H, DR_ACCEL_V];
-                for (a, s) in self.dr_acc.iter_mut().zip(h) {
-                    *a = s * f64::from(self.rng.gaussian());
-                }
-            }
-            // Dead reckoning: the acceleration error integrates twice.
-            for k in 0..3 {
-                self.dr_vel[k] += self.dr_acc[k] * dt;
-                self.dr_pos[k] += self.dr_vel[k] * dt;
             }
         } else {
             self.outage_at = None;
-            let a = exp(-dt / RECOVERY_TAU_S);
-            for k in 0..3 {
-                self.dr_vel[k] *= a;
-                self.dr_pos[k] *= a;
-            }
         }
-        // A failed barometer keeps its last good reading.
-        if !self.faults.baro_failed || self.baro_frozen.is_none() {
+        // A failed barometer keeps the reading it had when it failed.
+        if !self.faults.baro_failed {
+            self.baro_frozen = None;
+        } else if self.baro_frozen.is_none() {
             self.baro_frozen =
                 Some(isa_kpa(truth.h_m - geoid_undulation_m(truth.lat_deg, truth.lon_deg)) as f32);
         }
     }
 
-    /// The dead-reckoning position error now, NED, m.
-    pub fn dead_reckoning_error(&self) -> [f64; 3] {
-        self.dr_pos
+    /// Seconds since the current GNSS outage began (in NAV), if in one.
+    pub fn outage_s(&self) -> Option<f64> {
+        self.outage_at.map(|a| self.t_s - a)
     }
 
-    /// `insStatus` now (module doc, `docs/isb.md`).
-    pub fn ins_status(&self) -> u32 {
-        use ins_status::*;
-        let t = self.t_s;
-        let mag = if self.faults.mag_disturbed {
-            MAG_INTERFERENCE_OR_BAD_CAL
-        } else {
-            MAG_AIDING_HEADING
-        };
-        let hdg = if self.faults.mag_disturbed {
-            HDG_ALIGN_COARSE
-        } else {
-            HDG_ALIGN_FINE
-        };
-        if t < ALIGN_S {
-            return SOLUTION_ALIGNING << SOLUTION_SHIFT;
+    /// Whether the navigation period ending `t_s` begins a receiver epoch
+    /// (`gps_dt_s` apart): the aiding [`NavState::navigate`] then wants.
+    pub fn epoch_due(&self, t_s: f64, gps_dt_s: f64) -> bool {
+        epoch_of(t_s, gps_dt_s) != self.gnss_epoch
+    }
+
+    /// One navigation period ending `t_s` seconds since boot: the
+    /// mechanisation of the unit's IMU increment `inc`, then, at each
+    /// receiver epoch ([`NavState::epoch_due`]), the aiding
+    /// (`docs/navigation.md` "Phases"): `aiding` is the receiver's fix (the
+    /// antenna's position and NED velocity) and the barometer and
+    /// magnetometer, given at epochs only (reading them costs: the
+    /// firmware's tick budget).
+    pub fn navigate(
+        &mut self,
+        t_s: f64,
+        inc: &Increment,
+        gps_dt_s: f64,
+        aiding: Option<(Option<Fix>, Aiding)>,
+        cfg: &NavConfig,
+    ) {
+        self.nav_t = t_s;
+        self.gps_step = false;
+        if inc.dt.is_nan() || inc.dt <= 0.0 {
+            return;
         }
-        if !self.ever_fixed {
-            return (SOLUTION_AHRS << SOLUTION_SHIFT) | hdg | mag;
+        let epoch = epoch_of(t_s, gps_dt_s);
+        let due = epoch != self.gnss_epoch;
+        self.gnss_epoch = epoch;
+        let aiding = if due { aiding } else { None };
+        if self.phase == Phase::Aligning {
+            self.align(t_s, inc, aiding.map(|a| a.1), cfg);
+            return;
         }
-        let mut s = hdg | mag | NAV_MODE;
-        if self.fixed {
-            s |= VEL_ALIGN_FINE | POS_ALIGN_FINE | GPS_AIDING_POS | GPS_AIDING_VEL;
-            s |= SOLUTION_NAV << SOLUTION_SHIFT;
-            s |= GPS_NAV_FIX_3D << GPS_NAV_FIX_SHIFT;
+        let f_n = self.nom.mechanise(inc);
+        self.prop_dt += inc.dt;
+        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + f_n[k] * inc.dt);
+        if self.prop_dt >= PROPAGATE_S - 1e-9 {
+            self.propagate();
+        }
+        // Every aiding source enters at the receiver's epochs, so the state
+        // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix);
+        // between them the position is the integral of the velocity.
+        if let Some((gnss, aid)) = aiding {
+            let fuse_gps = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
+            if let (Some(fix), true) = (gnss, fuse_gps) {
+                self.fuse_gnss(&fix, cfg);
+            }
+            self.fuse_aiding(&aid, cfg);
+            self.check_last_lla(cfg);
+        }
+        self.mag_aiding &= self.mag_ok;
+    }
+
+    /// Coarse alignment: sums until [`ALIGN_S`] (the magnetometer at the
+    /// receiver's epochs), then, at the first epoch from there, roll and
+    /// pitch from the mean specific force, heading from the levelled mean
+    /// magnetometer reading and the declination, the covariance from the
+    /// profile.
+    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<Aiding>, cfg: &NavConfig) {
+        self.align_dv = [0, 1, 2].map(|k| self.align_dv[k] + inc.dv[k]);
+        let Some(aid) = aid else {
+            return;
+        };
+        self.align_mag = [0, 1, 2].map(|k| self.align_mag[k] + f64::from(aid.mag[k]));
+        self.align_n += 1;
+        if t_s < ALIGN_S - 1e-9 {
+            return;
+        }
+        let f = self.align_dv;
+        let roll = atan2(f[1], -f[2]);
+        let pitch = atan2(f[0], sqrt(f[1] * f[1] + f[2] * f[2]));
+        let n = f64::from(self.align_n.max(1));
+        let m = self.align_mag.map(|x| x / n);
+        let lvl = rotate(&quat_from_euler(roll, pitch, 0.0), &m);
+        let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        let use_mag = cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 && norm > 0.0;
+        let lla = self.nom.lla();
+        self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
+        self.declination_at = t_s;
+        let yaw = if use_mag {
+            self.mag_ref = Some((norm, libm::asin((lvl[2] / norm).clamp(-1.0, 1.0))));
+            self.declination - atan2(lvl[1], lvl[0])
         } else {
-            let since = self.outage_at.map_or(0.0, |a| t - a);
-            if since < HIGH_VARIANCE_AFTER_S {
-                s |= VEL_ALIGN_FINE | POS_ALIGN_FINE | (SOLUTION_NAV << SOLUTION_SHIFT);
-            } else {
-                s |= VEL_ALIGN_COARSE
-                    | POS_ALIGN_COARSE
-                    | (SOLUTION_NAV_HIGH_VARIANCE << SOLUTION_SHIFT);
+            0.0
+        };
+        self.nom.q = quat_from_euler(roll, pitch, yaw);
+        let tilt = (self.ba0 / 9.81).max(0.002);
+        let hdg = if use_mag {
+            3.0 * MAG_HEADING_SIGMA
+        } else {
+            core::f32::consts::PI
+        };
+        let mut s = [0.0f32; N];
+        for k in 0..3 {
+            s[POS + k] = 100.0;
+            s[VEL + k] = AHRS_VEL_SIGMA;
+            s[BG + k] = self.bg0;
+            s[BA + k] = self.ba0;
+        }
+        s[ATT] = tilt;
+        s[ATT + 1] = tilt;
+        s[ATT + 2] = hdg;
+        self.kf = Filter::new(&s);
+        self.mag_ok = use_mag;
+        self.phase = Phase::Ahrs;
+    }
+
+    /// The covariance over the periods since the last propagation.
+    fn propagate(&mut self) {
+        let dt = self.prop_dt;
+        if dt <= 0.0 {
+            return;
+        }
+        let f_n = self.prop_dv_n.map(|x| (x / dt) as f32);
+        let c = crate::math::double::dcm_from_quat(&self.nom.q);
+        let c_nb = c.map(|r| r.map(|x| x as f32));
+        let wie = wgs84::earth_rate_ned(self.nom.lat);
+        let wen = wgs84::transport_rate_ned(self.nom.lat, self.nom.h, &self.nom.v);
+        let w_in = [0, 1, 2].map(|k| (wie[k] + wen[k]) as f32);
+        let g = wgs84::normal_gravity(self.nom.lat, self.nom.h);
+        let iv = Interval {
+            dt: dt as f32,
+            f_n,
+            c_nb,
+            w_in,
+            grav_grad: (2.0 * g / wgs84::A) as f32,
+        };
+        self.kf.propagate(&iv, &self.q);
+        self.prop_dt = 0.0;
+        self.prop_dv_n = [0.0; 3];
+    }
+
+    /// Adds the filter's estimate to the nominal state.
+    fn correct(&mut self) {
+        let dx = self.kf.take_correction();
+        if dx.iter().all(|x| x.is_finite()) {
+            self.nom.correct(&dx);
+        }
+    }
+
+    /// A GNSS epoch: the first fix starts NAV (position and velocity set
+    /// from it); after that, six scalar updates (position and velocity
+    /// NED), the antenna's lever arm taken out.
+    fn fuse_gnss(&mut self, fix: &Fix, cfg: &NavConfig) {
+        self.propagate();
+        let (lla, v) = fix;
+        let ant = rotate(&self.nom.q, &cfg.gps1_ant_offset.map(f64::from));
+        let speed = libm::hypot(v[0], v[1]);
+        let hdg_sigma = self.kf.sigma(ATT + 2);
+        if self.phase != Phase::Nav {
+            // NAV from the first fix: position and velocity from it.
+            self.nom = Nominal {
+                lat: lla[0].to_radians(),
+                lon: lla[1].to_radians(),
+                h: lla[2],
+                v: *v,
+                ..self.nom
+            };
+            self.nom.move_ned(&ant.map(|x| -x));
+            let (h, vv) = (H_ACC_M / core::f32::consts::SQRT_2, V_ACC_M);
+            self.kf.reset3(POS, [h, h, vv]);
+            let s = S_ACC_MPS;
+            self.kf.reset3(VEL, [s, s, s]);
+            // A magnetometer heading was taken with the declination at
+            // `lastLla` (before the first fix the only position known); at
+            // the fix's position the declination differs, and the heading
+            // with it (a change the heading gate would refuse as an update).
+            let p = self.nom.lla();
+            let d = declination_deg(p[0], p[1], p[2], self.year).to_radians();
+            if self.mag_ref.is_some() {
+                let e = euler_from_quat(&self.nom.q);
+                self.nom.q = quat_from_euler(e[0], e[1], e[2] + (d - self.declination));
+            }
+            self.declination = d;
+            self.declination_at = self.nav_t;
+            self.phase = Phase::Nav;
+        } else {
+            let (m, n) = wgs84::radii(self.nom.lat);
+            let p = self.nom.lla();
+            let d = [
+                (lla[0] - p[0]).to_radians() * (m + p[2]) - ant[0],
+                // Across ±180° the difference of longitudes wraps.
+                crate::math::double::wrap_pi((lla[1] - p[1]).to_radians())
+                    * (n + p[2])
+                    * libm::cos(self.nom.lat)
+                    - ant[1],
+                -(lla[2] - p[2]) - ant[2],
+            ];
+            let h = H_ACC_M / core::f32::consts::SQRT_2;
+            let r_pos = [h * h, h * h, V_ACC_M * V_ACC_M];
+            let sv = S_ACC_MPS / 1.732;
+            for (k, (dk, r)) in d.iter().zip(r_pos).enumerate() {
+                self.kf.update(&[(POS + k, 1.0)], *dk as f32, r, 0.0);
+            }
+            for (k, (vk, nk)) in v.iter().zip(self.nom.v).enumerate() {
+                self.kf
+                    .update(&[(VEL + k, 1.0)], (vk - nk) as f32, sv * sv, 0.0);
+            }
+            self.correct();
+        }
+        self.gps_step = true;
+        // Heading from the course over ground once moving, when nothing
+        // else has given one.
+        if hdg_sigma > status::HDG_COARSE_RAD && speed > GPS_HEADING_MIN_SPEED {
+            let e = euler_from_quat(&self.nom.q);
+            let yaw = atan2(v[1], v[0]);
+            self.nom.q = quat_from_euler(e[0], e[1], yaw);
+            self.kf.reset1(ATT + 2, GPS_HEADING_SIGMA);
+        }
+        self.gps_heading = speed > GPS_HEADING_MIN_SPEED;
+    }
+
+    /// The barometer's height and the magnetometer's heading (and, before
+    /// the first fix, the AHRS's zero-velocity assumption).
+    fn fuse_aiding(&mut self, aid: &Aiding, cfg: &NavConfig) {
+        self.propagate();
+        if self.phase == Phase::Ahrs {
+            for k in 0..3 {
+                let y = -self.nom.v[k] as f32;
+                self.kf
+                    .update(&[(VEL + k, 1.0)], y, AHRS_VEL_SIGMA * AHRS_VEL_SIGMA, 0.0);
             }
         }
-        s
+        let lla = self.nom.lla();
+        if cfg.sys_cfg_bits & SYS_CFG_NO_BARO_FUSION == 0 && self.phase == Phase::Nav {
+            let p = f64::from(aid.pressure_kpa);
+            if p > 0.0 {
+                let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
+                let y = (lla[2] - h) as f32;
+                self.kf
+                    .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
+            }
+        }
+        self.mag_ok = false;
+        if cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 {
+            // The field model is dear (a spherical-harmonic sum) and the
+            // declination changes slowly: evaluated every
+            // DECLINATION_EVERY_S.
+            if self.nav_t - self.declination_at >= DECLINATION_EVERY_S {
+                self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
+                self.declination_at = self.nav_t;
+            }
+            if let Some(y) = self.mag_residual(aid) {
+                let r = MAG_HEADING_SIGMA * MAG_HEADING_SIGMA;
+                match self.kf.update(&[(ATT + 2, 1.0)], y, r, MAG_GATE) {
+                    Update::Applied(_) => {
+                        self.mag_ok = true;
+                        self.mag_aiding = true;
+                    }
+                    _ => self.mag_aiding = false,
+                }
+            } else {
+                self.mag_aiding = false;
+            }
+        }
+        self.correct();
+    }
+
+    /// The magnetometer's heading minus the estimate's, rad, if the
+    /// reading looks like the field learnt in alignment.
+    fn mag_residual(&self, aid: &Aiding) -> Option<f32> {
+        let (norm0, dip0) = self.mag_ref?;
+        let m = aid.mag.map(f64::from);
+        let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if norm.is_nan() || norm <= 0.0 || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
+            return None;
+        }
+        let e = euler_from_quat(&self.nom.q);
+        let lvl = rotate(&quat_from_euler(e[0], e[1], 0.0), &m);
+        let dip = libm::asin((lvl[2] / norm).clamp(-1.0, 1.0));
+        if (dip - dip0).abs() > MAG_DIP_TOLERANCE {
+            return None;
+        }
+        let yaw = self.declination - atan2(lvl[1], lvl[0]);
+        Some(crate::math::double::wrap_pi(yaw - e[2]) as f32)
+    }
+
+    /// `insStatus` now ([`status`]).
+    pub fn ins_status(&self) -> u32 {
+        status::ins_status(&status::Inputs {
+            phase: self.phase,
+            kf: &self.kf,
+            fixed: self.fixed,
+            mag_aiding: self.mag_aiding,
+            mag_interference: self.mag_ref.is_some() && !self.mag_ok,
+            gps_heading: self.gps_heading && self.fixed,
+            gps_step: self.gps_step,
+        })
     }
 
     /// The navigation bits of `hdwStatus` now.
@@ -369,44 +827,124 @@ impl NavState {
         h
     }
 
-    /// The INS solution for `truth` (before alignment: level, facing
-    /// north, at rest; before the first fix: at `lastLla`).
+    /// The INS solution of the output point (`insRotation`, `insOffset`):
+    /// the filter's state; while aligning level, facing north, at rest at
+    /// `lastLla`; as an AHRS (position and velocity not estimated) the
+    /// filter's attitude at `lastLla`, at rest. The truth is not read.
     pub fn solution(&self, truth: &NavTruth, cfg: &NavConfig) -> Solution {
-        let e = self.ins_att;
-        let err = [1.0, e[0] / 2.0, e[1] / 2.0, e[2] / 2.0];
-        let [r, p, y] = cfg.ins_rotation.map(f64::from);
-        let q_rot = quat_from_euler(r, p, y);
-        let q_nb = normalize(&quat_mul(&quat_mul(&err, &truth.q_nb), &q_rot));
-        if self.t_s < ALIGN_S {
-            return Solution {
+        let _ = truth;
+        // The usual insRotation is none: no trigonometry then.
+        let q_nb = if cfg.ins_rotation == [0.0; 3] {
+            self.nom.q
+        } else {
+            let [r, p, y] = cfg.ins_rotation.map(f64::from);
+            normalize(&quat_mul(&self.nom.q, &quat_from_euler(r, p, y)))
+        };
+        match self.phase {
+            Phase::Aligning => Solution {
                 lla: cfg.last_lla,
                 v_ned: [0.0; 3],
                 q_nb: [1.0, 0.0, 0.0, 0.0],
-            };
-        }
-        if !self.ever_fixed {
-            return Solution {
+            },
+            Phase::Ahrs => Solution {
                 lla: cfg.last_lla,
                 v_ned: [0.0; 3],
                 q_nb,
-            };
+            },
+            Phase::Nav => {
+                // The usual insOffset is none: no conversion then.
+                let lla = if cfg.ins_offset == [0.0; 3] {
+                    self.nom.lla()
+                } else {
+                    let lever = rotate(&q_nb, &cfg.ins_offset.map(f64::from));
+                    lla_plus_ned(&self.nom.lla(), &lever)
+                };
+                Solution {
+                    lla,
+                    v_ned: self.nom.v,
+                    q_nb,
+                }
+            }
         }
-        let lever = rotate(&(q_nb), &cfg.ins_offset.map(f64::from));
-        let mut d = [0.0; 3];
-        let mut v = [0.0; 3];
-        for k in 0..3 {
-            d[k] = lever[k] + self.ins_pos[k] + self.dr_pos[k];
-            v[k] = truth.v_ned[k] + self.ins_vel[k] + self.dr_vel[k];
+    }
+
+    /// Asks for `lastLla` to be saved when in NAV with a fix and the INS
+    /// has moved far enough from the saved one (`docs/navigation.md`
+    /// "Warm start"); at each receiver epoch.
+    fn check_last_lla(&mut self, cfg: &NavConfig) {
+        if self.phase != Phase::Nav || !self.fixed {
+            return;
         }
-        Solution {
-            lla: lla_plus_ned(&[truth.lat_deg, truth.lon_deg, truth.h_m], &d),
-            v_ned: v,
-            q_nb,
+        let lla = self.nom.lla();
+        let far = match self.saved_lla {
+            None => true,
+            Some(s) => {
+                let d = ned_from_ref(&lla, &s);
+                let limit = if cfg.last_lla_update_distance > 0.0 {
+                    f64::from(cfg.last_lla_update_distance)
+                } else {
+                    LAST_LLA_DEFAULT_DISTANCE_M
+                };
+                sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > limit
+            }
+        };
+        if far {
+            self.saved_lla = Some(lla);
+            self.save_lla = Some(lla);
+        }
+    }
+
+    /// INL2_STATES now (`tow`: GPS time of week, s): the filter's state of
+    /// the IMU (sensor frame), its biases, the declination and the dip it
+    /// uses; no barometer bias is estimated (0).
+    pub fn inl2_states(&self, tow: f64) -> Inl2States {
+        let lla = self.nom.lla();
+        let qe2n = quat_e2n(lla[0], lla[1]);
+        Inl2States {
+            time_of_week: tow,
+            qe2b: f32s(quat_mul(&qe2n, &self.nom.q)),
+            ve: f32s(rotate(&qe2n, &self.nom.v)),
+            ecef: ecef_of(&lla),
+            bias_pqr: f32s(self.nom.bg),
+            bias_acc: f32s(self.nom.ba),
+            bias_baro: 0.0,
+            mag_dec: self.declination as f32,
+            mag_inc: self.mag_ref.map_or(0.0, |(_, d)| d as f32),
+        }
+    }
+
+    /// The filter's attitude 1σ as roll, pitch and heading, rad: the tilt
+    /// σ (the rms of the north and east attitude errors' σ, whatever the
+    /// heading) for roll and pitch, the down error's σ for heading.
+    pub fn attitude_sigma_rad(&self) -> [f32; 3] {
+        let (n, e, d) = (
+            self.kf.sigma(ATT),
+            self.kf.sigma(ATT + 1),
+            self.kf.sigma(ATT + 2),
+        );
+        let tilt = libm::sqrtf((n * n + e * e) / 2.0);
+        [tilt, tilt, d]
+    }
+
+    /// INL2_NED_SIGMA now (`tow_ms`: GPS time of week, ms): the square
+    /// roots of the covariance's diagonal; the barometer bias and the
+    /// declination are not estimated (0).
+    pub fn inl2_ned_sigma(&self, tow_ms: u32) -> Inl2NedSigma {
+        let s = |i: usize| [0, 1, 2].map(|k| self.kf.sigma(i + k));
+        Inl2NedSigma {
+            time_of_week_ms: tow_ms,
+            std_pos_ned: s(POS),
+            std_vel_ned: s(VEL),
+            std_att_ned: s(ATT),
+            std_acc_bias: s(BA),
+            std_gyr_bias: s(BG),
+            std_bar_bias: 0.0,
+            std_mag_declination: 0.0,
         }
     }
 
     /// The receiver's position (of the antenna) and NED velocity, if it
-    /// has a fix.
+    /// has a fix: the truth plus the receiver's errors.
     pub fn gnss(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<([f64; 3], [f64; 3])> {
         if !self.fixed {
             return None;
@@ -507,6 +1045,18 @@ impl NavState {
 /// −6.5 K/km).
 pub fn isa_kpa(h: f64) -> f64 {
     101.325 * pow(1.0 - 2.255_77e-5 * h, 5.255_88)
+}
+
+/// The MSL height of ISA pressure `p` kPa, m (the inverse of [`isa_kpa`]).
+pub fn isa_height_m(p: f64) -> f64 {
+    (1.0 - pow(p / 101.325, 1.0 / 5.255_88)) / 2.255_77e-5
+}
+
+/// A decimal year of GPS seconds since the GPS epoch (1980-01-06 =
+/// 1980.014; 365.25-day years, within a day: what a field model's secular
+/// variation needs).
+pub fn decimal_year(gps_s: f64) -> f64 {
+    1980.0 + 5.0 / 366.0 + gps_s / (365.25 * 86_400.0)
 }
 
 /// Whether the navigation fields of a FLASH_CONFIG image are sane: `refLla`

@@ -251,6 +251,56 @@ crate::data_set! {
     }
 }
 
+crate::data_set! {
+    /// `inl2_states_t`, 96 bytes: the INS filter's states (DID_INL2_STATES,
+    /// 48).
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Inl2States in mod inl2_states, 96 bytes {
+        /// GPS time of week, s.
+        time_of_week: f64 = TIME_OF_WEEK @ 0,
+        /// W, X, Y, Z: body attitude relative to ECEF.
+        qe2b: [f32; 4] = QE2B @ 8,
+        /// ECEF velocity, m/s.
+        ve: [f32; 3] = VE @ 24,
+        /// ECEF position, m.
+        ecef: [f64; 3] = ECEF @ 36,
+        /// Gyro bias, rad/s.
+        bias_pqr: [f32; 3] = BIAS_PQR @ 60,
+        /// Accelerometer bias, m/s².
+        bias_acc: [f32; 3] = BIAS_ACC @ 72,
+        /// Barometer bias, m.
+        bias_baro: f32 = BIAS_BARO @ 84,
+        /// Magnetic declination, rad.
+        mag_dec: f32 = MAG_DEC @ 88,
+        /// Magnetic inclination, rad.
+        mag_inc: f32 = MAG_INC @ 92,
+    }
+}
+
+crate::data_set! {
+    /// `inl2_ned_sigma_t`, 72 bytes: standard deviations of the INS
+    /// filter's estimates, NED (DID_INL2_NED_SIGMA, 67).
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Inl2NedSigma in mod inl2_ned_sigma, 72 bytes {
+        /// GPS time of week, ms.
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        /// Position, NED, m.
+        std_pos_ned: [f32; 3] = STD_POS_NED @ 4,
+        /// Velocity, NED, m/s.
+        std_vel_ned: [f32; 3] = STD_VEL_NED @ 16,
+        /// Attitude, NED, rad.
+        std_att_ned: [f32; 3] = STD_ATT_NED @ 28,
+        /// Accelerometer bias, m/s².
+        std_acc_bias: [f32; 3] = STD_ACC_BIAS @ 40,
+        /// Gyro bias, rad/s.
+        std_gyr_bias: [f32; 3] = STD_GYR_BIAS @ 52,
+        /// Barometer bias, m.
+        std_bar_bias: f32 = STD_BAR_BIAS @ 64,
+        /// Magnetic declination, rad.
+        std_mag_declination: f32 = STD_MAG_DECLINATION @ 68,
+    }
+}
+
 /// `insStatus` bits (`eInsStatusFlags`, `data_sets.h`).
 pub mod ins_status {
     /// Heading usable, outside spec.
@@ -265,8 +315,12 @@ pub mod ins_status {
     pub const VEL_ALIGN_FINE: u32 = 0x0000_0020;
     /// Position within spec.
     pub const POS_ALIGN_FINE: u32 = 0x0000_0040;
+    /// Heading from GPS (motion or dual antenna).
+    pub const GPS_AIDING_HEADING: u32 = 0x0000_0080;
     /// Position aided by GPS.
     pub const GPS_AIDING_POS: u32 = 0x0000_0100;
+    /// A GPS update just entered the solution (the position may step).
+    pub const GPS_UPDATE_IN_SOLUTION: u32 = 0x0000_0200;
     /// Heading aided by the magnetometer.
     pub const MAG_AIDING_HEADING: u32 = 0x0000_0800;
     /// Position and velocity estimated (NAV); clear: AHRS.
@@ -287,6 +341,8 @@ pub mod ins_status {
     pub const SOLUTION_NAV_HIGH_VARIANCE: u32 = 4;
     /// Solution: AHRS, good.
     pub const SOLUTION_AHRS: u32 = 5;
+    /// Solution: AHRS, high variance.
+    pub const SOLUTION_AHRS_HIGH_VARIANCE: u32 = 6;
     /// Magnetic interference, or bad or no calibration.
     pub const MAG_INTERFERENCE_OR_BAD_CAL: u32 = 0x0080_0000;
     /// Shift of the GPS fix field (`eGpsNavFixStatus << 24`).
@@ -385,6 +441,8 @@ pub mod rmc_nav {
     pub const BITS_GPS1_RCVR_POS: u64 = 0x40_0000;
     /// DID_GPS1_VEL.
     pub const BITS_GPS1_VEL: u64 = 0x10_0000;
+    /// DID_INL2_NED_SIGMA (DID_INL2_STATES has no RMC bit).
+    pub const BITS_INL2_NED_SIGMA: u64 = 0x800_0000;
     /// DID_IMU_MAG.
     pub const BITS_IMU_MAG: u64 = 0x4_0000_0000;
     /// DID_PIMU_MAG.

@@ -58,3 +58,8 @@ both!(
     asce_streams_nmea_beside_isb,
     an_extrig_edge_gives_strobe_in_time_and_pstrb,
 );
+
+/// Cost figures exist on the QEMU image only.
+mod qemu_cost {
+    suite!(crate::target::Kind::Qemu; tick_cost_navigating);
+}

@@ -233,7 +233,18 @@ fn navigation_over_a_pty() {
             .try_into()
             .unwrap(),
     );
-    assert_eq!(i.header.ins_status, 0x0103_5970);
+    // NAV from the first fix: solution 3, GPS-aided, 3D fix.
+    let want = ins_status::NAV_MODE
+        | ins_status::GPS_AIDING_POS
+        | ins_status::GPS_AIDING_VEL
+        | (1 << ins_status::GPS_NAV_FIX_SHIFT);
+    assert_eq!(
+        i.header.ins_status & want,
+        want,
+        "{:#x}",
+        i.header.ins_status
+    );
+    assert_eq!(ins_status::solution(i.header.ins_status), 3);
     assert!((f64::from(i.ned[0]) - 50.10167f64.to_radians() * 6_366_707.019_5).abs() < 10.0);
 }
 
@@ -296,8 +307,10 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
         assert!((w[1].header.time_of_week - w[0].header.time_of_week - 0.1).abs() < 1e-6);
     }
     let last = navigating.last().unwrap();
+    // The SDK's healthy word at rest (0x200 marks a GNSS epoch's output).
     assert_eq!(
-        last.header.ins_status, 0x0103_5970,
+        last.header.ins_status & !ins_status::GPS_UPDATE_IN_SOLUTION,
+        0x0103_5970,
         "{:#x}",
         last.header.ins_status
     );
@@ -330,7 +343,9 @@ fn ins_2_and_gps1_pos_over_tcp_with_an_outage() {
     let mut back = false;
     for _ in 0..200 {
         let p = isb_packet(&mut c);
-        if p.did == did::INS_2 && ins(p).header.ins_status == 0x0103_5970 {
+        if p.did == did::INS_2
+            && ins(p).header.ins_status & !ins_status::GPS_UPDATE_IN_SOLUTION == 0x0103_5970
+        {
             back = true;
             break;
         }
@@ -413,8 +428,11 @@ fn a_manoeuvre_script_moves_the_ins() {
         let p = isb_packet(&mut c);
         match p.did {
             did::INS_1 => {
+                // NAV and GPS-aided (moving: heading from GPS too).
                 let i = Ins1::decode(&p.payload.try_into().unwrap());
-                if i.header.ins_status == 0x0103_5970 {
+                let s = i.header.ins_status;
+                let aided = ins_status::NAV_MODE | ins_status::GPS_AIDING_POS;
+                if s & aided == aided && ins_status::solution(s) == 3 {
                     ins.push(i);
                 }
             }
@@ -519,4 +537,120 @@ fn status_counts_isb_packets() {
     };
     assert_eq!(field("frames-sent"), "1", "{s}");
     assert_eq!(field("bytes-sent"), len.to_string(), "{s}");
+}
+
+/// The flight of the end-to-end tests: 45 s at rest (alignment, the cold
+/// start's fix at 30 s), then north at 20 m/s.
+const FLIGHT: &str = "start 45.5 7.25 300 0 0\nhold 45\naccel 2 10\nhold 10000\n";
+
+fn ins1_of(c: &mut Conn) -> Ins1 {
+    Ins1::decode(&isb_packet_of(c, did::INS_1).payload.try_into().unwrap())
+}
+
+/// A manoeuvre script flown by the real binary (`--motion`, `--speed 20`),
+/// INS_1 every second, the control socket's `fault gps` and `power-cycle`:
+/// NAV from the cold start's fix (30 s); moving north at 20 m/s, a 20 s
+/// outage is dead reckoning whose positions still advance 20 m a second by
+/// their own time fields; GPS aiding is back with the fix; a power cycle
+/// after NAV is a warm start: the saved `lastLla` from the alignment on,
+/// NAV 10 s after power-on instead of 30 s.
+fn flight_with_an_outage_and_a_power_cycle(c: &mut Conn, ctl: &mut Control) {
+    use ins_status::{GPS_AIDING_POS, NAV_MODE};
+    c.send(&isb_get(did::INS_1, 250));
+    // NAV, then moving.
+    let i = loop {
+        let i = ins1_of(c);
+        assert!(i.header.time_of_week < 1e5 || i.header.week != 0);
+        if i.header.ins_status & NAV_MODE != 0 && i.uvw[0] > 19.5 {
+            break i;
+        }
+    };
+    assert_ne!(i.header.ins_status & GPS_AIDING_POS, 0, "{i:?}");
+    assert!(ctl.cmd("fault gps off").starts_with("ok"));
+    let mut dr = Vec::new();
+    while dr.len() < 20 {
+        let i = ins1_of(c);
+        if ins_status::dead_reckoning(i.header.ins_status) {
+            dr.push(i);
+        }
+    }
+    for w in dr.windows(2) {
+        let dt = w[1].header.time_of_week - w[0].header.time_of_week;
+        assert!((dt - 1.0).abs() < 1e-6, "{dt}");
+        let north = (w[1].lla[0] - w[0].lla[0]) * 111_132.0;
+        assert!((north - 20.0).abs() < 1.0, "{north}");
+    }
+    assert!(ctl.cmd("fault gps on").starts_with("ok"));
+    let back = (0..5).any(|_| ins1_of(c).header.ins_status & GPS_AIDING_POS != 0);
+    assert!(back, "GPS aiding again once the fix is back");
+    assert_eq!(ctl.cmd("power-cycle"), "ok");
+    c.send(&isb_get(did::INS_1, 250));
+    // Time since boot until GPS time is known again.
+    let first = loop {
+        let i = ins1_of(c);
+        if i.header.week == 0 && i.header.time_of_week > 5.5 {
+            break i;
+        }
+    };
+    assert!((first.lla[0] - 45.5).abs() < 0.02, "lastLla: {first:?}");
+    assert_eq!(first.header.ins_status & NAV_MODE, 0);
+    // Time since boot runs until the fix (10 s), NAV from the receiver's
+    // next epoch: the output after it.
+    let mut since_boot = first.header.time_of_week;
+    let nav = loop {
+        let i = ins1_of(c);
+        if i.header.ins_status & NAV_MODE != 0 {
+            break i;
+        }
+        if i.header.week == 0 {
+            since_boot = i.header.time_of_week;
+        }
+    };
+    assert!((9.0..10.5).contains(&since_boot), "{since_boot}");
+    assert_ne!(nav.header.week, 0);
+    assert!((nav.lla[0] - 45.5).abs() < 0.05, "{nav:?}");
+}
+
+#[test]
+fn a_flight_with_an_outage_and_a_warm_power_cycle_over_tcp() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.txt");
+    std::fs::write(&path, FLIGHT).unwrap();
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&[
+        "--motion",
+        path.to_str().unwrap(),
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+    ]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
+    flight_with_an_outage_and_a_power_cycle(&mut c, &mut ctl);
+}
+
+#[test]
+fn a_flight_with_an_outage_and_a_warm_power_cycle_over_a_pty() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flight.txt");
+    std::fs::write(&path, FLIGHT).unwrap();
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = Emu::start(&[
+        "--protocol",
+        "isb",
+        "--pty",
+        "--power-on",
+        "now",
+        "--motion",
+        path.to_str().unwrap(),
+        "--control",
+        &addr,
+        "--speed",
+        "20",
+    ]);
+    let mut c = Conn::serial(&emu.pty_path());
+    let mut ctl = Control::connect(&addr);
+    flight_with_an_outage_and_a_power_cycle(&mut c, &mut ctl);
 }

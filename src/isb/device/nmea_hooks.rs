@@ -72,14 +72,8 @@ impl State {
             return;
         }
         let decl = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
-        let sigma = [
-            ins::INS_TILT.sigma,
-            ins::INS_TILT.sigma,
-            ins::INS_HEADING.sigma,
-        ];
-        let snap = Snapshot::fill(due, decl, sigma.map(|x| x as f32), |d, b| {
-            self.image_of(cx, d, b, now)
-        });
+        let sigma = self.nav.attitude_sigma_rad();
+        let snap = Snapshot::fill(due, decl, sigma, |d, b| self.image_of(cx, d, b, now));
         self.nmea.render(due, &snap, |line| push_line(cx, line));
     }
 }

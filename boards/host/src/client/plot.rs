@@ -4,6 +4,8 @@
 //! accelerations, attitude, …), against device time (`device_time_s`,
 //! from the frames' own counters or time fields, so a `--speed max`
 //! recording spans the whole axis), else host time, else the frame number.
+//! Columns named `pos_err_<name>` (an INS position error against the
+//! truth) are drawn together in one more panel.
 
 use std::path::Path;
 
@@ -104,7 +106,7 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
         .and_then(|i| text.lines().nth(1)?.split(',').nth(i))
         .unwrap_or("recording");
     let groups = if isb { ISB_GROUPS } else { KERNEL_GROUPS };
-    let panels: Vec<Panel> = groups
+    let mut panels: Vec<Panel> = groups
         .iter()
         .filter_map(|(title, y_label, cols)| {
             let series: Vec<Series> = cols
@@ -130,6 +132,32 @@ pub fn plot(csv: &Path, out: &Path) -> anyhow::Result<usize> {
             })
         })
         .collect();
+    // Columns `pos_err_<name>` (an INS position error against the truth,
+    // e.g. `examples/nav_outage.rs`): one panel, one line each.
+    let errs: Vec<Series> = header
+        .iter()
+        .enumerate()
+        .filter_map(|(i, h)| {
+            let name = h.strip_prefix("pos_err_")?;
+            Some(Series {
+                name: name.to_owned(),
+                points: rows
+                    .iter()
+                    .filter_map(|r| Some((*r.get(x_col)?, *r.get(i)?)))
+                    .collect(),
+                reference: false,
+            })
+        })
+        .collect();
+    if !errs.is_empty() {
+        panels.push(Panel {
+            title: "INS position error".to_owned(),
+            y_label: "horizontal error (m)".to_owned(),
+            y_scale: Scale::Linear,
+            series: errs,
+            legend: Corner::UpperRight,
+        });
+    }
     if panels.is_empty() || rows.is_empty() {
         bail!(
             "plot {}: nothing to plot (no rows, or no rate, acceleration or attitude columns)",
