@@ -449,7 +449,7 @@ fn a_lockstep_sample_ahead_of_the_host_clock_never_silences_the_unit() {
     let a = Instant::now();
     assert!(ctl.cmd("status").starts_with("ok "));
     assert!(
-        a.elapsed() < Duration::from_millis(500),
+        a.elapsed() < Duration::from_millis(1500),
         "{:?}",
         a.elapsed()
     );
