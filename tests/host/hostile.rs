@@ -640,3 +640,53 @@ fn nan_and_inf_lever_arms_are_refused_and_no_nan_reaches_an_output() {
     }
     assert!(checked > 10);
 }
+
+/// A fleet's shared feed: a new connection starts a new timeline for
+/// every device, so a far-future sample sent once does not lock any of
+/// them.
+#[test]
+fn a_new_connection_to_a_shared_feed_starts_every_devices_timeline() {
+    let ctl = format!("127.0.0.1:{}", free_port());
+    let emu = Emu::start(&[
+        "--count",
+        "2",
+        "--tcp",
+        "127.0.0.1:0",
+        "--control",
+        &ctl,
+        "--power-on",
+        "now",
+        "--motion-feed",
+        "127.0.0.1:0",
+        "--feed-shared",
+    ]);
+    let feed: SocketAddr = line_after(&emu, 3, "feed on tcp ").parse().unwrap();
+    let mut c = Control::connect(&ctl);
+    let wait = |c: &mut Control, k: u16, key: &str, value: &str| {
+        let end = Instant::now() + TIMEOUT;
+        loop {
+            let s = c.cmd(&format!("dev {k} status"));
+            if s.split_whitespace().any(|w| w == format!("{key}={value}")) {
+                return;
+            }
+            assert!(Instant::now() < end, "dev {k}: no {key}={value} in {s}");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    };
+    let mut f = TcpStream::connect(feed).unwrap();
+    for k in 0..2 {
+        f.write_all(&sample(k, 1.7e9, [0.0; 3])).unwrap();
+        f.write_all(&sample(k, 1.0, [0.0; 3])).unwrap();
+    }
+    for k in 0..2 {
+        wait(&mut c, k, "feed-rejected-non-increasing", "1");
+    }
+    drop(f);
+    let mut f = TcpStream::connect(feed).unwrap();
+    for k in 0..2 {
+        f.write_all(&sample(k, 2.0, [0.0; 3])).unwrap();
+    }
+    for k in 0..2 {
+        wait(&mut c, k, "feed-samples", "2");
+    }
+}
