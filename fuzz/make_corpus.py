@@ -161,6 +161,31 @@ def main():
           + b"0.04,45,7,300,10,0,0,0,30,0.4,0,0,10,0,0,-9.8,25\n"
           + b"time,wx,wy,wz,fx,fy,fz\n0.05,1,2,3,0,0,1\n")
 
+    # web_request: the first read's size, then one connection's bytes.
+    host = b"Host: 127.0.0.1:8080\r\n"
+    write("web_request", "page_and_state", b"\x07GET / HTTP/1.1\r\n" + host + b"\r\n"
+          + b"HEAD /app.js HTTP/1.1\r\n" + host + b"\r\n"
+          + b"GET /api/state?dev=0&since=3&truth_since=1 HTTP/1.1\r\n" + host
+          + b"Connection: close\r\n\r\n")
+    write("web_request", "command", b"\x20POST /api/command?dev=0 HTTP/1.1\r\n" + host
+          + b"X-Imu-Emu: 1\r\nContent-Length: 10\r\n\r\nfault comm"
+          + b"POST /api/command HTTP/1.1\r\n" + host + b"X-Imu-Emu: 1\r\n"
+          + b"Content-Length: 4\r\n\r\nhelp")
+    write("web_request", "refusals", b"\x03GET /api/devices HTTP/1.1\r\nHost: evil.example\r\n\r\n"
+          + b"POST /api/command HTTP/1.1\r\n" + host
+          + b"Content-Length: 18446744073709551615\r\n\r\n")
+    write("web_request", "http10", b"\x3fGET /api/devices HTTP/1.0\r\n" + host
+          + b"Connection: keep-alive\r\n\r\nBREW / HTTP/1.0\r\n\r\n")
+
+    # control_line: lines as the control socket takes them.
+    write("control_line", "commands", b"help\nstatus\npps\nextrig high\npower-cycle boot=low\n"
+          b"fault gps off\nfault temperature 85.5\nmotion rotate 1 2 3\n"
+          b"link drop 0.5 tx\nlink noise 10\nlink stall 100\ntruth\ndevices\n")
+    write("control_line", "addressed", b"dev 0 status\ndev 3 motion static 45 90\ndev 01 pps\n"
+          b"dev +1 pps\ndev 2 help\ndev\n dev  1   link   clear \n")
+    write("control_line", "scripts", b"motion script start 45 7 300 0; hold 10; turn 90 20\n"
+          b"motion file /tmp/x.csv\nfault temperature nan\nlink drop 2\n")
+
 
 if __name__ == "__main__":
     main()

@@ -175,10 +175,20 @@ pub enum Reject {
     NonIncreasing,
     /// A device index this feed does not serve (boards).
     WrongDevice,
+    /// Lockstep: a time more than [`MAX_LEAD_NS`] ahead of the device's
+    /// newest sample and of its device time (the host's clock too, at a
+    /// `--speed` factor): taking it would stop the unit for the lead, or
+    /// run the whole lead at once.
+    TooFarAhead,
 }
 
+/// Lockstep: how far ahead of the newest sample (and of device time) a
+/// sample may be, ns ([`Reject::TooFarAhead`]): 60 s of device time
+/// (120 000 ticks at 2 kHz).
+pub const MAX_LEAD_NS: u64 = 60_000_000_000;
+
 /// Number of [`Reject`] reasons.
-pub const REJECTS: usize = 9;
+pub const REJECTS: usize = 10;
 
 impl Reject {
     /// Every reason, in counter order.
@@ -192,6 +202,7 @@ impl Reject {
         Reject::OutOfRange,
         Reject::NonIncreasing,
         Reject::WrongDevice,
+        Reject::TooFarAhead,
     ];
 
     /// Its name in logs and `status` (`rejected-<name>=N`).
@@ -206,6 +217,7 @@ impl Reject {
             Reject::OutOfRange => "out-of-range",
             Reject::NonIncreasing => "non-increasing",
             Reject::WrongDevice => "wrong-device",
+            Reject::TooFarAhead => "too-far-ahead",
         }
     }
 }
@@ -657,6 +669,9 @@ pub fn lerp_truth(a: &Truth, b: &Truth, w: f32) -> Truth {
 pub struct Track {
     prev: Option<(u64, Truth)>,
     last: Option<(u64, Truth)>,
+    /// A new timeline began ([`Track::restart`]): the next sample is
+    /// taken whatever its time.
+    restarted: bool,
 }
 
 impl Track {
@@ -665,17 +680,27 @@ impl Track {
         Track {
             prev: None,
             last: None,
+            restarted: false,
         }
     }
 
-    /// Takes a sample whose time is after the previous one's.
+    /// Takes a sample whose time is after the previous one's (or any
+    /// time, the first after [`Track::restart`]).
     pub fn accept(&mut self, time_ns: u64, truth: Truth) -> Result<(), Reject> {
-        if self.last.is_some_and(|(t, _)| time_ns <= t) {
+        if !self.restarted && self.last.is_some_and(|(t, _)| time_ns <= t) {
             return Err(Reject::NonIncreasing);
         }
-        self.prev = self.last;
+        self.prev = if self.restarted { None } else { self.last };
+        self.restarted = false;
         self.last = Some((time_ns, truth));
         Ok(())
+    }
+
+    /// A new timeline (a new feed connection, a power cycle): the newest
+    /// sample holds until the next, which is taken whatever its time and
+    /// not interpolated with the ones before.
+    pub fn restart(&mut self) {
+        self.restarted = true;
     }
 
     /// The newest sample's time and truth.
@@ -764,6 +789,11 @@ impl Live {
     /// The newest sample.
     pub fn track(&self) -> &Track {
         &self.track
+    }
+
+    /// A new timeline ([`Track::restart`]).
+    pub fn restart(&mut self) {
+        self.track.restart();
     }
 
     /// The silence after which the feed is lost, ns.

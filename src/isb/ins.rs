@@ -1061,9 +1061,30 @@ pub fn decimal_year(gps_s: f64) -> f64 {
 
 /// Whether the navigation fields of a FLASH_CONFIG image are sane: `refLla`
 /// and `lastLla` latitude within ±90°, longitude within ±360°, height within
-/// −1 000…100 000 m, none NaN; `startupGPSDtMs` 200…60 000 ms. A SET that
-/// would store anything else is refused (NACK).
+/// −1 000…100 000 m, none NaN; `startupGPSDtMs` 200…60 000 ms; the lever
+/// arms `insOffset` and `gps1AntOffset` within ±[`MAX_LEVER_ARM_M`] and
+/// `insRotation` within ±2π rad on every axis (so none is NaN or infinite:
+/// each goes into every INS and GPS position). A SET that would store
+/// anything else is refused (NACK).
 pub fn flash_nav_valid(image: &[u8]) -> bool {
+    use super::sets::{flash, le};
+    let within = |off: usize, limit: f32| {
+        le::f32x3(image, off)
+            .iter()
+            .all(|x| (-limit..=limit).contains(x))
+    };
+    within(flash::INS_OFFSET, MAX_LEVER_ARM_M)
+        && within(flash::GPS1_ANT_OFFSET, MAX_LEVER_ARM_M)
+        && within(flash::INS_ROTATION, core::f32::consts::TAU)
+        && flash_lla_valid(image)
+}
+
+/// The largest lever arm (`insOffset`, `gps1AntOffset`) a FLASH_CONFIG may
+/// hold, m, per axis: beyond any vehicle an IMX rides on.
+pub const MAX_LEVER_ARM_M: f32 = 100.0;
+
+/// The positions and the GPS period of [`flash_nav_valid`].
+fn flash_lla_valid(image: &[u8]) -> bool {
     use super::sets::{flash, le};
     let lla_ok = |off: usize| {
         let (lat, lon, h) = (

@@ -271,11 +271,7 @@ fn accept_failing_with_emfile_is_transient_and_rate_limited() {
     let mut c = emu.connect();
     let first = start_ga(&mut c);
     let pid = emu.pid();
-    let open: Vec<u32> = std::fs::read_dir(format!("/proc/{pid}/fd"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_str().unwrap().parse().unwrap())
-        .collect();
-    let lowest_free = (0..).find(|n| !open.contains(n)).unwrap();
+    let lowest_free = support::lowest_free_fd(pid);
     let limit = format!("--nofile={lowest_free}:{lowest_free}");
     let st = Command::new("prlimit")
         .args(["--pid", &pid.to_string(), &limit])

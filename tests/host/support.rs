@@ -808,3 +808,13 @@ pub fn pty_pair() -> (std::os::fd::OwnedFd, std::os::fd::OwnedFd, String) {
     let path = nix::unistd::ttyname(&pty.slave).unwrap();
     (pty.master, pty.slave, path.to_str().unwrap().to_owned())
 }
+
+/// The lowest descriptor number process `pid` has free (a soft
+/// `RLIMIT_NOFILE` of it leaves the process none to open).
+pub fn lowest_free_fd(pid: u32) -> u32 {
+    let open: Vec<u32> = std::fs::read_dir(format!("/proc/{pid}/fd"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_str().unwrap().parse().unwrap())
+        .collect();
+    (0..).find(|n| !open.contains(n)).unwrap()
+}

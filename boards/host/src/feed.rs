@@ -38,7 +38,7 @@ use std::net::{SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::os::fd::{AsFd, AsRawFd};
 use std::time::{Duration, SystemTime};
 
-use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, OWN_DEVICE};
+use imu_emu::feed::{Counts, Decoder, Live, Reject, Sample, Track, MAX_LEAD_NS, OWN_DEVICE};
 use imu_emu::sensor::Truth;
 use imu_emu::vehicle::{fullstate, FullStateRow, VehicleState};
 use nix::poll::{PollFd, PollFlags};
@@ -171,27 +171,11 @@ impl FeedSocket {
         &mut self,
         each: &mut dyn FnMut(Result<Sample, Reject>, Duration),
     ) -> anyhow::Result<()> {
+        self.accept()?;
         let mut buf = [0u8; 4096];
         let mut got = 0;
         match &mut self.socket {
-            Socket::Tcp { listener, client } => {
-                loop {
-                    match listener.accept() {
-                        Ok((s, peer)) => {
-                            s.set_nonblocking(true)?;
-                            stamp_arrivals(&s);
-                            eprintln!(
-                                "imu-emu: {}motion feed client {peer} connected to {}",
-                                self.label, self.local
-                            );
-                            *client = Some((s, peer));
-                            self.decoder = Decoder::new();
-                        }
-                        Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
-                        Err(e) if crate::transport::is_transient_accept_error(&e) => break,
-                        Err(e) => return Err(anyhow::Error::new(e).context("motion feed accept")),
-                    }
-                }
+            Socket::Tcp { client, .. } => {
                 while let Some((s, peer)) = client.as_mut() {
                     if got >= MAX_READ {
                         break;
@@ -235,6 +219,37 @@ impl FeedSocket {
             }
         }
         Ok(())
+    }
+}
+
+impl FeedSocket {
+    /// TCP: takes a new client if one is waiting (it replaces the old, with
+    /// a fresh decoder); whether one came (a new feed timeline,
+    /// [`FeedState::new_timeline`]). UDP: never.
+    pub fn accept(&mut self) -> anyhow::Result<bool> {
+        let Socket::Tcp { listener, client } = &mut self.socket else {
+            return Ok(false);
+        };
+        let mut came = false;
+        loop {
+            match listener.accept() {
+                Ok((s, peer)) => {
+                    s.set_nonblocking(true)?;
+                    stamp_arrivals(&s);
+                    eprintln!(
+                        "imu-emu: {}motion feed client {peer} connected to {}",
+                        self.label, self.local
+                    );
+                    *client = Some((s, peer));
+                    self.decoder = Decoder::new();
+                    came = true;
+                }
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                Err(e) if crate::transport::is_transient_accept_error(&e) => break,
+                Err(e) => return Err(anyhow::Error::new(e).context("motion feed accept")),
+            }
+        }
+        Ok(came)
     }
 }
 
@@ -366,6 +381,14 @@ pub struct FeedState {
     pending: VecDeque<(u64, Item)>,
     /// Host time of the newest sample (status in lockstep).
     last_host: Option<std::time::Instant>,
+    /// Lockstep at a `--speed` factor: the device time the host clock
+    /// allows now ([`FeedState::set_pace`]).
+    pace_ns: Option<u64>,
+    /// Real time: a new timeline began ([`FeedState::new_timeline`]); the
+    /// next sample is taken whatever its time.
+    restarted: bool,
+    /// Rate limit of the `silent` / `back` messages.
+    silence_log: crate::transport::LogLimit,
     label: String,
 }
 
@@ -385,6 +408,9 @@ impl FeedState {
             counts: Counts::default(),
             pending: VecDeque::new(),
             last_host: None,
+            pace_ns: None,
+            restarted: false,
+            silence_log: crate::transport::LogLimit::default(),
             label: label.to_owned(),
         }
     }
@@ -402,6 +428,31 @@ impl FeedState {
     /// Counters so far.
     pub fn counts(&self) -> &Counts {
         &self.counts
+    }
+
+    /// Lockstep at a `--speed` factor: device time may not pass `ns` now
+    /// (the host clock); a sample more than [`MAX_LEAD_NS`] beyond it is
+    /// [`Reject::TooFarAhead`].
+    pub fn set_pace(&mut self, ns: u64) {
+        self.pace_ns = Some(ns);
+    }
+
+    /// A new timeline: a new feed connection or a power cycle. In real
+    /// time the next sample is taken whatever its time (what arrived
+    /// before applies now; the newest holds until then), so one
+    /// far-future sample cannot lock the feed. In lockstep device time
+    /// cannot go back: times go on from the newest (and
+    /// [`Reject::TooFarAhead`] keeps a far-future one out).
+    pub fn new_timeline(&mut self) {
+        if self.cfg.lockstep {
+            return;
+        }
+        while let Some((a, t, item)) = self.arriving.pop_front() {
+            let _ = self.offer_live(t, item, a);
+        }
+        self.live.restart();
+        self.full_live.row = None;
+        self.restarted = true;
     }
 
     /// Takes a decoded outcome at device time `now_ns`.
@@ -429,9 +480,20 @@ impl FeedState {
                     .pending
                     .back()
                     .map(|p| p.0)
-                    .or(self.track.last().map(|l| l.0));
+                    .or(self.track.last().map(|l| l.0))
+                    .or(self.full.as_ref().and_then(|f| f.rows.last()).map(|r| {
+                        // Full states reached: their time, ns.
+                        (r.time_s * 1e9) as u64
+                    }));
+                let lead_from = newest.unwrap_or(0).max(now_ns);
                 if newest.is_some_and(|n| t <= n) {
                     Err(Reject::NonIncreasing)
+                } else if t.saturating_sub(lead_from) > MAX_LEAD_NS
+                    || self
+                        .pace_ns
+                        .is_some_and(|p| t.saturating_sub(p) > MAX_LEAD_NS)
+                {
+                    Err(Reject::TooFarAhead)
                 } else {
                     self.pending.push_back((t, item));
                     Ok(())
@@ -443,9 +505,10 @@ impl FeedState {
                     .track()
                     .last()
                     .map(|l| l.0));
-                if newest.is_some_and(|n| t <= n) {
+                if !self.restarted && newest.is_some_and(|n| t <= n) {
                     Err(Reject::NonIncreasing)
                 } else {
+                    self.restarted = false;
                     if self.arriving.len() >= MAX_PENDING {
                         // Bounded: the oldest takes effect now.
                         if let Some((a, t, item)) = self.arriving.pop_front() {
@@ -557,17 +620,27 @@ impl FeedState {
             }
             None => truth.map(FeedMotion::Rates),
         };
-        if lost != was {
+        let held = if lost != was {
+            self.silence_log.allow()
+        } else {
+            None
+        };
+        if let Some(held) = held {
+            let held = if held > 0 {
+                format!(" ({held} earlier changes not logged)")
+            } else {
+                String::new()
+            };
             if lost {
                 eprintln!(
                     "imu-emu: {}motion feed silent for more than {} ms: sensor fault reported, \
-                     the last sample holds",
+                     the last sample holds{held}",
                     self.label,
                     self.cfg.timeout_ns / 1_000_000
                 );
             } else {
                 eprintln!(
-                    "imu-emu: {}motion feed back: sensor fault cleared",
+                    "imu-emu: {}motion feed back: sensor fault cleared{held}",
                     self.label
                 );
             }

@@ -205,7 +205,7 @@ impl FileNor {
 }
 
 /// What a non-regular file is, for the refusal message.
-fn describe(kind: std::fs::FileType) -> &'static str {
+pub fn describe(kind: std::fs::FileType) -> &'static str {
     if kind.is_dir() {
         "a directory"
     } else if kind.is_fifo() {

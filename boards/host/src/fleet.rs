@@ -154,6 +154,21 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
         let Some(mut sock) = self.shared_feed.take() else {
             return Ok(());
         };
+        // A new client: a new feed timeline for every device.
+        match sock.accept() {
+            Ok(true) => {
+                for slot in self.slots.iter_mut().flatten() {
+                    if let Slot::On(runner) = slot {
+                        runner.feed_new_timeline();
+                    }
+                }
+            }
+            Ok(false) => {}
+            Err(e) => {
+                self.shared_feed = Some(sock);
+                return Err(e);
+            }
+        }
         let slots = &mut self.slots;
         let counts = &mut self.shared_counts;
         // Each sample dated by its arrival at the socket, as a device's own

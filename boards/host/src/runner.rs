@@ -226,6 +226,9 @@ pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
     /// Lockstep at a `--speed` factor: device time does not run ahead of
     /// this clock either.
     pace: Option<Clock>,
+    /// Lockstep: the time of the newest sample taken, ns (device time
+    /// moves on to it).
+    lockstep_target: u64,
 }
 
 /// What the schedule drives on this board: the transport, the control
@@ -568,6 +571,9 @@ impl<T: Transport> HostPort<T> {
             control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
             control::Command::PowerCycle(boot) => {
                 dev.power_cycle_with(boot, at);
+                if let Some(f) = self.feed.as_mut() {
+                    f.new_timeline();
+                }
                 self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
                 if self.fw_update {
                     tracing::info!(
@@ -657,6 +663,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
             status_at: std::io::IsTerminal::is_terminal(&std::io::stdout())
                 .then(std::time::Instant::now),
             pace: None,
+            lockstep_target: 0,
         }
     }
 
@@ -693,7 +700,18 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
     ) {
         let at = self.clock.arrived_ns(age);
         if let Some(f) = self.io.feed.as_mut() {
+            if let Some(p) = &self.pace {
+                f.set_pace(p.now_ns());
+            }
             f.offer(r, at);
+        }
+    }
+
+    /// A new connection to a fleet's shared feed: a new feed timeline
+    /// ([`FeedState::new_timeline`]).
+    pub fn feed_new_timeline(&mut self) {
+        if let Some(f) = self.io.feed.as_mut() {
+            f.new_timeline();
         }
     }
 
@@ -724,6 +742,12 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
         if !state.wants_more() {
             return Ok(());
         }
+        if sock.accept()? {
+            state.new_timeline();
+        }
+        if let Some(p) = &self.pace {
+            state.set_pace(p.now_ns());
+        }
         let clock = &self.clock;
         let lockstep_now = state.lockstep().then(|| clock.now_ns());
         sock.read_stamped(&mut |r, age| {
@@ -745,21 +769,33 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 break;
             }
             if self.sched.next_deadline() > self.clock.now_ns() {
-                let Some(feed) = self.io.feed.as_mut() else {
-                    break;
-                };
-                let Some(t) = feed.next_time() else {
-                    break;
-                };
-                if let Some(p) = &self.pace {
-                    let host = p.now_ns();
-                    if t > host {
-                        wait = p.host_wait(t - host);
+                // Device time moves on to the newest sample taken, or
+                // takes the next; at a `--speed` factor no further than
+                // the host clock: a sample ahead of it is reached tick by
+                // tick as the host clock goes (interpolated from the one
+                // before), the unit never silent, its control and UART
+                // served meanwhile (the wait is at most `IDLE_WAKE`).
+                let target = if self.lockstep_target > self.clock.now_ns() {
+                    self.lockstep_target
+                } else {
+                    let Some(t) = self.io.feed.as_mut().and_then(FeedState::advance) else {
                         break;
+                    };
+                    self.lockstep_target = t;
+                    t
+                };
+                let to = self
+                    .pace
+                    .as_ref()
+                    .map_or(target, |p| target.min(p.now_ns()));
+                self.clock.advance_to(to);
+                let due = self.sched.next_deadline();
+                if to < target && due > self.clock.now_ns() {
+                    if let Some(p) = &self.pace {
+                        wait = p.host_wait(due - p.now_ns().min(due)).min(IDLE_WAKE);
                     }
+                    break;
                 }
-                feed.advance();
-                self.clock.advance_to(t);
             }
             let pass = self.step()?;
             ticks += u64::from(pass.ticks);

@@ -43,8 +43,7 @@ fn to_f32(v: f64) -> f32 {
 impl Trajectory {
     /// Reads and parses `path`.
     pub fn load(path: &Path, looped: bool) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("reading trajectory {}", path.display()))?;
+        let text = crate::vehicle::read_motion_file(path, "trajectory")?;
         Self::parse(&text, looped).with_context(|| format!("in {}", path.display()))
     }
 

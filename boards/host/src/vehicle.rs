@@ -11,6 +11,49 @@ use imu_emu::vehicle::{
     fullstate, FullStateLayout, FullStateRow, Manoeuvres, Script, VehicleState,
 };
 
+/// Largest motion file read (`--motion`, `motion file`, `--trajectory`),
+/// bytes: an hour of full-state rows at 100 Hz is about 30 MB.
+pub const MAX_MOTION_FILE: u64 = 64 * 1024 * 1024;
+
+/// Reads a motion file (`what`: `motion`, `trajectory`) as `--flash`
+/// opens its file: without blocking on a FIFO or becoming a controlling
+/// terminal, refusing what is not a regular file (a FIFO, `/dev/zero`, a
+/// directory) and a file beyond [`MAX_MOTION_FILE`], so a `motion file`
+/// command never stalls the device loop or grows the process.
+pub fn read_motion_file(path: &Path, what: &str) -> anyhow::Result<String> {
+    use std::io::Read as _;
+    use std::os::unix::fs::OpenOptionsExt as _;
+    let shown = path.display();
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(nix::fcntl::OFlag::O_NONBLOCK.bits() | nix::fcntl::OFlag::O_NOCTTY.bits())
+        .open(path)
+        .with_context(|| format!("reading {what} {shown}"))?;
+    let meta = file
+        .metadata()
+        .with_context(|| format!("reading {what} {shown}"))?;
+    if !meta.file_type().is_file() {
+        bail!(
+            "{what} {shown}: not a regular file ({})",
+            crate::flash::describe(meta.file_type())
+        );
+    }
+    if meta.len() > MAX_MOTION_FILE {
+        bail!(
+            "{what} {shown}: {} bytes, more than the {MAX_MOTION_FILE} a motion file may have",
+            meta.len()
+        );
+    }
+    let mut raw = Vec::new();
+    file.take(MAX_MOTION_FILE + 1)
+        .read_to_end(&mut raw)
+        .with_context(|| format!("reading {what} {shown}"))?;
+    if raw.len() as u64 > MAX_MOTION_FILE {
+        bail!("{what} {shown}: grew beyond {MAX_MOTION_FILE} bytes while read");
+    }
+    String::from_utf8(raw).with_context(|| format!("{what} {shown}: not UTF-8 text"))
+}
+
 /// A loaded vehicle source, with the device time it started at.
 #[derive(Debug, Clone)]
 pub struct VehicleSource {
@@ -30,8 +73,7 @@ enum Kind {
 impl VehicleSource {
     /// Reads and parses `path` (a script or a full-state CSV).
     pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("reading motion {}", path.display()))?;
+        let text = read_motion_file(path, "motion")?;
         Self::parse(&text).with_context(|| format!("in {}", path.display()))
     }
 

@@ -1,7 +1,8 @@
-//! `--web ADDR`: a live web view of the emulated unit(s), served from a
-//! thread of its own with [`tiny_http`] (a small, synchronous HTTP/1.1
-//! server with no async runtime; the page polls a JSON endpoint, so no
-//! WebSocket or Server-Sent-Events stack is needed).
+//! `--web ADDR`: a live web view of the emulated unit(s). The HTTP side
+//! is [`server`] (bounded connections, sizes and times, whatever a client
+//! does; synchronous, no async runtime: the page polls a JSON endpoint,
+//! so no WebSocket or Server-Sent-Events stack is needed); this module is
+//! the routes ([`Site`]), the JSON and the page.
 //!
 //! The device loop never waits for the web side:
 //! - **Out of the loop**: each runner holds a [`Tap`]. It copies the bytes
@@ -44,7 +45,7 @@
 use std::collections::VecDeque;
 use std::io::Read as _;
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -55,6 +56,8 @@ use imu_emu::model::Product;
 use crate::cli::Protocol;
 use crate::client;
 use crate::control;
+
+pub mod server;
 
 /// How often a runner publishes its status (host time): 25 Hz.
 pub const PUBLISH_EVERY: Duration = Duration::from_millis(40);
@@ -468,89 +471,81 @@ impl View {
     }
 }
 
-/// The running web server.
+/// The running web view: its HTTP server ([`server`]) and what it shows.
 pub struct Server {
     /// The address it listens on.
     pub addr: SocketAddr,
-    thread: Option<std::thread::JoinHandle<()>>,
-    stop: Arc<AtomicBool>,
+    _http: server::HttpServer,
 }
 
 impl Server {
-    /// Binds `addr` and serves `hub` from a thread of its own.
+    /// Binds `addr` and serves `hub` ([`server::HttpServer`]: a thread
+    /// per connection, within its limits).
     pub fn start(addr: &str, hub: Arc<Hub>) -> anyhow::Result<Server> {
-        let server =
-            tiny_http::Server::http(addr).map_err(|e| match e.downcast::<std::io::Error>() {
-                Ok(io) => crate::error::bind_error(*io, "--web", addr),
-                Err(e) => anyhow::anyhow!("--web {addr}: {e}"),
-            })?;
-        let bound = server
-            .server_addr()
-            .to_ip()
-            .ok_or_else(|| anyhow::anyhow!("--web {addr}: not an IP address"))?;
-        let stop = Arc::new(AtomicBool::new(false));
-        let flag = Arc::clone(&stop);
-        let thread = std::thread::Builder::new()
-            .name("imu-emu-web".into())
-            .spawn(move || serve(server, bound, hub, &flag))?;
+        let listener = std::net::TcpListener::bind(addr)
+            .map_err(|e| crate::error::bind_error(e, "--web", addr))?;
+        let bound = listener.local_addr()?;
+        let site = Site::new(hub, bound);
+        let handler: Arc<server::Handler> = Arc::new(move |r: &server::Request| site.respond(r));
+        let http = server::HttpServer::start(listener, handler, MAX_BODY)?;
         Ok(Server {
             addr: bound,
-            thread: Some(thread),
-            stop,
+            _http: http,
         })
     }
 }
 
-impl Drop for Server {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
+/// The web view's routes over a hub: what a request gets, whatever
+/// carries it (the server, the fuzz target).
+pub struct Site {
+    hub: Arc<Hub>,
+    views: Vec<Mutex<View>>,
+    bound: SocketAddr,
 }
 
-fn serve(server: tiny_http::Server, bound: SocketAddr, hub: Arc<Hub>, stop: &AtomicBool) {
-    let mut views: Vec<View> = hub.slots.iter().map(|s| View::new(Arc::clone(s))).collect();
-    while !stop.load(Ordering::Relaxed) {
-        let Ok(Some(mut req)) = server.recv_timeout(Duration::from_millis(100)) else {
-            continue;
+impl Site {
+    /// The routes of `hub`, served at `bound` (the `Host` a request must
+    /// name).
+    pub fn new(hub: Arc<Hub>, bound: SocketAddr) -> Site {
+        let views = hub
+            .slots
+            .iter()
+            .map(|s| Mutex::new(View::new(Arc::clone(s))))
+            .collect();
+        Site { hub, views, bound }
+    }
+
+    /// The answer to `r`.
+    pub fn respond(&self, r: &server::Request) -> server::Response {
+        let parts = Parts {
+            method: r.method,
+            url: r.target.clone(),
+            host: r.header("Host").map(str::to_owned),
+            marked: r.header("X-Imu-Emu") == Some("1"),
+            length: Some(r.body.len()),
         };
-        let parts = req_parts(&req);
-        let (code, ctype, body) = handle(&hub, &mut views, bound, parts, req.as_reader());
-        let mut resp = tiny_http::Response::from_string(body).with_status_code(code);
-        for (k, v) in [("Content-Type", ctype), ("Cache-Control", "no-store")] {
-            if let Ok(h) = tiny_http::Header::from_bytes(k.as_bytes(), v.as_bytes()) {
-                resp.add_header(h);
-            }
+        let (status, content_type, body) = handle(
+            &self.hub,
+            &self.views,
+            self.bound,
+            parts,
+            &mut r.body.as_slice(),
+        );
+        server::Response {
+            status,
+            content_type,
+            body,
         }
-        let _ = req.respond(resp);
     }
 }
 
 /// What `handle` needs of a request.
 struct Parts {
-    method: tiny_http::Method,
+    method: server::Method,
     url: String,
     host: Option<String>,
     marked: bool,
     length: Option<usize>,
-}
-
-fn req_parts(req: &tiny_http::Request) -> Parts {
-    let get = |name: &str| {
-        req.headers()
-            .iter()
-            .find(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
-            .map(|h| h.value.as_str().to_owned())
-    };
-    Parts {
-        method: req.method().clone(),
-        url: req.url().to_owned(),
-        host: get("Host"),
-        marked: get("X-Imu-Emu").as_deref() == Some("1"),
-        length: req.body_length(),
-    }
 }
 
 type Reply = (u16, &'static str, String);
@@ -564,15 +559,15 @@ fn text(code: u16, s: impl Into<String>) -> Reply {
 
 fn handle(
     hub: &Hub,
-    views: &mut [View],
+    views: &[Mutex<View>],
     bound: SocketAddr,
     p: Parts,
     body: &mut dyn std::io::Read,
 ) -> Reply {
-    let host_ok = p
-        .host
-        .as_deref()
-        .is_some_and(|h| h == bound.to_string() || h == format!("localhost:{}", bound.port()));
+    let host_ok = p.host.as_deref().is_some_and(|h| {
+        h.eq_ignore_ascii_case(&bound.to_string())
+            || h.eq_ignore_ascii_case(&format!("localhost:{}", bound.port()))
+    });
     if !host_ok {
         return text(421, "this server answers to its own address only");
     }
@@ -595,7 +590,7 @@ fn handle(
         }
         Ok(k)
     };
-    use tiny_http::Method::{Get, Post};
+    use server::Method::{Get, Post};
     match (&p.method, path) {
         (Get, "/") => (200, "text/html; charset=utf-8", INDEX_HTML.to_owned()),
         (Get, "/app.js") => (200, "text/javascript; charset=utf-8", APP_JS.to_owned()),
@@ -610,10 +605,13 @@ fn handle(
             let truth_since: u64 = param("truth_since")
                 .and_then(|s| s.parse().ok())
                 .unwrap_or(0);
+            let Ok(mut v) = views[k].lock() else {
+                return text(500, "error internal");
+            };
             (
                 200,
                 JSON,
-                state_json(hub.protocol, &mut views[k], since, truth_since),
+                state_json(hub.protocol, &mut v, since, truth_since),
             )
         }
         (Post, "/api/command") => {
@@ -819,8 +817,12 @@ mod tests {
         )
     }
 
-    fn call(hub: &Hub, method: tiny_http::Method, url: &str, marked: bool, body: &str) -> Reply {
-        let mut views: Vec<View> = hub.slots.iter().map(|s| View::new(Arc::clone(s))).collect();
+    fn call(hub: &Hub, method: server::Method, url: &str, marked: bool, body: &str) -> Reply {
+        let views: Vec<Mutex<View>> = hub
+            .slots
+            .iter()
+            .map(|s| Mutex::new(View::new(Arc::clone(s))))
+            .collect();
         let bound: SocketAddr = "127.0.0.1:8080".parse().unwrap();
         let p = Parts {
             method,
@@ -829,12 +831,12 @@ mod tests {
             marked,
             length: Some(body.len()),
         };
-        handle(hub, &mut views, bound, p, &mut body.as_bytes())
+        handle(hub, &views, bound, p, &mut body.as_bytes())
     }
 
     #[test]
     fn bad_requests_never_reach_the_device() {
-        use tiny_http::Method::{Get, Post};
+        use server::Method::{Get, Post};
         let h = hub();
         assert_eq!(call(&h, Post, "/api/command", false, "pps").0, 403);
         assert_eq!(call(&h, Post, "/api/command", true, "warp 9").0, 400);

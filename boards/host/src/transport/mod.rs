@@ -242,3 +242,48 @@ impl AcceptGuard {
         }
     }
 }
+
+/// A rate limit of repeated messages (a token bucket): a burst of
+/// [`LogLimit::BURST`], then one every [`LogLimit::EVERY`]; what it holds
+/// back is counted and named by the next message let through.
+#[derive(Debug, Clone)]
+pub struct LogLimit {
+    tokens: u32,
+    refilled: std::time::Instant,
+    held: u64,
+}
+
+impl Default for LogLimit {
+    fn default() -> Self {
+        LogLimit {
+            tokens: Self::BURST,
+            refilled: std::time::Instant::now(),
+            held: 0,
+        }
+    }
+}
+
+impl LogLimit {
+    /// Messages let through at once.
+    pub const BURST: u32 = 4;
+    /// Then one per this.
+    pub const EVERY: Duration = Duration::from_secs(10);
+
+    /// `Some(held back since the last one)` if this message may go out.
+    pub fn allow(&mut self) -> Option<u64> {
+        let now = std::time::Instant::now();
+        while self.tokens < Self::BURST && now.duration_since(self.refilled) >= Self::EVERY {
+            self.tokens += 1;
+            self.refilled += Self::EVERY;
+        }
+        if self.tokens == Self::BURST {
+            self.refilled = now;
+        }
+        if self.tokens == 0 {
+            self.held += 1;
+            return None;
+        }
+        self.tokens -= 1;
+        Some(std::mem::take(&mut self.held))
+    }
+}
