@@ -76,6 +76,7 @@ use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
+use crate::isb::aux_sets::{self, mag_cal_state, Imu3, Imus, MagCal, SystemFault};
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, NavConfig, NavFaults, NavState};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
@@ -94,6 +95,10 @@ use crate::time::Instant;
 
 // The NMEA streams' hooks (`$ASCE`, the sentences due at a tick).
 mod nmea_hooks;
+
+/// How long a magnetometer recalibration takes, ms (emulator's choice:
+/// the unit is not asked to rotate, `docs/isb-data-sets.md` "MAG_CAL").
+pub const MAG_RECAL_MS: u64 = 10_000;
 
 /// Persistent streams the image holds (the first ten running streams are
 /// saved; the image layout is unchanged since the IMU-mode device).
@@ -174,6 +179,9 @@ struct State {
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
+    /// MAG_CAL: the last command's state and the tick it came at
+    /// (`docs/isb-data-sets.md` "MAG_CAL").
+    mag_cal: (u32, u64),
     /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
     dropped_seen: u32,
     tx_limited: bool,
@@ -222,6 +230,7 @@ impl Personality for Isb {
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
+                mag_cal: (mag_cal_state::DO_NOTHING, 0),
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
@@ -532,7 +541,7 @@ impl State {
     /// The period grid a windowed data set lives on: IMU_RAW the IMU
     /// sample period's, the others the navigation period's.
     fn grid(&self, did: u8) -> [Integrals; 2] {
-        if did == did::IMU_RAW {
+        if matches!(did, did::IMU_RAW | did::IMU3_RAW) {
             self.imu_grid
         } else {
             self.nav_grid
@@ -541,7 +550,7 @@ impl State {
 
     /// Ticks of the period of [`Self::grid`]`(did)`.
     fn window_ticks(&self, cx: &impl Context<Integrals>, did: u8) -> u32 {
-        let ms = if did == did::IMU_RAW {
+        let ms = if matches!(did, did::IMU_RAW | did::IMU3_RAW) {
             self.imu_dt_ms
         } else {
             self.nav_dt_ms
@@ -719,6 +728,17 @@ impl State {
                     self.save_persistent(cx);
                 }
             }
+            did::MAG_CAL => {
+                let state = le::u32(image, aux_sets::mag_cal::STATE);
+                let tick = cx.time().ticks();
+                match state {
+                    mag_cal_state::MULTI_AXIS | mag_cal_state::SINGLE_AXIS => {
+                        self.mag_cal = (mag_cal_state::RECAL_RUNNING, tick)
+                    }
+                    mag_cal_state::ABORT => self.mag_cal = (mag_cal_state::DO_NOTHING, tick),
+                    _ => {}
+                }
+            }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);
             }
@@ -854,6 +874,10 @@ impl State {
             did::SYS_CMD => put(&SystemCommand::default().encode()),
             did::NMEA_BCAST_PERIOD => put(&self.nmea.table.to_msgs()),
             did::BIT => put(&self.bit.encode()),
+            // A unit that never faulted: all zeros (`docs/isb-data-sets.md`).
+            did::SYS_FAULT => put(&SystemFault::default().encode()),
+            did::GPS1_VERSION => put(&aux_sets::RECEIVER_VERSION.encode()),
+            did::MAG_CAL => put(&self.mag_cal_of(cx).encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
                 let (week, time_of_week_ms) = if self.nav.gps_time_valid() {
@@ -879,6 +903,7 @@ impl State {
             | did::GPS1_RCVR_POS
             | did::GPS1_VEL
             | did::GPS1_SAT
+            | did::GPS1_SIG
             | did::MAGNETOMETER
             | did::BAROMETER => {
                 let hdw = self.sys_params(cx, now).hdw_status;
@@ -1007,6 +1032,8 @@ impl State {
             }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
+            // The signals of the satellites GPS1_SAT reports.
+            did::GPS1_SIG => put(&aux_sets::gps_sig_of(&self.nav.gps_sat(&epoch)).encode()),
             did::MAGNETOMETER => {
                 put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
             }
@@ -1064,6 +1091,20 @@ impl State {
                 // the last measurement, as SYS_SENSORS reports it, not zeros.
                 last_measurement(cx)
             };
+            if did == did::IMU3_RAW {
+                // The chain has one sensor: IMU_RAW averages the three
+                // IMUs, so each of them reads what IMU_RAW reads
+                // (`docs/isb-data-sets.md` "IMU3_RAW").
+                let one = Imus { pqr, acc };
+                let b = Imu3 {
+                    time,
+                    status,
+                    imu: [one; 3],
+                }
+                .encode();
+                image[..b.len()].copy_from_slice(&b);
+                return b.len();
+            }
             out[..sets::imu::SIZE].copy_from_slice(
                 &Imu {
                     time,
@@ -1083,6 +1124,30 @@ impl State {
         let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
         image[base..base + m.len()].copy_from_slice(&m);
         base + m.len()
+    }
+
+    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): after a
+    /// recalibration command the progress runs from 0 to 100 % over
+    /// [`MAG_RECAL_MS`], then the state reads done; the declination is
+    /// FLASH_CONFIG's `magDeclination`.
+    fn mag_cal_of(&self, cx: &impl Context<Integrals>) -> MagCal {
+        let (state, at) = self.mag_cal;
+        let declination = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
+        let (state, progress) = if state == mag_cal_state::RECAL_RUNNING {
+            let ms = cx.time().ticks().saturating_sub(at) * 1000 / u64::from(rate(cx));
+            if ms >= MAG_RECAL_MS {
+                (mag_cal_state::RECAL_COMPLETE, 100.0)
+            } else {
+                (state, (ms * 100) as f32 / MAG_RECAL_MS as f32)
+            }
+        } else {
+            (state, 0.0)
+        };
+        MagCal {
+            state,
+            progress,
+            declination,
+        }
     }
 
     /// SYS_SENSORS now: the last measurement (body axes), the magnetometer
@@ -1213,7 +1278,7 @@ fn send_data(cx: &mut impl Context<Integrals>, did: u8, image: &[u8], offset: u1
 fn is_windowed(did: u8) -> bool {
     matches!(
         did,
-        did::IMU | did::IMU_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
+        did::IMU | did::IMU_RAW | did::IMU3_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
     )
 }
 
