@@ -1571,3 +1571,33 @@ fn imu3_raw_is_the_chains_sensor_three_times() {
         "{r:?}"
     );
 }
+
+/// What cltool's `-magRecal` sends (`docs/protocol-facts.md`): GET
+/// DID_MAG_CAL with period 100, then SET_DATA of `state`: MAG_CAL streams
+/// every 100 ms (1 ms source), the ACK comes, and the stream shows the
+/// recalibration running with its progress rising, then done.
+#[test]
+fn cltools_mag_recal_sequence_is_answered() {
+    let mut b = Bench::new();
+    b.send(&get(did::MAG_CAL, 100));
+    let r = b.run_ticks(2000);
+    let cals = of_did(&r, did::MAG_CAL);
+    assert_eq!(cals.len(), 10, "every 100 ms");
+    assert!(cals.iter().all(|p| p.payload.len() == 12));
+    let r = b.send(&set(did::MAG_CAL, 0, &1u32.to_le_bytes()));
+    assert_eq!((r[0].flags, r[0].payload[4]), (1, did::MAG_CAL));
+    let r = b.run_ticks(24_000);
+    let cals: Vec<MagCal> = of_did(&r, did::MAG_CAL)
+        .iter()
+        .map(|p| MagCal::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(cals.len(), 120);
+    assert!(cals.windows(2).all(|w| w[1].progress >= w[0].progress));
+    assert_eq!(cals[0].state, mag_cal_state::RECAL_RUNNING);
+    assert!(
+        cals[50].progress > 40.0 && cals[50].progress < 60.0,
+        "{:?}",
+        cals[50]
+    );
+    assert_eq!(cals[119].state, mag_cal_state::RECAL_COMPLETE);
+}
