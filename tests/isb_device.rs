@@ -1601,3 +1601,56 @@ fn cltools_mag_recal_sequence_is_answered() {
     );
     assert_eq!(cals[119].state, mag_cal_state::RECAL_COMPLETE);
 }
+
+/// PORT_MONITOR (223 B: 6 × 37-byte `port_monitor_set_t`, then u8
+/// activePorts @222): port 0 is the serial line (portInfo 0x10: UART,
+/// index 0), the only active one; txBytes / rxBytes count every byte sent
+/// and received since power-on (exactly what went over the line before
+/// the reply), the per-second rates the last whole second's bytes, and
+/// rxChecksumErrors the packets dropped for a bad checksum.
+#[test]
+fn port_monitor_counts_the_lines_bytes() {
+    use imu_emu::isb::aux_sets::{port_monitor, PortMonitor};
+    let mut b = Bench::new();
+    let mut rx = 0usize;
+    let pm = |b: &mut Bench, rx: &mut usize| {
+        let q = get(did::PORT_MONITOR, 0);
+        *rx += q.len();
+        let before = b.raw.len();
+        let r = b.send(&q);
+        assert_eq!((r.len(), r[0].did), (1, did::PORT_MONITOR));
+        assert_eq!(r[0].payload.len(), port_monitor::SIZE);
+        (
+            PortMonitor::decode(&r[0].payload.clone().try_into().unwrap()),
+            before,
+        )
+    };
+    let (m, sent) = pm(&mut b, &mut rx);
+    assert_eq!(m.active_ports, 1);
+    assert_eq!(m.port[0].port_info, 0x10);
+    assert_eq!(
+        (m.port[0].tx_bytes as usize, m.port[0].rx_bytes as usize),
+        (sent, rx)
+    );
+    assert!(m.port[1..].iter().all(|p| *p == Default::default()));
+    // IMU every 4 ms: 250 packets of 44 bytes a second.
+    let q = get(did::IMU, 1);
+    rx += q.len();
+    b.send(&q);
+    b.run_ticks(2 * 2000 + 100);
+    let (m, sent) = pm(&mut b, &mut rx);
+    assert_eq!(m.port[0].tx_bytes as usize, sent);
+    assert_eq!(m.port[0].rx_bytes as usize, rx);
+    assert_eq!(m.port[0].tx_bytes_per_sec, 250 * 44);
+    assert_eq!(m.port[0].rx_bytes_per_sec, 0);
+    assert_eq!(m.port[0].tx_data_drops, 0);
+    // A packet with a bad checksum.
+    let mut bad = get(did::DEV_INFO, 0);
+    let n = bad.len();
+    bad[n - 1] ^= 0xFF;
+    rx += bad.len();
+    b.send(&bad);
+    let (m, _) = pm(&mut b, &mut rx);
+    assert_eq!(m.port[0].rx_checksum_errors, 1);
+    assert_eq!(m.port[0].rx_bytes as usize, rx);
+}

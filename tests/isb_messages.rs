@@ -142,8 +142,15 @@ fn nack_to_a_bad_get() {
 }
 
 #[test]
-fn sys_fault_mag_cal_gps1_sig_gps1_version_imu3_raw_are_served() {
-    for (d, size) in [(2u16, 32u16), (17, 220), (19, 12), (45, 708), (96, 84)] {
+fn sys_fault_mag_cal_gps1_sig_gps1_version_port_monitor_imu3_raw_are_served() {
+    for (d, size) in [
+        (2u16, 32u16),
+        (17, 220),
+        (19, 12),
+        (45, 708),
+        (75, 223),
+        (96, 84),
+    ] {
         assert!(
             matches!(did::classify(d), Class::Supported(s) if s.size == size),
             "DID {d}"

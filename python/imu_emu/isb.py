@@ -27,6 +27,7 @@ IMU, BIT, STROBE_IN_TIME, IMU_RAW = 58, 64, 68, 97
 INS_1, INS_2, INS_3, INS_4, GPS1_POS, GPS1_VEL = 4, 5, 65, 66, 13, 30
 MAGNETOMETER, BAROMETER, IMU_MAG, PIMU_MAG, SYS_SENSORS = 52, 53, 85, 86, 11
 SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW = 2, 17, 19, 45, 96
+PORT_MONITOR = 75
 
 # Field kinds: struct format and item count.
 _KINDS = {
@@ -206,6 +207,16 @@ SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
             ("timeOfWeekMs", 0, "u32"), ("numSigs", 4, "u32"), ("gnssId", 8, "u8"), ("svId", 9, "u8"),
             ("sigId", 10, "u8"), ("cno", 11, "u8"), ("quality", 12, "u8"),
         ),
+    ),
+    # port_monitor_t: port 0 (the serial line) of the six 37-byte sets, activePorts.
+    PORT_MONITOR: (
+        "PORT_MONITOR",
+        223,
+        (("portInfo", 0, "u8"),)
+        + tuple((n, 1 + 4 * k, "u32") for k, n in enumerate((
+            "status", "txBytesPerSec", "rxBytesPerSec", "txBytes", "rxBytes", "txDataDrops", "rxOverflows",
+            "txBytesDropped", "rxChecksumErrors")))
+        + (("activePorts", 222, "u8"),),
     ),
     # imu3_t: time, status, then IMU 1 of the three (they read alike).
     IMU3_RAW: ("IMU3_RAW", 84, (("time", 0, "f64"), ("status", 8, "u32"), ("pqr", 12, "f32x3"), ("acc", 24, "f32x3"))),

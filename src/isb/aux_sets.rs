@@ -1,5 +1,5 @@
 //! The IMX-5's data sets beside navigation and the IMU: SYS_FAULT,
-//! GPS1_VERSION, MAG_CAL, GPS1_SIG and IMU3_RAW, each declared once with
+//! GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW and PORT_MONITOR, each declared once with
 //! [`crate::data_set!`] (layouts: SDK 2.7.1 `data_sets.h`, protocol 2.1,
 //! `docs/isb-data-sets.md` "Status, version, calibration and signal data
 //! sets", which also says why that header is taken as 2.7.1's).
@@ -209,6 +209,53 @@ crate::data_set! {
     }
 }
 
+crate::data_set! {
+    /// `port_monitor_set_t`, 37 bytes (packed by the header's
+    /// `PUSH_PACK_1`): one port of DID_PORT_MONITOR.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct PortMonitorSet in mod port_monitor_set, 37 bytes {
+        /// High nibble the port type (`ePortMonPortType`: 1 UART, 2 USB,
+        /// 3 SPI, 4 I2C, 5 CAN), low nibble its index.
+        port_info: u8 = PORT_INFO @ 0,
+        /// Status.
+        status: u32 = STATUS @ 1,
+        /// Bytes sent in the last whole second.
+        tx_bytes_per_sec: u32 = TX_BYTES_PER_SEC @ 5,
+        /// Bytes received in the last whole second.
+        rx_bytes_per_sec: u32 = RX_BYTES_PER_SEC @ 9,
+        /// Bytes sent since power-on.
+        tx_bytes: u32 = TX_BYTES @ 13,
+        /// Bytes received since power-on.
+        rx_bytes: u32 = RX_BYTES @ 17,
+        /// Writes that could not send all their data.
+        tx_data_drops: u32 = TX_DATA_DROPS @ 21,
+        /// Receive buffer overflows.
+        rx_overflows: u32 = RX_OVERFLOWS @ 25,
+        /// Bytes not sent.
+        tx_bytes_dropped: u32 = TX_BYTES_DROPPED @ 29,
+        /// Checksum failures received.
+        rx_checksum_errors: u32 = RX_CHECKSUM_ERRORS @ 33,
+    }
+}
+
+/// `NUM_SERIAL_PORTS`: entries of `port_monitor_t.port`.
+pub const NUM_SERIAL_PORTS: usize = 6;
+
+/// `ePortMonPortType` of a UART, in `portInfo`'s high nibble.
+pub const PORT_TYPE_UART: u8 = 1 << 4;
+
+crate::data_set! {
+    /// `port_monitor_t`, 223 bytes: DID_PORT_MONITOR, byte counts and
+    /// rates of each port.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct PortMonitor in mod port_monitor, 223 bytes {
+        /// The ports (the first `active_ports` in use).
+        port: [PortMonitorSet; NUM_SERIAL_PORTS] = PORT @ 0,
+        /// Ports in use.
+        active_ports: u8 = ACTIVE_PORTS @ 222,
+    }
+}
+
 /// RMC bits of these sets (`RMC_BITS_*`, `data_sets.h`).
 pub mod rmc_aux {
     /// DID_IMU3_RAW.
@@ -229,6 +276,9 @@ mod tests {
         assert_eq!(gps_sig_sv::SIZE, 7);
         assert_eq!(gps_sig::SIZE, 708);
         assert_eq!(imu3::SIZE, 84);
+        assert_eq!(port_monitor_set::SIZE, 37);
+        assert_eq!(port_monitor::SIZE, 223);
+        assert_eq!(port_monitor_set::RX_CHECKSUM_ERRORS, 33);
         assert_eq!(gps_version::EXTENSION, 40);
         assert_eq!(gps_sig_sv::STATUS, 5);
     }

@@ -95,6 +95,9 @@ use crate::time::Instant;
 
 // The NMEA streams' hooks (`$ASCE`, the sentences due at a tick).
 mod nmea_hooks;
+// PORT_MONITOR's byte counts.
+mod port_monitor;
+use port_monitor::{second_of, Counting, PortCounts};
 
 /// How long a magnetometer recalibration takes, ms (emulator's choice:
 /// the unit is not asked to rotate, `docs/isb-data-sets.md` "MAG_CAL").
@@ -182,6 +185,8 @@ struct State {
     /// MAG_CAL: the last command's state and the tick it came at
     /// (`docs/isb-data-sets.md` "MAG_CAL").
     mag_cal: (u32, u64),
+    /// PORT_MONITOR: the serial port's byte counts.
+    port: PortCounts,
     /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
     dropped_seen: u32,
     tx_limited: bool,
@@ -231,6 +236,7 @@ impl Personality for Isb {
                 bit: Bit::default(),
                 gen_fault_code: 0,
                 mag_cal: (mag_cal_state::DO_NOTHING, 0),
+                port: PortCounts::default(),
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
@@ -278,6 +284,8 @@ impl Personality for Isb {
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
+        st.mag_cal = (mag_cal_state::DO_NOTHING, 0);
+        st.port = PortCounts::default();
         st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
@@ -324,12 +332,16 @@ impl Personality for Isb {
     }
 
     fn on_rx(&mut self, bytes: &[u8], cx: &mut impl Context<Integrals>, now: Instant) {
+        let second = second_of(cx, now);
         let st = &mut self.st;
+        st.port.received(second, bytes.len());
+        let mut cc = Counting::new(cx);
         self.input.feed(bytes, |ev| match ev {
-            Input_::Packet(p) => st.packet(cx, &p, now),
-            Input_::Nmea(c) => st.nmea(cx, c, now),
-            Input_::Asce(body) => st.asce(cx, body),
+            Input_::Packet(p) => st.packet(&mut cc, &p, now),
+            Input_::Nmea(c) => st.nmea(&mut cc, c, now),
+            Input_::Asce(body) => st.asce(&mut cc, body),
         });
+        st.port.sent(second, &cc.tally);
         st.parse_errors = self.input.isb_errors();
     }
 
@@ -346,44 +358,10 @@ impl Personality for Isb {
     /// The period grids advance; pending flash writes happen; every
     /// periodic stream due sends.
     fn on_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
-        let st = &mut self.st;
-        let (nav, imu) = (
-            st.grid_ticks(cx, st.nav_dt_ms),
-            st.grid_ticks(cx, st.imu_dt_ms),
-        );
-        let ticks = cx.time().ticks();
-        if ticks.is_multiple_of(u64::from(nav)) {
-            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
-        }
-        if ticks.is_multiple_of(u64::from(imu)) {
-            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
-        }
-        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
-            let truth = st.truth(cx);
-            st.nav.set_year(st.gps_time(cx).1.decimal_year());
-            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
-        }
-        if st.save_pending {
-            st.save(cx);
-        }
-        let mut sent = false;
-        for i in 0..st.streams.len() {
-            let s = &mut st.streams[i];
-            if s.every == 0 {
-                continue;
-            }
-            s.countdown = s.countdown.saturating_sub(1);
-            if s.countdown == 0 {
-                s.countdown = s.every;
-                st.send_stream(cx, i, now);
-                sent = true;
-            }
-        }
-        if sent {
-            // Saturation is reported since the previous packet.
-            cx.chain_mut().restart_health_interval();
-        }
-        st.nmea_tick(cx, now);
+        let second = second_of(cx, now);
+        let mut cc = Counting::new(cx);
+        self.st.tick(&mut cc, now);
+        self.st.port.sent(second, &cc.tally);
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
@@ -392,13 +370,10 @@ impl Personality for Isb {
         if (pin, level) != (Pin::Extrig, Level::High) {
             return;
         }
-        let st = &mut self.st;
-        st.strobe_count = st.strobe_count.wrapping_add(1);
-        if let Some(i) = st.find(did::STROBE_IN_TIME) {
-            st.send_stream(cx, i, at);
-        }
-        let due = st.nmea.due_on_strobe();
-        st.send_nmea(cx, due, at);
+        let second = second_of(cx, at);
+        let mut cc = Counting::new(cx);
+        self.st.strobe(&mut cc, at);
+        self.st.port.sent(second, &cc.tally);
     }
 
     fn mode(&self) -> Mode {
@@ -521,6 +496,60 @@ fn frd(v: [f64; 3]) -> [f32; 3] {
 }
 
 impl State {
+    /// The period grids advance; pending flash writes happen; every
+    /// periodic stream due sends.
+    fn tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
+        let st = self;
+        let (nav, imu) = (
+            st.grid_ticks(cx, st.nav_dt_ms),
+            st.grid_ticks(cx, st.imu_dt_ms),
+        );
+        let ticks = cx.time().ticks();
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
+        }
+        if ticks.is_multiple_of(u64::from(st.grid_ticks(cx, ins::STEP_MS))) {
+            let truth = st.truth(cx);
+            st.nav.set_year(st.gps_time(cx).1.decimal_year());
+            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
+        if st.save_pending {
+            st.save(cx);
+        }
+        let mut sent = false;
+        for i in 0..st.streams.len() {
+            let s = &mut st.streams[i];
+            if s.every == 0 {
+                continue;
+            }
+            s.countdown = s.countdown.saturating_sub(1);
+            if s.countdown == 0 {
+                s.countdown = s.every;
+                st.send_stream(cx, i, now);
+                sent = true;
+            }
+        }
+        if sent {
+            // Saturation is reported since the previous packet.
+            cx.chain_mut().restart_health_interval();
+        }
+        st.nmea_tick(cx, now);
+    }
+
+    /// A strobe (module doc).
+    fn strobe(&mut self, cx: &mut impl Context<Integrals>, at: Instant) {
+        let st = self;
+        st.strobe_count = st.strobe_count.wrapping_add(1);
+        if let Some(i) = st.find(did::STROBE_IN_TIME) {
+            st.send_stream(cx, i, at);
+        }
+        let due = st.nmea.due_on_strobe();
+        st.send_nmea(cx, due, at);
+    }
+
     fn find(&self, did: u8) -> Option<usize> {
         self.streams.iter().position(|s| s.did == did)
     }
@@ -878,6 +907,7 @@ impl State {
             did::SYS_FAULT => put(&SystemFault::default().encode()),
             did::GPS1_VERSION => put(&aux_sets::RECEIVER_VERSION.encode()),
             did::MAG_CAL => put(&self.mag_cal_of(cx).encode()),
+            did::PORT_MONITOR => put(&self.port_monitor(cx, now).encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
                 let (week, time_of_week_ms) = if self.nav.gps_time_valid() {

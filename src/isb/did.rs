@@ -45,6 +45,8 @@ pub const GPS1_VERSION: u8 = 17;
 pub const MAG_CAL: u8 = 19;
 /// `gps_sig_t`: the signals the receiver tracks.
 pub const GPS1_SIG: u8 = 45;
+/// `port_monitor_t`: byte counts and rates of each port.
+pub const PORT_MONITOR: u8 = 75;
 /// `gps_vel_t`: GNSS velocity.
 pub const GPS1_VEL: u8 = 30;
 /// `imu_mag_t`: IMU and magnetometer.
@@ -223,7 +225,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 29] = [
+pub const DATA_SETS: [DataSet; 30] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -318,6 +320,13 @@ pub const DATA_SETS: [DataSet; 29] = [
         writable: BIT_W,
         rmc_bit: 0,
     },
+    nav(
+        PORT_MONITOR,
+        "port_monitor_t",
+        aux_sets::port_monitor::SIZE,
+        Source::Millisecond,
+        0,
+    ),
     DataSet {
         did: STROBE_IN_TIME,
         name: "strobe_in_time_t",

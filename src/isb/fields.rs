@@ -739,6 +739,41 @@ const IMU3: &[FieldSpec] = &[
     f("acc", aux::imu3::I + aux::imus::ACC, F32x3, "m/s²"),
 ];
 
+/// `port_monitor_t`: port 0 (the serial line) and `activePorts`.
+const PORT_MONITOR: &[FieldSpec] = &[
+    f("portInfo", aux::port_monitor_set::PORT_INFO, U8, ""),
+    f("status", aux::port_monitor_set::STATUS, U32, ""),
+    f(
+        "txBytesPerSec",
+        aux::port_monitor_set::TX_BYTES_PER_SEC,
+        U32,
+        "B/s",
+    ),
+    f(
+        "rxBytesPerSec",
+        aux::port_monitor_set::RX_BYTES_PER_SEC,
+        U32,
+        "B/s",
+    ),
+    f("txBytes", aux::port_monitor_set::TX_BYTES, U32, "B"),
+    f("rxBytes", aux::port_monitor_set::RX_BYTES, U32, "B"),
+    f("txDataDrops", aux::port_monitor_set::TX_DATA_DROPS, U32, ""),
+    f("rxOverflows", aux::port_monitor_set::RX_OVERFLOWS, U32, ""),
+    f(
+        "txBytesDropped",
+        aux::port_monitor_set::TX_BYTES_DROPPED,
+        U32,
+        "B",
+    ),
+    f(
+        "rxChecksumErrors",
+        aux::port_monitor_set::RX_CHECKSUM_ERRORS,
+        U32,
+        "",
+    ),
+    f("activePorts", aux::port_monitor::ACTIVE_PORTS, U8, ""),
+];
+
 const SYS_SENSORS: &[FieldSpec] = &[
     f("time", nav::sys_sensors::TIME, F64, "s"),
     f("temp", nav::sys_sensors::TEMP, F32, "°C"),
@@ -754,7 +789,7 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 29] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 30] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::SYS_FAULT, "SYS_FAULT", SYS_FAULT),
     (did::PIMU, "PIMU", PIMU),
@@ -767,6 +802,7 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 29] = [
     (did::MAG_CAL, "MAG_CAL", MAG_CAL),
     (did::IMU, "IMU", IMU),
     (did::BIT, "BIT", BIT),
+    (did::PORT_MONITOR, "PORT_MONITOR", PORT_MONITOR),
     (did::STROBE_IN_TIME, "STROBE_IN_TIME", STROBE),
     (did::IMU3_RAW, "IMU3_RAW", IMU3),
     (did::IMU_RAW, "IMU_RAW", IMU),
