@@ -521,15 +521,16 @@ fn status_counts_isb_packets() {
     assert_eq!(field("bytes-sent"), len.to_string(), "{s}");
 }
 
-/// SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG and IMU3_RAW through the
-/// binary over TCP (`docs/isb-data-sets.md`): each one-shot GET is one
-/// whole DATA packet of the release's size (32, 220, 12, 708, 84 bytes)
+/// SYS_FAULT, GPS1_VERSION, PORT_MONITOR, MAG_CAL, GPS1_SIG and IMU3_RAW
+/// through the binary over TCP (`docs/isb-data-sets.md`): each one-shot
+/// GET is one whole DATA packet of the release's size (32, 220, 223, 12,
+/// 708, 84 bytes)
 /// with the fields a real IMX-5.0 reports; a MAG_CAL recalibration command
 /// is ACKed and reads running, then done; GPS1_SIG lists the signals of
 /// the satellites GPS1_SAT lists once the receiver has its fix.
 #[test]
 fn status_version_calibration_signal_and_triple_imu_sets_over_tcp() {
-    use imu_emu::isb::aux_sets::{mag_cal_state, GpsSig, Imu3, MagCal};
+    use imu_emu::isb::aux_sets::{mag_cal_state, GpsSig, Imu3, MagCal, PortMonitor};
     let addr = format!("127.0.0.1:{}", free_port());
     let emu = isb(&["--control", &addr, "--speed", "20"]);
     let mut c = emu.connect();
@@ -548,6 +549,14 @@ fn status_version_calibration_signal_and_triple_imu_sets_over_tcp() {
     assert!(v.starts_with(b"EXT CORE 1.00"));
     assert_eq!(&v[30..39], b"00190000\0");
     assert!(v[40 + 3 * 30..].starts_with(b"MOD=ZED-F9P\0"));
+    // PORT_MONITOR: the line's bytes so far (three 16-byte GETs in, the
+    // two replies out before its own).
+    let out_so_far = c.received;
+    let pm = once(&mut c, did::PORT_MONITOR);
+    let pm = PortMonitor::decode(&pm.try_into().unwrap());
+    assert_eq!((pm.active_ports, pm.port[0].port_info), (1, 0x10));
+    assert_eq!(pm.port[0].tx_bytes as usize, out_so_far);
+    assert_eq!(pm.port[0].rx_bytes, 3 * 16);
     let i3 = once(&mut c, did::IMU3_RAW);
     let i3 = Imu3::decode(&i3.try_into().unwrap());
     assert_eq!(i3.imu[0], i3.imu[2]);
