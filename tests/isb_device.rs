@@ -483,7 +483,7 @@ fn get_rules() {
             (2, nack[6..15].to_vec())
         );
     }
-    assert!(b.send(&get(2, 0)).is_empty(), "SYS_FAULT: not served");
+    assert!(b.send(&get(14, 0)).is_empty(), "GPS2_POS: not served");
     let mut out = [0u8; 32];
     let n = packet::encode(3, 0, &[1, 0, 0, 0], &mut out).unwrap();
     assert_eq!(b.send(&out[..n])[0].flags, 2);
@@ -1391,4 +1391,301 @@ fn the_magnetometer_reads_the_field_at_the_vehicle_and_the_gps_date() {
     // The default date's declination is more than a degree away.
     let d_2026 = earth::declination_deg(80.0, 0.0, 0.0, 2026.0);
     assert!((want_d - d_2026).abs() > 1.0, "{want_d} vs {d_2026}");
+}
+
+// ----- SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW -----
+
+use imu_emu::isb::aux_sets::{
+    gps_sig, gps_version, imu3, mag_cal, mag_cal_state, sys_fault, GpsSig, GpsSigSv, GpsVersion,
+    Imu3, MagCal,
+};
+
+/// A NUL-padded string field as text.
+fn text(b: &[u8]) -> &str {
+    let n = b.iter().position(|&c| c == 0).unwrap_or(b.len());
+    std::str::from_utf8(&b[..n]).unwrap()
+}
+
+/// SYS_FAULT: one whole 32-byte `system_fault_t`, all zeros on a unit
+/// that never faulted; read-only (a SET changing it is refused).
+#[test]
+fn sys_fault_reads_a_healthy_unit() {
+    let mut b = Bench::new();
+    let p = b.get_once(did::SYS_FAULT);
+    assert_eq!(p.len(), sys_fault::SIZE);
+    assert_eq!(p.len(), 32);
+    assert!(p.iter().all(|&x| x == 0), "{p:?}");
+    let r = b.send(&set(did::SYS_FAULT, 0, &[1, 0, 0, 0]));
+    assert_eq!((r[0].flags, r[0].payload[4]), (2, did::SYS_FAULT), "NACK");
+    assert!(b.get_once(did::SYS_FAULT).iter().all(|&x| x == 0));
+}
+
+/// GPS1_VERSION: one whole 220-byte `gps_version_t`: swVersion[30] @0,
+/// hwVersion[10] @30, six 30-byte extensions @40, NUL padded.
+#[test]
+fn gps1_version_strings() {
+    let mut b = Bench::new();
+    let p = b.get_once(did::GPS1_VERSION);
+    assert_eq!(p.len(), 220);
+    assert_eq!(gps_version::SIZE, 220);
+    assert_eq!(text(&p[0..30]), "EXT CORE 1.00 (emulated)");
+    assert_eq!(text(&p[30..40]), "00190000");
+    let ext: Vec<&str> = (0..6).map(|k| text(&p[40 + 30 * k..70 + 30 * k])).collect();
+    assert_eq!(
+        ext,
+        [
+            "ROM BASE 0x118B2060",
+            "FWVER=HPG 1.32",
+            "PROTVER=27.31",
+            "MOD=ZED-F9P",
+            "GPS;GLO;GAL;BDS",
+            "SBAS;QZSS"
+        ]
+    );
+    let v = GpsVersion::decode(&p.try_into().unwrap());
+    assert_eq!(&v.hw_version[..8], b"00190000");
+}
+
+fn mag_cal_now(b: &mut Bench) -> MagCal {
+    let p = b.get_once(did::MAG_CAL);
+    assert_eq!(p.len(), 12);
+    MagCal::decode(&p.try_into().unwrap())
+}
+
+/// MAG_CAL (12 B: state u32 @0, progress f32 @4, declination f32 @8): idle
+/// reads state 0; the multi-axis command (cltool `-magRecal`) is ACKed and
+/// starts a recalibration that reads 200 (running) with its progress, then
+/// 201 (done) at 100 % after `MAG_RECAL_MS`; abort (101) ends one; the
+/// declination is FLASH_CONFIG's `magDeclination`; progress is read-only.
+#[test]
+fn mag_cal_recalibration_runs_and_completes() {
+    let mut b = Bench::new();
+    let m = mag_cal_now(&mut b);
+    assert_eq!((m.state, m.progress, m.declination), (0, 0.0, 0.0));
+    // magDeclination 0.2 rad.
+    let r = b.send(&set(
+        did::FLASH_CONFIG,
+        flash::MAG_DECLINATION as u16,
+        &0.2f32.to_le_bytes(),
+    ));
+    assert_eq!(r[0].flags, 1, "ACK");
+    let r = b.send(&set(
+        did::MAG_CAL,
+        0,
+        &mag_cal_state::MULTI_AXIS.to_le_bytes(),
+    ));
+    assert_eq!((r[0].flags, r[0].payload[4]), (1, did::MAG_CAL), "ACK");
+    let m = mag_cal_now(&mut b);
+    assert_eq!((m.state, m.progress), (mag_cal_state::RECAL_RUNNING, 0.0));
+    assert_eq!(m.declination, 0.2);
+    // 2000 ticks a second: 4 s of 10 s.
+    b.run_ticks(8000);
+    let m = mag_cal_now(&mut b);
+    assert_eq!((m.state, m.progress), (200, 40.0));
+    b.run_ticks(12_000);
+    let m = mag_cal_now(&mut b);
+    assert_eq!(
+        (m.state, m.progress),
+        (mag_cal_state::RECAL_COMPLETE, 100.0)
+    );
+    // progress is the device's.
+    let r = b.send(&set(did::MAG_CAL, mag_cal::PROGRESS as u16, &[0; 8]));
+    assert_eq!(r[0].flags, 2, "NACK");
+    // Single-axis, then abort.
+    b.send(&set(
+        did::MAG_CAL,
+        0,
+        &mag_cal_state::SINGLE_AXIS.to_le_bytes(),
+    ));
+    assert_eq!(mag_cal_now(&mut b).state, 200);
+    b.send(&set(did::MAG_CAL, 0, &mag_cal_state::ABORT.to_le_bytes()));
+    let m = mag_cal_now(&mut b);
+    assert_eq!((m.state, m.progress), (mag_cal_state::DO_NOTHING, 0.0));
+}
+
+/// GPS1_SIG (708 B: timeOfWeekMs, numSigs, 100 × 7-byte `gps_sig_sv_t`):
+/// one L1 C/A signal (sigId 0) for each satellite GPS1_SAT lists, with
+/// its constellation, number and C/N0, quality 7, healthy and used (5);
+/// the same epoch; streamed every 1 s; none without a fix.
+#[test]
+fn gps1_sig_lists_the_signals_of_gps1_sat() {
+    let mut b = Bench::new();
+    let p = b.get_once(did::GPS1_SIG);
+    assert_eq!(p.len(), 708);
+    assert_eq!(le_u32(&p, gps_sig::NUM_SIGS), 0, "no fix yet");
+    b.send(&get(did::GPS1_SIG, 1));
+    let r = b.run_ticks(64_000);
+    let sigs: Vec<GpsSig> = of_did(&r, did::GPS1_SIG)
+        .iter()
+        .map(|p| GpsSig::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(sigs.len(), 32, "every 1 s");
+    let fixed: Vec<&GpsSig> = sigs.iter().filter(|s| s.num_sigs > 0).collect();
+    assert!(fixed.len() >= 2);
+    for w in fixed.windows(2) {
+        assert_eq!(w[1].time_of_week_ms - w[0].time_of_week_ms, 1000);
+    }
+    let sat = GpsSat::decode(&b.get_once(did::GPS1_SAT).try_into().unwrap());
+    let sig = GpsSig::decode(&b.get_once(did::GPS1_SIG).try_into().unwrap());
+    assert_eq!(sig.time_of_week_ms, sat.time_of_week_ms);
+    assert_eq!(sig.num_sigs, sat.num_sats);
+    assert_eq!(sig.num_sigs, 12);
+    for (g, s) in sig.sig.iter().zip(&sat.sat).take(12) {
+        assert_eq!(
+            *g,
+            GpsSigSv {
+                gnss_id: s.gnss_id,
+                sv_id: s.sv_id,
+                sig_id: 0,
+                cno: s.cno,
+                quality: 7,
+                status: 0x0005,
+            }
+        );
+    }
+    assert!(sig.sig[12..].iter().all(|v| *v == GpsSigSv::default()));
+    b.dev.personality_mut().set_nav_faults(NavFaults {
+        gps_off: true,
+        ..NavFaults::default()
+    });
+    b.run_ticks(4000);
+    let sig = GpsSig::decode(&b.get_once(did::GPS1_SIG).try_into().unwrap());
+    assert_eq!(sig.num_sigs, 0);
+}
+
+fn le_u32(b: &[u8], i: usize) -> u32 {
+    u32_at(b, i)
+}
+
+/// IMU3_RAW (84 B: time f64, status u32, 3 × {pqr, acc}): a one-shot GET
+/// reads what IMU_RAW reads at the same instant in each of the three
+/// IMUs (the chain's one sensor); streamed every `startupImuDtMs` ×
+/// period; its RMC bit 0x100_0000_0000 streams it too.
+#[test]
+fn imu3_raw_is_the_chains_sensor_three_times() {
+    let mut b = Bench::new();
+    b.dev.chain_mut().set_motion(Motion::ConstantRotation {
+        lat_deg: 45.0,
+        heading_deg: 0.0,
+        rate_dps: [5.7, -11.5, 17.2],
+    });
+    b.run_ticks(100);
+    let raw = Imu::decode(&b.get_once(did::IMU_RAW).try_into().unwrap());
+    let p = b.get_once(did::IMU3_RAW);
+    assert_eq!(p.len(), 84);
+    assert_eq!(imu3::SIZE, 84);
+    let i3 = Imu3::decode(&p.try_into().unwrap());
+    assert_eq!((i3.time, i3.status), (raw.time, raw.status));
+    for imu in i3.imu {
+        assert_eq!((imu.pqr, imu.acc), (raw.pqr, raw.acc));
+    }
+    // |ω| of the rotation (5.7, −11.5, 17.2) °/s = 0.374 rad/s.
+    for imu in i3.imu {
+        let n = imu
+            .pqr
+            .iter()
+            .map(|w| f64::from(*w).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((n - 0.374).abs() < 0.005, "{i3:?}");
+    }
+    b.send(&get(did::IMU3_RAW, 3));
+    let r = b.run_ticks(600);
+    assert_eq!(r.len(), 100, "every 3 ms");
+    assert!(r
+        .iter()
+        .all(|p| p.did == did::IMU3_RAW && p.payload.len() == 84));
+    b.send(&hex("ef 49 06 00 00 00 3e 1f"));
+    let bits = 0x100_0000_0000u64;
+    let mut rmc_set = bits.to_le_bytes().to_vec();
+    rmc_set.extend_from_slice(&0u32.to_le_bytes());
+    b.send(&set(did::RMC, 0, &rmc_set));
+    let r = b.run_ticks(20);
+    assert!(
+        !r.is_empty() && r.iter().all(|p| p.did == did::IMU3_RAW),
+        "{r:?}"
+    );
+}
+
+/// What cltool's `-magRecal` sends (`docs/protocol-facts.md`): GET
+/// DID_MAG_CAL with period 100, then SET_DATA of `state`: MAG_CAL streams
+/// every 100 ms (1 ms source), the ACK comes, and the stream shows the
+/// recalibration running with its progress rising, then done.
+#[test]
+fn cltools_mag_recal_sequence_is_answered() {
+    let mut b = Bench::new();
+    b.send(&get(did::MAG_CAL, 100));
+    let r = b.run_ticks(2000);
+    let cals = of_did(&r, did::MAG_CAL);
+    assert_eq!(cals.len(), 10, "every 100 ms");
+    assert!(cals.iter().all(|p| p.payload.len() == 12));
+    let r = b.send(&set(did::MAG_CAL, 0, &1u32.to_le_bytes()));
+    assert_eq!((r[0].flags, r[0].payload[4]), (1, did::MAG_CAL));
+    let r = b.run_ticks(24_000);
+    let cals: Vec<MagCal> = of_did(&r, did::MAG_CAL)
+        .iter()
+        .map(|p| MagCal::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_eq!(cals.len(), 120);
+    assert!(cals.windows(2).all(|w| w[1].progress >= w[0].progress));
+    assert_eq!(cals[0].state, mag_cal_state::RECAL_RUNNING);
+    assert!(
+        cals[50].progress > 40.0 && cals[50].progress < 60.0,
+        "{:?}",
+        cals[50]
+    );
+    assert_eq!(cals[119].state, mag_cal_state::RECAL_COMPLETE);
+}
+
+/// PORT_MONITOR (223 B: 6 × 37-byte `port_monitor_set_t`, then u8
+/// activePorts @222): port 0 is the serial line (portInfo 0x10: UART,
+/// index 0), the only active one; txBytes / rxBytes count every byte sent
+/// and received since power-on (exactly what went over the line before
+/// the reply), the per-second rates the last whole second's bytes, and
+/// rxChecksumErrors the packets dropped for a bad checksum.
+#[test]
+fn port_monitor_counts_the_lines_bytes() {
+    use imu_emu::isb::aux_sets::{port_monitor, PortMonitor};
+    let mut b = Bench::new();
+    let mut rx = 0usize;
+    let pm = |b: &mut Bench, rx: &mut usize| {
+        let q = get(did::PORT_MONITOR, 0);
+        *rx += q.len();
+        let before = b.raw.len();
+        let r = b.send(&q);
+        assert_eq!((r.len(), r[0].did), (1, did::PORT_MONITOR));
+        assert_eq!(r[0].payload.len(), port_monitor::SIZE);
+        (
+            PortMonitor::decode(&r[0].payload.clone().try_into().unwrap()),
+            before,
+        )
+    };
+    let (m, sent) = pm(&mut b, &mut rx);
+    assert_eq!(m.active_ports, 1);
+    assert_eq!(m.port[0].port_info, 0x10);
+    assert_eq!(
+        (m.port[0].tx_bytes as usize, m.port[0].rx_bytes as usize),
+        (sent, rx)
+    );
+    assert!(m.port[1..].iter().all(|p| *p == Default::default()));
+    // IMU every 4 ms: 250 packets of 44 bytes a second.
+    let q = get(did::IMU, 1);
+    rx += q.len();
+    b.send(&q);
+    b.run_ticks(2 * 2000 + 100);
+    let (m, sent) = pm(&mut b, &mut rx);
+    assert_eq!(m.port[0].tx_bytes as usize, sent);
+    assert_eq!(m.port[0].rx_bytes as usize, rx);
+    assert_eq!(m.port[0].tx_bytes_per_sec, 250 * 44);
+    assert_eq!(m.port[0].rx_bytes_per_sec, 0);
+    assert_eq!(m.port[0].tx_data_drops, 0);
+    // A packet with a bad checksum.
+    let mut bad = get(did::DEV_INFO, 0);
+    let n = bad.len();
+    bad[n - 1] ^= 0xFF;
+    rx += bad.len();
+    b.send(&bad);
+    let (m, _) = pm(&mut b, &mut rx);
+    assert_eq!(m.port[0].rx_checksum_errors, 1);
+    assert_eq!(m.port[0].rx_bytes as usize, rx);
 }

@@ -142,8 +142,25 @@ fn nack_to_a_bad_get() {
 }
 
 #[test]
+fn sys_fault_mag_cal_gps1_sig_gps1_version_port_monitor_imu3_raw_are_served() {
+    for (d, size) in [
+        (2u16, 32u16),
+        (17, 220),
+        (19, 12),
+        (45, 708),
+        (75, 223),
+        (96, 84),
+    ] {
+        assert!(
+            matches!(did::classify(d), Class::Supported(s) if s.size == size),
+            "DID {d}"
+        );
+    }
+}
+
+#[test]
 fn an_unsupported_in_range_did_gets_no_reply() {
-    for d in [0u16, 2, 16, 54, 96, 121, 123, 131] {
+    for d in [0u16, 14, 16, 54, 57, 121, 123, 131] {
         let g = GetRequest {
             did: d,
             size: 0,
@@ -434,7 +451,7 @@ fn every_served_set_goes_out_whole_and_in_parts_and_comes_back_through_the_class
                 6 | 13 | 30 => 200,
                 52 => 10,
                 53 => 8,
-                15 => 1000,
+                15 | 45 => 1000,
                 _ => 1,
             },
             "{}",

@@ -26,6 +26,8 @@ DEV_INFO, PIMU, SYS_CMD, RMC, SYS_PARAMS, FLASH_CONFIG = 1, 3, 7, 9, 10, 12
 IMU, BIT, STROBE_IN_TIME, IMU_RAW = 58, 64, 68, 97
 INS_1, INS_2, INS_3, INS_4, GPS1_POS, GPS1_VEL = 4, 5, 65, 66, 13, 30
 MAGNETOMETER, BAROMETER, IMU_MAG, PIMU_MAG, SYS_SENSORS = 52, 53, 85, 86, 11
+SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW = 2, 17, 19, 45, 96
+PORT_MONITOR = 75
 
 # Field kinds: struct format and item count.
 _KINDS = {
@@ -188,6 +190,36 @@ SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
     ),
     IMU_MAG: ("IMU_MAG", 56, tuple(_IMU) + _MAG_AT(36)),
     PIMU_MAG: ("PIMU_MAG", 60, tuple(_PIMU) + _MAG_AT(40)),
+    SYS_FAULT: (
+        "SYS_FAULT",
+        32,
+        tuple((n, 4 * k, "u32") for k, n in enumerate(("status", "g1Task", "g2FileNum", "g3LineNum", "g4", "g5Lr", "pc", "psr"))),
+    ),
+    # gps_version_t: swVersion[30], hwVersion[10], extension[6][30]; strings
+    # the field table (as the Rust one) does not name.
+    GPS1_VERSION: ("GPS1_VERSION", 220, ()),
+    MAG_CAL: ("MAG_CAL", 12, (("state", 0, "u32"), ("progress", 4, "f32"), ("declination", 8, "f32"))),
+    # gps_sig_t: the header and the first 7-byte gps_sig_sv_t.
+    GPS1_SIG: (
+        "GPS1_SIG",
+        708,
+        (
+            ("timeOfWeekMs", 0, "u32"), ("numSigs", 4, "u32"), ("gnssId", 8, "u8"), ("svId", 9, "u8"),
+            ("sigId", 10, "u8"), ("cno", 11, "u8"), ("quality", 12, "u8"),
+        ),
+    ),
+    # port_monitor_t: port 0 (the serial line) of the six 37-byte sets, activePorts.
+    PORT_MONITOR: (
+        "PORT_MONITOR",
+        223,
+        (("portInfo", 0, "u8"),)
+        + tuple((n, 1 + 4 * k, "u32") for k, n in enumerate((
+            "status", "txBytesPerSec", "rxBytesPerSec", "txBytes", "rxBytes", "txDataDrops", "rxOverflows",
+            "txBytesDropped", "rxChecksumErrors")))
+        + (("activePorts", 222, "u8"),),
+    ),
+    # imu3_t: time, status, then IMU 1 of the three (they read alike).
+    IMU3_RAW: ("IMU3_RAW", 84, (("time", 0, "f64"), ("status", 8, "u32"), ("pqr", 12, "f32x3"), ("acc", 24, "f32x3"))),
     SYS_SENSORS: (
         "SYS_SENSORS",
         80,
@@ -358,15 +390,15 @@ def decode_set(did: int, data: bytes) -> Dict[str, Value]:
 def device_time(did: int, data: bytes) -> Optional[float]:
     """The device time a set carries, s: ``time`` (since boot) of the IMU,
     PIMU, magnetometer, barometer and sensor sets; the GPS time of week of
-    INS_1..4, GPS1_POS, GPS1_VEL; ``timeOfWeekMs`` / 1000 of
+    INS_1..4, GPS1_POS, GPS1_VEL, GPS1_SIG; ``timeOfWeekMs`` / 1000 of
     STROBE_IN_TIME and SYS_PARAMS."""
-    if did in (IMU, IMU_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER, SYS_SENSORS):
+    if did in (IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER, SYS_SENSORS):
         return struct.unpack_from("<d", data, 0)[0]
     if did in (INS_1, INS_2, INS_3, INS_4):
         return struct.unpack_from("<d", data, 4)[0]
     if did == GPS1_POS:
         return struct.unpack_from("<I", data, 4)[0] / 1000.0
-    if did == GPS1_VEL:
+    if did in (GPS1_VEL, GPS1_SIG):
         return struct.unpack_from("<I", data, 0)[0] / 1000.0
     if did == STROBE_IN_TIME:
         return struct.unpack_from("<I", data, 4)[0] / 1000.0

@@ -342,7 +342,9 @@ class DecoderTest(unittest.TestCase):
                     pass
             for d in (isb.DEV_INFO, isb.SYS_PARAMS, isb.FLASH_CONFIG, isb.RMC, isb.BIT, isb.STROBE_IN_TIME,
                       isb.INS_1, isb.INS_2, isb.INS_3, isb.INS_4, isb.GPS1_POS, isb.GPS1_VEL,
-                      isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS):
+                      isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS,
+                      isb.SYS_FAULT, isb.GPS1_VERSION, isb.MAG_CAL, isb.GPS1_SIG, isb.IMU3_RAW,
+                      isb.PORT_MONITOR):
                 emu.send(isb.get_data(d))
                 raw += emu.frame(d).raw
             emu.send(isb.stop_all())

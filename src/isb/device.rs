@@ -76,6 +76,7 @@ use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
+use crate::isb::aux_sets::{self, mag_cal_state, Imu3, Imus, MagCal, SystemFault};
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, mech, Aiding, NavConfig, NavFaults, NavState, StartTimes};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
@@ -94,6 +95,13 @@ use crate::time::Instant;
 
 // The NMEA streams' hooks (`$ASCE`, the sentences due at a tick).
 mod nmea_hooks;
+// PORT_MONITOR's byte counts.
+mod port_monitor;
+use port_monitor::{second_of, Counting, PortCounts};
+
+/// How long a magnetometer recalibration takes, ms (emulator's choice:
+/// the unit is not asked to rotate, `docs/isb-data-sets.md` "MAG_CAL").
+pub const MAG_RECAL_MS: u64 = 10_000;
 
 /// Persistent streams the image holds (the first ten running streams are
 /// saved; the image layout is unchanged since the IMU-mode device).
@@ -180,6 +188,11 @@ struct State {
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
+    /// MAG_CAL: the last command's state and the tick it came at
+    /// (`docs/isb-data-sets.md` "MAG_CAL").
+    mag_cal: (u32, u64),
+    /// PORT_MONITOR: the serial port's byte counts.
+    port: PortCounts,
     /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
     dropped_seen: u32,
     tx_limited: bool,
@@ -231,6 +244,8 @@ impl Personality for Isb {
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
+                mag_cal: (mag_cal_state::DO_NOTHING, 0),
+                port: PortCounts::default(),
                 dropped_seen: 0,
                 tx_limited: false,
                 parse_errors: 0,
@@ -279,6 +294,8 @@ impl Personality for Isb {
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
+        st.mag_cal = (mag_cal_state::DO_NOTHING, 0);
+        st.port = PortCounts::default();
         st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
         st.parse_errors = 0;
@@ -332,12 +349,16 @@ impl Personality for Isb {
     }
 
     fn on_rx(&mut self, bytes: &[u8], cx: &mut impl Context<Integrals>, now: Instant) {
+        let second = second_of(cx, now);
         let st = &mut self.st;
+        st.port.received(second, bytes.len());
+        let mut cc = Counting::new(cx);
         self.input.feed(bytes, |ev| match ev {
-            Input_::Packet(p) => st.packet(cx, &p, now),
-            Input_::Nmea(c) => st.nmea(cx, c, now),
-            Input_::Asce(body) => st.asce(cx, body),
+            Input_::Packet(p) => st.packet(&mut cc, &p, now),
+            Input_::Nmea(c) => st.nmea(&mut cc, c, now),
+            Input_::Asce(body) => st.asce(&mut cc, body),
         });
+        st.port.sent(second, &cc.tally);
         st.parse_errors = self.input.isb_errors();
     }
 
@@ -354,48 +375,10 @@ impl Personality for Isb {
     /// The period grids advance; pending flash writes happen; every
     /// periodic stream due sends.
     fn on_tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
-        let st = &mut self.st;
-        let (nav, imu) = (
-            st.grid_ticks(cx, st.nav_dt_ms),
-            st.grid_ticks(cx, st.imu_dt_ms),
-        );
-        let ticks = cx.time().ticks();
-        // The receiver's models step half a navigation period after the
-        // grid, on a tick of their own (the firmware's tick budget): a fix
-        // enters the filter at the receiver's next epoch.
-        if ticks % u64::from(st.grid_ticks(cx, ins::STEP_MS)) == u64::from(nav / 2) {
-            let truth = st.truth(cx);
-            st.nav.set_year(st.gps_time(cx).1.decimal_year());
-            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
-        }
-        if ticks.is_multiple_of(u64::from(nav)) {
-            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
-            st.navigate(cx);
-        }
-        if ticks.is_multiple_of(u64::from(imu)) {
-            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
-        }
-        if st.save_pending {
-            st.save(cx);
-        }
-        let mut sent = false;
-        for i in 0..st.streams.len() {
-            let s = &mut st.streams[i];
-            if s.every == 0 {
-                continue;
-            }
-            s.countdown = s.countdown.saturating_sub(1);
-            if s.countdown == 0 {
-                s.countdown = s.every;
-                st.send_stream(cx, i, now);
-                sent = true;
-            }
-        }
-        if sent {
-            // Saturation is reported since the previous packet.
-            cx.chain_mut().restart_health_interval();
-        }
-        st.nmea_tick(cx, now);
+        let second = second_of(cx, now);
+        let mut cc = Counting::new(cx);
+        self.st.tick(&mut cc, now);
+        self.st.port.sent(second, &cc.tally);
     }
 
     /// A rising EXTRIG edge is a strobe: counted, and sent as
@@ -404,13 +387,10 @@ impl Personality for Isb {
         if (pin, level) != (Pin::Extrig, Level::High) {
             return;
         }
-        let st = &mut self.st;
-        st.strobe_count = st.strobe_count.wrapping_add(1);
-        if let Some(i) = st.find(did::STROBE_IN_TIME) {
-            st.send_stream(cx, i, at);
-        }
-        let due = st.nmea.due_on_strobe();
-        st.send_nmea(cx, due, at);
+        let second = second_of(cx, at);
+        let mut cc = Counting::new(cx);
+        self.st.strobe(&mut cc, at);
+        self.st.port.sent(second, &cc.tally);
     }
 
     fn mode(&self) -> Mode {
@@ -539,6 +519,64 @@ fn frd(v: [f64; 3]) -> [f32; 3] {
 }
 
 impl State {
+    /// The period grids advance; pending flash writes happen; every
+    /// periodic stream due sends.
+    fn tick(&mut self, cx: &mut impl Context<Integrals>, now: Instant) {
+        let st = self;
+        let (nav, imu) = (
+            st.grid_ticks(cx, st.nav_dt_ms),
+            st.grid_ticks(cx, st.imu_dt_ms),
+        );
+        let ticks = cx.time().ticks();
+        // The receiver's models step half a navigation period after the
+        // grid, on a tick of their own (the firmware's tick budget): a fix
+        // enters the filter at the receiver's next epoch.
+        if ticks % u64::from(st.grid_ticks(cx, ins::STEP_MS)) == u64::from(nav / 2) {
+            let truth = st.truth(cx);
+            st.nav.set_year(st.gps_time(cx).1.decimal_year());
+            st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+        }
+        if ticks.is_multiple_of(u64::from(nav)) {
+            st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
+            st.navigate(cx);
+        }
+        if ticks.is_multiple_of(u64::from(imu)) {
+            st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
+        }
+        if st.save_pending {
+            st.save(cx);
+        }
+        let mut sent = false;
+        for i in 0..st.streams.len() {
+            let s = &mut st.streams[i];
+            if s.every == 0 {
+                continue;
+            }
+            s.countdown = s.countdown.saturating_sub(1);
+            if s.countdown == 0 {
+                s.countdown = s.every;
+                st.send_stream(cx, i, now);
+                sent = true;
+            }
+        }
+        if sent {
+            // Saturation is reported since the previous packet.
+            cx.chain_mut().restart_health_interval();
+        }
+        st.nmea_tick(cx, now);
+    }
+
+    /// A strobe (module doc).
+    fn strobe(&mut self, cx: &mut impl Context<Integrals>, at: Instant) {
+        let st = self;
+        st.strobe_count = st.strobe_count.wrapping_add(1);
+        if let Some(i) = st.find(did::STROBE_IN_TIME) {
+            st.send_stream(cx, i, at);
+        }
+        let due = st.nmea.due_on_strobe();
+        st.send_nmea(cx, due, at);
+    }
+
     fn find(&self, did: u8) -> Option<usize> {
         self.streams.iter().position(|s| s.did == did)
     }
@@ -559,7 +597,7 @@ impl State {
     /// The period grid a windowed data set lives on: IMU_RAW the IMU
     /// sample period's, the others the navigation period's.
     fn grid(&self, did: u8) -> [Integrals; 2] {
-        if did == did::IMU_RAW {
+        if matches!(did, did::IMU_RAW | did::IMU3_RAW) {
             self.imu_grid
         } else {
             self.nav_grid
@@ -568,7 +606,7 @@ impl State {
 
     /// Ticks of the period of [`Self::grid`]`(did)`.
     fn window_ticks(&self, cx: &impl Context<Integrals>, did: u8) -> u32 {
-        let ms = if did == did::IMU_RAW {
+        let ms = if matches!(did, did::IMU_RAW | did::IMU3_RAW) {
             self.imu_dt_ms
         } else {
             self.nav_dt_ms
@@ -746,6 +784,17 @@ impl State {
                     self.save_persistent(cx);
                 }
             }
+            did::MAG_CAL => {
+                let state = le::u32(image, aux_sets::mag_cal::STATE);
+                let tick = cx.time().ticks();
+                match state {
+                    mag_cal_state::MULTI_AXIS | mag_cal_state::SINGLE_AXIS => {
+                        self.mag_cal = (mag_cal_state::RECAL_RUNNING, tick)
+                    }
+                    mag_cal_state::ABORT => self.mag_cal = (mag_cal_state::DO_NOTHING, tick),
+                    _ => {}
+                }
+            }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);
             }
@@ -881,6 +930,11 @@ impl State {
             did::SYS_CMD => put(&SystemCommand::default().encode()),
             did::NMEA_BCAST_PERIOD => put(&self.nmea.table.to_msgs()),
             did::BIT => put(&self.bit.encode()),
+            // A unit that never faulted: all zeros (`docs/isb-data-sets.md`).
+            did::SYS_FAULT => put(&SystemFault::default().encode()),
+            did::GPS1_VERSION => put(&aux_sets::RECEIVER_VERSION.encode()),
+            did::MAG_CAL => put(&self.mag_cal_of(cx).encode()),
+            did::PORT_MONITOR => put(&self.port_monitor(cx, now).encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
                 let (week, time_of_week_ms) = if self.nav.gps_time_valid() {
@@ -906,6 +960,7 @@ impl State {
             | did::GPS1_RCVR_POS
             | did::GPS1_VEL
             | did::GPS1_SAT
+            | did::GPS1_SIG
             | did::MAGNETOMETER
             | did::BAROMETER
             | did::INL2_STATES
@@ -1086,6 +1141,8 @@ impl State {
             }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
+            // The signals of the satellites GPS1_SAT reports.
+            did::GPS1_SIG => put(&aux_sets::gps_sig_of(&self.nav.gps_sat(&epoch)).encode()),
             did::MAGNETOMETER => {
                 put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
             }
@@ -1152,6 +1209,20 @@ impl State {
                 // the last measurement, as SYS_SENSORS reports it, not zeros.
                 last_measurement(cx)
             };
+            if did == did::IMU3_RAW {
+                // The chain has one sensor: IMU_RAW averages the three
+                // IMUs, so each of them reads what IMU_RAW reads
+                // (`docs/isb-data-sets.md` "IMU3_RAW").
+                let one = Imus { pqr, acc };
+                let b = Imu3 {
+                    time,
+                    status,
+                    imu: [one; 3],
+                }
+                .encode();
+                image[..b.len()].copy_from_slice(&b);
+                return b.len();
+            }
             out[..sets::imu::SIZE].copy_from_slice(
                 &Imu {
                     time,
@@ -1171,6 +1242,30 @@ impl State {
         let m = ins::magnetometer(time, self.nav.magnetometer(&truth, end_tick)).encode();
         image[base..base + m.len()].copy_from_slice(&m);
         base + m.len()
+    }
+
+    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): after a
+    /// recalibration command the progress runs from 0 to 100 % over
+    /// [`MAG_RECAL_MS`], then the state reads done; the declination is
+    /// FLASH_CONFIG's `magDeclination`.
+    fn mag_cal_of(&self, cx: &impl Context<Integrals>) -> MagCal {
+        let (state, at) = self.mag_cal;
+        let declination = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
+        let (state, progress) = if state == mag_cal_state::RECAL_RUNNING {
+            let ms = cx.time().ticks().saturating_sub(at) * 1000 / u64::from(rate(cx));
+            if ms >= MAG_RECAL_MS {
+                (mag_cal_state::RECAL_COMPLETE, 100.0)
+            } else {
+                (state, (ms * 100) as f32 / MAG_RECAL_MS as f32)
+            }
+        } else {
+            (state, 0.0)
+        };
+        MagCal {
+            state,
+            progress,
+            declination,
+        }
     }
 
     /// SYS_SENSORS now: the last measurement (body axes), the magnetometer
@@ -1301,7 +1396,7 @@ fn send_data(cx: &mut impl Context<Integrals>, did: u8, image: &[u8], offset: u1
 fn is_windowed(did: u8) -> bool {
     matches!(
         did,
-        did::IMU | did::IMU_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
+        did::IMU | did::IMU_RAW | did::IMU3_RAW | did::PIMU | did::IMU_MAG | did::PIMU_MAG
     )
 }
 

@@ -8,6 +8,7 @@
 //! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
 //! DID 95, silence for any other DID the table does not hold.
 
+use super::aux_sets::{self, rmc_aux};
 use super::nav_sets::{
     barometer, gps_pos, gps_sat, gps_vel, imu_mag, inl2_ned_sigma, inl2_states, ins1, ins2, ins3,
     ins4, magnetometer, pimu_mag, rmc_nav, sys_sensors,
@@ -22,7 +23,7 @@ pub const DID_COUNT: u16 = 132;
 pub const NULL: u8 = 0;
 /// `dev_info_t`: device information (protocol-facts.md "ISB").
 pub const DEV_INFO: u8 = 1;
-/// `system_fault_t`: system fault information (not served).
+/// `system_fault_t`: system fault information.
 pub const SYS_FAULT: u8 = 2;
 /// `pimu_t`: preintegrated IMU (coning and sculling integrals).
 pub const PIMU: u8 = 3;
@@ -42,6 +43,14 @@ pub const INL2_NED_SIGMA: u8 = 67;
 pub const GPS1_POS: u8 = 13;
 /// `gps_sat_t`: the satellites the receiver tracks.
 pub const GPS1_SAT: u8 = 15;
+/// `gps_version_t`: the GNSS receiver's version strings.
+pub const GPS1_VERSION: u8 = 17;
+/// `mag_cal_t`: magnetometer recalibration.
+pub const MAG_CAL: u8 = 19;
+/// `gps_sig_t`: the signals the receiver tracks.
+pub const GPS1_SIG: u8 = 45;
+/// `port_monitor_t`: byte counts and rates of each port.
+pub const PORT_MONITOR: u8 = 75;
 /// `gps_vel_t`: GNSS velocity.
 pub const GPS1_VEL: u8 = 30;
 /// `imu_mag_t`: IMU and magnetometer.
@@ -78,7 +87,7 @@ pub const STROBE_IN_TIME: u8 = 68;
 /// Reference IMU (manufacturing); NACKed like DIDs ≥ 132 (protocol-facts.md: the
 /// IMX firmware counts DIDs only to 100 and answers 95 with a NACK).
 pub const REFERENCE_IMU: u8 = 95;
-/// `imu3_t` triple IMU (not served).
+/// `imu3_t`: the three IMUs at the IMU sample period.
 pub const IMU3_RAW: u8 = 96;
 /// `imu_t`: IMU data at the IMU sample period.
 pub const IMU_RAW: u8 = 97;
@@ -202,9 +211,12 @@ const FLASH_W: &[Range] = &[Range::new(
 /// the reserved byte beside it may be written with it (a host writes the
 /// first `u32`; the test's run rewrites them); the rest is the result.
 const BIT_W: &[Range] = &[Range::new(0, 4)];
+/// MAG_CAL: the `state` word (a command); progress and declination are
+/// the device's report.
+const MAG_CAL_W: &[Range] = &[Range::new(0, 4)];
 
-/// A read-only navigation data set (`docs/isb-data-sets.md` "Navigation
-/// data sets").
+/// A read-only data set (`docs/isb-data-sets.md` "Navigation data sets",
+/// "Status, version, calibration and signal data sets").
 const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: u64) -> DataSet {
     DataSet {
         did,
@@ -217,7 +229,7 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 26] = [
+pub const DATA_SETS: [DataSet; 32] = [
     DataSet {
         did: DEV_INFO,
         name: "dev_info_t",
@@ -226,6 +238,13 @@ pub const DATA_SETS: [DataSet; 26] = [
         writable: NONE,
         rmc_bit: 0,
     },
+    nav(
+        SYS_FAULT,
+        "system_fault_t",
+        aux_sets::sys_fault::SIZE,
+        Source::Millisecond,
+        0,
+    ),
     DataSet {
         did: PIMU,
         name: "pimu_t",
@@ -274,6 +293,21 @@ pub const DATA_SETS: [DataSet; 26] = [
         writable: FLASH_W,
         rmc_bit: 0,
     },
+    nav(
+        GPS1_VERSION,
+        "gps_version_t",
+        aux_sets::gps_version::SIZE,
+        Source::Millisecond,
+        0,
+    ),
+    DataSet {
+        did: MAG_CAL,
+        name: "mag_cal_t",
+        size: aux_sets::mag_cal::SIZE as u16,
+        source: Source::Millisecond,
+        writable: MAG_CAL_W,
+        rmc_bit: 0,
+    },
     DataSet {
         did: IMU,
         name: "imu_t",
@@ -290,6 +324,13 @@ pub const DATA_SETS: [DataSet; 26] = [
         writable: BIT_W,
         rmc_bit: 0,
     },
+    nav(
+        PORT_MONITOR,
+        "port_monitor_t",
+        aux_sets::port_monitor::SIZE,
+        Source::Millisecond,
+        0,
+    ),
     DataSet {
         did: STROBE_IN_TIME,
         name: "strobe_in_time_t",
@@ -298,6 +339,13 @@ pub const DATA_SETS: [DataSet; 26] = [
         writable: NONE,
         rmc_bit: sets::rmc::BITS_STROBE_IN_TIME,
     },
+    nav(
+        IMU3_RAW,
+        "imu3_t",
+        aux_sets::imu3::SIZE,
+        Source::ImuDt,
+        rmc_aux::BITS_IMU3_RAW,
+    ),
     DataSet {
         did: IMU_RAW,
         name: "imu_t",
@@ -377,6 +425,13 @@ pub const DATA_SETS: [DataSet; 26] = [
         rmc_nav::BITS_GPS1_SAT,
     ),
     nav(
+        GPS1_SIG,
+        "gps_sig_t",
+        aux_sets::gps_sig::SIZE,
+        Source::Fixed(1000),
+        rmc_aux::BITS_GPS1_SIG,
+    ),
+    nav(
         MAGNETOMETER,
         "magnetometer_t",
         magnetometer::SIZE,
@@ -413,7 +468,7 @@ pub const DATA_SETS: [DataSet; 26] = [
     ),
 ];
 
-/// The largest data set served, bytes (GPS1_SAT's 408): what an image
+/// The largest data set served, bytes (GPS1_SIG's 708): what an image
 /// buffer of the device and the TX queue's largest frame must hold.
 pub const MAX_SIZE: usize = {
     let mut max = 0;

@@ -6,6 +6,7 @@
 //! tests read and write data sets by field name through it.
 
 use crate::isb::asce;
+use crate::isb::aux_sets as aux;
 use crate::isb::did;
 use crate::isb::nav_sets as nav;
 use crate::isb::sets::{self, le};
@@ -731,6 +732,91 @@ const PIMU_MAG: &[FieldSpec] = &[
     ),
 ];
 
+const SYS_FAULT: &[FieldSpec] = &[
+    f("status", aux::sys_fault::STATUS, U32, ""),
+    f("g1Task", aux::sys_fault::G1_TASK, U32, ""),
+    f("g2FileNum", aux::sys_fault::G2_FILE_NUM, U32, ""),
+    f("g3LineNum", aux::sys_fault::G3_LINE_NUM, U32, ""),
+    f("g4", aux::sys_fault::G4, U32, ""),
+    f("g5Lr", aux::sys_fault::G5_LR, U32, ""),
+    f("pc", aux::sys_fault::PC, U32, ""),
+    f("psr", aux::sys_fault::PSR, U32, ""),
+];
+
+/// `gps_version_t`: 30- and 10-byte strings the table has no kind for
+/// (read them from the image, [`aux::gps_version`]).
+const GPS_VERSION: &[FieldSpec] = &[];
+
+const MAG_CAL: &[FieldSpec] = &[
+    f("state", aux::mag_cal::STATE, U32, ""),
+    f("progress", aux::mag_cal::PROGRESS, F32, "%"),
+    f("declination", aux::mag_cal::DECLINATION, F32, "rad"),
+];
+
+/// `gps_sig_t`: the header and the first signal's fields (as GPS_SAT).
+const GPS_SIG: &[FieldSpec] = &[
+    f("timeOfWeekMs", aux::gps_sig::TIME_OF_WEEK_MS, U32, "ms"),
+    f("numSigs", aux::gps_sig::NUM_SIGS, U32, ""),
+    f(
+        "gnssId",
+        aux::gps_sig::SIG + aux::gps_sig_sv::GNSS_ID,
+        U8,
+        "",
+    ),
+    f("svId", aux::gps_sig::SIG + aux::gps_sig_sv::SV_ID, U8, ""),
+    f("sigId", aux::gps_sig::SIG + aux::gps_sig_sv::SIG_ID, U8, ""),
+    f("cno", aux::gps_sig::SIG + aux::gps_sig_sv::CNO, U8, "dBHz"),
+    f(
+        "quality",
+        aux::gps_sig::SIG + aux::gps_sig_sv::QUALITY,
+        U8,
+        "",
+    ),
+];
+
+/// `imu3_t`: time, status, then IMU 1 (the three read alike).
+const IMU3: &[FieldSpec] = &[
+    f("time", aux::imu3::TIME, F64, "s"),
+    f("status", aux::imu3::STATUS, U32, ""),
+    f("pqr", aux::imu3::I + aux::imus::PQR, F32x3, "rad/s"),
+    f("acc", aux::imu3::I + aux::imus::ACC, F32x3, "m/s²"),
+];
+
+/// `port_monitor_t`: port 0 (the serial line) and `activePorts`.
+const PORT_MONITOR: &[FieldSpec] = &[
+    f("portInfo", aux::port_monitor_set::PORT_INFO, U8, ""),
+    f("status", aux::port_monitor_set::STATUS, U32, ""),
+    f(
+        "txBytesPerSec",
+        aux::port_monitor_set::TX_BYTES_PER_SEC,
+        U32,
+        "B/s",
+    ),
+    f(
+        "rxBytesPerSec",
+        aux::port_monitor_set::RX_BYTES_PER_SEC,
+        U32,
+        "B/s",
+    ),
+    f("txBytes", aux::port_monitor_set::TX_BYTES, U32, "B"),
+    f("rxBytes", aux::port_monitor_set::RX_BYTES, U32, "B"),
+    f("txDataDrops", aux::port_monitor_set::TX_DATA_DROPS, U32, ""),
+    f("rxOverflows", aux::port_monitor_set::RX_OVERFLOWS, U32, ""),
+    f(
+        "txBytesDropped",
+        aux::port_monitor_set::TX_BYTES_DROPPED,
+        U32,
+        "B",
+    ),
+    f(
+        "rxChecksumErrors",
+        aux::port_monitor_set::RX_CHECKSUM_ERRORS,
+        U32,
+        "",
+    ),
+    f("activePorts", aux::port_monitor::ACTIVE_PORTS, U8, ""),
+];
+
 const SYS_SENSORS: &[FieldSpec] = &[
     f("time", nav::sys_sensors::TIME, F64, "s"),
     f("temp", nav::sys_sensors::TEMP, F32, "°C"),
@@ -746,17 +832,22 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 26] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 32] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
+    (did::SYS_FAULT, "SYS_FAULT", SYS_FAULT),
     (did::PIMU, "PIMU", PIMU),
     (did::SYS_CMD, "SYS_CMD", SYS_CMD),
     (did::NMEA_BCAST_PERIOD, "NMEA_BCAST_PERIOD", NMEA_MSGS),
     (did::RMC, "RMC", RMC),
     (did::SYS_PARAMS, "SYS_PARAMS", SYS_PARAMS),
     (did::FLASH_CONFIG, "FLASH_CONFIG", FLASH),
+    (did::GPS1_VERSION, "GPS1_VERSION", GPS_VERSION),
+    (did::MAG_CAL, "MAG_CAL", MAG_CAL),
     (did::IMU, "IMU", IMU),
     (did::BIT, "BIT", BIT),
+    (did::PORT_MONITOR, "PORT_MONITOR", PORT_MONITOR),
     (did::STROBE_IN_TIME, "STROBE_IN_TIME", STROBE),
+    (did::IMU3_RAW, "IMU3_RAW", IMU3),
     (did::IMU_RAW, "IMU_RAW", IMU),
     (did::INS_1, "INS_1", INS_1),
     (did::INS_2, "INS_2", INS_2),
@@ -768,6 +859,7 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 26] = [
     (did::GPS1_RCVR_POS, "GPS1_RCVR_POS", GPS_POS),
     (did::GPS1_VEL, "GPS1_VEL", GPS_VEL),
     (did::GPS1_SAT, "GPS1_SAT", GPS_SAT),
+    (did::GPS1_SIG, "GPS1_SIG", GPS_SIG),
     (did::MAGNETOMETER, "MAGNETOMETER", MAGNETOMETER),
     (did::BAROMETER, "BAROMETER", BAROMETER),
     (did::IMU_MAG, "IMU_MAG", IMU_MAG),
@@ -838,14 +930,15 @@ pub fn read(spec: &FieldSpec, b: &[u8]) -> Value {
 }
 
 /// The device time a data set carries, in seconds: `time` (s since boot)
-/// of IMU, IMU_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER and
+/// of IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER and
 /// SYS_SENSORS; the GPS time of week of INS_1..4 (`timeOfWeek`), GPS1_POS,
-/// GPS1_VEL and GPS1_SAT (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
+/// GPS1_VEL, GPS1_SAT and GPS1_SIG (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
 /// SYS_PARAMS. `None` for the others.
 pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
     match did {
         did::IMU
         | did::IMU_RAW
+        | did::IMU3_RAW
         | did::PIMU
         | did::IMU_MAG
         | did::PIMU_MAG
@@ -863,6 +956,7 @@ pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
         }
         did::GPS1_VEL => Some(f64::from(le::u32(b, nav::gps_vel::TIME_OF_WEEK_MS)) / 1e3),
         did::GPS1_SAT => Some(f64::from(le::u32(b, nav::gps_sat::TIME_OF_WEEK_MS)) / 1e3),
+        did::GPS1_SIG => Some(f64::from(le::u32(b, aux::gps_sig::TIME_OF_WEEK_MS)) / 1e3),
         did::STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),
         did::SYS_PARAMS => Some(f64::from(le::u32(b, sets::sys_params::TIME_OF_WEEK_MS)) / 1e3),
         _ => None,

@@ -11,6 +11,7 @@
 //!   options, FLASH_CONFIG defaults and checksum (`docs/isb-data-sets.md`);
 //! - [`message`]: GET_DATA / SET_DATA / stop requests, ACK / NACK and DATA
 //!   encoders;
+//! - [`aux_sets`]: SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW;
 //! - [`fields`]: the data sets' fields by `data_sets.h` name, for hosts;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
 //!   and [`nmea::Input`], the one place every received byte goes;
@@ -18,6 +19,7 @@
 //!   the IMX-5 prints; [`nmea_stream`]: when each is due.
 
 pub mod asce;
+pub mod aux_sets;
 pub mod device;
 pub mod did;
 pub mod fields;

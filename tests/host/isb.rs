@@ -654,3 +654,90 @@ fn a_flight_with_an_outage_and_a_warm_power_cycle_over_a_pty() {
     let mut ctl = Control::connect(&addr);
     flight_with_an_outage_and_a_power_cycle(&mut c, &mut ctl);
 }
+
+/// SYS_FAULT, GPS1_VERSION, PORT_MONITOR, MAG_CAL, GPS1_SIG and IMU3_RAW
+/// through the binary over TCP (`docs/isb-data-sets.md`): each one-shot
+/// GET is one whole DATA packet of the release's size (32, 220, 223, 12,
+/// 708, 84 bytes)
+/// with the fields a real IMX-5.0 reports; a MAG_CAL recalibration command
+/// is ACKed and reads running, then done; GPS1_SIG lists the signals of
+/// the satellites GPS1_SAT lists once the receiver has its fix.
+#[test]
+fn status_version_calibration_signal_and_triple_imu_sets_over_tcp() {
+    use imu_emu::isb::aux_sets::{mag_cal_state, GpsSig, Imu3, MagCal, PortMonitor};
+    let addr = format!("127.0.0.1:{}", free_port());
+    let emu = isb(&["--control", &addr, "--speed", "20"]);
+    let mut c = emu.connect();
+    let mut ctl = Control::connect(&addr);
+    ctl.wait_powered();
+    let once = |c: &mut Conn, d: u8| {
+        c.send(&isb_get(d, 0));
+        let p = isb_packet_of(c, d);
+        assert_eq!(p.flags, 4, "whole, no offset flag");
+        p.payload
+    };
+    let f = once(&mut c, did::SYS_FAULT);
+    assert_eq!(f, [0u8; 32]);
+    let v = once(&mut c, did::GPS1_VERSION);
+    assert_eq!(v.len(), 220);
+    assert!(v.starts_with(b"EXT CORE 1.00"));
+    assert_eq!(&v[30..39], b"00190000\0");
+    assert!(v[40 + 3 * 30..].starts_with(b"MOD=ZED-F9P\0"));
+    // PORT_MONITOR: the line's bytes so far (three 16-byte GETs in, the
+    // two replies out before its own).
+    let out_so_far = c.received;
+    let pm = once(&mut c, did::PORT_MONITOR);
+    let pm = PortMonitor::decode(&pm.try_into().unwrap());
+    assert_eq!((pm.active_ports, pm.port[0].port_info), (1, 0x10));
+    assert_eq!(pm.port[0].tx_bytes as usize, out_so_far);
+    assert_eq!(pm.port[0].rx_bytes, 3 * 16);
+    let i3 = once(&mut c, did::IMU3_RAW);
+    let i3 = Imu3::decode(&i3.try_into().unwrap());
+    assert_eq!(i3.imu[0], i3.imu[2]);
+    // At rest, level: about 1 g down in each IMU.
+    assert!((i3.imu[1].acc[2] + 9.8).abs() < 0.2, "{i3:?}");
+    let m = MagCal::decode(&once(&mut c, did::MAG_CAL).try_into().unwrap());
+    assert_eq!((m.state, m.progress), (0, 0.0));
+    c.send(&isb_set(did::MAG_CAL, 0, &1u32.to_le_bytes()));
+    let ack = isb_packet(&mut c);
+    assert_eq!((ack.flags, ack.payload[4]), (1, did::MAG_CAL));
+    let m = MagCal::decode(&once(&mut c, did::MAG_CAL).try_into().unwrap());
+    assert_eq!(m.state, mag_cal_state::RECAL_RUNNING);
+    assert!((0.0..100.0).contains(&m.progress), "{m:?}");
+    // GPS1_SIG: empty before the fix, then the 12 satellites' signals.
+    c.send(&isb_get(did::GPS1_SIG, 1));
+    let sig =
+        |c: &mut Conn| GpsSig::decode(&isb_packet_of(c, did::GPS1_SIG).payload.try_into().unwrap());
+    assert_eq!(sig(&mut c).num_sigs, 0, "no fix at power-on");
+    let mut s = sig(&mut c);
+    for _ in 0..60 {
+        if s.num_sigs > 0 {
+            break;
+        }
+        s = sig(&mut c);
+    }
+    assert_eq!(s.num_sigs, 12);
+    c.send(&isb_get(did::GPS1_SAT, 0));
+    let sat = GpsSat::decode(
+        &isb_packet_of(&mut c, did::GPS1_SAT)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    for (g, v) in s.sig.iter().zip(&sat.sat).take(12) {
+        assert_eq!((g.gnss_id, g.sv_id, g.cno), (v.gnss_id, v.sv_id, v.cno));
+        assert_eq!((g.sig_id, g.quality, g.status), (0, 7, 5));
+    }
+    // The recalibration (10 s of device time) is done by now.
+    c.send(&isb_get(did::MAG_CAL, 0));
+    let m = MagCal::decode(
+        &isb_packet_of(&mut c, did::MAG_CAL)
+            .payload
+            .try_into()
+            .unwrap(),
+    );
+    assert_eq!(
+        (m.state, m.progress),
+        (mag_cal_state::RECAL_COMPLETE, 100.0)
+    );
+}
