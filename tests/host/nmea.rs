@@ -130,8 +130,13 @@ fn gpsd_reads_a_3d_fix_the_time_and_the_satellites() {
     assert!(!fixes.is_empty(), "no 3-D fix in {reports:#?}");
     for t in &fixes {
         let (lat, lon) = (t["lat"].as_f64().unwrap(), t["lon"].as_f64().unwrap());
-        let north = (lat - 45.0) * 111_132.0;
-        let east = lon * 78_847.0;
+        // The built-in site (docs/motion.md), metres per degree there.
+        let (lat0, lon0) = (
+            f64::from(imu_emu::sensor::motion::DEFAULT_LATITUDE_DEG),
+            imu_emu::vehicle::DEFAULT_LONGITUDE_DEG,
+        );
+        let north = (lat - lat0) * 111_200.0;
+        let east = (lon - lon0) * 111_320.0 * lat0.to_radians().cos();
         assert!(north.hypot(east) < 5.0, "{t}");
         assert!(t["time"].as_str().unwrap().ends_with(".000Z"), "{t}");
     }

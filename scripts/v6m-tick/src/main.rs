@@ -12,7 +12,7 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use imu_emu::{Device, Instant, PowerOn, Product, RamNor};
+use imu_emu::{Device, Instant, Kernel, PowerOn, Product, RamNor};
 
 const SYST_CSR: *mut u32 = 0xE000_E010 as *mut u32;
 const SYST_RVR: *mut u32 = 0xE000_E014 as *mut u32;
@@ -101,7 +101,7 @@ impl Buf {
     }
 }
 
-type Dev = Device<RamNor<8192>>;
+type Dev = Device<RamNor<8192>, Kernel>;
 
 struct Run {
     dev: Dev,
