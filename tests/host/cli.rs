@@ -115,7 +115,19 @@ fn fish_completes_every_level_and_zsh_has_the_nested_values() {
     assert_eq!(fish("imu-emu client record --to "), ["csv", "json"]);
     assert_eq!(
         fish("imu-emu sensor-profile show "),
-        ["IMX-5", "K100", "K102", "K108", "K110", "K110M", "K120", "K201", "K210", "K220"]
+        [
+            "IMX-5",
+            "IMX-5-2022",
+            "K100",
+            "K102",
+            "K108",
+            "K110",
+            "K110M",
+            "K120",
+            "K201",
+            "K210",
+            "K220"
+        ]
     );
     assert_eq!(
         fish("imu-emu completions "),
@@ -123,7 +135,7 @@ fn fish_completes_every_level_and_zsh_has_the_nested_values() {
     );
     let zsh = text(&imu_emu(&["completions", "zsh"]).stdout);
     for spec in [
-        "':name -- Model name:(K100 K102 K108 K110 K110M K120 K201 K210 K220 IMX-5)'",
+        "':name -- Model name:(K100 K102 K108 K110 K110M K120 K201 K210 K220 IMX-5 IMX-5-2022)'",
         "--protocol=[The unit",
         ":PROTOCOL:((kernel\\:",
         "'reset:IMX-5 (ISB)\\: software reset",
