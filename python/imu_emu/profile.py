@@ -2,10 +2,12 @@
 the datasheet figures derived from it.
 
 A profile is TOML (``imu-emu sensor-profile show K110`` prints a built-in
-one): sections ``gyro``, ``acc``, ``aux`` with the keys of
-:data:`SENSOR_KEYS` (gyro in deg/s, accelerometers in g) and
-``temperature`` with :data:`TEMPERATURE_KEYS`; every key is required
-(docs/sensors.md). The TOML reader is the standard library's ``tomllib``
+one): sections ``gyro``, ``acc`` and, for a unit with an aux
+accelerometer (K120, K220), ``aux``, with the keys of :data:`SENSOR_KEYS`
+(gyro in deg/s, accelerometers in g) and ``temperature`` with
+:data:`TEMPERATURE_KEYS`; every key of a section is required
+(docs/sensors.md). A file without ``aux`` keeps the unit's built-in aux
+figures in the emulator; here it has no ``aux`` entry. The TOML reader is the standard library's ``tomllib``
 on Python 3.11 and later, and ``tomli`` (the same API; a dependency the
 package declares for older Pythons only) before.
 """
@@ -35,7 +37,7 @@ class ProfileError(ValueError):
 
 def read_profile(path):
     """The profile in ``path`` as a dict of sections (``gyro``, ``acc``,
-    ``aux``: dicts of :data:`SENSOR_KEYS`; ``temperature``), each sensor
+    ``aux`` when the file has one: dicts of :data:`SENSOR_KEYS`; ``temperature``), each sensor
     with its datasheet figures added under ``datasheet``: gyro ``arw_deg_rt_h``
     and ``bias_instability_deg_h``; accelerometers ``vrw_m_s_rt_h`` and
     ``bias_instability_ug``. Raises :class:`ProfileError` naming a missing
@@ -47,6 +49,8 @@ def read_profile(path):
     for section, keys in (("gyro", SENSOR_KEYS), ("acc", SENSOR_KEYS),
                           ("aux", SENSOR_KEYS), ("temperature", TEMPERATURE_KEYS)):
         table = data.get(section)
+        if section == "aux" and table is None:
+            continue
         if not isinstance(table, dict):
             raise ProfileError(f"{path}: missing section [{section}]")
         for k in table:
@@ -67,6 +71,8 @@ def read_profile(path):
         "bias_instability_deg_h": g["bias_instability"] * 3600.0,
     }
     for s in ("acc", "aux"):
+        if s not in out:
+            continue
         a = out[s]
         a["datasheet"] = {
             "vrw_m_s_rt_h": a["noise_density"] * 60.0 * G,

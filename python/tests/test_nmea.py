@@ -85,7 +85,8 @@ class EmulatorTest(unittest.TestCase):
             self.assertIsNotNone(msg, name)
         gga = pynmea2.parse(got["GNGGA"].line, check=True)
         self.assertEqual((gga.gps_qual, gga.num_sats), (1, "12"))
-        self.assertAlmostEqual(gga.latitude, 45.0, places=4)
+        # The built-in site: Newlyn, 50.10167° N (docs/motion.md).
+        self.assertAlmostEqual(gga.latitude, 50.10167, places=4)
         rmc = pynmea2.parse(got["GNRMC"].line, check=True)
         self.assertEqual(rmc.datestamp.isoformat(), "2026-03-13")
         gsv = pynmea2.parse(got["GPGSV"].line, check=True)
