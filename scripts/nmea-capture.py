@@ -5,10 +5,11 @@ in docs/isb.md "Every sentence, captured from the emulator".
 Usage: scripts/nmea-capture.py [path/to/imu-emu]
 
 Runs the binary (--protocol isb over TCP, --gps-time 2026-03-13T15:27:00Z,
---speed 20, seed 0), streams GPGSV every 5 receiver epochs from power-on,
-and once 54 s of device time have passed (GPGSV's own clock) asks for every
-ID once with PSTRB on, reads the table back and strobes; prints each
-sentence's first line in the order received.
+--speed 20, seed 0), streams GPGSV at period 5 from power-on, and after 54
+of its groups (its source, GPS1_SAT, is 1 s: about 300 s of device time)
+asks for every ID once with PSTRB on, reads the table back and strobes;
+prints each sentence's first line in the order received (GSV's three lines
+as they came).
 """
 import os
 import re
@@ -44,11 +45,18 @@ def main():
             if line.startswith("listening"):
                 break
         c = socket.create_connection(("127.0.0.1", port))
+        # After the one-shots nothing streams: reads time out, and end.
+        c.settimeout(1.0)
         c.sendall(sentence("ASCE,0,GPGSV,5"))
         buf, first, asked, done = b"", {}, False, None
         deadline = time.time() + 600
         while time.time() < deadline:
-            buf += c.recv(65536)
+            try:
+                buf += c.recv(65536)
+            except socket.timeout:
+                if done:
+                    break
+                continue
             while b"\n" in buf:
                 raw, buf = buf.split(b"\n", 1)
                 i = raw.find(b"$")
@@ -59,8 +67,7 @@ def main():
                     continue
                 name = text[1:].split(",")[0].split("*")[0]
                 if name == "GPGSV" and not asked:
-                    # GSV carries no time: the line's count tells the epoch
-                    # (one per 5 receiver epochs of 200 ms = 1 s).
+                    # GSV carries no time: its groups are counted.
                     first.setdefault("_gsv_seconds", 0)
                     if text.startswith("$GPGSV,3,1,") or text.startswith("$GPGSV,1,1,"):
                         first["_gsv_seconds"] += 1
