@@ -1093,7 +1093,9 @@ impl State {
             }
         };
         let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
-        let fix = self.nav.gnss(&truth, &cfg);
+        // The receiver's fix only where it is reported (a conversion in
+        // soft double precision on the M4F).
+        let fix = || self.nav.gnss(&truth, &cfg);
         let tick = cx.time().ticks();
         match did {
             did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
@@ -1102,9 +1104,9 @@ impl State {
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
             // Without RTK the receiver's solution is GPS1_POS.
             did::GPS1_POS | did::GPS1_RCVR_POS => {
-                put(&ins::gps_pos(&epoch, fix, tow_offset).encode())
+                put(&ins::gps_pos(&epoch, fix(), tow_offset).encode())
             }
-            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix()).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             did::MAGNETOMETER => {
                 put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
