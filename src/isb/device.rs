@@ -78,7 +78,7 @@ use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
 use crate::isb::aux_sets::{self, mag_cal_state, Imu3, Imus, MagCal, SystemFault};
 use crate::isb::did::{self, DataSet};
-use crate::isb::ins::{self, mech, Aiding, NavConfig, NavFaults, NavState, StartTimes};
+use crate::isb::ins::{self, mech, NavConfig, NavFaults, NavState, StartTimes};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
 use crate::isb::nav::{self, GpsTime, NavTruth};
 use crate::isb::nav_sets::{rmc_nav, InsHeader, SysSensors};
@@ -539,6 +539,8 @@ impl State {
         if ticks.is_multiple_of(u64::from(nav)) {
             st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
             st.navigate(cx);
+        } else {
+            st.nav_work(cx);
         }
         if ticks.is_multiple_of(u64::from(imu)) {
             st.imu_grid = [st.imu_grid[1], cx.chain().integrals()];
@@ -1034,34 +1036,52 @@ impl State {
         let cfg = self.nav_config();
         let gps_dt_s = f64::from(self.gps_dt_ms) / 1000.0;
         let (_, gps) = self.gps_time(cx);
-        // The aiding sensors are read at the receiver's epochs only.
-        let aiding = self.nav.epoch_due(t_s, gps_dt_s).then(|| {
-            let truth = self.truth(cx);
-            let aid = Aiding {
-                mag: self.nav.magnetometer(&truth, tick),
-                pressure_kpa: self.nav.pressure_kpa(&truth, tick),
-                year: ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s()),
-            };
-            (self.nav.gnss(&truth, &cfg), aid)
+        // The aiding sensors are read at the receiver's epochs only, by the
+        // INS on the ticks that follow (`nav_work`).
+        let epoch = self.nav.epoch_due(t_s, gps_dt_s).then(|| {
+            let year = ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s());
+            (self.truth(cx), tick, year)
         });
-        self.nav.navigate(t_s, &inc, gps_dt_s, aiding, &cfg);
-        if let Some(lla) = self.nav.take_last_lla() {
-            for (k, x) in lla.iter().enumerate() {
-                le::put(&mut self.cfg.0, flash::LAST_LLA + 8 * k, &x.to_le_bytes());
-            }
-            le::put(
-                &mut self.cfg.0,
-                flash::LAST_LLA_TIME_OF_WEEK_MS,
-                &gps.tow_ms().to_le_bytes(),
-            );
-            le::put(
-                &mut self.cfg.0,
-                flash::LAST_LLA_WEEK,
-                &gps.week.to_le_bytes(),
-            );
-            self.cfg.update_checksum();
-            self.save_pending = true;
+        self.nav.navigate_truth(t_s, &inc, gps_dt_s, epoch, &cfg);
+        self.save_last_lla(cx);
+    }
+
+    /// A share of the INS's pending work (its covariance propagation, a
+    /// receiver epoch's aiding) on a tick between navigation periods:
+    /// the firmware's tick budget (`docs/performance.md`).
+    fn nav_work(&mut self, cx: &mut impl Context<Integrals>) {
+        if self.nav.work() {
+            self.save_last_lla(cx);
         }
+    }
+
+    /// `lastLla` saved if the INS asks, stamped with the GPS time of the
+    /// navigation period it was found in.
+    fn save_last_lla(&mut self, cx: &mut impl Context<Integrals>) {
+        let Some(lla) = self.nav.take_last_lla() else {
+            return;
+        };
+        let (_, gps) = self.gps_time(cx);
+        let nav_ticks = u64::from(self.grid_ticks(cx, self.nav_dt_ms));
+        let back = (cx.time().ticks() % nav_ticks) * (1_000_000_000 / u64::from(rate(cx)));
+        let gps = GpsTime::of_ns(
+            (u64::from(gps.week) * nav::WEEK_S * 1_000_000_000 + gps.tow_ns).saturating_sub(back),
+        );
+        for (k, x) in lla.iter().enumerate() {
+            le::put(&mut self.cfg.0, flash::LAST_LLA + 8 * k, &x.to_le_bytes());
+        }
+        le::put(
+            &mut self.cfg.0,
+            flash::LAST_LLA_TIME_OF_WEEK_MS,
+            &gps.tow_ms().to_le_bytes(),
+        );
+        le::put(
+            &mut self.cfg.0,
+            flash::LAST_LLA_WEEK,
+            &gps.week.to_le_bytes(),
+        );
+        self.cfg.update_checksum();
+        self.save_pending = true;
     }
 
     /// The bytes of a navigation data set now (`docs/isb.md`
@@ -1128,7 +1148,9 @@ impl State {
             }
         };
         let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
-        let fix = self.nav.gnss(&truth, &cfg);
+        // The receiver's fix only where it is reported (a conversion in
+        // soft double precision on the M4F).
+        let fix = || self.nav.gnss(&truth, &cfg);
         let tick = cx.time().ticks();
         match did {
             did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
@@ -1137,9 +1159,9 @@ impl State {
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
             // Without RTK the receiver's solution is GPS1_POS.
             did::GPS1_POS | did::GPS1_RCVR_POS => {
-                put(&ins::gps_pos(&epoch, fix, tow_offset).encode())
+                put(&ins::gps_pos(&epoch, fix(), tow_offset).encode())
             }
-            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix).encode()),
+            did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix()).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             // The signals of the satellites GPS1_SAT reports.
             did::GPS1_SIG => put(&aux_sets::gps_sig_of(&self.nav.gps_sat(&epoch)).encode()),

@@ -286,6 +286,60 @@ pub struct NavState {
     /// The position to save as `lastLla` (taken by the device).
     save_lla: Option<[f64; 3]>,
     saved_lla: Option<[f64; 3]>,
+    /// A covariance propagation is due ([`NavState::work`]).
+    prop_due: bool,
+    /// The last navigation period, s.
+    period_s: f64,
+    /// The receiver epoch's work still to do ([`NavState::work`]).
+    epoch: Option<Epoch>,
+    /// A GNSS update entered the state since the last period's start
+    /// (shown as [`NavState::gps_step`] from the next period).
+    gps_step_next: bool,
+}
+
+/// What a receiver epoch's aiding is read from: the readings themselves,
+/// or the truth and the tick to read them of (on the ticks of
+/// [`NavState::work`]).
+#[derive(Debug, Clone, Copy)]
+enum Input {
+    /// The fix and the barometer and magnetometer readings.
+    Read(Option<Fix>, Aiding),
+    /// The truth at the epoch, its tick, the decimal year of its date.
+    Truth(NavTruth, u64, f64),
+}
+
+/// The steps of a receiver epoch's work, in order (`docs/navigation.md`
+/// "Firmware cost"): each a share of the tick budget.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+enum Stage {
+    Propagate,
+    Fix,
+    GnssPos,
+    GnssVel,
+    Mag,
+    Baro,
+    Declination,
+    MagUpdate,
+    Done,
+}
+
+/// A receiver epoch in progress.
+#[derive(Debug, Clone, Copy)]
+struct Epoch {
+    input: Input,
+    cfg: NavConfig,
+    stage: Stage,
+    /// The fix (resolved at [`Stage::Fix`]).
+    fix: Option<Fix>,
+    /// Fusing the fix: the antenna's lever arm in NED, the ground speed,
+    /// the heading σ before the updates, whether it began NAV.
+    ant: V3,
+    speed: f64,
+    hdg_sigma: f32,
+    first: bool,
+    /// The readings (resolved at [`Stage::Mag`], [`Stage::Baro`]).
+    mag: [f32; 3],
+    year: f64,
 }
 
 /// One Gauss–Markov step with `a = e^(−Δt/τ)` and `b = σ·√(1 − a²)`.
@@ -389,6 +443,10 @@ impl NavState {
             declination_at: 0.0,
             save_lla: None,
             saved_lla: None,
+            prop_due: false,
+            period_s: 0.0,
+            epoch: None,
+            gps_step_next: false,
         }
     }
 
@@ -521,10 +579,24 @@ impl NavState {
         self.outage_at.map(|a| self.t_s - a)
     }
 
-    /// Whether the navigation period ending `t_s` begins a receiver epoch
-    /// (`gps_dt_s` apart): the aiding [`NavState::navigate`] then wants.
+    /// Whether the navigation period ending `t_s` is the last before a
+    /// receiver epoch (`gps_dt_s` apart): the aiding
+    /// [`NavState::navigate`] then wants (the epoch's work is done over
+    /// the next period, its correction enters the state as that period
+    /// ends, on the epoch).
     pub fn epoch_due(&self, t_s: f64, gps_dt_s: f64) -> bool {
-        epoch_of(t_s, gps_dt_s) != self.gnss_epoch
+        epoch_of(self.epoch_t(t_s, self.period_s), gps_dt_s) != self.gnss_epoch
+    }
+
+    /// The time of the epoch a period ending `t_s` (of `dt`) reads the
+    /// aiding for: the end of the next period, but in alignment (which
+    /// only sums) its own end.
+    fn epoch_t(&self, t_s: f64, dt: f64) -> f64 {
+        if self.phase == Phase::Aligning {
+            t_s
+        } else {
+            t_s + dt
+        }
     }
 
     /// One navigation period ending `t_s` seconds since boot: the
@@ -542,37 +614,203 @@ impl NavState {
         aiding: Option<(Option<Fix>, Aiding)>,
         cfg: &NavConfig,
     ) {
+        self.begin(
+            t_s,
+            inc,
+            gps_dt_s,
+            aiding.map(|(f, a)| Input::Read(f, a)),
+            cfg,
+        );
+    }
+
+    /// [`NavState::navigate`] with the epoch's aiding read by the INS
+    /// itself, from the truth `truth` at tick `tick` (the date `year`),
+    /// on the ticks of [`NavState::work`]: what the device does, so that
+    /// no tick carries a whole epoch (the firmware's tick budget).
+    pub fn navigate_truth(
+        &mut self,
+        t_s: f64,
+        inc: &Increment,
+        gps_dt_s: f64,
+        epoch: Option<(NavTruth, u64, f64)>,
+        cfg: &NavConfig,
+    ) {
+        self.begin(
+            t_s,
+            inc,
+            gps_dt_s,
+            epoch.map(|(t, k, y)| Input::Truth(t, k, y)),
+            cfg,
+        );
+    }
+
+    /// One navigation period: the last period's work finished (and its
+    /// correction in the state), the mechanisation; the covariance
+    /// propagation and the epoch's aiding left to [`NavState::work`].
+    fn begin(
+        &mut self,
+        t_s: f64,
+        inc: &Increment,
+        gps_dt_s: f64,
+        input: Option<Input>,
+        cfg: &NavConfig,
+    ) {
+        while self.work() {}
         self.nav_t = t_s;
-        self.gps_step = false;
+        self.gps_step = core::mem::take(&mut self.gps_step_next);
+        self.mag_aiding &= self.mag_ok;
         if inc.dt.is_nan() || inc.dt <= 0.0 {
             return;
         }
-        let epoch = epoch_of(t_s, gps_dt_s);
+        self.period_s = inc.dt;
+        // The epoch at the end of the next period: its aiding is read now
+        // and fused on the ticks of that period.
+        let epoch = epoch_of(self.epoch_t(t_s, inc.dt), gps_dt_s);
         let due = epoch != self.gnss_epoch;
         self.gnss_epoch = epoch;
-        let aiding = if due { aiding } else { None };
+        let input = if due { input } else { None };
         if self.phase == Phase::Aligning {
-            self.align(t_s, inc, aiding.map(|a| a.1), cfg);
+            let aid = input.map(|i| match i {
+                Input::Read(_, a) => a,
+                Input::Truth(truth, tick, year) => Aiding {
+                    mag: self.magnetometer(&truth, tick),
+                    pressure_kpa: 0.0,
+                    year,
+                },
+            });
+            self.align(t_s, inc, aid, cfg);
             return;
         }
         let f_n = self.nom.mechanise(inc);
         self.prop_dt += inc.dt;
         self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + f_n[k] * inc.dt);
-        if self.prop_dt >= PROPAGATE_S - 1e-9 {
-            self.propagate();
-        }
+        self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
         // Every aiding source enters at the receiver's epochs, so the state
-        // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix);
-        // between them the position is the integral of the velocity.
-        if let Some((gnss, aid)) = aiding {
-            let fuse_gps = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
-            if let (Some(fix), true) = (gnss, fuse_gps) {
-                self.fuse_gnss(&fix, cfg);
+        // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
+        // on the next period's outputs); between them the position is the
+        // integral of the velocity.
+        self.epoch = input.map(|input| {
+            let (fix, aid) = match input {
+                Input::Read(f, a) => (f, a),
+                Input::Truth(_, _, year) => (
+                    None,
+                    Aiding {
+                        mag: [0.0; 3],
+                        pressure_kpa: 0.0,
+                        year,
+                    },
+                ),
+            };
+            Epoch {
+                input,
+                cfg: *cfg,
+                stage: Stage::Propagate,
+                fix,
+                ant: [0.0; 3],
+                speed: 0.0,
+                hdg_sigma: 0.0,
+                first: false,
+                mag: aid.mag,
+                year: aid.year,
             }
-            self.fuse_aiding(&aid, cfg);
-            self.check_last_lla(cfg);
+        });
+    }
+
+    /// One share of the navigation's pending work — the covariance
+    /// propagation, then a receiver epoch's steps in order (reading the
+    /// aiding, the GNSS position updates, the velocity updates, the
+    /// barometer, the declination, the magnetometer) — on a tick between
+    /// navigation periods; whatever is left when the next period begins
+    /// is done then, so the result does not depend on how the work is
+    /// spread. Returns whether there was any.
+    pub fn work(&mut self) -> bool {
+        if self.prop_due {
+            self.prop_due = false;
+            self.propagate();
+            return true;
         }
-        self.mag_aiding &= self.mag_ok;
+        let Some(mut e) = self.epoch.take() else {
+            return false;
+        };
+        loop {
+            let stage = e.stage;
+            e.stage = match stage {
+                Stage::Propagate => Stage::Fix,
+                Stage::Fix => Stage::GnssPos,
+                Stage::GnssPos => Stage::GnssVel,
+                Stage::GnssVel => Stage::Mag,
+                Stage::Mag => Stage::Baro,
+                Stage::Baro => Stage::Declination,
+                Stage::Declination => Stage::MagUpdate,
+                Stage::MagUpdate | Stage::Done => Stage::Done,
+            };
+            let busy = self.stage(&mut e, stage);
+            if e.stage == Stage::Done {
+                return true;
+            }
+            if busy {
+                self.epoch = Some(e);
+                return true;
+            }
+        }
+    }
+
+    /// One step of a receiver epoch; whether it had anything to do.
+    fn stage(&mut self, e: &mut Epoch, stage: Stage) -> bool {
+        let cfg = e.cfg;
+        let mag_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0;
+        let gps_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
+        match stage {
+            Stage::Propagate => self.propagate(),
+            Stage::Fix => match e.input {
+                Input::Truth(truth, _, _) if gps_fusion => {
+                    e.fix = self.gnss(&truth, &cfg);
+                    true
+                }
+                _ => false,
+            },
+            Stage::GnssPos => match e.fix {
+                Some(fix) if gps_fusion => {
+                    self.fuse_gnss_pos(e, &fix);
+                    true
+                }
+                _ => false,
+            },
+            Stage::GnssVel => match e.fix {
+                Some(fix) if gps_fusion => {
+                    self.fuse_gnss_vel(e, &fix);
+                    true
+                }
+                _ => false,
+            },
+            Stage::Mag => match e.input {
+                Input::Truth(truth, tick, _) if mag_fusion && self.mag_ref.is_some() => {
+                    e.mag = self.magnetometer(&truth, tick);
+                    true
+                }
+                _ => false,
+            },
+            Stage::Baro => self.fuse_baro(e),
+            Stage::Declination => {
+                // The field model is dear (a spherical-harmonic sum) and the
+                // declination changes slowly: evaluated every
+                // DECLINATION_EVERY_S.
+                if mag_fusion && self.nav_t - self.declination_at >= DECLINATION_EVERY_S {
+                    let lla = self.nom.lla();
+                    self.declination = declination_deg(lla[0], lla[1], lla[2], e.year).to_radians();
+                    self.declination_at = self.nav_t;
+                    true
+                } else {
+                    false
+                }
+            }
+            Stage::MagUpdate => {
+                self.fuse_mag(e);
+                self.check_last_lla(&cfg);
+                true
+            }
+            Stage::Done => false,
+        }
     }
 
     /// Coarse alignment: sums until [`ALIGN_S`] (the magnetometer at the
@@ -629,11 +867,12 @@ impl NavState {
         self.phase = Phase::Ahrs;
     }
 
-    /// The covariance over the periods since the last propagation.
-    fn propagate(&mut self) {
+    /// The covariance over the periods since the last propagation;
+    /// whether there were any.
+    fn propagate(&mut self) -> bool {
         let dt = self.prop_dt;
         if dt <= 0.0 {
-            return;
+            return false;
         }
         let f_n = self.prop_dv_n.map(|x| (x / dt) as f32);
         let c = crate::math::double::dcm_from_quat(&self.nom.q);
@@ -652,6 +891,7 @@ impl NavState {
         self.kf.propagate(&iv, &self.q);
         self.prop_dt = 0.0;
         self.prop_dv_n = [0.0; 3];
+        true
     }
 
     /// Adds the filter's estimate to the nominal state.
@@ -662,16 +902,17 @@ impl NavState {
         }
     }
 
-    /// A GNSS epoch: the first fix starts NAV (position and velocity set
-    /// from it); after that, six scalar updates (position and velocity
+    /// A GNSS epoch's position: the first fix starts NAV (position and
+    /// velocity set from it); after that, three scalar updates (position
     /// NED), the antenna's lever arm taken out.
-    fn fuse_gnss(&mut self, fix: &Fix, cfg: &NavConfig) {
-        self.propagate();
+    fn fuse_gnss_pos(&mut self, e: &mut Epoch, fix: &Fix) {
         let (lla, v) = fix;
-        let ant = rotate(&self.nom.q, &cfg.gps1_ant_offset.map(f64::from));
-        let speed = libm::hypot(v[0], v[1]);
-        let hdg_sigma = self.kf.sigma(ATT + 2);
-        if self.phase != Phase::Nav {
+        let ant = rotate(&self.nom.q, &e.cfg.gps1_ant_offset.map(f64::from));
+        e.ant = ant;
+        e.speed = libm::hypot(v[0], v[1]);
+        e.hdg_sigma = self.kf.sigma(ATT + 2);
+        e.first = self.phase != Phase::Nav;
+        if e.first {
             // NAV from the first fix: position and velocity from it.
             self.nom = Nominal {
                 lat: lla[0].to_radians(),
@@ -712,59 +953,69 @@ impl NavState {
             ];
             let h = H_ACC_M / core::f32::consts::SQRT_2;
             let r_pos = [h * h, h * h, V_ACC_M * V_ACC_M];
-            let sv = S_ACC_MPS / 1.732;
             for (k, (dk, r)) in d.iter().zip(r_pos).enumerate() {
                 self.kf.update(&[(POS + k, 1.0)], *dk as f32, r, 0.0);
             }
+        }
+    }
+
+    /// A GNSS epoch's velocity: three scalar updates (none at the fix
+    /// that began NAV), the correction; the heading from the course over
+    /// ground once moving, when nothing else has given one.
+    fn fuse_gnss_vel(&mut self, e: &Epoch, fix: &Fix) {
+        let v = &fix.1;
+        if !e.first {
+            let sv = S_ACC_MPS / 1.732;
             for (k, (vk, nk)) in v.iter().zip(self.nom.v).enumerate() {
                 self.kf
                     .update(&[(VEL + k, 1.0)], (vk - nk) as f32, sv * sv, 0.0);
             }
             self.correct();
         }
-        self.gps_step = true;
-        // Heading from the course over ground once moving, when nothing
-        // else has given one.
-        if hdg_sigma > status::HDG_COARSE_RAD && speed > GPS_HEADING_MIN_SPEED {
-            let e = euler_from_quat(&self.nom.q);
+        self.gps_step_next = true;
+        if e.hdg_sigma > status::HDG_COARSE_RAD && e.speed > GPS_HEADING_MIN_SPEED {
+            let a = euler_from_quat(&self.nom.q);
             let yaw = atan2(v[1], v[0]);
-            self.nom.q = quat_from_euler(e[0], e[1], yaw);
+            self.nom.q = quat_from_euler(a[0], a[1], yaw);
             self.kf.reset1(ATT + 2, GPS_HEADING_SIGMA);
         }
-        self.gps_heading = speed > GPS_HEADING_MIN_SPEED;
+        self.gps_heading = e.speed > GPS_HEADING_MIN_SPEED;
     }
 
-    /// The barometer's height and the magnetometer's heading (and, before
-    /// the first fix, the AHRS's zero-velocity assumption).
-    fn fuse_aiding(&mut self, aid: &Aiding, cfg: &NavConfig) {
-        self.propagate();
+    /// Before the first fix the AHRS's zero-velocity assumption; in NAV
+    /// the barometer's height. Whether there was anything to do.
+    fn fuse_baro(&mut self, e: &Epoch) -> bool {
         if self.phase == Phase::Ahrs {
             for k in 0..3 {
                 let y = -self.nom.v[k] as f32;
                 self.kf
                     .update(&[(VEL + k, 1.0)], y, AHRS_VEL_SIGMA * AHRS_VEL_SIGMA, 0.0);
             }
+            return true;
         }
-        let lla = self.nom.lla();
-        if cfg.sys_cfg_bits & SYS_CFG_NO_BARO_FUSION == 0 && self.phase == Phase::Nav {
-            let p = f64::from(aid.pressure_kpa);
-            if p > 0.0 {
-                let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
-                let y = (lla[2] - h) as f32;
-                self.kf
-                    .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
-            }
+        if e.cfg.sys_cfg_bits & SYS_CFG_NO_BARO_FUSION != 0 || self.phase != Phase::Nav {
+            return false;
         }
+        let p = match e.input {
+            Input::Read(_, a) => a.pressure_kpa,
+            Input::Truth(truth, tick, _) => self.pressure_kpa(&truth, tick),
+        };
+        let p = f64::from(p);
+        if p > 0.0 {
+            let lla = self.nom.lla();
+            let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
+            let y = (lla[2] - h) as f32;
+            self.kf
+                .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
+        }
+        true
+    }
+
+    /// The magnetometer's heading, then the epoch's correction.
+    fn fuse_mag(&mut self, e: &Epoch) {
         self.mag_ok = false;
-        if cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 {
-            // The field model is dear (a spherical-harmonic sum) and the
-            // declination changes slowly: evaluated every
-            // DECLINATION_EVERY_S.
-            if self.nav_t - self.declination_at >= DECLINATION_EVERY_S {
-                self.declination = declination_deg(lla[0], lla[1], lla[2], aid.year).to_radians();
-                self.declination_at = self.nav_t;
-            }
-            if let Some(y) = self.mag_residual(aid) {
+        if e.cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0 {
+            if let Some(y) = self.mag_residual(&e.mag) {
                 let r = MAG_HEADING_SIGMA * MAG_HEADING_SIGMA;
                 match self.kf.update(&[(ATT + 2, 1.0)], y, r, MAG_GATE) {
                     Update::Applied(_) => {
@@ -782,9 +1033,9 @@ impl NavState {
 
     /// The magnetometer's heading minus the estimate's, rad, if the
     /// reading looks like the field learnt in alignment.
-    fn mag_residual(&self, aid: &Aiding) -> Option<f32> {
+    fn mag_residual(&self, mag: &[f32; 3]) -> Option<f32> {
         let (norm0, dip0) = self.mag_ref?;
-        let m = aid.mag.map(f64::from);
+        let m = mag.map(f64::from);
         let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
         if norm.is_nan() || norm <= 0.0 || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
             return None;
