@@ -10,11 +10,11 @@
 //!   instability 2.0 °/h, ARW 0.23 °/√h, accelerometer bias instability
 //!   27 µg, VRW 0.020 m/s/√h. Range ±4000 °/s, ±16 g and bandwidth 539 Hz
 //!   gyro / 416 Hz accelerometer, which that table does not give, are the
-//!   datasheet quote of issue 19.
+//!   IMX-5 datasheet's as the emulator has carried them since.
 //! - **IMX-5-2022**: the earlier figures, those of the IMX-5 hardware
 //!   repository's product page (`IS-hdw`, `Products/IMX-5-0/README.md`,
 //!   © 2014–2022, "Tactical Grade IMU"): 1.5 °/h, 0.16 °/√h, 19 µg,
-//!   0.02 m/s/√h — the ones issue 19 quoted and the emulator used until
+//!   0.02 m/s/√h — the ones the emulator used until
 //!   now (the user manual of release 1.9.0, September 2022, read 2.0 °/h,
 //!   0.2 °/√h, 20 µg, 0.04 m/s/√h in between). Same ranges and bandwidths.
 //!
