@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The performance figures of the docs/performance.md (issue 12) in one
+# The performance figures of the docs/performance.md in one
 # command: the criterion benches (short measurement times) and the
 # whole-process figures of the release `imu-emu` measured by
 # `boards/host/examples/loadgen.rs`; prints a Markdown table and the

@@ -6,7 +6,7 @@
 #   scripts/fw-sizes.sh NAME=ELF[:ram] ...   # ":ram" also checks static RAM
 #
 # Prints one line per image and exits 1 if any is over 256 KiB of flash (or,
-# where checked, 64 KiB of static RAM): the developers' guide's budgets.
+# where checked, 64 KiB of static RAM): the product's budgets (docs/firmware-budget.md).
 # The QEMU image's RAM includes an 8 KiB RAM model of the flash, which
 # counts against its RAM budget like any other static.
 set -euo pipefail

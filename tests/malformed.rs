@@ -1,4 +1,4 @@
-//! The malformed-input catalogue (issue 13): one test per class of bad
+//! The malformed-input catalogue: one test per class of bad
 //! host → device input, each asserting
 //!
 //! 1. the documented reaction — the exact reply bytes, or exact silence

@@ -1,7 +1,7 @@
 //! Motion beyond what `f32` or the sensor holds saturates as a real sensor
 //! does: the axes read the range and the USW range bits (ICD Table 5.26,
 //! bits 10–12, gyro X/Y/Z) are set — never all-zero axes with USW 0
-//! (issue 13, "The host runner under abuse": a trajectory value of 3.5e38,
+//! (the host runner under abuse: a trajectory value of 3.5e38,
 //! `motion rotate 1e6 0 0`).
 
 use imu_emu::chain::{ChainConfig, SignalChain};

@@ -1,4 +1,4 @@
-//! Golden sessions (issue 9 "Nothing changes on the wire"): scripted
+//! Golden sessions (nothing changes on the wire): scripted
 //! sessions driven straight through the core [`Device`] with a fixed seed
 //! and a fixed tick schedule (tick `k` at `k × tick_period_ns()`), recorded
 //! byte for byte — every TX byte and every event, with the tick it appeared

@@ -1,4 +1,4 @@
-//! Soak (issue 13): the core driven directly, faster than real time, at
+//! Soak: the core driven directly, faster than real time, at
 //! the maximum rate of the largest UDD configuration on a 2 Mbaud line
 //! (and GA at 2 kHz), with commands interleaved every 100 ms — ReadRAM,
 //! GetBIT, SaveFlash of a harmless parameter, Get_User_Def_Data_struct.

@@ -1,4 +1,4 @@
-//! Power-loss campaigns on the parameter store (issue 13 "Power loss"):
+//! Power-loss campaigns on the parameter store (power loss at any instant):
 //! thousands of randomized save sequences on the NOR model with the power
 //! cut at a random program/erase step — half-done steps and *torn* ones
 //! ([`RamNor::cut_power_torn`]: a program that clears a random subset of its

@@ -1,4 +1,4 @@
-//! Self-consistency of the vehicle truth (issue 18): for each motion
+//! Self-consistency of the vehicle truth: for each motion
 //! source, a strapdown integration of the ideal sensor output — the truth
 //! the chain takes, as `f32` (float build) and as the fixed-point build's
 //! integers — reproduces the source's own position, velocity and attitude

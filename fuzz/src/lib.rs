@@ -1,4 +1,4 @@
-//! The fuzz targets' bodies (issue 13 "Fuzzing"): each takes the raw
+//! The fuzz targets' bodies: each takes the raw
 //! fuzzer input and panics on a broken invariant, never merely on bad
 //! input. Kept in a library so the `fuzz_targets/*.rs` stay one line
 //! and a crash input can be replayed from a unit test or a debugger.

@@ -1,4 +1,4 @@
-"""A closed loop through the emulator (issue 18), and the example of it.
+"""A closed loop through the emulator (the live motion feed), and the example of it.
 
 A rigid body turns about its z axis (inertia 1, so the torque is the
 angular acceleration); an attitude controller sees it only through the

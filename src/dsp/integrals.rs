@@ -1,7 +1,7 @@
 //! Cumulative integrals since power-on, from which any output stream takes
 //! its own window by differences — whatever its period, without an
-//! accumulator of its own in the chain (issue 9: the KERNEL's variants, the
-//! IMX's IMU and PIMU).
+//! accumulator of its own in the chain (the KERNEL's variants, the IMX's IMU
+//! and PIMU).
 //!
 //! **What is integrated.** Every tick adds the *pre-FIR measurement* in
 //! carrier axes (after the mounting rotation, before any filter), with the

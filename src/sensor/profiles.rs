@@ -169,10 +169,10 @@ const KERNEL_SOURCE: &str = "emulator figures (Inertial Labs publishes none foun
 misalignment ICD 2.2; ranges ICD 3.2.2";
 const IMX5_SOURCE: &str = "Inertial Sense documentation release 3.1.1 (2026-10-01), \
 docs/index.md Performance Specifications (ARW, VRW, bias instability); range and \
-bandwidth the datasheet quote of issue 19; other terms emulator mid grade";
+bandwidth the IMX-5 datasheet's figures; other terms emulator mid grade";
 const IMX5_2022_SOURCE: &str = "Inertial Sense IS-hdw Products/IMX-5-0/README.md \
 (c 2014-2022; the figures the emulator used before release 3.1.1's); range and \
-bandwidth the datasheet quote of issue 19; other terms emulator mid grade";
+bandwidth the IMX-5 datasheet's figures; other terms emulator mid grade";
 
 /// Every built-in profile, KERNEL models in ICD 2.1 order, then the IMX-5
 /// and its earlier figures.

@@ -537,7 +537,7 @@ pub fn boot_asserted_at_power_on_silences_the_device(kind: Kind) {
 
 // ----- latency -----
 
-/// A reply leaves when the device writes it, as on a wire (issue 13: QEMU's
+/// A reply leaves when the device writes it, as on a wire (QEMU's
 /// UART socket without `nodelay=on` held small writes back ~40 ms, so a rig
 /// measured latencies no real KERNEL has, and the last frame came 40–50 ms
 /// after Stop).
@@ -699,7 +699,7 @@ pub fn tick_cost_largest_udd(kind: Kind) {
     assert_cost(&stats, 11_800, 6_900);
 }
 
-/// The guide's worst case: every filter on (LPF 16 Hz = the order-192 FIR,
+/// The worst case of the tick budget: every filter on (LPF 16 Hz = the order-192 FIR,
 /// all three cascade filters), the aux accelerometer (K120), incremental
 /// output, non-zero mounting angles, and the largest UDD a K120 has.
 pub fn tick_cost_worst_case(kind: Kind) {

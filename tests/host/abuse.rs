@@ -1,4 +1,4 @@
-//! The host runner under abuse (issue 13): what a hostile or broken local
+//! The host runner under abuse: what a hostile or broken local
 //! client does to the real `imu-emu` binary, and what the binary must do
 //! about it — keep the device's ticks on time, keep its memory bounded,
 //! keep running, refuse what is unsafe with one clear line.
@@ -517,8 +517,8 @@ fn a_trajectory_value_beyond_f32_saturates_on_the_wire() {
     );
 }
 
-/// Options that parse but do not go together are refused with one line
-/// (issue 21): a KERNEL model for the IMX-5, a pty link with TCP, a flash
+/// Options that parse but do not go together are refused with one line:
+/// a KERNEL model for the IMX-5, a pty link with TCP, a flash
 /// "file" that cannot hold an image.
 #[test]
 fn options_that_do_not_go_together_are_refused() {

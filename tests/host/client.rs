@@ -1,4 +1,4 @@
-//! End-to-end tests of `imu-emu client …` (issue 11): each subcommand of
+//! End-to-end tests of `imu-emu client …`: each subcommand of
 //! the real binary against the real emulator, checked by what it prints,
 //! what it writes and what the device did.
 

@@ -1,4 +1,4 @@
-//! End-to-end tests of the control socket's product side (issue 11):
+//! End-to-end tests of the control socket's product side:
 //! `help`, `status`, errors that name the syntax, events, and the link
 //! faults, each checked by its effect on the wire of the real binary.
 

@@ -1,4 +1,4 @@
-//! The live motion feed (`--motion-feed`, issue 18) through the real
+//! The live motion feed (`--motion-feed`) through the real
 //! binary: text rows and binary samples over TCP and UDP move the gyros
 //! the GA frames report; bad samples are counted by reason; a silent feed
 //! is reported as a sensor fault (KERNEL USW bit 1, IMX IMU status) and

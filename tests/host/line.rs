@@ -1,5 +1,5 @@
 //! The host runner's line and schedule under abuse, through the real
-//! `imu-emu` binary (issue 13, "The host runner under abuse"): a flood of
+//! `imu-emu` binary (the host runner under abuse): a flood of
 //! UART input must not starve the ticks, and a `--speed` factor beyond what
 //! the host computes must neither pile up ticks nor ignore SIGTERM.
 

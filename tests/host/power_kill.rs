@@ -1,4 +1,4 @@
-//! Power loss through the real binary (issue 13 "Power loss"):
+//! Power loss through the real binary (power loss at any instant):
 //! `imu-emu --flash FILE` is killed with SIGKILL at random moments during
 //! bursts of SaveFlash (ICD 5.3.7), 120 times in a row on one flash file.
 //! After every restart the parameters (ReadRAM, 5.3.8) must equal the

@@ -1,4 +1,4 @@
-//! Sensor profiles through the binary (issue 19): `imu-emu sensor-profile
+//! Sensor profiles through the binary: `imu-emu sensor-profile
 //! show NAME` prints a file that `check` (and `--sensor-profile`) reads
 //! back to the same profile; a bad file is one line naming the key and
 //! its allowed range (exit status 2, nothing listens); `--sensor-profile

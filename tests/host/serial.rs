@@ -1,4 +1,4 @@
-//! End-to-end tests of `--serial DEV` (issue 11): the emulator on a real
+//! End-to-end tests of `--serial DEV`: the emulator on a real
 //! tty — here the slave of a pty pair the test opens, the test playing the
 //! far end of the cable on the master — whose rate follows the device's.
 

@@ -1,4 +1,4 @@
-//! The host runner under abuse, round two (issue 22): what a hostile or
+//! The host runner under abuse, round two: what a hostile or
 //! broken peer does to the real `imu-emu` binary — a serial port that
 //! hangs up, control answers longer than a socket buffer, command bursts
 //! faster than the line, a client tool given absurd timeouts or a peer
@@ -40,7 +40,7 @@ fn answers_to(addr: &str, lines: &str) -> Vec<String> {
     got
 }
 
-/// Issue 22 item 2: 1 000 `help` lines in one write (each answer ≈ 520
+/// 1 000 `help` lines in one write (each answer ≈ 520
 /// bytes, half a megabyte in all, far beyond the 64 KiB output queue)
 /// get 1 000 whole answers, in order; so do 40 `devices` lines of a
 /// 100-device run (≈ 3 KB each). A full queue holds back the next command
@@ -67,7 +67,7 @@ fn every_control_line_gets_its_whole_answer_however_long() {
     assert!(got.iter().all(|l| *l == devices[0]), "an answer differs");
 }
 
-/// Minor items of issue 22: a blank line is answered (`error empty
+/// Smaller cases: a blank line is answered (`error empty
 /// line`, one answer per line), and a device number is canonical
 /// decimal (`dev +1`, `dev 01` are refused, `dev 0` and `dev 10` taken).
 #[test]
@@ -112,7 +112,7 @@ fn run_for(args: &[&str], limit: Duration) -> std::process::Output {
     child.wait_with_output().unwrap()
 }
 
-/// Issue 22 item 5: `client --timeout` takes a finite time in (0, 3600]
+/// `client --timeout` takes a finite time in (0, 3600]
 /// seconds; NaN (which panicked), infinities and absurd values (which
 /// waited for ever) are usage errors, exit status 2, one line naming the
 /// option.
@@ -136,7 +136,7 @@ fn client_timeouts_that_are_not_a_time_are_usage_errors() {
     }
 }
 
-/// Issue 22 item 4: `client record --frames 10` against a peer that
+/// `client record --frames 10` against a peer that
 /// sends only valid frames that are not data (an acknowledgement, every
 /// 20 ms, for ever) ends after `--timeout` with one line saying no data
 /// frame came (it used to wait for ever).
@@ -186,7 +186,7 @@ fn client_record_times_out_when_only_non_data_frames_come() {
     assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
 }
 
-/// Issue 22 (minor): `client decode` streams its input: decoding
+/// `client decode` streams its input: decoding
 /// `/dev/zero` (endless) keeps the process's resident memory small
 /// (under 32 MiB after 1.5 s at GB/s; reading it whole grew without
 /// bound).
@@ -214,7 +214,7 @@ fn client_decode_streams_its_input_in_bounded_memory() {
     assert!(kb("VmHWM:") < 32 * 1024, "peak RSS {} kB", kb("VmHWM:"));
 }
 
-/// Issue 22 item 6: under `ulimit -n 6` a UART client that connects and
+/// under `ulimit -n 6` a UART client that connects and
 /// closes without sending holds the last descriptor; the emulator notices
 /// the close while the device is idle (a client that closed its sending
 /// side and is sent nothing for a second is closed), so the control
@@ -280,7 +280,7 @@ fn dev_info_answered(c: &mut support::Conn) -> bool {
     false
 }
 
-/// Issue 22 item 1 and a minor item: `--serial` says the device powers on
+/// `--serial` says the device powers on
 /// at start (not "when a client connects"); when the port hangs up (the
 /// pty's master closed) the emulator says so once, does not spin (under
 /// 0.2 s of CPU in 1 s; it used to take a whole core) and keeps running;
@@ -424,7 +424,7 @@ fn line_to(
     }
 }
 
-/// Issue 22 item 3: [`BURST`] commands in one write, far faster than the
+/// [`BURST`] commands in one write, far faster than the
 /// line carries them, each get their reply (the device's input is paced
 /// at the line rate whatever the transport delivers at once, so the
 /// replies, each shorter than its command, always fit the line). Before,
@@ -493,7 +493,7 @@ fn an_isb_burst_over_a_serial_port_gets_every_reply() {
     a_burst_gets_every_reply(Via::Serial, true);
 }
 
-/// Issue 22 (minor): saves that fail to reach the flash file (here every
+/// saves that fail to reach the flash file (here every
 /// write refused with EFBIG: `ulimit -f 0` on an existing image, as a
 /// full disk refuses them) are said on stderr at most once a second, with
 /// the count, not once per save.
@@ -531,7 +531,7 @@ fn failed_flash_writes_are_reported_at_most_once_a_second() {
     assert!(err.contains("failed writes so far"), "{err}");
 }
 
-/// Issue 22 (minor): a `--count` start that fails (device 2's flash path
+/// a `--count` start that fails (device 2's flash path
 /// is a directory; device 2's port is taken) leaves none of the `FILE.K`
 /// files it created; a file that was there before stays.
 #[test]
@@ -580,7 +580,7 @@ fn a_fleet_start_that_fails_leaves_no_flash_files() {
     assert!(!k(1).exists() && !k(2).exists(), "FILE.1/FILE.2 left");
 }
 
-/// Issue 22 (minor), a documented decision: the control socket serves one
+/// A documented decision: the control socket serves one
 /// client; a new one replaces the previous one, whose connection is
 /// closed (it reads end of file), and is answered.
 #[test]

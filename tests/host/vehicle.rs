@@ -1,4 +1,4 @@
-//! The vehicle truth through the real binary (issue 18): `--motion` with a
+//! The vehicle truth through the real binary: `--motion` with a
 //! manoeuvre script or a full-state CSV, the control socket's `truth`,
 //! `motion script|file` and `status`, and the motion seen in the GA
 //! frames' rates and accelerations (ICD Table 5.7: gyro HR ·1e5 °/s, acc

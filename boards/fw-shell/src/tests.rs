@@ -310,7 +310,7 @@ fn ga_counters(tx: &[(u64, u8)], skip: usize) -> Vec<u16> {
     out
 }
 
-/// Issue 13: after a stall of the emulated CPU at high line use the
+/// After a stall of the emulated CPU at high line use the
 /// firmware dropped frames in a burst (2 kHz counter jumps) because the
 /// catch-up ran ticks without the line time before them. GA at 250 Hz on
 /// 115 200 bit/s is 40 B × 250 = 10 000 B/s: 86.8 % of the line's

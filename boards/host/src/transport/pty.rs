@@ -493,7 +493,7 @@ mod tests {
         assert_eq!(b, [1, 2, 0x0A, 0x0D]);
 
         // A rate change while the client has the port open leaves the
-        // client's speed alone (issue 11, baud mismatch): the mismatch is
+        // client's speed alone (a baud mismatch): the mismatch is
         // noted and bytes are garbled both ways until the client follows.
         t.set_line_rate(4800).unwrap();
         let mut tio = termios::tcgetattr(&client).unwrap();
