@@ -1,13 +1,14 @@
 //! Byte layouts of the ISB data sets the emulated IMX-5 serves, with the
 //! status bits and option words that go in them.
 //!
-//! Every struct is packed little-endian (`docs/protocol-facts.md` "ISB").
-//! Each module below gives the byte offset of every field and `SIZE`; the
-//! typed structs
-//! ([`DevInfo`], [`Imu`], [`Pimu`], [`Rmc`], [`SystemCommand`],
-//! [`StrobeInTime`], [`SysParams`], [`Bit`]) encode to and decode from a
-//! `[u8; SIZE]`; FLASH_CONFIG stays a byte image ([`FlashConfig`]) with
-//! accessors, because a SET_DATA writes into it at any offset. Sources:
+//! Every struct is packed little-endian (`docs/protocol-facts.md` "ISB")
+//! and declared once with [`crate::data_set!`]: its module gives the byte
+//! offset of every field, `SIZE` and the named fields (`FIELDS`); the
+//! typed structs ([`DevInfo`], [`Imu`], [`Pimu`], [`Rmc`],
+//! [`SystemCommand`], [`StrobeInTime`], [`SysParams`], [`NvmFlashCfg`],
+//! [`Bit`]) encode to and decode from a `[u8; SIZE]`. The device keeps
+//! FLASH_CONFIG as a byte image ([`FlashConfig`]) with accessors, because
+//! a SET_DATA writes into it at any offset. Sources:
 //! protocol-facts.md "ISB" first; fields it does not list (FLASH_CONFIG
 //! past `ser2BaudRate`, `bit_t`) from the SDK's `data_sets.h` of protocol 2.1
 //! (`PROTOCOL_VERSION_CHAR1 1`). `docs/isb-data-sets.md` lists every
