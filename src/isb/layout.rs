@@ -268,13 +268,19 @@ pub const fn moved(spec: FieldSpec, name: &'static str, by: usize) -> FieldSpec 
 }
 
 /// The fields of a nested struct moved to its offset `by`, each renamed
-/// per `renames` (`(its name, the name here)`).
+/// per `renames` (`(its name, the name here)`; a rename of a field the
+/// struct does not name fails to compile).
 #[doc(hidden)]
 pub const fn nested<const N: usize>(
     fields: &[FieldSpec],
     by: usize,
     renames: &[(&str, &'static str)],
 ) -> [FieldSpec; N] {
+    let mut r = 0;
+    while r < renames.len() {
+        let _ = named(fields, renames[r].0);
+        r += 1;
+    }
     let mut out = [PLACEHOLDER; N];
     let mut i = 0;
     while i < N {
