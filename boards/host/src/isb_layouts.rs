@@ -106,4 +106,12 @@ mod tests {
         ));
         assert_eq!(quoted("a\"b\\c\n"), "\"a\\\"b\\\\c\\u000a\"");
     }
+
+    #[test]
+    fn text_lists_each_set_then_its_fields() {
+        let t = to_text(&DATA_SETS);
+        assert!(t.starts_with("1 DEV_INFO dev_info_t (84 B)\n     2 u8     hardwareType\n"));
+        assert!(t.contains("58 IMU imu_t (36 B)\n     0 f64    time s\n     8 u32    status\n"));
+        assert!(t.contains("17 GPS1_VERSION gps_version_t (220 B)\n19 MAG_CAL"));
+    }
 }
