@@ -207,23 +207,23 @@ def decode_set(did: int, data: bytes) -> Dict[str, Value]:
     return dict(zip(columns(did), values))
 
 
+#: Names of the field that carries a set's device time (as the binary's
+#: decoder reads it): s since boot, GPS s of the week, or GPS ms of the week.
+TIME_FIELDS = ("time", "timeOfWeek", "timeOfWeekMs")
+
+
 def device_time(did: int, data: bytes) -> Optional[float]:
-    """The device time a set carries, s: ``time`` (since boot) of the IMU,
-    PIMU, magnetometer, barometer and sensor sets; the GPS time of week of
-    INS_1..4, GPS1_POS, GPS1_VEL, GPS1_SIG; ``timeOfWeekMs`` / 1000 of
-    STROBE_IN_TIME and SYS_PARAMS."""
-    if did in (IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER, SYS_SENSORS):
-        return struct.unpack_from("<d", data, 0)[0]
-    if did in (INS_1, INS_2, INS_3, INS_4):
-        return struct.unpack_from("<d", data, 4)[0]
-    if did == GPS1_POS:
-        return struct.unpack_from("<I", data, 4)[0] / 1000.0
-    if did in (GPS1_VEL, GPS1_SIG):
-        return struct.unpack_from("<I", data, 0)[0] / 1000.0
-    if did == STROBE_IN_TIME:
-        return struct.unpack_from("<I", data, 4)[0] / 1000.0
-    if did == SYS_PARAMS:
-        return struct.unpack_from("<I", data, 0)[0] / 1000.0
+    """The device time a set carries, s: its first field named in
+    :data:`TIME_FIELDS` (``time`` since boot of the IMU, PIMU,
+    magnetometer, barometer and sensor sets; the GPS time of week of
+    INS_1..4, INL2_*, GPS1_*; ``timeOfWeekMs`` / 1000 of STROBE_IN_TIME and
+    SYS_PARAMS); ``None`` for a set with none."""
+    if did not in LAYOUTS:
+        return None
+    for name, off, kind, unit in LAYOUTS[did][3]:
+        if name in TIME_FIELDS:
+            (value,) = struct.unpack_from("<d" if kind == "f64" else "<I", data, off)
+            return value / 1000.0 if unit == "ms" else float(value)
     return None
 
 

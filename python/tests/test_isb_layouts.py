@@ -3,7 +3,10 @@ the generated part of ``docs/isb-data-sets.md``) are what the program's
 own declarations give (``imu-emu isb-layouts --json``)."""
 
 import importlib.util
+import json
+import subprocess
 import sys
+import tempfile
 import unittest
 from pathlib import Path
 
@@ -43,6 +46,34 @@ class LayoutsTest(unittest.TestCase):
             isb_layouts.LAYOUTS,
         )
         self.assertEqual(isb.SETS[isb.FLASH_CONFIG][2][4], ("startupNavDtMs", 16, "u32"))
+
+    def test_device_time_is_the_binarys(self):
+        from imu_emu import isb
+
+        with imu_emu.Emulator(["--protocol", "isb"]) as emu:
+            raw = b""
+            for d in sorted(set(isb.SETS) - {isb.SYS_CMD}):
+                emu.send(isb.get_data(d))
+                raw += emu.frame(d).raw
+        with tempfile.NamedTemporaryFile(suffix=".bin") as f:
+            f.write(raw)
+            f.flush()
+            out = subprocess.run(
+                [imu_emu.find_binary(), "client", "--protocol", "isb", "decode", f.name, "--to", "json"],
+                check=True, capture_output=True, text=True,
+            ).stdout
+        rows = [json.loads(line) for line in out.splitlines()]
+        packets = [p for p in isb.PacketReader().feed(raw) if p.whole_set() is not None]
+        self.assertEqual(len(rows), len(packets))
+        timed = 0
+        for p, r in zip(packets, rows):
+            t = isb.device_time(p.did, p.payload)
+            if t is None:
+                self.assertNotIn("device_time_s", r, p.did)
+            else:
+                timed += 1
+                self.assertAlmostEqual(t, r["device_time_s"], places=6, msg=str(p.did))
+        self.assertEqual(timed, 22)
 
 
 if __name__ == "__main__":

@@ -640,27 +640,24 @@ pub fn find(name: &str) -> Option<(u8, &'static FieldSpec)> {
     hits.next().is_none().then_some(first)
 }
 
-/// The device time a data set carries, in seconds: `time` (s since boot)
-/// of IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG, MAGNETOMETER, BAROMETER and
-/// SYS_SENSORS; the GPS time of week of INS_1..4 (`timeOfWeek`), GPS1_POS,
-/// GPS1_VEL, GPS1_SAT and GPS1_SIG (`timeOfWeekMs`); `timeOfWeekMs` of STROBE_IN_TIME and
-/// SYS_PARAMS. `None` for the others.
+/// Names of the field that carries a data set's device time: `time` (s
+/// since boot: IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG,
+/// MAGNETOMETER, BAROMETER, SYS_SENSORS), `timeOfWeek` (GPS s of the week:
+/// INS_1..4, INL2_STATES) or `timeOfWeekMs` (ms: GPS1_POS, GPS1_RCVR_POS,
+/// GPS1_VEL, GPS1_SAT, GPS1_SIG, INL2_NED_SIGMA, STROBE_IN_TIME,
+/// SYS_PARAMS).
+pub const TIME_FIELDS: [&str; 3] = ["time", "timeOfWeek", "timeOfWeekMs"];
+
+/// The device time a data set carries, in seconds: its first field named
+/// in [`TIME_FIELDS`] (in ms when its unit says so); `None` for a set
+/// with none.
 pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
-    use super::nav_sets::{gps_pos, gps_sat, gps_vel, inl2_ned_sigma, inl2_states};
-    use super::sets::le;
-    match did {
-        IMU | IMU_RAW | IMU3_RAW | PIMU | IMU_MAG | PIMU_MAG | MAGNETOMETER | BAROMETER
-        | SYS_SENSORS => Some(le::f64(b, 0)),
-        // GPS seconds of the week.
-        INS_1 | INS_2 | INS_3 | INS_4 => Some(le::f64(b, 4)),
-        INL2_STATES => Some(le::f64(b, inl2_states::TIME_OF_WEEK)),
-        INL2_NED_SIGMA => Some(f64::from(le::u32(b, inl2_ned_sigma::TIME_OF_WEEK_MS)) / 1e3),
-        GPS1_POS | GPS1_RCVR_POS => Some(f64::from(le::u32(b, gps_pos::TIME_OF_WEEK_MS)) / 1e3),
-        GPS1_VEL => Some(f64::from(le::u32(b, gps_vel::TIME_OF_WEEK_MS)) / 1e3),
-        GPS1_SAT => Some(f64::from(le::u32(b, gps_sat::TIME_OF_WEEK_MS)) / 1e3),
-        GPS1_SIG => Some(f64::from(le::u32(b, aux_sets::gps_sig::TIME_OF_WEEK_MS)) / 1e3),
-        STROBE_IN_TIME => Some(f64::from(le::u32(b, sets::strobe::TIME_OF_WEEK_MS)) / 1e3),
-        SYS_PARAMS => Some(f64::from(le::u32(b, sets::sys_params::TIME_OF_WEEK_MS)) / 1e3),
+    let (_, fields) = set(did)?;
+    let f = fields.iter().find(|f| TIME_FIELDS.contains(&f.name))?;
+    let scale = if f.unit == "ms" { 1e3 } else { 1.0 };
+    match super::layout::read(f, b) {
+        super::layout::Value::Float(s) => Some(s / scale),
+        super::layout::Value::Unsigned(n) => Some(n as f64 / scale),
         _ => None,
     }
 }
@@ -738,5 +735,40 @@ mod tests {
         );
         assert_eq!(device_time(IMU, &b), Some(1.5));
         assert_eq!(device_time(RMC, &b), None);
+        let timed: heapless::Vec<u8, 64> = DATA_SETS
+            .iter()
+            .filter(|s| device_time(s.did, &[0; MAX_SIZE]).is_some())
+            .map(|s| s.did)
+            .collect();
+        assert_eq!(
+            timed,
+            [
+                PIMU,
+                SYS_PARAMS,
+                IMU,
+                STROBE_IN_TIME,
+                IMU3_RAW,
+                IMU_RAW,
+                INS_1,
+                INS_2,
+                INS_3,
+                INS_4,
+                INL2_STATES,
+                INL2_NED_SIGMA,
+                GPS1_POS,
+                GPS1_RCVR_POS,
+                GPS1_VEL,
+                GPS1_SAT,
+                GPS1_SIG,
+                MAGNETOMETER,
+                BAROMETER,
+                SYS_SENSORS,
+                IMU_MAG,
+                PIMU_MAG
+            ]
+        );
+        let mut g = [0u8; 92];
+        g[4..8].copy_from_slice(&1234u32.to_le_bytes());
+        assert_eq!(device_time(GPS1_POS, &g), Some(1.234));
     }
 }
