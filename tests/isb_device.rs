@@ -2,7 +2,7 @@
 //! bytes, ticks and pin edges exactly as a board drives it, answers read
 //! back with the ISB packet decoder (`src/isb/device.rs`; `docs/isb.md`).
 
-use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::device::{Device, Level, Pin};
 use imu_emu::earth;
 use imu_emu::isb::did;
 use imu_emu::isb::ins::{self, NavFaults};
@@ -19,9 +19,10 @@ use imu_emu::isb::sets::{
 };
 use imu_emu::isb::Isb;
 use imu_emu::sensor::Motion;
-use imu_emu::{Instant, Product, RamNor};
+use imu_emu::Instant;
 
-type Flash = RamNor<16384>;
+mod common;
+use common::isb::{get, imx5, IsbFlash as Flash};
 
 /// A received packet.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,18 +49,6 @@ fn hex(s: &str) -> Vec<u8> {
         .collect()
 }
 
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 64];
-    let n = message::encode_get(&req, &mut out).unwrap();
-    out[..n].to_vec()
-}
-
 fn set(did: u8, offset: u16, data: &[u8]) -> Vec<u8> {
     let mut out = [0u8; 512];
     let n = message::encode_set(did, offset, data, &mut out).unwrap();
@@ -72,15 +61,7 @@ impl Bench {
     }
 
     fn with_flash(flash: Flash) -> Self {
-        let dev = Device::<Flash, Isb>::new(
-            PowerOn {
-                product: Product::imx5(),
-                boot: None,
-                seed: 11,
-            },
-            flash,
-            Instant::ZERO,
-        );
+        let dev = imx5(11, flash);
         Bench {
             dev,
             now: 0,

@@ -3,40 +3,22 @@
 //! own emulated IMU integrated by the filter, aided by its receiver,
 //! barometer and magnetometer; read back as bytes (INS_1/INS_2, INL2_*).
 
-use imu_emu::device::{Device, PowerOn};
+use imu_emu::device::Device;
 use imu_emu::isb::did;
 use imu_emu::isb::ins::NavFaults;
-use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::nav;
 use imu_emu::isb::nav_sets::{ins_status, Inl2NedSigma, Inl2States, Ins1, Ins2};
 use imu_emu::isb::packet::Decoder;
 use imu_emu::isb::Isb;
 use imu_emu::math::double::{rotate, V3};
-use imu_emu::sensor::profile::{arw_to_density, vrw_to_density, SensorProfile};
+use imu_emu::sensor::profile::SensorProfile;
 use imu_emu::sensor::profiles::IMX5_PROFILE;
-use imu_emu::vehicle::{Manoeuvres, Script, VehicleState};
-use imu_emu::{Instant, Product, RamNor};
+use imu_emu::vehicle::{Manoeuvres, VehicleState};
+use imu_emu::Instant;
 
-type Flash = RamNor<16384>;
+mod common;
+use common::isb::{flight, get, IsbFlash as Flash, CONSUMER};
 
-/// A consumer-grade MEMS IMU (a phone-class part): gyro ARW 0.6 °/√h and
-/// bias instability 36 °/h, accelerometer VRW 0.1 m/s/√h and bias
-/// instability 1 mg; the rest as the IMX-5's.
-static CONSUMER: SensorProfile = {
-    let mut p = IMX5_PROFILE;
-    p.gyro.noise_density = arw_to_density(0.6);
-    p.gyro.bias_instability = 36.0 / 3600.0;
-    p.acc.noise_density = vrw_to_density(0.1);
-    p.acc.bias_instability = 1e-3;
-    p
-};
-
-/// The flight: still for 60 s (alignment, first fix, bias settling), a
-/// take-off run, turns, a climb and descent, then straight and level
-/// (where the outage falls), 7 minutes.
-const FLIGHT: &str = "start 45.5 7.25 300 30 0; hold 60; accel 2 15; hold 20; \
-    coord-turn 3 30; hold 20; climb 5 20; hold 10; descend 5 20; hold 10; \
-    coord-turn -3 30; hold 20; accel 1 5; hold 150";
 /// The outage: from here, 60 s.
 const OUTAGE_AT_S: f64 = 330.0;
 const OUTAGE_S: f64 = 60.0;
@@ -48,34 +30,9 @@ struct Run {
     reader: Decoder<4096>,
 }
 
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 64];
-    let n = message::encode_get(&req, &mut out).unwrap();
-    out[..n].to_vec()
-}
-
 impl Run {
     fn new(profile: &'static SensorProfile, seed: u64) -> Self {
-        let mut dev = Device::<Flash, Isb>::new(
-            PowerOn {
-                product: Product::imx5(),
-                boot: None,
-                seed,
-            },
-            Flash::new(),
-            Instant::ZERO,
-        );
-        dev.chain_mut().set_profile(Some(profile));
-        let mut script = Manoeuvres::new(Script::parse(FLIGHT).unwrap());
-        let s = script.at(0.0);
-        dev.chain_mut().set_vehicle(s, s.truth());
-        dev.power_cycle(Instant::ZERO);
+        let (dev, script) = flight(profile, seed);
         Run {
             dev,
             script,

@@ -3,18 +3,17 @@
 //! NMEA and ISB interleaved whole on one line (`src/isb/asce.rs`,
 //! `src/isb/nmea_out.rs`, `src/isb/nmea_stream.rs`; `docs/isb.md` "NMEA").
 
-use imu_emu::device::{Device, Level, Pin, PowerOn};
+use imu_emu::device::{Device, Level, Pin};
 use imu_emu::isb::did;
-use imu_emu::isb::message::{self, GetRequest};
+use imu_emu::isb::message::{self};
 use imu_emu::isb::nav_sets::{GpsPos, Ins1, Ins2};
 use imu_emu::isb::nmea::checksum;
 use imu_emu::isb::Isb;
-use imu_emu::{Instant, Product, RamNor};
+use imu_emu::Instant;
 
 mod common;
+use common::isb::{get, imx5, IsbFlash as Flash};
 use common::xorshift::XorShift;
-
-type Flash = RamNor<16384>;
 
 /// What came out of the line, split into whole ISB packets and whole
 /// sentences (a cut message fails the split).
@@ -35,33 +34,13 @@ fn sentence(body: &str) -> Vec<u8> {
     format!("${body}*{:02X}\r\n", checksum(body.as_bytes())).into_bytes()
 }
 
-fn get(did: u8, period: u16) -> Vec<u8> {
-    let req = GetRequest {
-        did: u16::from(did),
-        size: 0,
-        offset: 0,
-        period,
-    };
-    let mut out = [0u8; 64];
-    let n = message::encode_get(&req, &mut out).unwrap();
-    out[..n].to_vec()
-}
-
 impl Bench {
     fn new() -> Self {
         Self::with_flash(Flash::new())
     }
 
     fn with_flash(flash: Flash) -> Self {
-        let dev = Device::<Flash, Isb>::new(
-            PowerOn {
-                product: Product::imx5(),
-                boot: None,
-                seed: 11,
-            },
-            flash,
-            Instant::ZERO,
-        );
+        let dev = imx5(11, flash);
         Bench {
             dev,
             now: 0,

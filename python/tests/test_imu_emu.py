@@ -347,7 +347,8 @@ class DecoderTest(unittest.TestCase):
                       isb.INS_1, isb.INS_2, isb.INS_3, isb.INS_4, isb.GPS1_POS, isb.GPS1_VEL,
                       isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS,
                       isb.SYS_FAULT, isb.GPS1_VERSION, isb.MAG_CAL, isb.GPS1_SIG, isb.IMU3_RAW,
-                      isb.PORT_MONITOR):
+                      isb.PORT_MONITOR, isb.NMEA_BCAST_PERIOD, isb.GPS1_RCVR_POS, isb.GPS1_SAT,
+                      isb.INL2_STATES, isb.INL2_NED_SIGMA):
                 emu.send(isb.get_data(d))
                 raw += emu.frame(d).raw
             emu.send(isb.stop_all())

@@ -230,16 +230,29 @@ impl Table {
     }
 }
 
-/// `nmea_msgs_t` (DID 8, `NMEA_BCAST_PERIOD`; SDK 2.7.1 `data_sets.h`):
-/// `u32 options`, then [`MAX_PAIRS`] × `{u8 msgID, u8 period}`; an ID 0
-/// ends the list.
-pub mod nmea_msgs {
-    /// Struct size, bytes.
-    pub const SIZE: usize = 44;
-    /// Offset of `options`.
-    pub const OPTIONS: usize = 0;
-    /// Offset of the first `{msgID, period}` pair.
-    pub const MSGS: usize = 4;
+crate::data_set! {
+    /// `{u8 msgID, u8 period}`: one entry of `nmea_msgs_t`.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct NmeaMsg in mod nmea_msg, 2 bytes {
+        /// Sentence ID (0 ends the list).
+        msg_id: u8 = MSG_ID @ 0 => ["msgID"],
+        /// Period, in the sentence's source periods.
+        period: u8 = PERIOD @ 1 => ["period"],
+    }
+}
+
+crate::data_set! {
+    /// `nmea_msgs_t` (DID 8, `NMEA_BCAST_PERIOD`; SDK 2.7.1 `data_sets.h`):
+    /// `u32 options`, then [`MAX_PAIRS`] × `{u8 msgID, u8 period}`; an ID 0
+    /// ends the list.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    pub struct NmeaMsgs in mod nmea_msgs, 44 bytes {
+        /// `$ASCE` options.
+        options: u32 = OPTIONS @ 0 => ["options"],
+        /// The pairs.
+        msgs: [NmeaMsg; MAX_PAIRS] = MSGS @ 4 => [each "nmeaBroadcastMsgs"
+            [0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19] ["msgID", "period"]],
+    }
 }
 
 impl Table {

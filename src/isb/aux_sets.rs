@@ -10,21 +10,21 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct SystemFault in mod sys_fault, 32 bytes {
         /// `eSysFaultStatus` bits (0: hardware reset, no fault).
-        status: u32 = STATUS @ 0,
+        status: u32 = STATUS @ 0 => ["status"],
         /// Task running at the fault.
-        g1_task: u32 = G1_TASK @ 4,
+        g1_task: u32 = G1_TASK @ 4 => ["g1Task"],
         /// Source file number of the fault.
-        g2_file_num: u32 = G2_FILE_NUM @ 8,
+        g2_file_num: u32 = G2_FILE_NUM @ 8 => ["g2FileNum"],
         /// Source line number of the fault.
-        g3_line_num: u32 = G3_LINE_NUM @ 12,
+        g3_line_num: u32 = G3_LINE_NUM @ 12 => ["g3LineNum"],
         /// Multipurpose register.
-        g4: u32 = G4 @ 16,
+        g4: u32 = G4 @ 16 => ["g4"],
         /// Link register at the fault.
-        g5_lr: u32 = G5_LR @ 20,
+        g5_lr: u32 = G5_LR @ 20 => ["g5Lr"],
         /// Program counter at the fault.
-        pc: u32 = PC @ 24,
+        pc: u32 = PC @ 24 => ["pc"],
         /// Program status register at the fault.
-        psr: u32 = PSR @ 28,
+        psr: u32 = PSR @ 28 => ["psr"],
     }
 }
 
@@ -85,11 +85,11 @@ crate::data_set! {
     pub struct MagCal in mod mag_cal, 12 bytes {
         /// `eMagCalState`: commands 1 multi-axis, 2 single-axis, 101 abort;
         /// status 200 running, 201 done.
-        state: u32 = STATE @ 0,
+        state: u32 = STATE @ 0 => ["state"],
         /// Progress, 0..100 %.
-        progress: f32 = PROGRESS @ 4,
+        progress: f32 = PROGRESS @ 4 => ["progress" in "%"],
         /// Magnetic declination estimate, rad.
-        declination: f32 = DECLINATION @ 8,
+        declination: f32 = DECLINATION @ 8 => ["declination" in "rad"],
     }
 }
 
@@ -114,15 +114,15 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct GpsSigSv in mod gps_sig_sv, 7 bytes {
         /// Constellation (`eSatSvGnssId`, as `gps_sat_sv_t.gnssId`).
-        gnss_id: u8 = GNSS_ID @ 0,
+        gnss_id: u8 = GNSS_ID @ 0 => ["gnssId"],
         /// Satellite number within the constellation.
-        sv_id: u8 = SV_ID @ 1,
+        sv_id: u8 = SV_ID @ 1 => ["svId"],
         /// Signal (`eSatSvSigId`: GPS L1 C/A 0).
-        sig_id: u8 = SIG_ID @ 2,
+        sig_id: u8 = SIG_ID @ 2 => ["sigId"],
         /// Carrier-to-noise density, dBHz.
-        cno: u8 = CNO @ 3,
+        cno: u8 = CNO @ 3 => ["cno" in "dBHz"],
         /// `eSatSigQuality` (5..7: code and carrier locked).
-        quality: u8 = QUALITY @ 4,
+        quality: u8 = QUALITY @ 4 => ["quality"],
         /// [`sig_status`] bits (`eSatSigStatus`).
         status: u16 = STATUS @ 5,
     }
@@ -137,11 +137,11 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq)]
     pub struct GpsSig in mod gps_sig, 708 bytes {
         /// GPS time of week of the receiver's epoch, ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0 => ["timeOfWeekMs" in "ms"],
         /// Entries of `sig` in use.
-        num_sigs: u32 = NUM_SIGS @ 4,
+        num_sigs: u32 = NUM_SIGS @ 4 => ["numSigs"],
         /// The signals.
-        sig: [GpsSigSv; MAX_NUM_SAT_SIGNALS] = SIG @ 8,
+        sig: [GpsSigSv; MAX_NUM_SAT_SIGNALS] = SIG @ 8 => [..],
     }
 }
 
@@ -189,9 +189,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Imus in mod imus, 24 bytes {
         /// Angular rate, rad/s.
-        pqr: [f32; 3] = PQR @ 0,
+        pqr: [f32; 3] = PQR @ 0 => ["pqr" in "rad/s"],
         /// Specific force, m/s².
-        acc: [f32; 3] = ACC @ 12,
+        acc: [f32; 3] = ACC @ 12 => ["acc" in "m/s²"],
     }
 }
 
@@ -201,11 +201,11 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Imu3 in mod imu3, 84 bytes {
         /// Seconds since boot.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// IMU status word (as `imu_t.status`).
-        status: u32 = STATUS @ 8,
+        status: u32 = STATUS @ 8 => ["status"],
         /// IMU 1, 2, 3.
-        imu: [Imus; 3] = I @ 12,
+        imu: [Imus; 3] = I @ 12 => [..],
     }
 }
 
@@ -216,25 +216,25 @@ crate::data_set! {
     pub struct PortMonitorSet in mod port_monitor_set, 37 bytes {
         /// High nibble the port type (`ePortMonPortType`: 1 UART, 2 USB,
         /// 3 SPI, 4 I2C, 5 CAN), low nibble its index.
-        port_info: u8 = PORT_INFO @ 0,
+        port_info: u8 = PORT_INFO @ 0 => ["portInfo"],
         /// Status.
-        status: u32 = STATUS @ 1,
+        status: u32 = STATUS @ 1 => ["status"],
         /// Bytes sent in the last whole second.
-        tx_bytes_per_sec: u32 = TX_BYTES_PER_SEC @ 5,
+        tx_bytes_per_sec: u32 = TX_BYTES_PER_SEC @ 5 => ["txBytesPerSec" in "B/s"],
         /// Bytes received in the last whole second.
-        rx_bytes_per_sec: u32 = RX_BYTES_PER_SEC @ 9,
+        rx_bytes_per_sec: u32 = RX_BYTES_PER_SEC @ 9 => ["rxBytesPerSec" in "B/s"],
         /// Bytes sent since power-on.
-        tx_bytes: u32 = TX_BYTES @ 13,
+        tx_bytes: u32 = TX_BYTES @ 13 => ["txBytes" in "B"],
         /// Bytes received since power-on.
-        rx_bytes: u32 = RX_BYTES @ 17,
+        rx_bytes: u32 = RX_BYTES @ 17 => ["rxBytes" in "B"],
         /// Writes that could not send all their data.
-        tx_data_drops: u32 = TX_DATA_DROPS @ 21,
+        tx_data_drops: u32 = TX_DATA_DROPS @ 21 => ["txDataDrops"],
         /// Receive buffer overflows.
-        rx_overflows: u32 = RX_OVERFLOWS @ 25,
+        rx_overflows: u32 = RX_OVERFLOWS @ 25 => ["rxOverflows"],
         /// Bytes not sent.
-        tx_bytes_dropped: u32 = TX_BYTES_DROPPED @ 29,
+        tx_bytes_dropped: u32 = TX_BYTES_DROPPED @ 29 => ["txBytesDropped" in "B"],
         /// Checksum failures received.
-        rx_checksum_errors: u32 = RX_CHECKSUM_ERRORS @ 33,
+        rx_checksum_errors: u32 = RX_CHECKSUM_ERRORS @ 33 => ["rxChecksumErrors"],
     }
 }
 
@@ -250,9 +250,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct PortMonitor in mod port_monitor, 223 bytes {
         /// The ports (the first `active_ports` in use).
-        port: [PortMonitorSet; NUM_SERIAL_PORTS] = PORT @ 0,
+        port: [PortMonitorSet; NUM_SERIAL_PORTS] = PORT @ 0 => [..],
         /// Ports in use.
-        active_ports: u8 = ACTIVE_PORTS @ 222,
+        active_ports: u8 = ACTIVE_PORTS @ 222 => ["activePorts"],
     }
 }
 

@@ -8,7 +8,9 @@
 //! outside the table is [`classify`]: NACK for DID ≥ [`DID_COUNT`] and for
 //! DID 95, silence for any other DID the table does not hold.
 
+use super::asce::nmea_msgs;
 use super::aux_sets::{self, rmc_aux};
+use super::layout::FieldSpec;
 use super::nav_sets::{
     barometer, gps_pos, gps_sat, gps_vel, imu_mag, inl2_ned_sigma, inl2_states, ins1, ins2, ins3,
     ins4, magnetometer, pimu_mag, rmc_nav, sys_sensors,
@@ -167,10 +169,15 @@ impl Range {
 pub struct DataSet {
     /// Its DID.
     pub did: u8,
+    /// Its name in `data_sets.h` without `DID_` (`FLASH_CONFIG`).
+    pub did_name: &'static str,
     /// The C type name in `data_sets.h`, for diagnostics.
     pub name: &'static str,
     /// Size of the packed struct, bytes.
     pub size: u16,
+    /// The fields a host reads by name: the table its layout's
+    /// [`crate::data_set!`] declaration makes.
+    pub fields: &'static [FieldSpec],
     /// What a stream period multiplies.
     pub source: Source,
     /// The byte ranges a SET_DATA may change; every other byte is read-only
@@ -192,7 +199,7 @@ const NONE: &[Range] = &[];
 const ALL_RMC: &[Range] = &[Range::new(0, sets::rmc::SIZE as u16)];
 const ALL_SYS_CMD: &[Range] = &[Range::new(0, sets::sys_cmd::SIZE as u16)];
 /// NMEA_BCAST_PERIOD: all (options and pairs).
-const ALL_NMEA_MSGS: &[Range] = &[Range::new(0, crate::isb::asce::nmea_msgs::SIZE as u16)];
+const ALL_NMEA_MSGS: &[Range] = &[Range::new(0, nmea_msgs::SIZE as u16)];
 /// SYS_PARAMS: only `genFaultCode` ("set to zero to reset fault code",
 /// `data_sets.h`); the rest is the device's report.
 const SYS_PARAMS_W: &[Range] = &[Range::new(
@@ -217,11 +224,21 @@ const MAG_CAL_W: &[Range] = &[Range::new(0, 4)];
 
 /// A read-only data set (`docs/isb-data-sets.md` "Navigation data sets",
 /// "Status, version, calibration and signal data sets").
-const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: u64) -> DataSet {
+const fn nav(
+    did: u8,
+    did_name: &'static str,
+    name: &'static str,
+    size: usize,
+    fields: &'static [FieldSpec],
+    source: Source,
+    rmc_bit: u64,
+) -> DataSet {
     DataSet {
         did,
+        did_name,
         name,
         size: size as u16,
+        fields,
         source,
         writable: NONE,
         rmc_bit,
@@ -232,237 +249,301 @@ const fn nav(did: u8, name: &'static str, size: usize, source: Source, rmc_bit: 
 pub const DATA_SETS: [DataSet; 32] = [
     DataSet {
         did: DEV_INFO,
+        did_name: "DEV_INFO",
         name: "dev_info_t",
         size: sets::dev_info::SIZE as u16,
+        fields: sets::dev_info::FIELDS,
         source: Source::Millisecond,
         writable: NONE,
         rmc_bit: 0,
     },
     nav(
         SYS_FAULT,
+        "SYS_FAULT",
         "system_fault_t",
         aux_sets::sys_fault::SIZE,
+        aux_sets::sys_fault::FIELDS,
         Source::Millisecond,
         0,
     ),
     DataSet {
         did: PIMU,
+        did_name: "PIMU",
         name: "pimu_t",
         size: sets::pimu::SIZE as u16,
+        fields: sets::pimu::FIELDS,
         source: Source::NavDt,
         writable: NONE,
         rmc_bit: sets::rmc::BITS_PIMU,
     },
     DataSet {
         did: SYS_CMD,
+        did_name: "SYS_CMD",
         name: "system_command_t",
         size: sets::sys_cmd::SIZE as u16,
+        fields: sets::sys_cmd::FIELDS,
         source: Source::Millisecond,
         writable: ALL_SYS_CMD,
         rmc_bit: 0,
     },
     DataSet {
         did: NMEA_BCAST_PERIOD,
+        did_name: "NMEA_BCAST_PERIOD",
         name: "nmea_msgs_t",
-        size: crate::isb::asce::nmea_msgs::SIZE as u16,
+        size: nmea_msgs::SIZE as u16,
+        fields: nmea_msgs::FIELDS,
         source: Source::Millisecond,
         writable: ALL_NMEA_MSGS,
         rmc_bit: 0,
     },
     DataSet {
         did: RMC,
+        did_name: "RMC",
         name: "rmc_t",
         size: sets::rmc::SIZE as u16,
+        fields: sets::rmc::FIELDS,
         source: Source::Millisecond,
         writable: ALL_RMC,
         rmc_bit: 0,
     },
     DataSet {
         did: SYS_PARAMS,
+        did_name: "SYS_PARAMS",
         name: "sys_params_t",
         size: sets::sys_params::SIZE as u16,
+        fields: sets::sys_params::FIELDS,
         source: Source::Millisecond,
         writable: SYS_PARAMS_W,
         rmc_bit: 0,
     },
     DataSet {
         did: FLASH_CONFIG,
+        did_name: "FLASH_CONFIG",
         name: "nvm_flash_cfg_t",
         size: sets::flash::SIZE as u16,
+        fields: sets::flash::FIELDS,
         source: Source::Millisecond,
         writable: FLASH_W,
         rmc_bit: 0,
     },
     nav(
         GPS1_VERSION,
+        "GPS1_VERSION",
         "gps_version_t",
         aux_sets::gps_version::SIZE,
+        aux_sets::gps_version::FIELDS,
         Source::Millisecond,
         0,
     ),
     DataSet {
         did: MAG_CAL,
+        did_name: "MAG_CAL",
         name: "mag_cal_t",
         size: aux_sets::mag_cal::SIZE as u16,
+        fields: aux_sets::mag_cal::FIELDS,
         source: Source::Millisecond,
         writable: MAG_CAL_W,
         rmc_bit: 0,
     },
     DataSet {
         did: IMU,
+        did_name: "IMU",
         name: "imu_t",
         size: sets::imu::SIZE as u16,
+        fields: sets::imu::FIELDS,
         source: Source::NavDt,
         writable: NONE,
         rmc_bit: sets::rmc::BITS_IMU,
     },
     DataSet {
         did: BIT,
+        did_name: "BIT",
         name: "bit_t",
         size: sets::bit::SIZE as u16,
+        fields: sets::bit::FIELDS,
         source: Source::Millisecond,
         writable: BIT_W,
         rmc_bit: 0,
     },
     nav(
         PORT_MONITOR,
+        "PORT_MONITOR",
         "port_monitor_t",
         aux_sets::port_monitor::SIZE,
+        aux_sets::port_monitor::FIELDS,
         Source::Millisecond,
         0,
     ),
     DataSet {
         did: STROBE_IN_TIME,
+        did_name: "STROBE_IN_TIME",
         name: "strobe_in_time_t",
         size: sets::strobe::SIZE as u16,
+        fields: sets::strobe::FIELDS,
         source: Source::Millisecond,
         writable: NONE,
         rmc_bit: sets::rmc::BITS_STROBE_IN_TIME,
     },
     nav(
         IMU3_RAW,
+        "IMU3_RAW",
         "imu3_t",
         aux_sets::imu3::SIZE,
+        aux_sets::imu3::FIELDS,
         Source::ImuDt,
         rmc_aux::BITS_IMU3_RAW,
     ),
     DataSet {
         did: IMU_RAW,
+        did_name: "IMU_RAW",
         name: "imu_t",
         size: sets::imu::SIZE as u16,
+        fields: sets::imu::FIELDS,
         source: Source::ImuDt,
         writable: NONE,
         rmc_bit: sets::rmc::BITS_IMU_RAW,
     },
     nav(
         INS_1,
+        "INS_1",
         "ins_1_t",
         ins1::SIZE,
+        ins1::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_INS1,
     ),
     nav(
         INS_2,
+        "INS_2",
         "ins_2_t",
         ins2::SIZE,
+        ins2::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_INS2,
     ),
     nav(
         INS_3,
+        "INS_3",
         "ins_3_t",
         ins3::SIZE,
+        ins3::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_INS3,
     ),
     nav(
         INS_4,
+        "INS_4",
         "ins_4_t",
         ins4::SIZE,
+        ins4::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_INS4,
     ),
     nav(
         INL2_STATES,
+        "INL2_STATES",
         "inl2_states_t",
         inl2_states::SIZE,
+        inl2_states::FIELDS,
         Source::NavDt,
         0,
     ),
     nav(
         INL2_NED_SIGMA,
+        "INL2_NED_SIGMA",
         "inl2_ned_sigma_t",
         inl2_ned_sigma::SIZE,
+        inl2_ned_sigma::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_INL2_NED_SIGMA,
     ),
     nav(
         GPS1_POS,
+        "GPS1_POS",
         "gps_pos_t",
         gps_pos::SIZE,
+        gps_pos::FIELDS,
         Source::GpsDt,
         rmc_nav::BITS_GPS1_POS,
     ),
     nav(
         GPS1_RCVR_POS,
+        "GPS1_RCVR_POS",
         "gps_pos_t",
         gps_pos::SIZE,
+        gps_pos::FIELDS,
         Source::GpsDt,
         rmc_nav::BITS_GPS1_RCVR_POS,
     ),
     nav(
         GPS1_VEL,
+        "GPS1_VEL",
         "gps_vel_t",
         gps_vel::SIZE,
+        gps_vel::FIELDS,
         Source::GpsDt,
         rmc_nav::BITS_GPS1_VEL,
     ),
     nav(
         GPS1_SAT,
+        "GPS1_SAT",
         "gps_sat_t",
         gps_sat::SIZE,
+        gps_sat::FIELDS,
         Source::Fixed(1000),
         rmc_nav::BITS_GPS1_SAT,
     ),
     nav(
         GPS1_SIG,
+        "GPS1_SIG",
         "gps_sig_t",
         aux_sets::gps_sig::SIZE,
+        aux_sets::gps_sig::FIELDS,
         Source::Fixed(1000),
         rmc_aux::BITS_GPS1_SIG,
     ),
     nav(
         MAGNETOMETER,
+        "MAGNETOMETER",
         "magnetometer_t",
         magnetometer::SIZE,
+        magnetometer::FIELDS,
         Source::Fixed(10),
         rmc_nav::BITS_MAGNETOMETER,
     ),
     nav(
         BAROMETER,
+        "BAROMETER",
         "barometer_t",
         barometer::SIZE,
+        barometer::FIELDS,
         Source::Fixed(8),
         rmc_nav::BITS_BAROMETER,
     ),
     nav(
         SYS_SENSORS,
+        "SYS_SENSORS",
         "sys_sensors_t",
         sys_sensors::SIZE,
+        sys_sensors::FIELDS,
         Source::Millisecond,
         0,
     ),
     nav(
         IMU_MAG,
+        "IMU_MAG",
         "imu_mag_t",
         imu_mag::SIZE,
+        imu_mag::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_IMU_MAG,
     ),
     nav(
         PIMU_MAG,
+        "PIMU_MAG",
         "pimu_mag_t",
         pimu_mag::SIZE,
+        pimu_mag::FIELDS,
         Source::NavDt,
         rmc_nav::BITS_PIMU_MAG,
     ),
@@ -516,6 +597,71 @@ pub fn classify(did: u16) -> Class {
     }
 }
 
+/// The DID name and named fields of data set `did`, if served (for
+/// hosts: `imu-emu client --protocol isb` reads and writes data sets by
+/// field name through these; the device never does).
+pub fn set(did: u8) -> Option<(&'static str, &'static [FieldSpec])> {
+    lookup(u16::from(did)).map(|s| (s.did_name, s.fields))
+}
+
+/// A data set by DID name (any case, `DID_` prefix optional) or number.
+pub fn set_by_name(name: &str) -> Option<u8> {
+    let bare = name
+        .get(..4)
+        .filter(|p| p.eq_ignore_ascii_case("did_"))
+        .map_or(name, |_| &name[4..]);
+    DATA_SETS
+        .iter()
+        .find(|s| s.did_name.eq_ignore_ascii_case(bare))
+        .map(|s| s.did)
+        .or_else(|| {
+            let n: u8 = name.parse().ok()?;
+            set(n).map(|_| n)
+        })
+}
+
+/// A field named `SET.field` or, when only one data set has it, `field`
+/// (any case): its DID and row.
+pub fn find(name: &str) -> Option<(u8, &'static FieldSpec)> {
+    let in_set = |did: u8, field: &str| {
+        let (_, fs) = set(did)?;
+        fs.iter()
+            .find(|f| f.name.eq_ignore_ascii_case(field))
+            .map(|f| (did, f))
+    };
+    if let Some((s, field)) = name.split_once('.') {
+        return in_set(set_by_name(s)?, field);
+    }
+    let mut hits = DATA_SETS
+        .iter()
+        .filter(|s| s.did != IMU_RAW)
+        .filter_map(|s| in_set(s.did, name));
+    let first = hits.next()?;
+    hits.next().is_none().then_some(first)
+}
+
+/// Names of the field that carries a data set's device time: `time` (s
+/// since boot: IMU, IMU_RAW, IMU3_RAW, PIMU, IMU_MAG, PIMU_MAG,
+/// MAGNETOMETER, BAROMETER, SYS_SENSORS), `timeOfWeek` (GPS s of the week:
+/// INS_1..4, INL2_STATES) or `timeOfWeekMs` (ms: GPS1_POS, GPS1_RCVR_POS,
+/// GPS1_VEL, GPS1_SAT, GPS1_SIG, INL2_NED_SIGMA, STROBE_IN_TIME,
+/// SYS_PARAMS).
+pub const TIME_FIELDS: [&str; 3] = ["time", "timeOfWeek", "timeOfWeekMs"];
+
+/// The device time a data set carries, in seconds: its first field named
+/// in [`TIME_FIELDS`] (in ms when its unit says so); `None` for a set
+/// with none.
+pub fn device_time(did: u8, b: &[u8]) -> Option<f64> {
+    let (_, fields) = set(did)?;
+    let f = fields.iter().find(|f| TIME_FIELDS.contains(&f.name))?;
+    let scale = if f.unit == "ms" { 1e3 } else { 1.0 };
+    match super::layout::read(f, b) {
+        super::layout::Value::Float(s) => Some(s / scale),
+        super::layout::Value::Unsigned(n) => Some(n as f64 / scale),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -544,5 +690,85 @@ mod tests {
                 assert!(r.start < r.end && r.end <= s.size, "{}", s.name);
             }
         }
+    }
+
+    #[test]
+    fn every_named_field_lies_inside_its_set() {
+        for s in &DATA_SETS {
+            for f in s.fields {
+                assert!(
+                    f.offset + f.kind.size() <= usize::from(s.size),
+                    "{} {}",
+                    s.did,
+                    f.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn names_resolve() {
+        assert_eq!(find("startupNavDtMs").unwrap().0, FLASH_CONFIG);
+        assert_eq!(find("flash_config.SER0BAUDRATE").unwrap().1.offset, 20);
+        // In several sets: ambiguous without the set.
+        assert!(find("time").is_none());
+        assert_eq!(find("imu.time").unwrap().0, IMU);
+        assert_eq!(find("IMU_RAW.acc").unwrap().0, IMU_RAW);
+        assert_eq!(set_by_name("did_pimu"), Some(PIMU));
+        assert_eq!(set_by_name("58"), Some(IMU));
+        assert_eq!(set_by_name("59"), None);
+    }
+
+    #[test]
+    fn reads_typed_values() {
+        let mut b = [0u8; 36];
+        b[0..8].copy_from_slice(&1.5f64.to_le_bytes());
+        b[24..28].copy_from_slice(&(-9.5f32).to_le_bytes());
+        let (_, fs) = set(IMU).unwrap();
+        assert_eq!(
+            crate::isb::layout::read(&fs[0], &b),
+            crate::isb::layout::Value::Float(1.5)
+        );
+        assert_eq!(
+            crate::isb::layout::read(&fs[3], &b),
+            crate::isb::layout::Value::Vec3([-9.5, 0.0, 0.0])
+        );
+        assert_eq!(device_time(IMU, &b), Some(1.5));
+        assert_eq!(device_time(RMC, &b), None);
+        let timed: heapless::Vec<u8, 64> = DATA_SETS
+            .iter()
+            .filter(|s| device_time(s.did, &[0; MAX_SIZE]).is_some())
+            .map(|s| s.did)
+            .collect();
+        assert_eq!(
+            timed,
+            [
+                PIMU,
+                SYS_PARAMS,
+                IMU,
+                STROBE_IN_TIME,
+                IMU3_RAW,
+                IMU_RAW,
+                INS_1,
+                INS_2,
+                INS_3,
+                INS_4,
+                INL2_STATES,
+                INL2_NED_SIGMA,
+                GPS1_POS,
+                GPS1_RCVR_POS,
+                GPS1_VEL,
+                GPS1_SAT,
+                GPS1_SIG,
+                MAGNETOMETER,
+                BAROMETER,
+                SYS_SENSORS,
+                IMU_MAG,
+                PIMU_MAG
+            ]
+        );
+        let mut g = [0u8; 92];
+        g[4..8].copy_from_slice(&1234u32.to_le_bytes());
+        assert_eq!(device_time(GPS1_POS, &g), Some(1.234));
     }
 }

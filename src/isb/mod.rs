@@ -6,13 +6,15 @@
 //! shell); beneath it the protocol layer, pure and table-driven:
 //! - [`packet`]: header, checksum, encoding, the streaming decoder;
 //! - [`did`]: DID numbers and the table of the data sets the emulated
-//!   IMX-5 (IMU mode) serves, with the NACK rule;
+//!   IMX-5 (IMU mode) serves, with the NACK rule, and their fields by
+//!   `data_sets.h` name, for hosts;
+//! - [`layout`]: [`crate::data_set!`], the one declaration of each data
+//!   set's layout and named fields;
 //! - [`sets`]: byte layouts of those data sets, status bits, RMC bits and
 //!   options, FLASH_CONFIG defaults and checksum (`docs/isb-data-sets.md`);
 //! - [`message`]: GET_DATA / SET_DATA / stop requests, ACK / NACK and DATA
 //!   encoders;
 //! - [`aux_sets`]: SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW;
-//! - [`fields`]: the data sets' fields by `data_sets.h` name, for hosts;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
 //!   and [`nmea::Input`], the one place every received byte goes;
 //! - [`asce`]: the `$ASCE` table and parser; [`nmea_out`]: the sentences
@@ -22,7 +24,6 @@ pub mod asce;
 pub mod aux_sets;
 pub mod device;
 pub mod did;
-pub mod fields;
 pub mod ins;
 pub mod layout;
 pub mod message;

@@ -12,14 +12,14 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct InsHeader in mod ins_header, 20 bytes {
         /// GPS weeks since 1980-01-06 (0 before GPS time is known).
-        week: u32 = WEEK @ 0,
+        week: u32 = WEEK @ 0 => ["week"],
         /// GPS seconds since the start of the week (time since boot before
         /// GPS time is known).
-        time_of_week: f64 = TIME_OF_WEEK @ 4,
+        time_of_week: f64 = TIME_OF_WEEK @ 4 => ["timeOfWeek" in "s"],
         /// [`ins_status`] bits.
-        ins_status: u32 = INS_STATUS @ 12,
+        ins_status: u32 = INS_STATUS @ 12 => ["insStatus"],
         /// `hdwStatus` bits ([`super::sets::hdw_status`], [`hdw_nav`]).
-        hdw_status: u32 = HDW_STATUS @ 16,
+        hdw_status: u32 = HDW_STATUS @ 16 => ["hdwStatus"],
     }
 }
 
@@ -28,15 +28,15 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins1 in mod ins1, 80 bytes {
         /// GPS time and status words.
-        header: InsHeader = HEADER @ 0,
+        header: InsHeader = HEADER @ 0 => [..],
         /// Roll, pitch, yaw, rad, body relative to NED.
-        theta: [f32; 3] = THETA @ 20,
+        theta: [f32; 3] = THETA @ 20 => ["theta" in "rad"],
         /// Body-frame velocity, m/s.
-        uvw: [f32; 3] = UVW @ 32,
+        uvw: [f32; 3] = UVW @ 32 => ["uvw" in "m/s"],
         /// Latitude °, longitude °, height above the WGS84 ellipsoid, m.
-        lla: [f64; 3] = LLA @ 44,
+        lla: [f64; 3] = LLA @ 44 => ["lla" in "deg, deg, m"],
         /// North, east, down offset of `lla` from FLASH_CONFIG `refLla`, m.
-        ned: [f32; 3] = NED @ 68,
+        ned: [f32; 3] = NED @ 68 => ["ned" in "m"],
     }
 }
 
@@ -45,13 +45,13 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins2 in mod ins2, 72 bytes {
         /// GPS time and status words.
-        header: InsHeader = HEADER @ 0,
+        header: InsHeader = HEADER @ 0 => [..],
         /// W, X, Y, Z: body attitude relative to NED (Hamilton).
-        qn2b: [f32; 4] = QN2B @ 20,
+        qn2b: [f32; 4] = QN2B @ 20 => ["qn2b"],
         /// Body-frame velocity, m/s.
-        uvw: [f32; 3] = UVW @ 36,
+        uvw: [f32; 3] = UVW @ 36 => ["uvw" in "m/s"],
         /// Latitude °, longitude °, height above the ellipsoid, m.
-        lla: [f64; 3] = LLA @ 48,
+        lla: [f64; 3] = LLA @ 48 => ["lla" in "deg, deg, m"],
     }
 }
 
@@ -61,9 +61,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins3 in mod ins3, 76 bytes {
         /// The `ins_2_t` part.
-        ins2: Ins2 = INS2 @ 0,
+        ins2: Ins2 = INS2 @ 0 => [..],
         /// Height above mean sea level, m.
-        msl: f32 = MSL @ 72,
+        msl: f32 = MSL @ 72 => ["msl" in "m"],
     }
 }
 
@@ -72,13 +72,13 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Ins4 in mod ins4, 72 bytes {
         /// GPS time and status words.
-        header: InsHeader = HEADER @ 0,
+        header: InsHeader = HEADER @ 0 => [..],
         /// W, X, Y, Z: body attitude relative to ECEF.
-        qe2b: [f32; 4] = QE2B @ 20,
+        qe2b: [f32; 4] = QE2B @ 20 => ["qe2b"],
         /// ECEF velocity, m/s.
-        ve: [f32; 3] = VE @ 36,
+        ve: [f32; 3] = VE @ 36 => ["ve" in "m/s"],
         /// ECEF position, m.
-        ecef: [f64; 3] = ECEF @ 48,
+        ecef: [f64; 3] = ECEF @ 48 => ["ecef" in "m"],
     }
 }
 
@@ -87,35 +87,35 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct GpsPos in mod gps_pos, 92 bytes {
         /// GPS week.
-        week: u32 = WEEK @ 0,
+        week: u32 = WEEK @ 0 => ["week"],
         /// GPS time of week of the solution, ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 4,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 4 => ["timeOfWeekMs" in "ms"],
         /// [`gps_status`]: satellites used, fix type, flags.
-        status: u32 = STATUS @ 8,
+        status: u32 = STATUS @ 8 => ["status"],
         /// ECEF position, m.
-        ecef: [f64; 3] = ECEF @ 12,
+        ecef: [f64; 3] = ECEF @ 12 => ["ecef" in "m"],
         /// Latitude °, longitude °, height above the ellipsoid, m.
-        lla: [f64; 3] = LLA @ 36,
+        lla: [f64; 3] = LLA @ 36 => ["lla" in "deg, deg, m"],
         /// Height above mean sea level, m.
-        h_msl: f32 = H_MSL @ 60,
+        h_msl: f32 = H_MSL @ 60 => ["hMSL" in "m"],
         /// Horizontal accuracy, m.
-        h_acc: f32 = H_ACC @ 64,
+        h_acc: f32 = H_ACC @ 64 => ["hAcc" in "m"],
         /// Vertical accuracy, m.
-        v_acc: f32 = V_ACC @ 68,
+        v_acc: f32 = V_ACC @ 68 => ["vAcc" in "m"],
         /// Position dilution of precision.
-        p_dop: f32 = P_DOP @ 72,
+        p_dop: f32 = P_DOP @ 72 => ["pDop"],
         /// Mean C/N0 of the satellites received, dBHz.
-        cno_mean: f32 = CNO_MEAN @ 76,
+        cno_mean: f32 = CNO_MEAN @ 76 => ["cnoMean" in "dBHz"],
         /// GPS time of week = time since boot + this, s.
-        tow_offset: f64 = TOW_OFFSET @ 80,
+        tow_offset: f64 = TOW_OFFSET @ 80 => ["towOffset" in "s"],
         /// GPS − UTC, s.
-        leap_s: u8 = LEAP_S @ 88,
+        leap_s: u8 = LEAP_S @ 88 => ["leapS" in "s"],
         /// Satellites in the solution.
-        sats_used: u8 = SATS_USED @ 89,
+        sats_used: u8 = SATS_USED @ 89 => ["satsUsed"],
         /// Standard deviation of `cno_mean` over 5 s, 0.1 dBHz.
-        cno_mean_sigma: u8 = CNO_MEAN_SIGMA @ 90,
+        cno_mean_sigma: u8 = CNO_MEAN_SIGMA @ 90 => ["cnoMeanSigma" in "dBHz"],
         /// Jamming / spoofing flags (`eGpsStatus2`).
-        status2: u8 = STATUS2 @ 91,
+        status2: u8 = STATUS2 @ 91 => ["status2"],
     }
 }
 
@@ -124,13 +124,13 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct GpsVel in mod gps_vel, 24 bytes {
         /// GPS time of week of the solution, ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0 => ["timeOfWeekMs" in "ms"],
         /// ECEF velocity, m/s.
-        vel: [f32; 3] = VEL @ 4,
+        vel: [f32; 3] = VEL @ 4 => ["vel" in "m/s"],
         /// Speed accuracy, m/s.
-        s_acc: f32 = S_ACC @ 16,
+        s_acc: f32 = S_ACC @ 16 => ["sAcc" in "m/s"],
         /// The [`gps_status`] word of GPS1_POS.
-        status: u32 = STATUS @ 20,
+        status: u32 = STATUS @ 20 => ["status"],
     }
 }
 
@@ -140,15 +140,15 @@ crate::data_set! {
     pub struct GpsSatSv in mod gps_sat_sv, 8 bytes {
         /// Constellation (`eSatSvGnssId`: 1 GPS, 2 SBAS, 3 Galileo, 4
         /// BeiDou, 5 QZSS, 6 GLONASS, 7 NavIC, 8 IMES).
-        gnss_id: u8 = GNSS_ID @ 0,
+        gnss_id: u8 = GNSS_ID @ 0 => ["gnssId"],
         /// Satellite number within the constellation.
-        sv_id: u8 = SV_ID @ 1,
+        sv_id: u8 = SV_ID @ 1 => ["svId"],
         /// Elevation, degrees (±90).
         elev: i8 = ELEV @ 2,
         /// Azimuth, degrees (±180).
         azim: i16 = AZIM @ 3,
         /// Carrier-to-noise density, dBHz.
-        cno: u8 = CNO @ 5,
+        cno: u8 = CNO @ 5 => ["cno" in "dBHz"],
         /// [`sat_status`] bits (`eSatSvStatus`).
         status: u16 = STATUS @ 6,
     }
@@ -163,11 +163,11 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub struct GpsSat in mod gps_sat, 408 bytes {
         /// GPS time of week of the receiver's epoch, ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0 => ["timeOfWeekMs" in "ms"],
         /// Entries of `sat` in use.
-        num_sats: u32 = NUM_SATS @ 4,
+        num_sats: u32 = NUM_SATS @ 4 => ["numSats"],
         /// The satellites.
-        sat: [GpsSatSv; MAX_NUM_SATELLITES] = SAT @ 8,
+        sat: [GpsSatSv; MAX_NUM_SATELLITES] = SAT @ 8 => [..],
     }
 }
 
@@ -176,9 +176,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Magnetometer in mod magnetometer, 20 bytes {
         /// Seconds since boot.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// Field, sensor frame, normalized gauss (`docs/isb.md`).
-        mag: [f32; 3] = MAG @ 8,
+        mag: [f32; 3] = MAG @ 8 => ["mag" in "normalized"],
     }
 }
 
@@ -187,15 +187,15 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Barometer in mod barometer, 24 bytes {
         /// Seconds since boot.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// Pressure, kPa.
-        bar: f32 = BAR @ 8,
+        bar: f32 = BAR @ 8 => ["bar" in "kPa"],
         /// Altitude above MSL from the pressure, m.
-        msl_bar: f32 = MSL_BAR @ 12,
+        msl_bar: f32 = MSL_BAR @ 12 => ["mslBar" in "m"],
         /// Temperature, °C.
-        bar_temp: f32 = BAR_TEMP @ 16,
+        bar_temp: f32 = BAR_TEMP @ 16 => ["barTemp" in "°C"],
         /// Relative humidity, %.
-        humidity: f32 = HUMIDITY @ 20,
+        humidity: f32 = HUMIDITY @ 20 => ["humidity" in "%"],
     }
 }
 
@@ -204,9 +204,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct ImuMag in mod imu_mag, 56 bytes {
         /// The IMU part.
-        imu: Imu = IMU @ 0,
+        imu: Imu = IMU @ 0 => [..],
         /// The magnetometer part.
-        mag: Magnetometer = MAG @ 36,
+        mag: Magnetometer = MAG @ 36 => [.. "time" => "magTime"],
     }
 }
 
@@ -215,9 +215,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct PimuMag in mod pimu_mag, 60 bytes {
         /// The PIMU part.
-        pimu: Pimu = PIMU @ 0,
+        pimu: Pimu = PIMU @ 0 => [..],
         /// The magnetometer part.
-        mag: Magnetometer = MAG @ 40,
+        mag: Magnetometer = MAG @ 40 => [.. "time" => "magTime"],
     }
 }
 
@@ -227,27 +227,27 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct SysSensors in mod sys_sensors, 80 bytes {
         /// Seconds since boot.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// IMU temperature, °C.
-        temp: f32 = TEMP @ 8,
+        temp: f32 = TEMP @ 8 => ["temp" in "°C"],
         /// Angular rate, rad/s.
-        pqr: [f32; 3] = PQR @ 12,
+        pqr: [f32; 3] = PQR @ 12 => ["pqr" in "rad/s"],
         /// Specific force, m/s².
-        acc: [f32; 3] = ACC @ 24,
+        acc: [f32; 3] = ACC @ 24 => ["acc" in "m/s²"],
         /// Magnetic field, normalized gauss.
-        mag: [f32; 3] = MAG @ 36,
+        mag: [f32; 3] = MAG @ 36 => ["mag" in "normalized"],
         /// Pressure, kPa.
-        bar: f32 = BAR @ 48,
+        bar: f32 = BAR @ 48 => ["bar" in "kPa"],
         /// Barometer temperature, °C.
-        bar_temp: f32 = BAR_TEMP @ 52,
+        bar_temp: f32 = BAR_TEMP @ 52 => ["barTemp" in "°C"],
         /// Altitude above MSL from the pressure, m.
-        msl_bar: f32 = MSL_BAR @ 56,
+        msl_bar: f32 = MSL_BAR @ 56 => ["mslBar" in "m"],
         /// Relative humidity, %.
-        humidity: f32 = HUMIDITY @ 60,
+        humidity: f32 = HUMIDITY @ 60 => ["humidity" in "%"],
         /// Supply voltage, V.
-        vin: f32 = VIN @ 64,
+        vin: f32 = VIN @ 64 => ["vin" in "V"],
         /// Analog inputs 1, 3, 4, V.
-        ana: [f32; 3] = ANA @ 68,
+        ana: [f32; 3] = ANA @ 68 => ["ana" in "V"],
     }
 }
 
@@ -257,23 +257,23 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Inl2States in mod inl2_states, 96 bytes {
         /// GPS time of week, s.
-        time_of_week: f64 = TIME_OF_WEEK @ 0,
+        time_of_week: f64 = TIME_OF_WEEK @ 0 => ["timeOfWeek" in "s"],
         /// W, X, Y, Z: body attitude relative to ECEF.
-        qe2b: [f32; 4] = QE2B @ 8,
+        qe2b: [f32; 4] = QE2B @ 8 => ["qe2b"],
         /// ECEF velocity, m/s.
-        ve: [f32; 3] = VE @ 24,
+        ve: [f32; 3] = VE @ 24 => ["ve" in "m/s"],
         /// ECEF position, m.
-        ecef: [f64; 3] = ECEF @ 36,
+        ecef: [f64; 3] = ECEF @ 36 => ["ecef" in "m"],
         /// Gyro bias, rad/s.
-        bias_pqr: [f32; 3] = BIAS_PQR @ 60,
+        bias_pqr: [f32; 3] = BIAS_PQR @ 60 => ["biasPqr" in "rad/s"],
         /// Accelerometer bias, m/s².
-        bias_acc: [f32; 3] = BIAS_ACC @ 72,
+        bias_acc: [f32; 3] = BIAS_ACC @ 72 => ["biasAcc" in "m/s^2"],
         /// Barometer bias, m.
-        bias_baro: f32 = BIAS_BARO @ 84,
+        bias_baro: f32 = BIAS_BARO @ 84 => ["biasBaro" in "m"],
         /// Magnetic declination, rad.
-        mag_dec: f32 = MAG_DEC @ 88,
+        mag_dec: f32 = MAG_DEC @ 88 => ["magDec" in "rad"],
         /// Magnetic inclination, rad.
-        mag_inc: f32 = MAG_INC @ 92,
+        mag_inc: f32 = MAG_INC @ 92 => ["magInc" in "rad"],
     }
 }
 
@@ -283,21 +283,21 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Inl2NedSigma in mod inl2_ned_sigma, 72 bytes {
         /// GPS time of week, ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0 => ["timeOfWeekMs" in "ms"],
         /// Position, NED, m.
-        std_pos_ned: [f32; 3] = STD_POS_NED @ 4,
+        std_pos_ned: [f32; 3] = STD_POS_NED @ 4 => ["StdPosNed" in "m"],
         /// Velocity, NED, m/s.
-        std_vel_ned: [f32; 3] = STD_VEL_NED @ 16,
+        std_vel_ned: [f32; 3] = STD_VEL_NED @ 16 => ["StdVelNed" in "m/s"],
         /// Attitude, NED, rad.
-        std_att_ned: [f32; 3] = STD_ATT_NED @ 28,
+        std_att_ned: [f32; 3] = STD_ATT_NED @ 28 => ["StdAttNed" in "rad"],
         /// Accelerometer bias, m/s².
-        std_acc_bias: [f32; 3] = STD_ACC_BIAS @ 40,
+        std_acc_bias: [f32; 3] = STD_ACC_BIAS @ 40 => ["StdAccBias" in "m/s^2"],
         /// Gyro bias, rad/s.
-        std_gyr_bias: [f32; 3] = STD_GYR_BIAS @ 52,
+        std_gyr_bias: [f32; 3] = STD_GYR_BIAS @ 52 => ["StdGyrBias" in "rad/s"],
         /// Barometer bias, m.
-        std_bar_bias: f32 = STD_BAR_BIAS @ 64,
+        std_bar_bias: f32 = STD_BAR_BIAS @ 64 => ["StdBarBias" in "m"],
         /// Magnetic declination, rad.
-        std_mag_declination: f32 = STD_MAG_DECLINATION @ 68,
+        std_mag_declination: f32 = STD_MAG_DECLINATION @ 68 => ["StdMagDeclination" in "rad"],
     }
 }
 

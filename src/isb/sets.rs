@@ -1,13 +1,14 @@
 //! Byte layouts of the ISB data sets the emulated IMX-5 serves, with the
 //! status bits and option words that go in them.
 //!
-//! Every struct is packed little-endian (`docs/protocol-facts.md` "ISB").
-//! Each module below gives the byte offset of every field and `SIZE`; the
-//! typed structs
-//! ([`DevInfo`], [`Imu`], [`Pimu`], [`Rmc`], [`SystemCommand`],
-//! [`StrobeInTime`], [`SysParams`], [`Bit`]) encode to and decode from a
-//! `[u8; SIZE]`; FLASH_CONFIG stays a byte image ([`FlashConfig`]) with
-//! accessors, because a SET_DATA writes into it at any offset. Sources:
+//! Every struct is packed little-endian (`docs/protocol-facts.md` "ISB")
+//! and declared once with [`crate::data_set!`]: its module gives the byte
+//! offset of every field, `SIZE` and the named fields (`FIELDS`); the
+//! typed structs ([`DevInfo`], [`Imu`], [`Pimu`], [`Rmc`],
+//! [`SystemCommand`], [`StrobeInTime`], [`SysParams`], [`NvmFlashCfg`],
+//! [`Bit`]) encode to and decode from a `[u8; SIZE]`. The device keeps
+//! FLASH_CONFIG as a byte image ([`FlashConfig`]) with accessors, because
+//! a SET_DATA writes into it at any offset. Sources:
 //! protocol-facts.md "ISB" first; fields it does not list (FLASH_CONFIG
 //! past `ser2BaudRate`, `bit_t`) from the SDK's `data_sets.h` of protocol 2.1
 //! (`PROTOCOL_VERSION_CHAR1 1`). `docs/isb-data-sets.md` lists every
@@ -61,39 +62,39 @@ pub mod le {
     }
 }
 
-/// `dev_info_t`, 84 bytes (protocol-facts.md "ISB"; `data_sets.h` of protocol 2.1
-/// agrees: `reserved` u16, `hardwareType`, `hdwRunState`).
-pub mod dev_info {
-    /// Struct size.
-    pub const SIZE: usize = 84;
-    /// `u16 reserved`.
-    pub const RESERVED: usize = 0;
-    /// `u8 hardwareType` (3 = IMX).
-    pub const HARDWARE_TYPE: usize = 2;
-    /// `u8 hdwRunState` (2 = application).
-    pub const HDW_RUN_STATE: usize = 3;
-    /// `u32 serialNumber`.
-    pub const SERIAL_NUMBER: usize = 4;
-    /// `u8 hardwareVer[4]`.
-    pub const HARDWARE_VER: usize = 8;
-    /// `u8 firmwareVer[4]`.
-    pub const FIRMWARE_VER: usize = 12;
-    /// `u32 buildNumber`.
-    pub const BUILD_NUMBER: usize = 16;
-    /// `u8 protocolVer[4]`.
-    pub const PROTOCOL_VER: usize = 20;
-    /// `u32 repoRevision`.
-    pub const REPO_REVISION: usize = 24;
-    /// `char manufacturer[24]`.
-    pub const MANUFACTURER: usize = 28;
-    /// `u8 buildType` (`'r'` release, …).
-    pub const BUILD_TYPE: usize = 52;
-    /// `u8 buildYear` (year − 2000), then month, day.
-    pub const BUILD_DATE: usize = 53;
-    /// `u8 buildHour`, minute, second, millisecond.
-    pub const BUILD_TIME: usize = 56;
-    /// `char addInfo[24]`.
-    pub const ADD_INFO: usize = 60;
+crate::data_set! {
+    /// `dev_info_t`, 84 bytes (protocol-facts.md "ISB"; `data_sets.h` of
+    /// protocol 2.1 agrees: `reserved` u16, `hardwareType`, `hdwRunState`).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub struct DevInfo in mod dev_info, 84 bytes {
+        _: u16 = RESERVED @ 0,
+        /// `hardwareType` (3 = IMX).
+        hardware_type: u8 = HARDWARE_TYPE @ 2 => ["hardwareType"],
+        /// `hdwRunState` (2 = application).
+        hdw_run_state: u8 = HDW_RUN_STATE @ 3 => ["hdwRunState"],
+        /// `serialNumber`; the vendor tool refuses 0.
+        serial_number: u32 = SERIAL_NUMBER @ 4 => ["serialNumber"],
+        /// `hardwareVer` (5.0.0.0 for an IMX-5).
+        hardware_ver: [u8; 4] = HARDWARE_VER @ 8 => ["hardwareVer" as Version],
+        /// `firmwareVer`.
+        firmware_ver: [u8; 4] = FIRMWARE_VER @ 12 => ["firmwareVer" as Version],
+        /// `buildNumber`.
+        build_number: u32 = BUILD_NUMBER @ 16 => ["buildNumber"],
+        /// `protocolVer` ([`dev_info::PROTOCOL_2_1`]).
+        protocol_ver: [u8; 4] = PROTOCOL_VER @ 20 => ["protocolVer" as Version],
+        /// `repoRevision`.
+        repo_revision: u32 = REPO_REVISION @ 24 => ["repoRevision"],
+        /// `manufacturer`, NUL padded.
+        manufacturer: [u8; 24] = MANUFACTURER @ 28 => ["manufacturer"],
+        /// `buildType` (`'r'` release, …).
+        build_type: u8 = BUILD_TYPE @ 52 => ["buildType"],
+        /// `buildYear − 2000`, `buildMonth`, `buildDay`.
+        build_date: [u8; 3] = BUILD_DATE @ 53,
+        /// `buildHour`, `buildMinute`, `buildSecond`, `buildMillisecond`.
+        build_time: [u8; 4] = BUILD_TIME @ 56,
+        /// `addInfo`, NUL padded.
+        add_info: [u8; 24] = ADD_INFO @ 60 => ["addInfo"],
+    }
     /// Length of the two strings.
     pub const STR_LEN: usize = 24;
     /// `eIsHardwareType` IMX.
@@ -112,78 +113,7 @@ pub mod dev_info {
     pub const BUILD_NUMBER_2_7_1: u32 = 1;
 }
 
-/// `dev_info_t` ([`dev_info`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DevInfo {
-    /// `hardwareType` (3 = IMX).
-    pub hardware_type: u8,
-    /// `hdwRunState` (2 = application).
-    pub hdw_run_state: u8,
-    /// `serialNumber`; the vendor tool refuses 0.
-    pub serial_number: u32,
-    /// `hardwareVer` (5.0.0.0 for an IMX-5).
-    pub hardware_ver: [u8; 4],
-    /// `firmwareVer`.
-    pub firmware_ver: [u8; 4],
-    /// `buildNumber`.
-    pub build_number: u32,
-    /// `protocolVer` ([`dev_info::PROTOCOL_2_1`]).
-    pub protocol_ver: [u8; 4],
-    /// `repoRevision`.
-    pub repo_revision: u32,
-    /// `manufacturer`, NUL padded.
-    pub manufacturer: [u8; 24],
-    /// `buildType`.
-    pub build_type: u8,
-    /// `buildYear − 2000`, `buildMonth`, `buildDay`.
-    pub build_date: [u8; 3],
-    /// `buildHour`, `buildMinute`, `buildSecond`, `buildMillisecond`.
-    pub build_time: [u8; 4],
-    /// `addInfo`, NUL padded.
-    pub add_info: [u8; 24],
-}
-
 impl DevInfo {
-    /// The image.
-    pub fn encode(&self) -> [u8; dev_info::SIZE] {
-        use dev_info::*;
-        let mut b = [0u8; SIZE];
-        b[HARDWARE_TYPE] = self.hardware_type;
-        b[HDW_RUN_STATE] = self.hdw_run_state;
-        le::put(&mut b, SERIAL_NUMBER, &self.serial_number.to_le_bytes());
-        le::put(&mut b, HARDWARE_VER, &self.hardware_ver);
-        le::put(&mut b, FIRMWARE_VER, &self.firmware_ver);
-        le::put(&mut b, BUILD_NUMBER, &self.build_number.to_le_bytes());
-        le::put(&mut b, PROTOCOL_VER, &self.protocol_ver);
-        le::put(&mut b, REPO_REVISION, &self.repo_revision.to_le_bytes());
-        le::put(&mut b, MANUFACTURER, &self.manufacturer);
-        b[BUILD_TYPE] = self.build_type;
-        le::put(&mut b, BUILD_DATE, &self.build_date);
-        le::put(&mut b, BUILD_TIME, &self.build_time);
-        le::put(&mut b, ADD_INFO, &self.add_info);
-        b
-    }
-
-    /// Decodes an image (reserved bytes ignored).
-    pub fn decode(b: &[u8; dev_info::SIZE]) -> Self {
-        use dev_info::*;
-        DevInfo {
-            hardware_type: b[HARDWARE_TYPE],
-            hdw_run_state: b[HDW_RUN_STATE],
-            serial_number: le::u32(b, SERIAL_NUMBER),
-            hardware_ver: le::get(b, HARDWARE_VER),
-            firmware_ver: le::get(b, FIRMWARE_VER),
-            build_number: le::u32(b, BUILD_NUMBER),
-            protocol_ver: le::get(b, PROTOCOL_VER),
-            repo_revision: le::u32(b, REPO_REVISION),
-            manufacturer: le::get(b, MANUFACTURER),
-            build_type: b[BUILD_TYPE],
-            build_date: le::get(b, BUILD_DATE),
-            build_time: le::get(b, BUILD_TIME),
-            add_info: le::get(b, ADD_INFO),
-        }
-    }
-
     /// The product hardware id the SDK derives from `hardwareType` and
     /// `hardwareVer[0..2]` (6:4:6 bits, `data_sets.h`); the vendor tool
     /// refuses a device where it is 0xFFFF (protocol-facts.md).
@@ -220,13 +150,13 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Imu in mod imu, 36 bytes {
         /// Seconds since boot.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// [`imu_status`] bits.
-        status: u32 = STATUS @ 8,
+        status: u32 = STATUS @ 8 => ["status"],
         /// Angular rate, rad/s.
-        pqr: [f32; 3] = PQR @ 12,
+        pqr: [f32; 3] = PQR @ 12 => ["pqr" in "rad/s"],
         /// Specific force, m/s².
-        acc: [f32; 3] = ACC @ 24,
+        acc: [f32; 3] = ACC @ 24 => ["acc" in "m/s²"],
     }
 }
 
@@ -235,15 +165,15 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct Pimu in mod pimu, 40 bytes {
         /// Seconds since boot, end of the integration period.
-        time: f64 = TIME @ 0,
+        time: f64 = TIME @ 0 => ["time" in "s"],
         /// Integration period, s (= `startupNavDtMs`).
-        dt: f32 = DT @ 8,
+        dt: f32 = DT @ 8 => ["dt" in "s"],
         /// [`imu_status`] bits.
-        status: u32 = STATUS @ 12,
+        status: u32 = STATUS @ 12 => ["status"],
         /// Δθ, rad.
-        theta: [f32; 3] = THETA @ 16,
+        theta: [f32; 3] = THETA @ 16 => ["theta" in "rad"],
         /// Δv, m/s.
-        vel: [f32; 3] = VEL @ 28,
+        vel: [f32; 3] = VEL @ 28 => ["vel" in "m/s"],
     }
 }
 
@@ -335,9 +265,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct Rmc in mod rmc, 12 bytes {
         /// Stream enable bits.
-        bits: u64 = BITS @ 0,
+        bits: u64 = BITS @ 0 => ["bits"],
         /// Port mask and options.
-        options: u32 = OPTIONS @ 8,
+        options: u32 = OPTIONS @ 8 => ["options"],
     }
     /// DID_IMU stream.
     pub const BITS_IMU: u64 = 0x10;
@@ -376,9 +306,9 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct SystemCommand in mod sys_cmd, 8 bytes {
         /// Command code.
-        command: u32 = COMMAND @ 0,
+        command: u32 = COMMAND @ 0 => ["command"],
         /// Bitwise inverse of `command` for the command to take effect.
-        inv_command: u32 = INV_COMMAND @ 4,
+        inv_command: u32 = INV_COMMAND @ 4 => ["invCommand"],
     }
     /// Save the running streams as persistent.
     pub const SAVE_PERSISTENT_MESSAGES: u32 = 1;
@@ -419,13 +349,13 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     pub struct StrobeInTime in mod strobe, 12 bytes {
         /// GPS week (0 without GPS time).
-        week: u32 = WEEK @ 0,
+        week: u32 = WEEK @ 0 => ["week"],
         /// Time of week (or since boot without GPS), ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 4,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 4 => ["timeOfWeekMs" in "ms"],
         /// The strobe input pin.
-        pin: u16 = PIN @ 8,
+        pin: u16 = PIN @ 8 => ["pin"],
         /// Serial number of the event.
-        count: u16 = COUNT @ 10,
+        count: u16 = COUNT @ 10 => ["count"],
     }
 }
 
@@ -434,142 +364,162 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct SysParams in mod sys_params, 64 bytes {
         /// Time of week (since boot without GPS), ms.
-        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0,
+        time_of_week_ms: u32 = TIME_OF_WEEK_MS @ 0 => ["timeOfWeekMs" in "ms"],
         /// INS status (`eInsStatusFlags`).
-        ins_status: u32 = INS_STATUS @ 4,
+        ins_status: u32 = INS_STATUS @ 4 => ["insStatus"],
         /// [`hdw_status`] bits.
-        hdw_status: u32 = HDW_STATUS @ 8,
+        hdw_status: u32 = HDW_STATUS @ 8 => ["hdwStatus"],
         /// IMU temperature, °C.
-        imu_temp: f32 = IMU_TEMP @ 12,
+        imu_temp: f32 = IMU_TEMP @ 12 => ["imuTemp" in "°C"],
         /// Barometer temperature, °C.
-        baro_temp: f32 = BARO_TEMP @ 16,
+        baro_temp: f32 = BARO_TEMP @ 16 => ["baroTemp" in "°C"],
         /// MCU temperature, °C.
-        mcu_temp: f32 = MCU_TEMP @ 20,
+        mcu_temp: f32 = MCU_TEMP @ 20 => ["mcuTemp" in "°C"],
         /// System status bits.
-        sys_status: u32 = SYS_STATUS @ 24,
+        sys_status: u32 = SYS_STATUS @ 24 => ["sysStatus"],
         /// IMU sample period, ms.
-        imu_sample_period_ms: u32 = IMU_SAMPLE_PERIOD_MS @ 28,
+        imu_sample_period_ms: u32 = IMU_SAMPLE_PERIOD_MS @ 28 => ["imuSamplePeriodMs" in "ms"],
         /// PIMU integration and output period, ms.
-        nav_output_period_ms: u32 = NAV_OUTPUT_PERIOD_MS @ 32,
+        nav_output_period_ms: u32 = NAV_OUTPUT_PERIOD_MS @ 32 => ["navOutputPeriodMs" in "ms"],
         /// Measured sample period, s.
-        sensor_true_period: f64 = SENSOR_TRUE_PERIOD @ 36,
+        sensor_true_period: f64 = SENSOR_TRUE_PERIOD @ 36 => ["sensorTruePeriod" in "s"],
         /// FLASH_CONFIG checksum (= FLASH_CONFIG `checksum`).
-        flash_cfg_checksum: u32 = FLASH_CFG_CHECKSUM @ 44,
+        flash_cfg_checksum: u32 = FLASH_CFG_CHECKSUM @ 44 => ["flashCfgChecksum"],
         /// Filter update period, ms.
-        nav_update_period_ms: u32 = NAV_UPDATE_PERIOD_MS @ 48,
+        nav_update_period_ms: u32 = NAV_UPDATE_PERIOD_MS @ 48 => ["navUpdatePeriodMs" in "ms"],
         /// General fault code (writable: set to 0 to reset).
-        gen_fault_code: u32 = GEN_FAULT_CODE @ 52,
+        gen_fault_code: u32 = GEN_FAULT_CODE @ 52 => ["genFaultCode"],
         /// Up time, s.
-        up_time: f64 = UP_TIME @ 56,
+        up_time: f64 = UP_TIME @ 56 => ["upTime" in "s"],
     }
 }
 
-/// `nvm_flash_cfg_t`, 288 bytes. Offsets up to `ser2BaudRate` from
-/// protocol-facts.md "ISB"; the others from `data_sets.h` of protocol 2.1 (its
-/// `ser2BaudRate` lands at 204 and its size at 288, as protocol-facts.md says).
-pub mod flash {
-    /// Struct size.
-    pub const SIZE: usize = 288;
-    /// `u32 size` (= 288, read-only).
-    pub const SIZE_FIELD: usize = 0;
-    /// `u32 checksum`: XOR of the `u32` words of bytes 8..287.
-    pub const CHECKSUM: usize = 4;
+crate::data_set! {
+    /// `wheel_config_t`, 60 bytes: FLASH_CONFIG `wheelConfig` (`data_sets.h`
+    /// of protocol 2.1; the IMU mode does not use it).
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct WheelConfig in mod wheel_config, 60 bytes {
+        /// Config bits.
+        bits: u32 = BITS @ 0,
+        /// `transform_t`: Euler angles and offset from IMU to wheel frame,
+        /// with their sigmas (12 × f32).
+        transform: [f32; 12] = TRANSFORM @ 4,
+        /// Track width, m.
+        track_width: f32 = TRACK_WIDTH @ 52,
+        /// Wheel radius, m.
+        radius: f32 = RADIUS @ 56,
+    }
+}
+
+crate::data_set! {
+    /// `nvm_flash_cfg_t`, 288 bytes: FLASH_CONFIG as a typed struct (the
+    /// device keeps it as the byte image [`FlashConfig`], which a SET_DATA
+    /// writes at any offset). Offsets up to `ser2BaudRate` from
+    /// protocol-facts.md "ISB"; the others from `data_sets.h` of protocol
+    /// 2.1 (its `ser2BaudRate` lands at 204 and its size at 288, as
+    /// protocol-facts.md says).
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct NvmFlashCfg in mod flash, 288 bytes {
+        /// Struct size (= 288, read-only).
+        size: u32 = SIZE_FIELD @ 0 => ["size"],
+        /// XOR of the `u32` words of bytes 8..287.
+        checksum: u32 = CHECKSUM @ 4 => ["checksum"],
+        /// Factory-defaults key.
+        key: u32 = KEY @ 8 => ["key"],
+        /// IMU sample period, ms (applies after reset).
+        startup_imu_dt_ms: u32 = STARTUP_IMU_DT_MS @ 12 => ["startupImuDtMs" in "ms"],
+        /// Navigation period, ms (applies after reset).
+        startup_nav_dt_ms: u32 = STARTUP_NAV_DT_MS @ 16 => ["startupNavDtMs" in "ms"],
+        /// Serial port 0 rate.
+        ser0_baud_rate: u32 = SER0_BAUD_RATE @ 20 => ["ser0BaudRate" in "bit/s"],
+        /// Serial port 1 rate.
+        ser1_baud_rate: u32 = SER1_BAUD_RATE @ 24 => ["ser1BaudRate" in "bit/s"],
+        /// INS frame rotation from the IMU, rad.
+        ins_rotation: [f32; 3] = INS_ROTATION @ 28 => ["insRotation" in "rad"],
+        /// INS frame offset, m.
+        ins_offset: [f32; 3] = INS_OFFSET @ 40 => ["insOffset" in "m"],
+        /// GPS 1 antenna offset, m.
+        gps1_ant_offset: [f32; 3] = GPS1_ANT_OFFSET @ 52 => ["gps1AntOffset" in "m"],
+        /// Dynamic model.
+        dynamic_model: u8 = DYNAMIC_MODEL @ 64 => ["dynamicModel"],
+        /// Debug.
+        debug: u8 = DEBUG @ 65 => ["debug"],
+        /// GNSS satellite signals and constellations.
+        gnss_sat_sig_const: u16 = GNSS_SAT_SIG_CONST @ 66 => ["gnssSatSigConst"],
+        /// System configuration bits.
+        sys_cfg_bits: u32 = SYS_CFG_BITS @ 68 => ["sysCfgBits"],
+        /// Reference latitude, longitude, height.
+        ref_lla: [f64; 3] = REF_LLA @ 72 => ["refLla" in "deg, deg, m"],
+        /// Last latitude, longitude, height.
+        last_lla: [f64; 3] = LAST_LLA @ 96 => ["lastLla" in "deg, deg, m"],
+        /// Time of week of `lastLla`, ms.
+        last_lla_time_of_week_ms: u32 = LAST_LLA_TIME_OF_WEEK_MS @ 120 => ["lastLlaTimeOfWeekMs" in "ms"],
+        /// GPS week of `lastLla`.
+        last_lla_week: u32 = LAST_LLA_WEEK @ 124 => ["lastLlaWeek"],
+        /// Distance that updates `lastLla`, m.
+        last_lla_update_distance: f32 = LAST_LLA_UPDATE_DISTANCE @ 128 => ["lastLlaUpdateDistance" in "m"],
+        /// Hardware interface configuration bits.
+        io_config: u32 = IO_CONFIG @ 132 => ["ioConfig"],
+        /// Platform configuration.
+        platform_config: u32 = PLATFORM_CONFIG @ 136 => ["platformConfig"],
+        /// GPS 2 antenna offset, m.
+        gps2_ant_offset: [f32; 3] = GPS2_ANT_OFFSET @ 140 => ["gps2AntOffset" in "m"],
+        /// Zero-velocity frame rotation, rad.
+        zero_vel_rotation: [f32; 3] = ZERO_VEL_ROTATION @ 152 => ["zeroVelRotation" in "rad"],
+        /// Zero-velocity frame offset, m.
+        zero_vel_offset: [f32; 3] = ZERO_VEL_OFFSET @ 164 => ["zeroVelOffset" in "m"],
+        /// GPS time user delay, s.
+        gps_time_user_delay: f32 = GPS_TIME_USER_DELAY @ 176 => ["gpsTimeUserDelay" in "s"],
+        /// Magnetic declination, rad.
+        mag_declination: f32 = MAG_DECLINATION @ 180 => ["magDeclination" in "rad"],
+        /// GPS time synchronisation pulse period, ms.
+        gps_time_sync_period_ms: u32 = GPS_TIME_SYNC_PERIOD_MS @ 184 => ["gpsTimeSyncPeriodMs" in "ms"],
+        /// GPS measurement period, ms.
+        startup_gps_dt_ms: u32 = STARTUP_GPS_DT_MS @ 188 => ["startupGPSDtMs" in "ms"],
+        /// RTK configuration bits.
+        rtk_cfg_bits: u32 = RTK_CFG_BITS @ 192 => ["RTKCfgBits"],
+        /// Sensor ranges.
+        sensor_config: u32 = SENSOR_CONFIG @ 196 => ["sensorConfig"],
+        /// Minimum satellite elevation, rad.
+        gps_minimum_elevation: f32 = GPS_MINIMUM_ELEVATION @ 200 => ["gpsMinimumElevation" in "rad"],
+        /// Serial port 2 rate.
+        ser2_baud_rate: u32 = SER2_BAUD_RATE @ 204 => ["ser2BaudRate" in "bit/s"],
+        /// Wheel encoder configuration.
+        wheel_config: WheelConfig = WHEEL_CONFIG @ 208,
+        /// Magnetometer interference threshold.
+        mag_interference_threshold: f32 = MAG_INTERFERENCE_THRESHOLD @ 268 => ["magInterferenceThreshold"],
+        /// Magnetometer calibration quality threshold.
+        mag_calibration_quality_threshold: f32 = MAG_CALIBRATION_QUALITY_THRESHOLD @ 272 => ["magCalibrationQualityThreshold"],
+        /// Minimum GNSS C/N0, dBHz.
+        gnss_cn0_minimum: u8 = GNSS_CN0_MINIMUM @ 276,
+        /// Dynamic C/N0 minimum offset, dBHz.
+        gnss_cn0_dyn_min_offset: u8 = GNSS_CN0_DYN_MIN_OFFSET @ 277,
+        /// IMU gyro fault rejection threshold, low.
+        imu_reject_thresh_gyro_low: u8 = IMU_REJECT_THRESH_GYRO_LOW @ 278 => ["imuRejectThreshGyroLow"],
+        /// IMU gyro fault rejection threshold, high.
+        imu_reject_thresh_gyro_high: u8 = IMU_REJECT_THRESH_GYRO_HIGH @ 279 => ["imuRejectThreshGyroHigh"],
+        /// IMU shock detection latency, ms.
+        imu_shock_detect_latency_ms: u8 = IMU_SHOCK_DETECT_LATENCY_MS @ 280 => ["imuShockDetectLatencyMs" in "ms"],
+        /// IMU shock rejection latch time, ms.
+        imu_shock_reject_latch_ms: u8 = IMU_SHOCK_REJECT_LATCH_MS @ 281 => ["imuShockRejectLatchMs" in "ms"],
+        /// IMU shock rejection options.
+        imu_shock_options: u8 = IMU_SHOCK_OPTIONS @ 282 => ["imuShockOptions"],
+        /// `imuShockDeltaAccHighThreshold`.
+        imu_shock_delta_acc_high: u8 = IMU_SHOCK_DELTA_ACC_HIGH @ 283,
+        /// `imuShockDeltaAccLowThreshold`.
+        imu_shock_delta_acc_low: u8 = IMU_SHOCK_DELTA_ACC_LOW @ 284,
+        /// `imuShockDeltaGyroHighThreshold`.
+        imu_shock_delta_gyro_high: u8 = IMU_SHOCK_DELTA_GYRO_HIGH @ 285,
+        /// `imuShockDeltaGyroLowThreshold`.
+        imu_shock_delta_gyro_low: u8 = IMU_SHOCK_DELTA_GYRO_LOW @ 286,
+        /// Hardware interface configuration bits, second word.
+        io_config2: u8 = IO_CONFIG2 @ 287,
+    }
     /// First byte the checksum covers.
     pub const CHECKSUM_START: usize = 8;
-    /// `u32 key`: factory-defaults key.
-    pub const KEY: usize = 8;
-    /// `u32 startupImuDtMs` (applies after reset).
-    pub const STARTUP_IMU_DT_MS: usize = 12;
-    /// `u32 startupNavDtMs` (applies after reset).
-    pub const STARTUP_NAV_DT_MS: usize = 16;
-    /// `u32 ser0BaudRate`.
-    pub const SER0_BAUD_RATE: usize = 20;
-    /// `u32 ser1BaudRate`.
-    pub const SER1_BAUD_RATE: usize = 24;
-    /// `f32 insRotation[3]`, rad.
-    pub const INS_ROTATION: usize = 28;
-    /// `f32 insOffset[3]`, m.
-    pub const INS_OFFSET: usize = 40;
-    /// `f32 gps1AntOffset[3]`, m.
-    pub const GPS1_ANT_OFFSET: usize = 52;
-    /// `u8 dynamicModel`.
-    pub const DYNAMIC_MODEL: usize = 64;
-    /// `u8 debug`.
-    pub const DEBUG: usize = 65;
-    /// `u16 gnssSatSigConst`.
-    pub const GNSS_SAT_SIG_CONST: usize = 66;
-    /// `u32 sysCfgBits`.
-    pub const SYS_CFG_BITS: usize = 68;
     /// `sysCfgBits`: no BIT at start-up
     /// (`SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP`, SDK 2.7.1).
     pub const SYS_CFG_BITS_DISABLE_AUTO_BIT_ON_STARTUP: u32 = 0x0008_0000;
-    /// `f64 refLla[3]`.
-    pub const REF_LLA: usize = 72;
-    /// `f64 lastLla[3]`.
-    pub const LAST_LLA: usize = 96;
-    /// `u32 lastLlaTimeOfWeekMs`.
-    pub const LAST_LLA_TIME_OF_WEEK_MS: usize = 120;
-    /// `u32 lastLlaWeek`.
-    pub const LAST_LLA_WEEK: usize = 124;
-    /// `f32 lastLlaUpdateDistance`, m.
-    pub const LAST_LLA_UPDATE_DISTANCE: usize = 128;
-    /// `u32 ioConfig`.
-    pub const IO_CONFIG: usize = 132;
-    /// `u32 platformConfig`.
-    pub const PLATFORM_CONFIG: usize = 136;
-    /// `f32 gps2AntOffset[3]`.
-    pub const GPS2_ANT_OFFSET: usize = 140;
-    /// `f32 zeroVelRotation[3]`.
-    pub const ZERO_VEL_ROTATION: usize = 152;
-    /// `f32 zeroVelOffset[3]`.
-    pub const ZERO_VEL_OFFSET: usize = 164;
-    /// `f32 gpsTimeUserDelay`, s.
-    pub const GPS_TIME_USER_DELAY: usize = 176;
-    /// `f32 magDeclination`, rad.
-    pub const MAG_DECLINATION: usize = 180;
-    /// `u32 gpsTimeSyncPeriodMs`.
-    pub const GPS_TIME_SYNC_PERIOD_MS: usize = 184;
-    /// `u32 startupGPSDtMs`.
-    pub const STARTUP_GPS_DT_MS: usize = 188;
-    /// `u32 RTKCfgBits`.
-    pub const RTK_CFG_BITS: usize = 192;
-    /// `u32 sensorConfig`.
-    pub const SENSOR_CONFIG: usize = 196;
-    /// `f32 gpsMinimumElevation`, rad.
-    pub const GPS_MINIMUM_ELEVATION: usize = 200;
-    /// `u32 ser2BaudRate`.
-    pub const SER2_BAUD_RATE: usize = 204;
-    /// `wheel_config_t wheelConfig` (60 bytes: u32 bits, 12 × f32
-    /// transform, f32 track width, f32 radius).
-    pub const WHEEL_CONFIG: usize = 208;
-    /// `f32 magInterferenceThreshold`.
-    pub const MAG_INTERFERENCE_THRESHOLD: usize = 268;
-    /// `f32 magCalibrationQualityThreshold`.
-    pub const MAG_CALIBRATION_QUALITY_THRESHOLD: usize = 272;
-    /// `u8 gnssCn0Minimum`, dBHz.
-    pub const GNSS_CN0_MINIMUM: usize = 276;
-    /// `u8 gnssCn0DynMinOffset`, dBHz.
-    pub const GNSS_CN0_DYN_MIN_OFFSET: usize = 277;
-    /// `u8 imuRejectThreshGyroLow`.
-    pub const IMU_REJECT_THRESH_GYRO_LOW: usize = 278;
-    /// `u8 imuRejectThreshGyroHigh`.
-    pub const IMU_REJECT_THRESH_GYRO_HIGH: usize = 279;
-    /// `u8 imuShockDetectLatencyMs`.
-    pub const IMU_SHOCK_DETECT_LATENCY_MS: usize = 280;
-    /// `u8 imuShockRejectLatchMs`.
-    pub const IMU_SHOCK_REJECT_LATCH_MS: usize = 281;
-    /// `u8 imuShockOptions`.
-    pub const IMU_SHOCK_OPTIONS: usize = 282;
-    /// `u8 imuShockDeltaAccHighThreshold`.
-    pub const IMU_SHOCK_DELTA_ACC_HIGH: usize = 283;
-    /// `u8 imuShockDeltaAccLowThreshold`.
-    pub const IMU_SHOCK_DELTA_ACC_LOW: usize = 284;
-    /// `u8 imuShockDeltaGyroHighThreshold`.
-    pub const IMU_SHOCK_DELTA_GYRO_HIGH: usize = 285;
-    /// `u8 imuShockDeltaGyroLowThreshold`.
-    pub const IMU_SHOCK_DELTA_GYRO_LOW: usize = 286;
-    /// `u8 ioConfig2`.
-    pub const IO_CONFIG2: usize = 287;
 
     /// Factory `key` of the emulator's defaults. The IMX firmware's own key
     /// value is not in the SDK; the emulator's is its own choice
@@ -629,41 +579,29 @@ impl FlashConfig {
     /// The factory defaults ([`flash`] `DEFAULT_*`), checksum set.
     pub fn factory() -> Self {
         use flash::*;
-        let mut b = [0u8; SIZE];
-        le::put(&mut b, SIZE_FIELD, &(SIZE as u32).to_le_bytes());
-        le::put(&mut b, KEY, &FACTORY_KEY.to_le_bytes());
-        le::put(&mut b, STARTUP_IMU_DT_MS, &DEFAULT_IMU_DT_MS.to_le_bytes());
-        le::put(&mut b, STARTUP_NAV_DT_MS, &DEFAULT_NAV_DT_MS.to_le_bytes());
-        for off in [SER0_BAUD_RATE, SER1_BAUD_RATE, SER2_BAUD_RATE] {
-            le::put(&mut b, off, &DEFAULT_BAUD_RATE.to_le_bytes());
-        }
-        b[DYNAMIC_MODEL] = DEFAULT_DYNAMIC_MODEL;
-        le::put(&mut b, IO_CONFIG, &DEFAULT_IO_CONFIG.to_le_bytes());
-        le::put(
-            &mut b,
-            GPS_TIME_SYNC_PERIOD_MS,
-            &DEFAULT_GPS_TIME_SYNC_PERIOD_MS.to_le_bytes(),
+        let mut c = FlashConfig(
+            NvmFlashCfg {
+                size: SIZE as u32,
+                key: FACTORY_KEY,
+                startup_imu_dt_ms: DEFAULT_IMU_DT_MS,
+                startup_nav_dt_ms: DEFAULT_NAV_DT_MS,
+                ser0_baud_rate: DEFAULT_BAUD_RATE,
+                ser1_baud_rate: DEFAULT_BAUD_RATE,
+                ser2_baud_rate: DEFAULT_BAUD_RATE,
+                dynamic_model: DEFAULT_DYNAMIC_MODEL,
+                io_config: DEFAULT_IO_CONFIG,
+                gps_time_sync_period_ms: DEFAULT_GPS_TIME_SYNC_PERIOD_MS,
+                startup_gps_dt_ms: DEFAULT_GPS_DT_MS,
+                sensor_config: DEFAULT_SENSOR_CONFIG,
+                gps_minimum_elevation: DEFAULT_GPS_MIN_ELEVATION,
+                mag_interference_threshold: DEFAULT_MAG_INTERFERENCE_THRESHOLD,
+                mag_calibration_quality_threshold: DEFAULT_MAG_CAL_QUALITY_THRESHOLD,
+                gnss_cn0_minimum: DEFAULT_GNSS_CN0_MINIMUM,
+                gnss_cn0_dyn_min_offset: DEFAULT_GNSS_CN0_DYN_MIN_OFFSET,
+                ..NvmFlashCfg::default()
+            }
+            .encode(),
         );
-        le::put(&mut b, STARTUP_GPS_DT_MS, &DEFAULT_GPS_DT_MS.to_le_bytes());
-        le::put(&mut b, SENSOR_CONFIG, &DEFAULT_SENSOR_CONFIG.to_le_bytes());
-        le::put(
-            &mut b,
-            GPS_MINIMUM_ELEVATION,
-            &DEFAULT_GPS_MIN_ELEVATION.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            MAG_INTERFERENCE_THRESHOLD,
-            &DEFAULT_MAG_INTERFERENCE_THRESHOLD.to_le_bytes(),
-        );
-        le::put(
-            &mut b,
-            MAG_CALIBRATION_QUALITY_THRESHOLD,
-            &DEFAULT_MAG_CAL_QUALITY_THRESHOLD.to_le_bytes(),
-        );
-        b[GNSS_CN0_MINIMUM] = DEFAULT_GNSS_CN0_MINIMUM;
-        b[GNSS_CN0_DYN_MIN_OFFSET] = DEFAULT_GNSS_CN0_DYN_MIN_OFFSET;
-        let mut c = FlashConfig(b);
         c.update_checksum();
         c
     }
@@ -714,40 +652,40 @@ impl FlashConfig {
     }
 }
 
-/// `bit_t`, 56 bytes, not in protocol-facts.md: from `data_sets.h` of protocol 2.1.
-pub mod bit {
-    /// Struct size.
-    pub const SIZE: usize = 56;
-    /// `u8 command` (`eBitCommand`; ignored when 0).
-    pub const COMMAND: usize = 0;
-    /// `u8 lastCommand`.
-    pub const LAST_COMMAND: usize = 1;
-    /// `u8 state` (`eBitState`).
-    pub const STATE: usize = 2;
-    /// `u8 reserved`.
-    pub const RESERVED: usize = 3;
-    /// `u32 hdwBitStatus` (`eHdwBitStatusFlags`).
-    pub const HDW_BIT_STATUS: usize = 4;
-    /// `u32 calBitStatus` (`eCalBitStatusFlags`).
-    pub const CAL_BIT_STATUS: usize = 8;
-    /// `f32 tcPqrBias`, then tcAccBias, tcPqrSlope, tcAccSlope,
-    /// tcPqrLinearity, tcAccLinearity (6 × f32).
-    pub const TC_PQR_BIAS: usize = 12;
-    /// `f32 pqr`: gyro error, rad/s.
-    pub const PQR: usize = 36;
-    /// `f32 acc`: accelerometer error, m/s².
-    pub const ACC: usize = 40;
-    /// `f32 pqrSigma`.
-    pub const PQR_SIGMA: usize = 44;
-    /// `f32 accSigma`.
-    pub const ACC_SIGMA: usize = 48;
-    /// `u8 testMode`.
-    pub const TEST_MODE: usize = 52;
-    /// `u8 testVar`.
-    pub const TEST_VAR: usize = 53;
-    /// `u16 detectedHardwareId`.
-    pub const DETECTED_HARDWARE_ID: usize = 54;
-
+crate::data_set! {
+    /// `bit_t`, 56 bytes, not in protocol-facts.md: from `data_sets.h` of
+    /// protocol 2.1.
+    #[derive(Debug, Clone, Copy, PartialEq, Default)]
+    pub struct Bit in mod bit, 56 bytes {
+        /// Input command (`eBitCommand`; ignored when 0).
+        command: u8 = COMMAND @ 0 => ["command"],
+        /// Last command.
+        last_command: u8 = LAST_COMMAND @ 1 => ["lastCommand"],
+        /// State (`eBitState`).
+        state: u8 = STATE @ 2 => ["state"],
+        _: u8 = RESERVED @ 3,
+        /// Hardware BIT status (`eHdwBitStatusFlags`).
+        hdw_bit_status: u32 = HDW_BIT_STATUS @ 4 => ["hdwBitStatus"],
+        /// Calibration BIT status (`eCalBitStatusFlags`).
+        cal_bit_status: u32 = CAL_BIT_STATUS @ 8 => ["calBitStatus"],
+        /// tcPqrBias, tcAccBias, tcPqrSlope, tcAccSlope, tcPqrLinearity,
+        /// tcAccLinearity.
+        tc: [f32; 6] = TC_PQR_BIAS @ 12,
+        /// Gyro error, rad/s.
+        pqr: f32 = PQR @ 36 => ["pqr" in "rad/s"],
+        /// Accelerometer error, m/s².
+        acc: f32 = ACC @ 40 => ["acc" in "m/s²"],
+        /// Angular rate standard deviation.
+        pqr_sigma: f32 = PQR_SIGMA @ 44 => ["pqrSigma" in "rad/s"],
+        /// Acceleration standard deviation.
+        acc_sigma: f32 = ACC_SIGMA @ 48 => ["accSigma" in "m/s²"],
+        /// Test mode.
+        test_mode: u8 = TEST_MODE @ 52 => ["testMode"],
+        /// Test variable.
+        test_var: u8 = TEST_VAR @ 53 => ["testVar"],
+        /// Detected hardware id.
+        detected_hardware_id: u16 = DETECTED_HARDWARE_ID @ 54 => ["detectedHardwareId"],
+    }
     /// Command: none.
     pub const CMD_NONE: u8 = 0;
     /// Command: stop.
@@ -772,89 +710,6 @@ pub mod bit {
     pub const HDW_FAULT_NOISE_ACC: u32 = 0x200;
     /// `calBitStatus`: passed all.
     pub const CAL_PASSED_ALL: u32 = 0x01;
-}
-
-/// `bit_t` ([`bit`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Bit {
-    /// Input command.
-    pub command: u8,
-    /// Last command.
-    pub last_command: u8,
-    /// State.
-    pub state: u8,
-    /// Hardware BIT status.
-    pub hdw_bit_status: u32,
-    /// Calibration BIT status.
-    pub cal_bit_status: u32,
-    /// tcPqrBias, tcAccBias, tcPqrSlope, tcAccSlope, tcPqrLinearity,
-    /// tcAccLinearity.
-    pub tc: [f32; 6],
-    /// Gyro error, rad/s.
-    pub pqr: f32,
-    /// Accelerometer error, m/s².
-    pub acc: f32,
-    /// Angular rate standard deviation.
-    pub pqr_sigma: f32,
-    /// Acceleration standard deviation.
-    pub acc_sigma: f32,
-    /// Test mode.
-    pub test_mode: u8,
-    /// Test variable.
-    pub test_var: u8,
-    /// Detected hardware id.
-    pub detected_hardware_id: u16,
-}
-
-impl Bit {
-    /// The image.
-    pub fn encode(&self) -> [u8; bit::SIZE] {
-        use bit::*;
-        let mut b = [0u8; SIZE];
-        b[COMMAND] = self.command;
-        b[LAST_COMMAND] = self.last_command;
-        b[STATE] = self.state;
-        le::put(&mut b, HDW_BIT_STATUS, &self.hdw_bit_status.to_le_bytes());
-        le::put(&mut b, CAL_BIT_STATUS, &self.cal_bit_status.to_le_bytes());
-        for (i, v) in self.tc.iter().enumerate() {
-            le::put(&mut b, TC_PQR_BIAS + 4 * i, &v.to_le_bytes());
-        }
-        le::put(&mut b, PQR, &self.pqr.to_le_bytes());
-        le::put(&mut b, ACC, &self.acc.to_le_bytes());
-        le::put(&mut b, PQR_SIGMA, &self.pqr_sigma.to_le_bytes());
-        le::put(&mut b, ACC_SIGMA, &self.acc_sigma.to_le_bytes());
-        b[TEST_MODE] = self.test_mode;
-        b[TEST_VAR] = self.test_var;
-        le::put(
-            &mut b,
-            DETECTED_HARDWARE_ID,
-            &self.detected_hardware_id.to_le_bytes(),
-        );
-        b
-    }
-    /// Decodes an image.
-    pub fn decode(b: &[u8; bit::SIZE]) -> Self {
-        use bit::*;
-        let mut tc = [0f32; 6];
-        for (i, v) in tc.iter_mut().enumerate() {
-            *v = le::f32(b, TC_PQR_BIAS + 4 * i);
-        }
-        Bit {
-            command: b[COMMAND],
-            last_command: b[LAST_COMMAND],
-            state: b[STATE],
-            hdw_bit_status: le::u32(b, HDW_BIT_STATUS),
-            cal_bit_status: le::u32(b, CAL_BIT_STATUS),
-            tc,
-            pqr: le::f32(b, PQR),
-            acc: le::f32(b, ACC),
-            pqr_sigma: le::f32(b, PQR_SIGMA),
-            acc_sigma: le::f32(b, ACC_SIGMA),
-            test_mode: b[TEST_MODE],
-            test_var: b[TEST_VAR],
-            detected_hardware_id: le::u16(b, DETECTED_HARDWARE_ID),
-        }
-    }
 }
 
 #[cfg(test)]

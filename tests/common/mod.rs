@@ -10,6 +10,7 @@ use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
 use imu_emu::Kernel;
 
+pub mod isb;
 pub mod xorshift;
 
 pub type Flash = RamNor<8192>;

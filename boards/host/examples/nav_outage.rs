@@ -12,63 +12,29 @@
 //! imu-emu client plot outage.csv -o docs/ins-outage.png
 //! ```
 
-use imu_emu::device::{Device, PowerOn};
 use imu_emu::isb::did;
 use imu_emu::isb::ins::NavFaults;
-use imu_emu::isb::message::{encode_get, GetRequest};
 use imu_emu::isb::nav_sets::Ins2;
 use imu_emu::isb::packet::Decoder;
-use imu_emu::isb::Isb;
-use imu_emu::sensor::profile::{arw_to_density, vrw_to_density, SensorProfile};
+use imu_emu::sensor::profile::SensorProfile;
 use imu_emu::sensor::profiles::IMX5_PROFILE;
-use imu_emu::vehicle::{wgs84, Manoeuvres, Script};
-use imu_emu::{Instant, Product, RamNor};
+use imu_emu::vehicle::wgs84;
+use imu_emu::Instant;
 
-/// The consumer-grade profile of `tests/isb_ins.rs`.
-static CONSUMER: SensorProfile = {
-    let mut p = IMX5_PROFILE;
-    p.gyro.noise_density = arw_to_density(0.6);
-    p.gyro.bias_instability = 36.0 / 3600.0;
-    p.acc.noise_density = vrw_to_density(0.1);
-    p.acc.bias_instability = 1e-3;
-    p
-};
+// The flight and the consumer-grade profile of `tests/isb_ins.rs`.
+#[path = "../../../tests/common/isb.rs"]
+mod bench;
+use bench::{flight, CONSUMER};
 
-const FLIGHT: &str = "start 45.5 7.25 300 30 0; hold 60; accel 2 15; hold 20; \
-    coord-turn 3 30; hold 20; climb 5 20; hold 10; descend 5 20; hold 10; \
-    coord-turn -3 30; hold 20; accel 1 5; hold 150";
 const OUTAGE: (u64, u64) = (330, 390);
 const END_S: u64 = 450;
 
 /// Horizontal INS error each second of the flight, m.
 fn errors(profile: &'static SensorProfile) -> Vec<f64> {
-    let mut dev = Device::<RamNor<16384>, Isb>::new(
-        PowerOn {
-            product: Product::imx5(),
-            boot: None,
-            seed: 11,
-        },
-        RamNor::new(),
-        Instant::ZERO,
-    );
-    dev.chain_mut().set_profile(Some(profile));
-    let mut script = Manoeuvres::new(Script::parse(FLIGHT).unwrap());
-    let s = script.at(0.0);
-    dev.chain_mut().set_vehicle(s, s.truth());
-    dev.power_cycle(Instant::ZERO);
+    let (mut dev, mut script) = flight(profile, 11);
     let period = dev.tick_period_ns();
     let per_s = 1_000_000_000 / period;
-    let mut get = [0u8; 32];
-    let n = encode_get(
-        &GetRequest {
-            did: u16::from(did::INS_2),
-            size: 0,
-            offset: 0,
-            period: 0,
-        },
-        &mut get,
-    )
-    .unwrap();
+    let get = bench::get(did::INS_2, 0);
     let mut dec = Decoder::<4096>::new();
     let mut buf = [0u8; 4096];
     let mut out = Vec::new();
@@ -86,7 +52,7 @@ fn errors(profile: &'static SensorProfile) -> Vec<f64> {
             dev.on_tick(Instant(tick * period));
             while dev.poll_tx(&mut buf) > 0 {}
         }
-        dev.on_rx(&get[..n], Instant(tick * period));
+        dev.on_rx(&get, Instant(tick * period));
         let k = dev.poll_tx(&mut buf);
         let mut input = &buf[..k];
         let p = dec.next_packet(&mut input).expect("INS_2");

@@ -274,6 +274,14 @@ pub enum Sub {
     /// record` CSV): the fitted ARW/VRW, bias instability and rate random
     /// walk beside the profile's, and a log-log plot (PNG, SVG).
     Allan(crate::allan::AllanArgs),
+    /// Print the layouts of the ISB data sets the emulated IMX-5 serves
+    /// (DID, name, struct, size, named fields with offset, kind and unit).
+    #[command(name = "isb-layouts")]
+    IsbLayouts {
+        /// As JSON, one data set a line (what `scripts/isb-layouts.py` reads).
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// `imu-emu sensor-profile …`.
@@ -516,6 +524,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         Some(Sub::Client(c)) => return crate::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
         Some(Sub::Allan(a)) => return crate::allan::run(&a),
+        Some(Sub::IsbLayouts { json }) => return crate::isb_layouts::run(json),
         Some(Sub::Completions { shell }) => return print_all(&completions(shell)),
         Some(Sub::Man { command, dir }) => return man(&command, dir.as_deref()),
         None => {}

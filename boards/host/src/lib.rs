@@ -48,6 +48,7 @@ pub mod error;
 pub mod feed;
 pub mod flash;
 pub mod fleet;
+pub mod isb_layouts;
 pub mod link;
 pub mod monitor;
 pub mod plot;

@@ -317,11 +317,11 @@ impl Timing {
     }
 }
 
-/// Whether an ISB data set's time ([`imu_emu::isb::fields::device_time`])
+/// Whether an ISB data set's time ([`imu_emu::isb::did::device_time`])
 /// is GPS time of week: the set has a `timeOfWeek` or `timeOfWeekMs`
 /// field (the others count seconds since boot, `time`).
 fn gps_timed(did: u8) -> bool {
-    imu_emu::isb::fields::set(did)
+    imu_emu::isb::did::set(did)
         .is_some_and(|(_, fields)| fields.iter().any(|f| f.name.starts_with("timeOfWeek")))
 }
 
@@ -438,7 +438,7 @@ impl View {
                         continue;
                     };
                     let gps = gps_timed(did);
-                    let own = imu_emu::isb::fields::device_time(did, b).map(|value| Own {
+                    let own = imu_emu::isb::did::device_time(did, b).map(|value| Own {
                         value,
                         wrap: gps.then_some(WEEK_S),
                     });
@@ -449,7 +449,7 @@ impl View {
                         self.gps_tow_at_zero = Some((o.value - t).rem_euclid(WEEK_S));
                     }
                     let values = client::isb::numbers(did, b);
-                    let set = imu_emu::isb::fields::set(did).map(|(name, _)| name);
+                    let set = imu_emu::isb::did::set(did).map(|(name, _)| name);
                     self.push(t, set, values);
                 }
             }

@@ -1,7 +1,7 @@
 //! `imu-emu client --protocol isb …`: the host side of an ISB line (an
 //! Inertial Sense IMX-5, the emulator's `--protocol isb` or a real unit):
 //! GET_DATA / SET_DATA of the data sets by field name
-//! ([`imu_emu::isb::fields`], the `data_sets.h` names of protocol 2.1,
+//! ([`imu_emu::isb::did`] and [`imu_emu::isb::layout`], the `data_sets.h` names of protocol 2.1,
 //! `docs/isb-data-sets.md`), streams recorded to CSV / JSON lines with the
 //! sets' own device time, raw captures decoded.
 
@@ -9,7 +9,7 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context as _};
-use imu_emu::isb::fields::{self, FieldSpec, Kind, Value};
+use imu_emu::isb::layout::{self, FieldSpec, Kind, Value};
 use imu_emu::isb::message::{self, GetRequest};
 use imu_emu::isb::packet::{self, Decoder, PacketType, FLAG_OFFSET, MAX_PACKET};
 use imu_emu::isb::{did, sets};
@@ -161,21 +161,21 @@ impl IsbLink {
 
 /// The name and fields of served set `did`, or an error naming them all.
 pub fn set_of(did: u8) -> anyhow::Result<(&'static str, &'static [FieldSpec])> {
-    fields::set(did)
+    did::set(did)
         .ok_or_else(|| UsageError(format!("no data set {did}; served: {}", set_names())).into())
 }
 
 fn set_names() -> String {
-    fields::SETS
+    did::DATA_SETS
         .iter()
-        .map(|s| s.1)
+        .map(|s| s.did_name)
         .collect::<Vec<_>>()
         .join(" ")
 }
 
 /// A data set by name or number, or a usage error listing them.
 pub fn parse_set(s: &str) -> anyhow::Result<u8> {
-    fields::set_by_name(s)
+    did::set_by_name(s)
         .ok_or_else(|| UsageError(format!("no data set {s}; served: {}", set_names())).into())
 }
 
@@ -215,7 +215,7 @@ fn float(kind: Kind, x: f64) -> String {
 
 /// The cells of `spec` read from `b`.
 fn cells(spec: &FieldSpec, b: &[u8]) -> Vec<Cell> {
-    match fields::read(spec, b) {
+    match layout::read(spec, b) {
         Value::Unsigned(u) => vec![Cell::Num(u.to_string())],
         Value::Float(x) => vec![Cell::Num(float(spec.kind, x))],
         Value::Vec3(v) => v.iter().map(|&x| Cell::Num(float(spec.kind, x))).collect(),
@@ -239,12 +239,12 @@ fn cells(spec: &FieldSpec, b: &[u8]) -> Vec<Cell> {
 /// The numeric columns of set `did` read from `b` (vectors as
 /// `name_x`…; versions and text left out): what the web view plots.
 pub fn numbers(did: u8, b: &[u8]) -> Vec<(String, f64)> {
-    let Some((_, fs)) = fields::set(did) else {
+    let Some((_, fs)) = did::set(did) else {
         return Vec::new();
     };
     let mut out = Vec::new();
     for f in fs {
-        match fields::read(f, b) {
+        match layout::read(f, b) {
             Value::Unsigned(u) => out.push((f.name.to_owned(), u as f64)),
             Value::Float(x) => out.push((f.name.to_owned(), x)),
             Value::Vec3(v) => out.extend(columns(f).into_iter().zip(v)),
@@ -274,7 +274,7 @@ pub fn show_field(f: &FieldSpec, b: &[u8]) -> String {
             Cell::Num(s) | Cell::Text(s) => s,
         })
         .collect();
-    let hex = match (f.kind, fields::read(f, b)) {
+    let hex = match (f.kind, layout::read(f, b)) {
         (Kind::U32 | Kind::U64, Value::Unsigned(u)) if f.unit.is_empty() && u > 9 => {
             format!(" ({u:#x})")
         }
@@ -331,7 +331,7 @@ pub fn parse_field(f: &FieldSpec, text: &str) -> anyhow::Result<Vec<u8>> {
 
 /// A field by `SET.field` or unique `field` name, or a usage error.
 pub fn find_field(name: &str) -> anyhow::Result<(u8, &'static FieldSpec)> {
-    fields::find(name).ok_or_else(|| {
+    did::find(name).ok_or_else(|| {
         UsageError(format!(
             "no field {name}; name it SET.field (e.g. FLASH_CONFIG.startupNavDtMs; a field in \
              several sets needs its set); sets: {}",
@@ -380,7 +380,7 @@ impl Recorder {
         self.per_set
             .iter()
             .map(|s| {
-                let name = fields::set(s.did).map_or("?", |x| x.0);
+                let name = did::set(s.did).map_or("?", |x| x.0);
                 match s.span {
                     Some((a, b)) => format!("{name} {} over {:.3} s of device time", s.rows, b - a),
                     None => format!("{name} {}", s.rows),
@@ -410,11 +410,11 @@ impl Recorder {
             self.skipped += 1;
             return Ok(false);
         };
-        let Some((name, fs)) = fields::set(d) else {
+        let Some((name, fs)) = did::set(d) else {
             self.skipped += 1;
             return Ok(false);
         };
-        let dt = fields::device_time(d, b);
+        let dt = did::device_time(d, b);
         if self.to == OutFormat::Csv {
             match self.csv_did {
                 None => {
@@ -589,8 +589,7 @@ fn record_rows(
                     if done.contains(&d) {
                         continue;
                     }
-                    let elapsed = match (rec.of(d).and_then(|s| s.span), fields::device_time(d, b))
-                    {
+                    let elapsed = match (rec.of(d).and_then(|s| s.span), did::device_time(d, b)) {
                         (Some((first, _)), Some(t)) => t - first,
                         (None, Some(_)) => 0.0,
                         (_, None) => t0.elapsed().as_secs_f64(),
@@ -781,7 +780,7 @@ pub fn run(
             link.send_stop()?;
             writeln!(out, "stopped")?;
         }
-        C::Get { param } => match fields::set_by_name(param) {
+        C::Get { param } => match did::set_by_name(param) {
             Some(d) => {
                 let b = link.get(d)?;
                 write!(out, "{}", show_set(d, &b)?)?;
@@ -792,7 +791,7 @@ pub fn run(
                 writeln!(out, "{}", show_field(f, &b))?;
             }
         },
-        C::Set { param, value } => match fields::set_by_name(param) {
+        C::Set { param, value } => match did::set_by_name(param) {
             Some(d) => {
                 let (set_name, fs) = set_of(d)?;
                 let bytes = parse_set_value(d, fs, value, &mut link)?;
