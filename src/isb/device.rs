@@ -76,7 +76,8 @@ use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
-use crate::isb::aux_sets::{self, mag_cal_state, Imu3, Imus, MagCal, SystemFault};
+use crate::isb::aux_sets::{self, Imu3, Imus, MagCal, SystemFault};
+use crate::isb::can::{self, CanConfig};
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, mech, NavConfig, NavFaults, NavState, StartTimes};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
@@ -89,6 +90,7 @@ use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
     FlashConfig, Imu, Pimu, Rmc, StrobeInTime, SysParams, SystemCommand,
 };
+use crate::isb::{magcal, rtos};
 use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
@@ -98,10 +100,6 @@ mod nmea_hooks;
 // PORT_MONITOR's byte counts.
 mod port_monitor;
 use port_monitor::{second_of, Counting, PortCounts};
-
-/// How long a magnetometer recalibration takes, ms (emulator's choice:
-/// the unit is not asked to rotate, `docs/isb-data-sets.md` "MAG_CAL").
-pub const MAG_RECAL_MS: u64 = 10_000;
 
 /// Persistent streams the image holds (the first ten running streams are
 /// saved; the image layout is unchanged since the IMU-mode device).
@@ -122,17 +120,19 @@ pub const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
 const PERSIST: usize = flash::SIZE;
 /// Where the persistent NMEA table starts ([`asce::Table::to_image`]).
 const PERSIST_NMEA: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// Where CAN_CONFIG starts ([`can`]).
+const PERSIST_CAN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
 /// The ISB image in flash: FLASH_CONFIG, the persistent streams, the
-/// persistent NMEA table.
-pub const IMAGE_LEN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
+/// persistent NMEA table, CAN_CONFIG.
+pub const IMAGE_LEN: usize = PERSIST_CAN + can::can_config::SIZE;
 /// How the ISB image is stored ([`crate::store`]): its own magic, so a
 /// flash written by the KERNEL personality is not taken for it. Version 2
-/// added the NMEA table (a version-1 image loads as none: factory
-/// defaults).
+/// added the NMEA table, version 3 CAN_CONFIG (an image of an older
+/// version loads as none: factory defaults).
 pub const IMAGE: ImageSpec = ImageSpec {
     len: IMAGE_LEN as u16,
     magic: *b"ISB1",
-    version: 2,
+    version: 3,
 };
 /// An incomplete packet or sentence with no new byte for this long is
 /// dropped (as the KERNEL does with a frame cut short).
@@ -188,9 +188,10 @@ struct State {
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
-    /// MAG_CAL: the last command's state and the tick it came at
-    /// (`docs/isb-data-sets.md` "MAG_CAL").
-    mag_cal: (u32, u64),
+    /// MAG_CAL: the magnetometer recalibration ([`magcal`]).
+    mag_cal: magcal::Recal,
+    /// CAN_CONFIG as saved in flash ([`can`]).
+    can: CanConfig,
     /// PORT_MONITOR: the serial port's byte counts.
     port: PortCounts,
     /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
@@ -244,7 +245,8 @@ impl Personality for Isb {
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
-                mag_cal: (mag_cal_state::DO_NOTHING, 0),
+                mag_cal: magcal::Recal::default(),
+                can: can::FACTORY,
                 port: PortCounts::default(),
                 dropped_seen: 0,
                 tx_limited: false,
@@ -274,11 +276,16 @@ impl Personality for Isb {
         if loaded && cfg.is_valid() && cfg.key() == flash::FACTORY_KEY {
             st.cfg = cfg;
             st.persist.copy_from_slice(&image[PERSIST..PERSIST_NMEA]);
-            st.persist_nmea.copy_from_slice(&image[PERSIST_NMEA..]);
+            st.persist_nmea
+                .copy_from_slice(&image[PERSIST_NMEA..PERSIST_CAN]);
+            let mut c = [0u8; can::can_config::SIZE];
+            c.copy_from_slice(&image[PERSIST_CAN..]);
+            st.can = CanConfig::decode(&c);
         } else {
             st.cfg = FlashConfig::factory();
             st.persist = [0; 4 + MAX_STREAMS * ENTRY];
             st.persist_nmea = [0; asce::IMAGE_LEN];
+            st.can = can::FACTORY;
         }
         st.nmea = NmeaStreams::default();
         st.imu_dt_ms = st.cfg.startup_imu_dt_ms().clamp(1, 1000);
@@ -294,7 +301,7 @@ impl Personality for Isb {
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
-        st.mag_cal = (mag_cal_state::DO_NOTHING, 0);
+        st.mag_cal = magcal::Recal::default();
         st.port = PortCounts::default();
         st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;
@@ -535,6 +542,9 @@ impl State {
             let truth = st.truth(cx);
             st.nav.set_year(st.gps_time(cx).1.decimal_year());
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+            if st.mag_cal.running() {
+                st.mag_recal_sample(&truth, ticks);
+            }
         }
         if ticks.is_multiple_of(u64::from(nav)) {
             st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
@@ -566,6 +576,18 @@ impl State {
             cx.chain_mut().restart_health_interval();
         }
         st.nmea_tick(cx, now);
+    }
+
+    /// A magnetometer reading at tick `tick` (the one MAGNETOMETER reads
+    /// then) into the running recalibration; its result, when it ends,
+    /// becomes the navigation's field reference ([`magcal`]).
+    fn mag_recal_sample(&mut self, truth: &NavTruth, tick: u64) {
+        let m = self.nav.magnetometer(truth, tick);
+        let level = self.nav.mag_levelled(&m);
+        if let Some((norm, dip)) = self.mag_cal.feed(&m, &level) {
+            self.nav.set_mag_reference(norm, dip);
+        }
+        self.nav.set_mag_recalibrating(self.mag_cal.running());
     }
 
     /// A strobe (module doc).
@@ -787,15 +809,15 @@ impl State {
                 }
             }
             did::MAG_CAL => {
-                let state = le::u32(image, aux_sets::mag_cal::STATE);
-                let tick = cx.time().ticks();
-                match state {
-                    mag_cal_state::MULTI_AXIS | mag_cal_state::SINGLE_AXIS => {
-                        self.mag_cal = (mag_cal_state::RECAL_RUNNING, tick)
-                    }
-                    mag_cal_state::ABORT => self.mag_cal = (mag_cal_state::DO_NOTHING, tick),
-                    _ => {}
-                }
+                self.mag_cal
+                    .command(le::u32(image, aux_sets::mag_cal::STATE));
+                self.nav.set_mag_recalibrating(self.mag_cal.running());
+            }
+            did::CAN_CONFIG => {
+                let mut b = [0u8; can::can_config::SIZE];
+                b.copy_from_slice(&image[..can::can_config::SIZE]);
+                self.can = CanConfig::decode(&b);
+                self.save_pending = true;
             }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);
@@ -879,7 +901,8 @@ impl State {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
         image[PERSIST..PERSIST_NMEA].copy_from_slice(&self.persist);
-        image[PERSIST_NMEA..].copy_from_slice(&self.persist_nmea);
+        image[PERSIST_NMEA..PERSIST_CAN].copy_from_slice(&self.persist_nmea);
+        image[PERSIST_CAN..].copy_from_slice(&self.can.encode());
         self.save_pending = cx.save_image(&image).is_err();
     }
 
@@ -935,7 +958,9 @@ impl State {
             // A unit that never faulted: all zeros (`docs/isb-data-sets.md`).
             did::SYS_FAULT => put(&SystemFault::default().encode()),
             did::GPS1_VERSION => put(&aux_sets::RECEIVER_VERSION.encode()),
-            did::MAG_CAL => put(&self.mag_cal_of(cx).encode()),
+            did::MAG_CAL => put(&self.mag_cal_of().encode()),
+            did::RTOS_INFO => put(&rtos::rtos_info(&self.rtos_schedule(cx)).encode()),
+            did::CAN_CONFIG => put(&self.can.encode()),
             did::PORT_MONITOR => put(&self.port_monitor(cx, now).encode()),
             did::STROBE_IN_TIME => {
                 // GPS time of the edge once GPS time is known.
@@ -1266,27 +1291,26 @@ impl State {
         base + m.len()
     }
 
-    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): after a
-    /// recalibration command the progress runs from 0 to 100 % over
-    /// [`MAG_RECAL_MS`], then the state reads done; the declination is
+    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): the
+    /// recalibration's state and progress ([`magcal`]); the declination is
     /// FLASH_CONFIG's `magDeclination`.
-    fn mag_cal_of(&self, cx: &impl Context<Integrals>) -> MagCal {
-        let (state, at) = self.mag_cal;
-        let declination = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
-        let (state, progress) = if state == mag_cal_state::RECAL_RUNNING {
-            let ms = cx.time().ticks().saturating_sub(at) * 1000 / u64::from(rate(cx));
-            if ms >= MAG_RECAL_MS {
-                (mag_cal_state::RECAL_COMPLETE, 100.0)
-            } else {
-                (state, (ms * 100) as f32 / MAG_RECAL_MS as f32)
-            }
-        } else {
-            (state, 0.0)
-        };
+    fn mag_cal_of(&self) -> MagCal {
         MagCal {
-            state,
-            progress,
-            declination,
+            state: self.mag_cal.state(),
+            progress: self.mag_cal.progress(),
+            declination: le::f32(&self.cfg.0, flash::MAG_DECLINATION),
+        }
+    }
+
+    /// What RTOS_INFO reports of the unit's work ([`rtos`]).
+    fn rtos_schedule(&self, cx: &impl Context<Integrals>) -> rtos::Schedule {
+        rtos::Schedule {
+            rate_hz: rate(cx),
+            ticks: cx.time().ticks(),
+            imu_dt_ms: self.imu_dt_ms,
+            nav_dt_ms: self.nav_dt_ms,
+            step_ms: ins::STEP_MS,
+            step_offset: self.grid_ticks(cx, self.nav_dt_ms) / 2,
         }
     }
 
@@ -1374,6 +1398,9 @@ impl State {
         }
         if self.save_pending {
             hdw |= hdw_status::FLASH_WRITE_PENDING;
+        }
+        if self.mag_cal.complete() {
+            hdw |= magcal::HDW_STATUS_MAG_RECAL_COMPLETE;
         }
         if cx.tx_dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;

@@ -10,6 +10,7 @@ use crate::isb::aux_sets as aux;
 use crate::isb::did;
 use crate::isb::nav_sets as nav;
 use crate::isb::sets::{self, le};
+use crate::isb::{can, rtos};
 
 /// The type of a field, as packed in the struct.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -753,6 +754,67 @@ const MAG_CAL: &[FieldSpec] = &[
     f("declination", aux::mag_cal::DECLINATION, F32, "rad"),
 ];
 
+/// `rtos_info_t`: the heap words and the first task's figures (the
+/// others follow every 60 bytes, [`crate::isb::rtos`]).
+const RTOS_INFO: &[FieldSpec] = &[
+    f("freeHeapSize", rtos::rtos_info::FREE_HEAP_SIZE, U32, "B"),
+    f("mallocSize", rtos::rtos_info::MALLOC_SIZE, U32, "B"),
+    f("freeSize", rtos::rtos_info::FREE_SIZE, U32, "B"),
+    f(
+        "T0_periodMs",
+        rtos::rtos_info::TASK + rtos::rtos_task::PERIOD_MS,
+        U32,
+        "ms",
+    ),
+    f(
+        "T0_startTimeUs",
+        rtos::rtos_info::TASK + rtos::rtos_task::START_TIME_US,
+        U32,
+        "us",
+    ),
+    f(
+        "T1_periodMs",
+        rtos::rtos_info::TASK + 60 + rtos::rtos_task::PERIOD_MS,
+        U32,
+        "ms",
+    ),
+    f(
+        "T1_startTimeUs",
+        rtos::rtos_info::TASK + 60 + rtos::rtos_task::START_TIME_US,
+        U32,
+        "us",
+    ),
+];
+
+/// `can_config_t`: the first message's period and address, the bus rate
+/// and the receive address ([`crate::isb::can`]).
+const CAN_CONFIG: &[FieldSpec] = &[
+    f(
+        "can_period_mult[0]",
+        can::can_config::CAN_PERIOD_MULT,
+        U16,
+        "",
+    ),
+    f(
+        "can_transmit_address[0]",
+        can::can_config::CAN_TRANSMIT_ADDRESS,
+        U32,
+        "",
+    ),
+    f(
+        "can_baudrate_kbps",
+        can::can_config::CAN_BAUDRATE_KBPS,
+        U16,
+        "kbit/s",
+    ),
+    f(
+        "can_receive_address",
+        can::can_config::CAN_RECEIVE_ADDRESS,
+        U32,
+        "",
+    ),
+];
+
 /// `gps_sig_t`: the header and the first signal's fields (as GPS_SAT).
 const GPS_SIG: &[FieldSpec] = &[
     f("timeOfWeekMs", aux::gps_sig::TIME_OF_WEEK_MS, U32, "ms"),
@@ -832,7 +894,7 @@ const SYS_SENSORS: &[FieldSpec] = &[
 ];
 
 /// The data sets served, by DID: the SDK's DID name and its fields.
-pub const SETS: [(u8, &str, &[FieldSpec]); 32] = [
+pub const SETS: [(u8, &str, &[FieldSpec]); 34] = [
     (did::DEV_INFO, "DEV_INFO", DEV_INFO),
     (did::SYS_FAULT, "SYS_FAULT", SYS_FAULT),
     (did::PIMU, "PIMU", PIMU),
@@ -843,6 +905,8 @@ pub const SETS: [(u8, &str, &[FieldSpec]); 32] = [
     (did::FLASH_CONFIG, "FLASH_CONFIG", FLASH),
     (did::GPS1_VERSION, "GPS1_VERSION", GPS_VERSION),
     (did::MAG_CAL, "MAG_CAL", MAG_CAL),
+    (did::RTOS_INFO, "RTOS_INFO", RTOS_INFO),
+    (did::CAN_CONFIG, "CAN_CONFIG", CAN_CONFIG),
     (did::IMU, "IMU", IMU),
     (did::BIT, "BIT", BIT),
     (did::PORT_MONITOR, "PORT_MONITOR", PORT_MONITOR),
