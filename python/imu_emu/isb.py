@@ -28,6 +28,7 @@ INS_1, INS_2, INS_3, INS_4, GPS1_POS, GPS1_VEL = 4, 5, 65, 66, 13, 30
 MAGNETOMETER, BAROMETER, IMU_MAG, PIMU_MAG, SYS_SENSORS = 52, 53, 85, 86, 11
 SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW = 2, 17, 19, 45, 96
 PORT_MONITOR = 75
+RTOS_INFO, CAN_CONFIG = 38, 90
 
 # Field kinds: struct format and item count.
 _KINDS = {
@@ -199,6 +200,25 @@ SETS: Dict[int, Tuple[str, int, Sequence[Field]]] = {
     # the field table (as the Rust one) does not name.
     GPS1_VERSION: ("GPS1_VERSION", 220, ()),
     MAG_CAL: ("MAG_CAL", 12, (("state", 0, "u32"), ("progress", 4, "f32"), ("declination", 8, "f32"))),
+    # rtos_info_t: the heap words, then period and last start of tasks 0 and 1 (60 bytes each).
+    RTOS_INFO: (
+        "RTOS_INFO",
+        372,
+        (
+            ("freeHeapSize", 0, "u32"), ("mallocSize", 4, "u32"), ("freeSize", 8, "u32"),
+            ("T0_periodMs", 32, "u32"), ("T0_startTimeUs", 56, "u32"),
+            ("T1_periodMs", 92, "u32"), ("T1_startTimeUs", 116, "u32"),
+        ),
+    ),
+    # can_config_t: message 0's period multiple and address, the bus rate, the receive address.
+    CAN_CONFIG: (
+        "CAN_CONFIG",
+        168,
+        (
+            ("can_period_mult_0", 0, "u16"), ("can_transmit_address_0", 54, "u32"),
+            ("can_baudrate_kbps", 162, "u16"), ("can_receive_address", 164, "u32"),
+        ),
+    ),
     # gps_sig_t: the header and the first 7-byte gps_sig_sv_t.
     GPS1_SIG: (
         "GPS1_SIG",

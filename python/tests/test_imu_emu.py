@@ -347,7 +347,7 @@ class DecoderTest(unittest.TestCase):
                       isb.INS_1, isb.INS_2, isb.INS_3, isb.INS_4, isb.GPS1_POS, isb.GPS1_VEL,
                       isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS,
                       isb.SYS_FAULT, isb.GPS1_VERSION, isb.MAG_CAL, isb.GPS1_SIG, isb.IMU3_RAW,
-                      isb.PORT_MONITOR):
+                      isb.PORT_MONITOR, isb.RTOS_INFO, isb.CAN_CONFIG):
                 emu.send(isb.get_data(d))
                 raw += emu.frame(d).raw
             emu.send(isb.stop_all())

@@ -790,13 +790,13 @@ const RTOS_INFO: &[FieldSpec] = &[
 /// and the receive address ([`crate::isb::can`]).
 const CAN_CONFIG: &[FieldSpec] = &[
     f(
-        "can_period_mult[0]",
+        "can_period_mult_0",
         can::can_config::CAN_PERIOD_MULT,
         U16,
         "",
     ),
     f(
-        "can_transmit_address[0]",
+        "can_transmit_address_0",
         can::can_config::CAN_TRANSMIT_ADDRESS,
         U32,
         "",
