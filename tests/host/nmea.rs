@@ -193,12 +193,20 @@ fn the_first_stpb_after_pers_and_a_reset_stops_the_streams() {
 /// `$SRST`, SYS_CMD 99 three times 20 ms apart (the SDK's software
 /// reset), a power cycle on the control socket, and `$SRST` with the
 /// port closed and reopened (the `$STPB` is then the first write of the
-/// new open) — and one `$STPB` sent the moment the resumed streams show:
-/// the line goes quiet (25 s of device time) and stays so.
+/// new open), and `$SRST` with a stray `0xEF` byte right before the
+/// `$STPB` (which the input classifier once took for a packet's start,
+/// swallowing the `$`) — and one `$STPB` sent the moment the resumed
+/// streams show: the line goes quiet (25 s of device time) and stays so.
 #[test]
 fn the_first_stpb_after_a_reset_silences_the_pty() {
     use support::{isb_get, Control};
-    for reset in ["$SRST", "SYS_CMD 99", "power-cycle", "$SRST, reopen"] {
+    for reset in [
+        "$SRST",
+        "SYS_CMD 99",
+        "power-cycle",
+        "$SRST, reopen",
+        "$SRST, stray 0xEF",
+    ] {
         let addr = format!("127.0.0.1:{}", free_port());
         let emu = Emu::start(&[
             "--protocol",
@@ -240,7 +248,11 @@ fn the_first_stpb_after_a_reset_silences_the_pty() {
         }
         // The resumed streams' next byte, then at once one `$STPB`.
         assert_eq!(c.read_bytes(1).len(), 1, "{reset}: resumed");
-        c.send(b"$STPB*15\r\n");
+        if reset.ends_with("0xEF") {
+            c.send(b"\xEF$STPB*15\r\n");
+        } else {
+            c.send(b"$STPB*15\r\n");
+        }
         std::thread::sleep(Duration::from_millis(100));
         c.drain_for(Duration::from_millis(200));
         assert_eq!(
