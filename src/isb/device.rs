@@ -30,11 +30,13 @@
 //!   until then; `startupImuDtMs`, `startupNavDtMs` and `ser0BaudRate`
 //!   apply after a reset: "system reset required" while they differ from
 //!   the running values), RMC (below), SYS_CMD (1 save persistent
-//!   messages, 97 save flash, 99 software reset, 5 zero motion: accepted,
-//!   no effect; 1122334455 then 1357924680: factory reset of FLASH_CONFIG,
+//!   messages, 97 save flash, 99 software reset, 5 zero motion and 4 / 8
+//!   RTOS statistics: accepted, no effect; 1122334455 then 1357924680: factory reset of FLASH_CONFIG,
 //!   saved, then a reset; ignored unless `invCommand == !command`), SYS_PARAMS
 //!   (`genFaultCode`), BIT (`command` ≠ 0 runs the test at once: state
-//!   done, the result from the chain's BIT faults).
+//!   done, the result from the chain's BIT faults), MAG_CAL (a
+//!   recalibration, [`crate::isb::magcal`]), CAN_CONFIG (saved to flash
+//!   with FLASH_CONFIG, [`crate::isb::can`]).
 //! - **RMC**: its bits stand for the streams of the data sets that have an
 //!   RMC bit (IMU, PIMU, STROBE_IN_TIME, IMU_RAW and the navigation sets;
 //!   with `RMC_BITS_PRESET` the device picks the multiples, `docs/isb.md`); a SET starts those whose
