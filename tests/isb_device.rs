@@ -1433,16 +1433,41 @@ fn mag_cal_now(b: &mut Bench) -> MagCal {
     MagCal::decode(&p.try_into().unwrap())
 }
 
+/// The unit turning at 36 °/s about its up (`[0, 0, 36]`) or right
+/// (`[36, 0, 0]`) axis, or at rest.
+fn turn(b: &mut Bench, rate_dps: [f32; 3]) {
+    b.dev.chain_mut().set_motion(Motion::ConstantRotation {
+        lat_deg: 45.0,
+        heading_deg: 0.0,
+        rate_dps,
+    });
+}
+
+/// `insStatus` MAG_RECALIBRATING and `hdwStatus` MAG_RECAL_COMPLETE now.
+fn recal_bits(b: &mut Bench) -> (bool, bool) {
+    let p = b.sys_params();
+    (
+        p.ins_status & 0x0040_0000 != 0,
+        p.hdw_status & 0x0000_4000 != 0,
+    )
+}
+
 /// MAG_CAL (12 B: state u32 @0, progress f32 @4, declination f32 @8): idle
 /// reads state 0; the multi-axis command (cltool `-magRecal`) is ACKed and
-/// starts a recalibration that reads 200 (running) with its progress, then
-/// 201 (done) at 100 % after `MAG_RECAL_MS`; abort (101) ends one; the
-/// declination is FLASH_CONFIG's `magDeclination`; progress is read-only.
+/// starts a recalibration: state 200, `insStatus` MAG_RECALIBRATING, and a
+/// progress that follows how far the field has turned in the body frame —
+/// a unit at rest stays near 0 for 30 s, a whole turn in heading (10 s at
+/// 36 °/s) covers one axis, a whole turn about a horizontal axis the
+/// second: then state 201 at 100 %, MAG_RECALIBRATING cleared,
+/// `hdwStatus` MAG_RECAL_COMPLETE raised. Single-axis needs the heading
+/// turn only; abort (101) ends one; the declination is FLASH_CONFIG's
+/// `magDeclination`; progress is read-only.
 #[test]
-fn mag_cal_recalibration_runs_and_completes() {
+fn mag_cal_recalibration_follows_the_turns_the_unit_makes() {
     let mut b = Bench::new();
     let m = mag_cal_now(&mut b);
     assert_eq!((m.state, m.progress, m.declination), (0, 0.0, 0.0));
+    assert_eq!(recal_bits(&mut b), (false, false));
     // magDeclination 0.2 rad.
     let r = b.send(&set(
         did::FLASH_CONFIG,
@@ -1459,29 +1484,53 @@ fn mag_cal_recalibration_runs_and_completes() {
     let m = mag_cal_now(&mut b);
     assert_eq!((m.state, m.progress), (mag_cal_state::RECAL_RUNNING, 0.0));
     assert_eq!(m.declination, 0.2);
-    // 2000 ticks a second: 4 s of 10 s.
-    b.run_ticks(8000);
+    assert_eq!(recal_bits(&mut b), (true, false));
+    // 30 s at rest (2000 ticks a second): the field does not turn.
+    b.run_ticks(60_000);
     let m = mag_cal_now(&mut b);
-    assert_eq!((m.state, m.progress), (200, 40.0));
-    b.run_ticks(12_000);
+    assert_eq!(m.state, 200);
+    assert!(m.progress > 0.0 && m.progress < 10.0, "{}", m.progress);
+    // A whole turn in heading: one axis of two.
+    turn(&mut b, [0.0, 0.0, 36.0]);
+    b.run_ticks(22_000);
+    let m = mag_cal_now(&mut b);
+    assert_eq!(m.state, 200);
+    assert!(m.progress > 50.0 && m.progress < 100.0, "{}", m.progress);
+    assert_eq!(recal_bits(&mut b), (true, false));
+    // A whole turn about a horizontal axis: done.
+    turn(&mut b, [36.0, 0.0, 0.0]);
+    b.run_ticks(22_000);
     let m = mag_cal_now(&mut b);
     assert_eq!(
         (m.state, m.progress),
         (mag_cal_state::RECAL_COMPLETE, 100.0)
     );
+    assert_eq!(recal_bits(&mut b), (false, true));
     // progress is the device's.
     let r = b.send(&set(did::MAG_CAL, mag_cal::PROGRESS as u16, &[0; 8]));
     assert_eq!(r[0].flags, 2, "NACK");
-    // Single-axis, then abort.
+    // Single-axis: the heading turn alone completes it.
+    turn(&mut b, [0.0, 0.0, 0.0]);
     b.send(&set(
         did::MAG_CAL,
         0,
         &mag_cal_state::SINGLE_AXIS.to_le_bytes(),
     ));
     assert_eq!(mag_cal_now(&mut b).state, 200);
+    assert_eq!(recal_bits(&mut b), (true, false));
+    turn(&mut b, [0.0, 0.0, 36.0]);
+    b.run_ticks(22_000);
+    assert_eq!(mag_cal_now(&mut b).state, 201);
+    // Abort ends a running one: nothing raised.
+    b.send(&set(
+        did::MAG_CAL,
+        0,
+        &mag_cal_state::SINGLE_AXIS.to_le_bytes(),
+    ));
     b.send(&set(did::MAG_CAL, 0, &mag_cal_state::ABORT.to_le_bytes()));
     let m = mag_cal_now(&mut b);
     assert_eq!((m.state, m.progress), (mag_cal_state::DO_NOTHING, 0.0));
+    assert_eq!(recal_bits(&mut b), (false, false));
 }
 
 /// GPS1_SIG (708 B: timeOfWeekMs, numSigs, 100 × 7-byte `gps_sig_sv_t`):
@@ -1591,7 +1640,8 @@ fn imu3_raw_is_the_chains_sensor_three_times() {
 /// What cltool's `-magRecal` sends (`docs/protocol-facts.md`): GET
 /// DID_MAG_CAL with period 100, then SET_DATA of `state`: MAG_CAL streams
 /// every 100 ms (1 ms source), the ACK comes, and the stream shows the
-/// recalibration running with its progress rising, then done.
+/// recalibration running with its progress rising while the unit turns
+/// (11 s in heading, 11 s about a horizontal axis), then done.
 #[test]
 fn cltools_mag_recal_sequence_is_answered() {
     let mut b = Bench::new();
@@ -1602,20 +1652,23 @@ fn cltools_mag_recal_sequence_is_answered() {
     assert!(cals.iter().all(|p| p.payload.len() == 12));
     let r = b.send(&set(did::MAG_CAL, 0, &1u32.to_le_bytes()));
     assert_eq!((r[0].flags, r[0].payload[4]), (1, did::MAG_CAL));
-    let r = b.run_ticks(24_000);
+    turn(&mut b, [0.0, 0.0, 36.0]);
+    let mut r = b.run_ticks(22_000);
+    turn(&mut b, [36.0, 0.0, 0.0]);
+    r.extend(b.run_ticks(22_000));
     let cals: Vec<MagCal> = of_did(&r, did::MAG_CAL)
         .iter()
         .map(|p| MagCal::decode(&p.payload.clone().try_into().unwrap()))
         .collect();
-    assert_eq!(cals.len(), 120);
+    assert_eq!(cals.len(), 220);
     assert!(cals.windows(2).all(|w| w[1].progress >= w[0].progress));
     assert_eq!(cals[0].state, mag_cal_state::RECAL_RUNNING);
     assert!(
-        cals[50].progress > 40.0 && cals[50].progress < 60.0,
-        "{:?}",
+        cals[50].progress > 25.0 && cals[50].progress < 50.0,
+        "half the first turn: {:?}",
         cals[50]
     );
-    assert_eq!(cals[119].state, mag_cal_state::RECAL_COMPLETE);
+    assert_eq!(cals[219].state, mag_cal_state::RECAL_COMPLETE);
 }
 
 /// PORT_MONITOR (223 B: 6 × 37-byte `port_monitor_set_t`, then u8
@@ -1669,4 +1722,100 @@ fn port_monitor_counts_the_lines_bytes() {
     let (m, _) = pm(&mut b, &mut rx);
     assert_eq!(m.port[0].rx_checksum_errors, 1);
     assert_eq!(m.port[0].rx_bytes as usize, rx);
+}
+
+// ----- RTOS_INFO, CAN_CONFIG -----
+
+/// RTOS_INFO (38, 372 B: heap words, then six 60-byte `rtos_task_t`):
+/// served with the task names and the periods and last-run times of the
+/// emulated unit's work — sample on the IMU grid (`startupImuDtMs` 1 ms),
+/// nav on the navigation period (4 ms), comm on the 1 ms grid of its
+/// streams, maint on the aiding models' 20 ms step (half a navigation
+/// period after the grid), idle and timer names only; heap, CPU and stack
+/// figures 0 (not measured). 1.2345 s after power-on, byte for byte. The
+/// vendor tool's companion SYS_CMD 4 (enable RTOS statistics) is ACKed,
+/// and a stream of period 1000 sends every 1 s.
+#[test]
+fn rtos_info_is_the_units_own_task_table() {
+    use imu_emu::isb::rtos::{rtos_info, rtos_task};
+    let mut b = Bench::new();
+    b.run_ticks(2469);
+    let p = b.get_once(did::RTOS_INFO);
+    let mut want = vec![0u8; 372];
+    let tasks: [(&[u8], u32, u32); 6] = [
+        (b"SAMPLE", 1, 1_234_000),
+        (b"NAV", 4, 1_232_000),
+        (b"COMM", 1, 1_234_000),
+        (b"MAINT", 20, 1_222_000),
+        (b"IDLE", 0, 0),
+        (b"TIMER", 0, 0),
+    ];
+    for (k, (name, period, start)) in tasks.iter().enumerate() {
+        let at = rtos_info::TASK + k * rtos_task::SIZE;
+        want[at..at + name.len()].copy_from_slice(name);
+        want[at + 20..at + 24].copy_from_slice(&period.to_le_bytes());
+        want[at + 44..at + 48].copy_from_slice(&start.to_le_bytes());
+    }
+    assert_eq!(p, want);
+    assert_eq!(&p[12..24], b"SAMPLE\0\0\0\0\0\0");
+    // SYS_CMD 4 (cltool `-did DID_RTOS_INFO`): ACKed.
+    let mut cmd = 4u32.to_le_bytes().to_vec();
+    cmd.extend((!4u32).to_le_bytes());
+    let r = b.send(&set(did::SYS_CMD, 0, &cmd));
+    assert_eq!((r[0].flags, r[0].payload[4]), (1, did::SYS_CMD), "ACK");
+    b.send(&get(did::RTOS_INFO, 1000));
+    let r = b.run_ticks(6000);
+    let s = of_did(&r, did::RTOS_INFO);
+    assert_eq!(s.len(), 3, "every 1 s");
+    assert!(s.windows(2).all(|w| w[1].tick - w[0].tick == 2000));
+}
+
+/// CAN_CONFIG (90, 168 B, packed: u16 period multiples ×27 @0, u32
+/// transmit addresses ×27 @54, u16 `can_baudrate_kbps` @162, u32
+/// `can_receive_address` @164): factory settings (every message off,
+/// 500 kbit/s), a SET_DATA ACKed, read back, written to flash ("flash
+/// write pending" until the next tick) and still there after a power
+/// cycle; a host DATA packet writes it too, unanswered.
+#[test]
+fn can_config_is_set_read_back_and_kept_in_flash() {
+    use imu_emu::isb::packet::{self, FLAG_OFFSET};
+    let mut b = Bench::new();
+    let mut factory = vec![0u8; 168];
+    factory[162..164].copy_from_slice(&500u16.to_le_bytes());
+    assert_eq!(b.get_once(did::CAN_CONFIG), factory);
+    // 250 kbit/s, receive address 0x123.
+    let mut v = 250u16.to_le_bytes().to_vec();
+    v.extend(0x123u32.to_le_bytes());
+    let r = b.send(&set(did::CAN_CONFIG, 162, &v));
+    assert_eq!((r[0].flags, r[0].payload[4]), (1, did::CAN_CONFIG), "ACK");
+    assert_ne!(b.sys_params().hdw_status & 0x8000, 0, "flash write pending");
+    b.run_ticks(1);
+    assert_eq!(b.sys_params().hdw_status & 0x8000, 0, "written");
+    // Host DATA: INS time every 10 periods at address 0x1F0 (message 0).
+    let mut payload = 0u16.to_le_bytes().to_vec();
+    payload.extend(10u16.to_le_bytes());
+    let mut out = [0u8; 64];
+    let n = packet::encode(4 | FLAG_OFFSET, did::CAN_CONFIG, &payload, &mut out).unwrap();
+    assert!(b.send(&out[..n]).is_empty(), "no ACK");
+    let mut payload = 54u16.to_le_bytes().to_vec();
+    payload.extend(0x1F0u32.to_le_bytes());
+    let n = packet::encode(4 | FLAG_OFFSET, did::CAN_CONFIG, &payload, &mut out).unwrap();
+    assert!(b.send(&out[..n]).is_empty(), "no ACK");
+    b.run_ticks(1);
+    let mut want = factory.clone();
+    want[0..2].copy_from_slice(&10u16.to_le_bytes());
+    want[54..58].copy_from_slice(&0x1F0u32.to_le_bytes());
+    want[162..168].copy_from_slice(&v);
+    assert_eq!(b.get_once(did::CAN_CONFIG), want);
+    let mut b = b.power_cycle();
+    assert_eq!(b.get_once(did::CAN_CONFIG), want, "kept over a power cycle");
+    // FLASH_CONFIG's own save keeps it too.
+    b.send(&set(
+        did::FLASH_CONFIG,
+        flash::MAG_DECLINATION as u16,
+        &0.1f32.to_le_bytes(),
+    ));
+    b.run_ticks(1);
+    let mut b = b.power_cycle();
+    assert_eq!(b.get_once(did::CAN_CONFIG), want);
 }

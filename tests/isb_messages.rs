@@ -823,3 +823,41 @@ proptest! {
         }
     }
 }
+
+/// A stray `0xEF` (or an ISB header the decoder refuses: a wrong second
+/// preamble byte, an impossible size) right before `$STPB`: the decoder
+/// drops the candidate and the sentence still counts, in any chunking —
+/// once it swallowed the `$`, and the first `$STPB` went unheard. A
+/// candidate with a possible size still takes what follows (the 100 ms
+/// abandon frees the line).
+#[test]
+fn a_stray_preamble_byte_does_not_swallow_the_next_sentence() {
+    let stop = vec![Ev::Nmea(Command::StopAllPorts)];
+    for pre in [
+        &b"\xEF"[..],
+        b"\xEF\x00",
+        b"\xEF\xEF",
+        b"\xEF\x49\x04\x01\xFF\xFF",
+    ] {
+        let mut bytes = pre.to_vec();
+        bytes.extend(b"$STPB*15\r\n");
+        for chunks in [&[bytes.len()][..], &[1], &[2, 3]] {
+            assert_eq!(events(&bytes, chunks), stop, "{pre:02X?} {chunks:?}");
+        }
+    }
+    // Then a packet still decodes.
+    let mut bytes = b"\xEF$STPB*15\r\n".to_vec();
+    bytes.extend(wire(4, 1, &[1, 2, 3, 4]));
+    assert_eq!(
+        events(&bytes, &[3]),
+        vec![
+            Ev::Nmea(Command::StopAllPorts),
+            Ev::Pkt(4, 1, vec![1, 2, 3, 4])
+        ]
+    );
+    // A possible size: the candidate takes the sentence.
+    assert_eq!(
+        events(b"\xEF\x49\x04\x01\x54\x00$STPB*15\r\n", &[16]),
+        vec![]
+    );
+}

@@ -8,7 +8,7 @@ from typing import Dict, Sequence, Tuple
 #: A named field: (``data_sets.h`` name, byte offset, kind, unit).
 Field = Tuple[str, int, str, str]
 
-__all__ = ["DEV_INFO", "SYS_FAULT", "PIMU", "SYS_CMD", "NMEA_BCAST_PERIOD", "RMC", "SYS_PARAMS", "FLASH_CONFIG", "GPS1_VERSION", "MAG_CAL", "IMU", "BIT", "PORT_MONITOR", "STROBE_IN_TIME", "IMU3_RAW", "IMU_RAW", "INS_1", "INS_2", "INS_3", "INS_4", "INL2_STATES", "INL2_NED_SIGMA", "GPS1_POS", "GPS1_RCVR_POS", "GPS1_VEL", "GPS1_SAT", "GPS1_SIG", "MAGNETOMETER", "BAROMETER", "SYS_SENSORS", "IMU_MAG", "PIMU_MAG", "LAYOUTS", "Field"]
+__all__ = ["DEV_INFO", "SYS_FAULT", "PIMU", "SYS_CMD", "NMEA_BCAST_PERIOD", "RMC", "SYS_PARAMS", "FLASH_CONFIG", "GPS1_VERSION", "MAG_CAL", "RTOS_INFO", "CAN_CONFIG", "IMU", "BIT", "PORT_MONITOR", "STROBE_IN_TIME", "IMU3_RAW", "IMU_RAW", "INS_1", "INS_2", "INS_3", "INS_4", "INL2_STATES", "INL2_NED_SIGMA", "GPS1_POS", "GPS1_RCVR_POS", "GPS1_VEL", "GPS1_SAT", "GPS1_SIG", "MAGNETOMETER", "BAROMETER", "SYS_SENSORS", "IMU_MAG", "PIMU_MAG", "LAYOUTS", "Field"]
 
 DEV_INFO = 1
 SYS_FAULT = 2
@@ -20,6 +20,8 @@ SYS_PARAMS = 10
 FLASH_CONFIG = 12
 GPS1_VERSION = 17
 MAG_CAL = 19
+RTOS_INFO = 38
+CAN_CONFIG = 90
 IMU = 58
 BIT = 64
 PORT_MONITOR = 75
@@ -189,6 +191,27 @@ LAYOUTS: Dict[int, Tuple[str, str, int, Sequence[Field]]] = {
         ("state", 0, 'u32', ""),
         ("progress", 4, 'f32', "%"),
         ("declination", 8, 'f32', "rad"),
+    )),
+    RTOS_INFO: ('RTOS_INFO', 'rtos_info_t', 372, (
+        ("freeHeapSize", 0, 'u32', "B"),
+        ("mallocSize", 4, 'u32', "B"),
+        ("freeSize", 8, 'u32', "B"),
+        ("task[0].periodMs", 32, 'u32', "ms"),
+        ("task[0].startTimeUs", 56, 'u32', "us"),
+        ("task[1].periodMs", 92, 'u32', "ms"),
+        ("task[1].startTimeUs", 116, 'u32', "us"),
+        ("task[2].periodMs", 152, 'u32', "ms"),
+        ("task[2].startTimeUs", 176, 'u32', "us"),
+        ("task[3].periodMs", 212, 'u32', "ms"),
+        ("task[3].startTimeUs", 236, 'u32', "us"),
+        ("task[4].periodMs", 272, 'u32', "ms"),
+        ("task[4].startTimeUs", 296, 'u32', "us"),
+        ("task[5].periodMs", 332, 'u32', "ms"),
+        ("task[5].startTimeUs", 356, 'u32', "us"),
+    )),
+    CAN_CONFIG: ('CAN_CONFIG', 'can_config_t', 168, (
+        ("can_baudrate_kbps", 162, 'u16', "kbit/s"),
+        ("can_receive_address", 164, 'u32', ""),
     )),
     IMU: ('IMU', 'imu_t', 36, (
         ("time", 0, 'f64', "s"),

@@ -348,7 +348,7 @@ class DecoderTest(unittest.TestCase):
                       isb.MAGNETOMETER, isb.BAROMETER, isb.IMU_MAG, isb.PIMU_MAG, isb.SYS_SENSORS,
                       isb.SYS_FAULT, isb.GPS1_VERSION, isb.MAG_CAL, isb.GPS1_SIG, isb.IMU3_RAW,
                       isb.PORT_MONITOR, isb.NMEA_BCAST_PERIOD, isb.GPS1_RCVR_POS, isb.GPS1_SAT,
-                      isb.INL2_STATES, isb.INL2_NED_SIGMA):
+                      isb.INL2_STATES, isb.INL2_NED_SIGMA, isb.RTOS_INFO, isb.CAN_CONFIG):
                 emu.send(isb.get_data(d))
                 raw += emu.frame(d).raw
             emu.send(isb.stop_all())

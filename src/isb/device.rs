@@ -86,7 +86,8 @@ use crate::chain::{ChainConfig, Health};
 use crate::dsp::integrals::{self, Increment, Integrals};
 use crate::io::{Level, Mode, Pin};
 use crate::isb::asce;
-use crate::isb::aux_sets::{self, mag_cal_state, Imu3, Imus, MagCal, SystemFault};
+use crate::isb::aux_sets::{self, Imu3, Imus, MagCal, SystemFault};
+use crate::isb::can::{self, CanConfig};
 use crate::isb::did::{self, DataSet};
 use crate::isb::ins::{self, mech, NavConfig, NavFaults, NavState, StartTimes};
 use crate::isb::message::{self, AckInfo, GetReply, GetRequest, Request, SetOutcome};
@@ -99,6 +100,7 @@ use crate::isb::sets::{
     self, bit, dev_info, flash, hdw_status, imu_status, le, rmc, sys_cmd, Bit, DevInfo,
     FlashConfig, Imu, Pimu, Rmc, StrobeInTime, SysParams, SystemCommand,
 };
+use crate::isb::{magcal, rtos};
 use crate::personality::{Context, Personality};
 use crate::store::ImageSpec;
 use crate::time::Instant;
@@ -130,10 +132,6 @@ pub use persist::{IMAGE, IMAGE_LEN};
 use port_monitor::{second_of, Counting, PortCounts};
 use requests::push;
 use status::imu_status_of;
-
-/// How long a magnetometer recalibration takes, ms (emulator's choice:
-/// the unit is not asked to rotate, `docs/isb-data-sets.md` "MAG_CAL").
-pub const MAG_RECAL_MS: u64 = 10_000;
 
 /// Persistent streams the image holds (the first ten running streams are
 /// saved; the image layout is unchanged since the IMU-mode device).
@@ -200,9 +198,10 @@ struct State {
     strobe_count: u16,
     bit: Bit,
     gen_fault_code: u32,
-    /// MAG_CAL: the last command's state and the tick it came at
-    /// (`docs/isb-data-sets.md` "MAG_CAL").
-    mag_cal: (u32, u64),
+    /// MAG_CAL: the magnetometer recalibration ([`magcal`]).
+    mag_cal: magcal::Recal,
+    /// CAN_CONFIG as saved in flash ([`can`]).
+    can: CanConfig,
     /// PORT_MONITOR: the serial port's byte counts.
     port: PortCounts,
     /// `tx_dropped` of the line at the last SYS_PARAMS (TX limited since).
@@ -256,7 +255,8 @@ impl Personality for Isb {
                 strobe_count: 0,
                 bit: Bit::default(),
                 gen_fault_code: 0,
-                mag_cal: (mag_cal_state::DO_NOTHING, 0),
+                mag_cal: magcal::Recal::default(),
+                can: can::FACTORY,
                 port: PortCounts::default(),
                 dropped_seen: 0,
                 tx_limited: false,
@@ -292,7 +292,7 @@ impl Personality for Isb {
         st.strobe_count = 0;
         st.bit = Bit::default();
         st.gen_fault_code = 0;
-        st.mag_cal = (mag_cal_state::DO_NOTHING, 0);
+        st.mag_cal = magcal::Recal::default();
         st.port = PortCounts::default();
         st.dropped_seen = cx.tx_dropped();
         st.tx_limited = false;

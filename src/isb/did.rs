@@ -51,6 +51,10 @@ pub const GPS1_VERSION: u8 = 17;
 pub const MAG_CAL: u8 = 19;
 /// `gps_sig_t`: the signals the receiver tracks.
 pub const GPS1_SIG: u8 = 45;
+/// `rtos_info_t`: the firmware's task table ([`super::rtos`]).
+pub const RTOS_INFO: u8 = 38;
+/// `can_config_t`: CAN output settings, kept in flash ([`super::can`]).
+pub const CAN_CONFIG: u8 = 90;
 /// `port_monitor_t`: byte counts and rates of each port.
 pub const PORT_MONITOR: u8 = 75;
 /// `gps_vel_t`: GNSS velocity.
@@ -221,6 +225,8 @@ const BIT_W: &[Range] = &[Range::new(0, 4)];
 /// MAG_CAL: the `state` word (a command); progress and declination are
 /// the device's report.
 const MAG_CAL_W: &[Range] = &[Range::new(0, 4)];
+/// CAN_CONFIG: all of it.
+const ALL_CAN: &[Range] = &[Range::new(0, super::can::can_config::SIZE as u16)];
 
 /// A read-only data set (`docs/isb-data-sets.md` "Navigation data sets",
 /// "Status, version, calibration and signal data sets").
@@ -246,7 +252,7 @@ const fn nav(
 }
 
 /// The data sets of the emulated IMX-5, by DID.
-pub const DATA_SETS: [DataSet; 32] = [
+pub const DATA_SETS: [DataSet; 34] = [
     DataSet {
         did: DEV_INFO,
         did_name: "DEV_INFO",
@@ -343,6 +349,25 @@ pub const DATA_SETS: [DataSet; 32] = [
         fields: aux_sets::mag_cal::FIELDS,
         source: Source::Millisecond,
         writable: MAG_CAL_W,
+        rmc_bit: 0,
+    },
+    nav(
+        RTOS_INFO,
+        "RTOS_INFO",
+        "rtos_info_t",
+        super::rtos::rtos_info::SIZE,
+        super::rtos::rtos_info::FIELDS,
+        Source::Millisecond,
+        0,
+    ),
+    DataSet {
+        did: CAN_CONFIG,
+        did_name: "CAN_CONFIG",
+        name: "can_config_t",
+        size: super::can::can_config::SIZE as u16,
+        fields: super::can::can_config::FIELDS,
+        source: Source::Millisecond,
+        writable: ALL_CAN,
         rmc_bit: 0,
     },
     DataSet {

@@ -277,6 +277,8 @@ pub struct NavState {
     mag_ref: Option<(f64, f64)>,
     mag_ok: bool,
     mag_aiding: bool,
+    /// A magnetometer recalibration runs (`insStatus` MAG_RECALIBRATING).
+    mag_recal: bool,
     gps_heading: bool,
     /// A GNSS update entered the solution in the last period.
     gps_step: bool,
@@ -437,6 +439,7 @@ impl NavState {
             mag_ref: None,
             mag_ok: false,
             mag_aiding: false,
+            mag_recal: false,
             gps_heading: false,
             gps_step: false,
             declination: 0.0,
@@ -1041,7 +1044,7 @@ impl NavState {
             return None;
         }
         let e = euler_from_quat(&self.nom.q);
-        let lvl = rotate(&quat_from_euler(e[0], e[1], 0.0), &m);
+        let lvl = self.mag_levelled(mag);
         let dip = libm::asin((lvl[2] / norm).clamp(-1.0, 1.0));
         if (dip - dip0).abs() > MAG_DIP_TOLERANCE {
             return None;
@@ -1050,9 +1053,10 @@ impl NavState {
         Some(crate::math::double::wrap_pi(yaw - e[2]) as f32)
     }
 
-    /// `insStatus` now ([`status`]).
+    /// `insStatus` now ([`status`]; MAG_RECALIBRATING while a
+    /// recalibration runs, [`super::magcal`]).
     pub fn ins_status(&self) -> u32 {
-        status::ins_status(&status::Inputs {
+        let s = status::ins_status(&status::Inputs {
             phase: self.phase,
             kf: &self.kf,
             fixed: self.fixed,
@@ -1060,7 +1064,33 @@ impl NavState {
             mag_interference: self.mag_ref.is_some() && !self.mag_ok,
             gps_heading: self.gps_heading && self.fixed,
             gps_step: self.gps_step,
-        })
+        });
+        if self.mag_recal {
+            s | super::magcal::INS_STATUS_MAG_RECALIBRATING
+        } else {
+            s
+        }
+    }
+
+    /// Marks a magnetometer recalibration as running or not.
+    pub fn set_mag_recalibrating(&mut self, on: bool) {
+        self.mag_recal = on;
+    }
+
+    /// The magnetometer reading `m` (body axes) levelled with the INS's
+    /// own roll and pitch: north-ish, east-ish, down components.
+    pub fn mag_levelled(&self, m: &[f32; 3]) -> [f64; 3] {
+        let e = euler_from_quat(&self.nom.q);
+        rotate(&quat_from_euler(e[0], e[1], 0.0), &m.map(f64::from))
+    }
+
+    /// A recalibration's result: the field's magnitude and dip (rad) the
+    /// magnetometer's readings are checked against from now on (what
+    /// alignment learnt until then).
+    pub fn set_mag_reference(&mut self, norm: f64, dip: f64) {
+        if norm.is_finite() && norm > 0.0 && dip.is_finite() {
+            self.mag_ref = Some((norm, dip));
+        }
     }
 
     /// The navigation bits of `hdwStatus` now.

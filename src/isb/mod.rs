@@ -15,6 +15,8 @@
 //! - [`message`]: GET_DATA / SET_DATA / stop requests, ACK / NACK and DATA
 //!   encoders;
 //! - [`aux_sets`]: SYS_FAULT, GPS1_VERSION, MAG_CAL, GPS1_SIG, IMU3_RAW;
+//! - [`rtos`]: RTOS_INFO, the task table; [`can`]: CAN_CONFIG; [`magcal`]:
+//!   the magnetometer recalibration behind MAG_CAL;
 //! - [`nmea`]: the NMEA commands the vendor tool sends, the `$INFO` reply,
 //!   and [`nmea::Input`], the one place every received byte goes;
 //! - [`asce`]: the `$ASCE` table and parser; [`nmea_out`]: the sentences
@@ -22,10 +24,12 @@
 
 pub mod asce;
 pub mod aux_sets;
+pub mod can;
 pub mod device;
 pub mod did;
 pub mod ins;
 pub mod layout;
+pub mod magcal;
 pub mod message;
 pub mod nav;
 pub mod nav_sets;
@@ -33,6 +37,7 @@ pub mod nmea;
 pub mod nmea_out;
 pub mod nmea_stream;
 pub mod packet;
+pub mod rtos;
 pub mod sets;
 
 pub use device::Isb;

@@ -23,7 +23,7 @@
 //! then `*` and the checksum in upper-case hex (as the SDK's footer writes
 //! it) and `\r\n`.
 
-use super::packet::{Decoder, Packet, MAX_PACKET};
+use super::packet::{Decoder, Packet, HEADER_LEN, MAX_PACKET};
 use super::sets::DevInfo;
 use core::fmt::Write as _;
 
@@ -205,12 +205,20 @@ pub struct Dropped {
 /// drops everything else. A `$` or `0xEF` always starts a new message (a
 /// sentence in progress is dropped for it); while the decoder holds an ISB
 /// candidate every byte goes to it, so a sentence arriving inside a
-/// candidate that later fails its checksum is lost with it. `CAP` is the
-/// largest packet accepted ([`MAX_PACKET`] for every legal packet).
+/// candidate that later fails its checksum is lost with it. A candidate
+/// refused within its header (a stray `0xEF` not followed by `0x49`, an
+/// impossible size) gives its bytes after the first back to the sentence
+/// side, so a stray `0xEF` right before `$STPB` does not swallow the `$`.
+/// `CAP` is the largest packet accepted ([`MAX_PACKET`] for every legal
+/// packet).
 #[derive(Debug, Clone)]
 pub struct Input<const CAP: usize = MAX_PACKET> {
     isb: Decoder<CAP>,
     mode: Mode,
+    /// The first bytes of the ISB candidate held, and how many it has
+    /// taken (saturating).
+    head: [u8; HEADER_LEN],
+    taken: usize,
     body: [u8; MAX_BODY],
     body_len: usize,
     sum: u8,
@@ -229,6 +237,8 @@ impl<const CAP: usize> Input<CAP> {
         Input {
             isb: Decoder::new(),
             mode: Mode::Idle,
+            head: [0; HEADER_LEN],
+            taken: 0,
             body: [0; MAX_BODY],
             body_len: 0,
             sum: 0,
@@ -332,6 +342,7 @@ impl<const CAP: usize> Input<CAP> {
             }
             b if b == super::packet::PREAMBLE[0] => {
                 self.mode = Mode::Isb;
+                self.taken = 0;
                 self.isb_byte(b, on);
             }
             _ => self.dropped.junk_bytes = self.dropped.junk_bytes.wrapping_add(1),
@@ -339,11 +350,39 @@ impl<const CAP: usize> Input<CAP> {
     }
 
     fn isb_byte(&mut self, b: u8, on: &mut impl FnMut(Event<'_>)) {
+        if let Some(h) = self.head.get_mut(self.taken) {
+            *h = b;
+        }
+        self.taken = self.taken.saturating_add(1);
         let mut one: &[u8] = core::slice::from_ref(&b);
+        let mut found = false;
         while let Some(p) = self.isb.next_packet(&mut one) {
+            found = true;
             on(Event::Packet(p));
         }
-        if !self.isb.has_partial() {
+        if self.isb.has_partial() {
+            return;
+        }
+        self.mode = Mode::Idle;
+        if !found && self.taken <= HEADER_LEN {
+            // Refused within its header: its bytes after the first go back
+            // to the sentence side (the decoder has dropped them).
+            let (head, n) = (self.head, self.taken);
+            for &x in &head[1..n] {
+                self.rescanned(x, on);
+            }
+        }
+    }
+
+    /// A byte the ISB decoder refused, classified again for sentences
+    /// only (an `0xEF` among them was the decoder's to take: junk here).
+    fn rescanned(&mut self, b: u8, on: &mut impl FnMut(Event<'_>)) {
+        if b != super::packet::PREAMBLE[0] {
+            self.byte(b, on);
+        } else if self.mode == Mode::Idle {
+            self.dropped.junk_bytes = self.dropped.junk_bytes.wrapping_add(1);
+        } else {
+            self.dropped.bad_sentences = self.dropped.bad_sentences.wrapping_add(1);
             self.mode = Mode::Idle;
         }
     }

@@ -660,8 +660,11 @@ fn a_flight_with_an_outage_and_a_warm_power_cycle_over_a_pty() {
 /// GET is one whole DATA packet of the release's size (32, 220, 223, 12,
 /// 708, 84 bytes)
 /// with the fields a real IMX-5.0 reports; a MAG_CAL recalibration command
-/// is ACKed and reads running, then done; GPS1_SIG lists the signals of
-/// the satellites GPS1_SAT lists once the receiver has its fix.
+/// is ACKed and reads running, does not progress while the unit rests, and
+/// completes when the unit is turned on the control socket (`motion
+/// rotate`: a whole turn in heading, then one about a horizontal axis);
+/// GPS1_SIG lists the signals of the satellites GPS1_SAT lists once the
+/// receiver has its fix; RTOS_INFO is the unit's task table.
 #[test]
 fn status_version_calibration_signal_and_triple_imu_sets_over_tcp() {
     use imu_emu::isb::aux_sets::{mag_cal_state, GpsSig, Imu3, MagCal, PortMonitor};
@@ -728,16 +731,70 @@ fn status_version_calibration_signal_and_triple_imu_sets_over_tcp() {
         assert_eq!((g.gnss_id, g.sv_id, g.cno), (v.gnss_id, v.sv_id, v.cno));
         assert_eq!((g.sig_id, g.quality, g.status), (0, 7, 5));
     }
-    // The recalibration (10 s of device time) is done by now.
-    c.send(&isb_get(did::MAG_CAL, 0));
-    let m = MagCal::decode(
-        &isb_packet_of(&mut c, did::MAG_CAL)
-            .payload
-            .try_into()
-            .unwrap(),
-    );
+    // At rest through the receiver's cold start: still running, hardly
+    // any progress.
+    let m = MagCal::decode(&once(&mut c, did::MAG_CAL).try_into().unwrap());
+    assert_eq!(m.state, mag_cal_state::RECAL_RUNNING);
+    assert!(m.progress < 10.0, "{m:?}");
+    let cal =
+        |c: &mut Conn| MagCal::decode(&isb_packet_of(c, did::MAG_CAL).payload.try_into().unwrap());
+    // 36 °/s in heading for 11 s (MAG_CAL every 100 ms): one axis of two.
+    assert!(ctl.cmd("motion rotate 0 0 36").starts_with("ok"));
+    c.send(&isb_get(did::MAG_CAL, 100));
+    let mut m = cal(&mut c);
+    for _ in 0..110 {
+        m = cal(&mut c);
+    }
+    assert_eq!(m.state, mag_cal_state::RECAL_RUNNING);
+    assert!(m.progress > 50.0 && m.progress < 100.0, "{m:?}");
+    // Then about a horizontal axis: done within the turn.
+    assert!(ctl.cmd("motion rotate 36 0 0").starts_with("ok"));
+    for _ in 0..150 {
+        m = cal(&mut c);
+        if m.state != mag_cal_state::RECAL_RUNNING {
+            break;
+        }
+    }
     assert_eq!(
         (m.state, m.progress),
         (mag_cal_state::RECAL_COMPLETE, 100.0)
     );
+    c.send(&isb_get(did::MAG_CAL, 0));
+    let r = once(&mut c, did::RTOS_INFO);
+    assert_eq!(r.len(), 372);
+    assert_eq!(&r[12..19], b"SAMPLE\0");
+    assert_eq!(&r[12 + 60..16 + 60], b"NAV\0");
+}
+
+/// CAN_CONFIG written over TCP is kept in `--flash FILE`: after a restart
+/// (a power cycle) it reads back byte for byte; a fresh unit reads the
+/// factory settings (every message off, 500 kbit/s).
+#[test]
+fn can_config_survives_a_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("imx.flash");
+    let path = file.to_str().unwrap();
+    let mut want = vec![0u8; 168];
+    want[162..164].copy_from_slice(&500u16.to_le_bytes());
+    {
+        let emu = isb(&["--flash", path]);
+        let mut c = emu.connect();
+        c.send(&isb_get(did::CAN_CONFIG, 0));
+        assert_eq!(isb_packet_of(&mut c, did::CAN_CONFIG).payload, want);
+        // INS time every 5 periods at 0x100, 1 Mbit/s.
+        c.send(&isb_set(did::CAN_CONFIG, 0, &5u16.to_le_bytes()));
+        assert_eq!(isb_packet(&mut c).flags, 1);
+        c.send(&isb_set(did::CAN_CONFIG, 54, &0x100u32.to_le_bytes()));
+        assert_eq!(isb_packet(&mut c).flags, 1);
+        c.send(&isb_set(did::CAN_CONFIG, 162, &1000u16.to_le_bytes()));
+        assert_eq!(isb_packet(&mut c).flags, 1);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    want[0..2].copy_from_slice(&5u16.to_le_bytes());
+    want[54..58].copy_from_slice(&0x100u32.to_le_bytes());
+    want[162..164].copy_from_slice(&1000u16.to_le_bytes());
+    let emu = isb(&["--flash", path]);
+    let mut c = emu.connect();
+    c.send(&isb_get(did::CAN_CONFIG, 0));
+    assert_eq!(isb_packet_of(&mut c, did::CAN_CONFIG).payload, want);
 }

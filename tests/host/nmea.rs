@@ -185,6 +185,84 @@ fn the_first_stpb_after_pers_and_a_reset_stops_the_streams() {
     assert_eq!(c.drain_for(Duration::from_millis(2500)), 0, "stopped");
 }
 
+/// The reported `$STPB` defect ("after `$PERS` of DEV_INFO and SYS_CMD
+/// streams and a reset, the first `$STPB` is ignored") through the real
+/// path: the binary on a pty at 10× speed, the streams asked for as the
+/// vendor tool asks (GET_DATA with a period: DEV_INFO every 100 ms,
+/// SYS_CMD every 1 ms), saved with `$PERS`, then each way of resetting —
+/// `$SRST`, SYS_CMD 99 three times 20 ms apart (the SDK's software
+/// reset), a power cycle on the control socket, and `$SRST` with the
+/// port closed and reopened (the `$STPB` is then the first write of the
+/// new open), and `$SRST` with a stray `0xEF` byte right before the
+/// `$STPB` (which the input classifier once took for a packet's start,
+/// swallowing the `$`) — and one `$STPB` sent the moment the resumed
+/// streams show: the line goes quiet (25 s of device time) and stays so.
+#[test]
+fn the_first_stpb_after_a_reset_silences_the_pty() {
+    use support::{isb_get, Control};
+    for reset in [
+        "$SRST",
+        "SYS_CMD 99",
+        "power-cycle",
+        "$SRST, reopen",
+        "$SRST, stray 0xEF",
+    ] {
+        let addr = format!("127.0.0.1:{}", free_port());
+        let emu = Emu::start(&[
+            "--protocol",
+            "isb",
+            "--pty",
+            "--power-on",
+            "now",
+            "--speed",
+            "10",
+            "--control",
+            &addr,
+        ]);
+        let mut ctl = Control::connect(&addr);
+        let mut c = Conn::serial(&emu.pty_path());
+        c.send(&isb_get(did::DEV_INFO, 100));
+        c.send(&isb_get(did::SYS_CMD, 1));
+        std::thread::sleep(Duration::from_millis(200));
+        c.send(b"$PERS*14\r\n");
+        std::thread::sleep(Duration::from_millis(200));
+        match reset {
+            "SYS_CMD 99" => {
+                let mut cmd = 99u32.to_le_bytes().to_vec();
+                cmd.extend((!99u32).to_le_bytes());
+                for _ in 0..3 {
+                    c.send(&isb_set(did::SYS_CMD, 0, &cmd));
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+            }
+            "power-cycle" => assert!(ctl.cmd("power-cycle").starts_with("ok")),
+            _ => c.send(b"$SRST*06\r\n"),
+        }
+        if reset.ends_with("reopen") {
+            drop(c);
+            std::thread::sleep(Duration::from_millis(300));
+            c = Conn::serial(&emu.pty_path());
+        } else {
+            std::thread::sleep(Duration::from_millis(300));
+            c.drain_for(Duration::from_millis(100));
+        }
+        // The resumed streams' next byte, then at once one `$STPB`.
+        assert_eq!(c.read_bytes(1).len(), 1, "{reset}: resumed");
+        if reset.ends_with("0xEF") {
+            c.send(b"\xEF$STPB*15\r\n");
+        } else {
+            c.send(b"$STPB*15\r\n");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        c.drain_for(Duration::from_millis(200));
+        assert_eq!(
+            c.drain_for(Duration::from_millis(2500)),
+            0,
+            "{reset}: quiet after the first $STPB"
+        );
+    }
+}
+
 /// `strobe` on the control socket is a rising EXTRIG edge: the IMX-5
 /// answers with STROBE_IN_TIME and, with ID 13 on, `$PSTRB` carrying the
 /// same GPS week, time of week and count.

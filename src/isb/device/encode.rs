@@ -29,6 +29,8 @@ impl<C: Context<Integrals>> Encoders for C {
         (did::FLASH_CONFIG, flash_config),
         (did::GPS1_VERSION, gps1_version),
         (did::MAG_CAL, mag_cal),
+        (did::RTOS_INFO, rtos_info),
+        (did::CAN_CONFIG, can_config),
         (did::IMU, windowed_now),
         (did::BIT, bit),
         (did::PORT_MONITOR, port_monitor),
@@ -120,8 +122,16 @@ encoders! {
         put(out, &aux_sets::RECEIVER_VERSION.encode())
     }
 
-    fn mag_cal(st, cx, _, _, out) {
-        put(out, &st.mag_cal_of(cx).encode())
+    fn mag_cal(st, _, _, _, out) {
+        put(out, &st.mag_cal_of().encode())
+    }
+
+    fn rtos_info(st, cx, _, _, out) {
+        put(out, &rtos::rtos_info(&st.rtos_schedule(cx)).encode())
+    }
+
+    fn can_config(st, _, _, _, out) {
+        put(out, &st.can.encode())
     }
 
     fn port_monitor(st, cx, _, now, out) {
@@ -259,27 +269,26 @@ impl State {
         base + m.len()
     }
 
-    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): after a
-    /// recalibration command the progress runs from 0 to 100 % over
-    /// [`MAG_RECAL_MS`], then the state reads done; the declination is
+    /// MAG_CAL now (`docs/isb-data-sets.md` "MAG_CAL"): the
+    /// recalibration's state and progress ([`magcal`]); the declination is
     /// FLASH_CONFIG's `magDeclination`.
-    pub(super) fn mag_cal_of(&self, cx: &impl Context<Integrals>) -> MagCal {
-        let (state, at) = self.mag_cal;
-        let declination = le::f32(&self.cfg.0, flash::MAG_DECLINATION);
-        let (state, progress) = if state == mag_cal_state::RECAL_RUNNING {
-            let ms = cx.time().ticks().saturating_sub(at) * 1000 / u64::from(rate(cx));
-            if ms >= MAG_RECAL_MS {
-                (mag_cal_state::RECAL_COMPLETE, 100.0)
-            } else {
-                (state, (ms * 100) as f32 / MAG_RECAL_MS as f32)
-            }
-        } else {
-            (state, 0.0)
-        };
+    pub(super) fn mag_cal_of(&self) -> MagCal {
         MagCal {
-            state,
-            progress,
-            declination,
+            state: self.mag_cal.state(),
+            progress: self.mag_cal.progress(),
+            declination: le::f32(&self.cfg.0, flash::MAG_DECLINATION),
+        }
+    }
+
+    /// What RTOS_INFO reports of the unit's work ([`rtos`]).
+    pub(super) fn rtos_schedule(&self, cx: &impl Context<Integrals>) -> rtos::Schedule {
+        rtos::Schedule {
+            rate_hz: rate(cx),
+            ticks: cx.time().ticks(),
+            imu_dt_ms: self.imu_dt_ms,
+            nav_dt_ms: self.nav_dt_ms,
+            step_ms: ins::STEP_MS,
+            step_offset: self.grid_ticks(cx, self.nav_dt_ms) / 2,
         }
     }
 

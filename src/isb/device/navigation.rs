@@ -6,6 +6,18 @@
 use super::*;
 
 impl State {
+    /// A magnetometer reading at tick `tick` (the one MAGNETOMETER reads
+    /// then) into the running recalibration; its result, when it ends,
+    /// becomes the navigation's field reference ([`magcal`]).
+    pub(super) fn mag_recal_sample(&mut self, truth: &NavTruth, tick: u64) {
+        let m = self.nav.magnetometer(truth, tick);
+        let level = self.nav.mag_levelled(&m);
+        if let Some((norm, dip)) = self.mag_cal.feed(&m, &level) {
+            self.nav.set_mag_reference(norm, dip);
+        }
+        self.nav.set_mag_recalibrating(self.mag_cal.running());
+    }
+
     /// The navigation truth at the last tick ([`nav::truth_of`], once a
     /// tick).
     pub(super) fn truth(&self, cx: &impl Context<Integrals>) -> NavTruth {

@@ -1,5 +1,5 @@
 //! What the ISB personality keeps in flash: FLASH_CONFIG, the persistent
-//! streams and the persistent NMEA table, in one power-fail-safe image
+//! streams, the persistent NMEA table and CAN_CONFIG, in one power-fail-safe image
 //! ([`crate::store`]).
 
 use super::*;
@@ -12,17 +12,19 @@ pub(super) const ENTRY: usize = 8;
 pub(super) const PERSIST: usize = flash::SIZE;
 /// Where the persistent NMEA table starts ([`asce::Table::to_image`]).
 pub(super) const PERSIST_NMEA: usize = PERSIST + 4 + MAX_STREAMS * ENTRY;
+/// Where CAN_CONFIG starts ([`can`]).
+pub(super) const PERSIST_CAN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
 /// The ISB image in flash: FLASH_CONFIG, the persistent streams, the
-/// persistent NMEA table.
-pub const IMAGE_LEN: usize = PERSIST_NMEA + asce::IMAGE_LEN;
+/// persistent NMEA table, CAN_CONFIG.
+pub const IMAGE_LEN: usize = PERSIST_CAN + can::can_config::SIZE;
 /// How the ISB image is stored ([`crate::store`]): its own magic, so a
 /// flash written by the KERNEL personality is not taken for it. Version 2
-/// added the NMEA table (a version-1 image loads as none: factory
-/// defaults).
+/// added the NMEA table, version 3 CAN_CONFIG (an image of an older
+/// version loads as none: factory defaults).
 pub const IMAGE: ImageSpec = ImageSpec {
     len: IMAGE_LEN as u16,
     magic: *b"ISB1",
-    version: 2,
+    version: 3,
 };
 
 impl State {
@@ -40,11 +42,16 @@ impl State {
         if loaded && cfg.is_valid() && cfg.key() == flash::FACTORY_KEY {
             st.cfg = cfg;
             st.persist.copy_from_slice(&image[PERSIST..PERSIST_NMEA]);
-            st.persist_nmea.copy_from_slice(&image[PERSIST_NMEA..]);
+            st.persist_nmea
+                .copy_from_slice(&image[PERSIST_NMEA..PERSIST_CAN]);
+            let mut c = [0u8; can::can_config::SIZE];
+            c.copy_from_slice(&image[PERSIST_CAN..]);
+            st.can = CanConfig::decode(&c);
         } else {
             st.cfg = FlashConfig::factory();
             st.persist = [0; 4 + MAX_STREAMS * ENTRY];
             st.persist_nmea = [0; asce::IMAGE_LEN];
+            st.can = can::FACTORY;
         }
     }
 
@@ -98,7 +105,8 @@ impl State {
         let mut image = [0u8; IMAGE_LEN];
         image[..PERSIST].copy_from_slice(&self.cfg.0);
         image[PERSIST..PERSIST_NMEA].copy_from_slice(&self.persist);
-        image[PERSIST_NMEA..].copy_from_slice(&self.persist_nmea);
+        image[PERSIST_NMEA..PERSIST_CAN].copy_from_slice(&self.persist_nmea);
+        image[PERSIST_CAN..].copy_from_slice(&self.can.encode());
         self.save_pending = cx.save_image(&image).is_err();
     }
 }

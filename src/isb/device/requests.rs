@@ -136,15 +136,15 @@ impl State {
                 }
             }
             did::MAG_CAL => {
-                let state = le::u32(image, aux_sets::mag_cal::STATE);
-                let tick = cx.time().ticks();
-                match state {
-                    mag_cal_state::MULTI_AXIS | mag_cal_state::SINGLE_AXIS => {
-                        self.mag_cal = (mag_cal_state::RECAL_RUNNING, tick)
-                    }
-                    mag_cal_state::ABORT => self.mag_cal = (mag_cal_state::DO_NOTHING, tick),
-                    _ => {}
-                }
+                self.mag_cal
+                    .command(le::u32(image, aux_sets::mag_cal::STATE));
+                self.nav.set_mag_recalibrating(self.mag_cal.running());
+            }
+            did::CAN_CONFIG => {
+                let mut b = [0u8; can::can_config::SIZE];
+                b.copy_from_slice(&image[..can::can_config::SIZE]);
+                self.can = CanConfig::decode(&b);
+                self.save_pending = true;
             }
             did::BIT if image[bit::COMMAND] != bit::CMD_NONE => {
                 self.run_bit(cx, image[bit::COMMAND]);

@@ -34,6 +34,9 @@ impl State {
         if self.save_pending {
             hdw |= hdw_status::FLASH_WRITE_PENDING;
         }
+        if self.mag_cal.complete() {
+            hdw |= magcal::HDW_STATUS_MAG_RECAL_COMPLETE;
+        }
         if cx.tx_dropped() != self.dropped_seen {
             hdw |= hdw_status::ERR_COM_TX_LIMITED;
         }

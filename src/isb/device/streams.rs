@@ -21,6 +21,9 @@ impl State {
             let truth = st.truth(cx);
             st.nav.set_year(st.gps_time(cx).1.decimal_year());
             st.nav.step(ticks as f64 / f64::from(rate(cx)), &truth);
+            if st.mag_cal.running() {
+                st.mag_recal_sample(&truth, ticks);
+            }
         }
         if ticks.is_multiple_of(u64::from(nav)) {
             st.nav_grid = [st.nav_grid[1], cx.chain().integrals()];
