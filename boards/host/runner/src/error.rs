@@ -1,24 +1,10 @@
-//! The host crate's errors, below every other module (no module imports
-//! another's error types, so `cli`, `client`, `control`, `flash`, `fleet`
-//! and `runner` do not import each other for them).
-//!
-//! An error is one line on stderr (`imu-emu: …`, [`crate::cli::report`]):
-//! exit status 2 for a [`UsageError`] anywhere in its chain (what the user
-//! asked for is wrong, as clap's usage errors), 1 for a failure while
-//! running.
+//! The runner's errors, below every other module of the runner (no module
+//! imports another's error types, so `control`, `flash`, `fleet` and
+//! `runner` do not import each other for them). [`UsageError`] (exit
+//! status 2) is the tools crate's, the one type the program's `report`
+//! looks for.
 
-/// An error in what the user asked for (exit status 2, as clap's usage
-/// errors), as opposed to one met while running (exit status 1).
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl core::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
+pub use imu_emu_tools::error::UsageError;
 
 /// The error of binding `addr` for `option` (`--tcp`, `--control`), with a
 /// hint where one helps: a port in use suggests port 0, an address that

@@ -13,7 +13,7 @@
 //!   the bytes are counted as lost to the view (`Slot::lost`) and the
 //!   loop goes on. A closed or slow tab therefore costs the device nothing.
 //! - **The web thread** drains the ring, decodes the frames (the client's
-//!   decoders: [`crate::client::decode`], [`crate::client::isb`]), keeps
+//!   decoders: [`imu_emu_tools::client::decode`], [`imu_emu_tools::client::isb`]), keeps
 //!   the last [`KEEP_POINTS`] points per device with their device time
 //!   (and, for ISB, their data set's name: field names repeat across sets),
 //!   and answers the page's polls.
@@ -53,9 +53,9 @@ use std::time::{Duration, Instant};
 use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
 use imu_emu::model::Product;
 
-use crate::cli::Protocol;
-use crate::client;
 use crate::control;
+use imu_emu_tools::client;
+use imu_emu_tools::protocol::Protocol;
 
 pub mod server;
 

@@ -18,7 +18,7 @@
 //! `--tcp` and `--control` must be loopback addresses unless
 //! `--allow-remote` is given (then a warning says what is exposed). Errors
 //! are one line (`imu-emu: …`, [`report`]): exit status 2 for a bad
-//! argument ([`UsageError`], [`crate::error`]), 1 for a failure while running.
+//! argument ([`UsageError`], [`imu_emu_tools::error`]), 1 for a failure while running.
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -34,11 +34,12 @@ use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
 use imu_emu::time::Instant;
 
-use crate::clock::Speed;
-use crate::error::UsageError;
-use crate::flash::{FileNor, MemNor};
-use crate::runner::{HostPersonality, Runner};
-use crate::transport::{PtyTransport, TcpTransport, Transport};
+use imu_emu_runner::clock::Speed;
+use imu_emu_runner::flash::{FileNor, MemNor};
+use imu_emu_runner::runner::{HostPersonality, Runner};
+use imu_emu_runner::transport::{PtyTransport, TcpTransport, Transport};
+use imu_emu_tools::error::UsageError;
+use imu_emu_tools::protocol::Protocol;
 
 /// Default TCP address.
 pub const DEFAULT_TCP: &str = "127.0.0.1:7000";
@@ -142,7 +143,7 @@ pub struct Args {
     /// With --motion-feed (real time): after this many seconds without a
     /// sample the unit reports a sensor fault (KERNEL USW bit 1, IMX IMU
     /// status), the last sample holding; cleared by the next sample.
-    #[arg(long, value_name = "SECONDS", default_value_t = crate::feed::DEFAULT_TIMEOUT_S,
+    #[arg(long, value_name = "SECONDS", default_value_t = imu_emu_runner::feed::DEFAULT_TIMEOUT_S,
           requires = "motion_feed", value_parser = parse_timeout)]
     pub feed_timeout: f64,
 
@@ -187,7 +188,7 @@ pub struct Args {
     /// `listening on …` per device, in order; one control socket for all
     /// (`dev K <command>`, `devices`). Not with --serial.
     #[arg(long, value_name = "N", default_value_t = 1,
-          value_parser = clap::value_parser!(u16).range(1..=crate::fleet::MAX_COUNT as i64))]
+          value_parser = clap::value_parser!(u16).range(1..=imu_emu_runner::fleet::MAX_COUNT as i64))]
     pub count: u16,
 
     /// Device seconds per host second: a factor (`1` real time, `10`,
@@ -214,8 +215,8 @@ pub struct Args {
     /// K110` prints a built-in one to start from) instead of the model's
     /// built-in one. With --count, `K=FILE` is for device K only (and wins
     /// over a plain FILE, which is for every device); repeatable.
-    #[arg(long = "sensor-profile", value_name = "[K=]FILE", value_parser = crate::profile_file::parse_arg)]
-    pub sensor_profile: Vec<crate::profile_file::ProfileArg>,
+    #[arg(long = "sensor-profile", value_name = "[K=]FILE", value_parser = imu_emu_tools::profile_file::parse_arg)]
+    pub sensor_profile: Vec<imu_emu_tools::profile_file::ProfileArg>,
 
     /// The profiles of `--sensor-profile`, loaded at start (one a device).
     #[arg(skip)]
@@ -245,7 +246,7 @@ pub enum Sub {
     /// Talk to a unit (the emulator or a real one; a KERNEL, or an IMX-5
     /// with --protocol isb) over TCP or a serial port: info, bit, start,
     /// stop, get, set, commit-baud, udd, record, decode, plot.
-    Client(Box<crate::client::ClientArgs>),
+    Client(Box<imu_emu_tools::client::ClientArgs>),
     /// Print a shell completion script (from this command-line
     /// definition): `imu-emu completions bash > ~/.local/share/bash-completion/completions/imu-emu`.
     Completions {
@@ -273,7 +274,7 @@ pub enum Sub {
     /// The Allan deviation of a unit run in process (or of a `client
     /// record` CSV): the fitted ARW/VRW, bias instability and rate random
     /// walk beside the profile's, and a log-log plot (PNG, SVG).
-    Allan(crate::allan::AllanArgs),
+    Allan(imu_emu_tools::allan::AllanArgs),
 }
 
 /// `imu-emu sensor-profile …`.
@@ -327,12 +328,12 @@ impl clap::builder::TypedValueParser for ProfileName {
 fn sensor_profile(sub: &ProfileSub) -> anyhow::Result<()> {
     let text = match sub {
         ProfileSub::Show { name } => {
-            let b = crate::profile_file::builtin(name)?;
-            crate::profile_file::to_toml(b.profile, b.has_aux(), b.name, b.source)
+            let b = imu_emu_tools::profile_file::builtin(name)?;
+            imu_emu_tools::profile_file::to_toml(b.profile, b.has_aux(), b.name, b.source)
         }
         ProfileSub::Check { file } => {
-            let (p, aux) = crate::profile_file::load_with_aux(file)?;
-            crate::profile_file::to_toml(&p, aux, &file.display().to_string(), "this file")
+            let (p, aux) = imu_emu_tools::profile_file::load_with_aux(file)?;
+            imu_emu_tools::profile_file::to_toml(&p, aux, &file.display().to_string(), "this file")
         }
     };
     let mut out = std::io::stdout().lock();
@@ -359,15 +360,6 @@ pub fn init_logging(verbose: u8, quiet: bool) {
         .with_ansi(false)
         .without_time()
         .try_init();
-}
-
-/// The emulated device's protocol (`--protocol`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Protocol {
-    /// Inertial Labs KERNEL (ICD rev 1.42).
-    Kernel,
-    /// Inertial Sense IMX-5 over ISB (protocol 2.1).
-    Isb,
 }
 
 /// When the device powers on (`--power-on`).
@@ -416,9 +408,9 @@ fn parse_timeout(s: &str) -> Result<f64, String> {
 }
 
 /// The feed's clock and timeout from the arguments, if there is a feed.
-fn feed_config(args: &Args) -> Option<crate::feed::FeedConfig> {
+fn feed_config(args: &Args) -> Option<imu_emu_runner::feed::FeedConfig> {
     args.motion_feed.as_ref()?;
-    Some(crate::feed::FeedConfig {
+    Some(imu_emu_runner::feed::FeedConfig {
         lockstep: args.lockstep,
         timeout_ns: (args.feed_timeout * 1e9) as u64,
     })
@@ -513,9 +505,9 @@ pub fn one_line_panics() {
 pub fn run(mut args: Args) -> anyhow::Result<()> {
     init_logging(args.verbose, args.quiet);
     match args.command {
-        Some(Sub::Client(c)) => return crate::client::run(*c),
+        Some(Sub::Client(c)) => return imu_emu_tools::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
-        Some(Sub::Allan(a)) => return crate::allan::run(&a),
+        Some(Sub::Allan(a)) => return imu_emu_tools::allan::run(&a),
         Some(Sub::Completions { shell }) => return print_all(&completions(shell)),
         Some(Sub::Man { command, dir }) => return man(&command, dir.as_deref()),
         None => {}
@@ -530,8 +522,9 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_timerslack(1);
     // A bad profile file stops the program before anything listens.
-    args.profiles = crate::profile_file::per_device(&args.sensor_profile, usize::from(args.count))
-        .map_err(as_usage)?;
+    args.profiles =
+        imu_emu_tools::profile_file::per_device(&args.sensor_profile, usize::from(args.count))
+            .map_err(as_usage)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // A second signal while shutting down exits at once.
@@ -650,12 +643,12 @@ fn web_view(
     product: Product,
     name: &str,
     places: &[String],
-) -> anyhow::Result<Option<(Arc<crate::web::Hub>, crate::web::Server)>> {
+) -> anyhow::Result<Option<(Arc<imu_emu_runner::web::Hub>, imu_emu_runner::web::Server)>> {
     let Some(addr) = &args.web else {
         return Ok(None);
     };
-    let hub = crate::web::Hub::new(args.protocol, product, name, places);
-    let server = crate::web::Server::start(addr, Arc::clone(&hub))?;
+    let hub = imu_emu_runner::web::Hub::new(args.protocol, product, name, places);
+    let server = imu_emu_runner::web::Server::start(addr, Arc::clone(&hub))?;
     Ok(Some((hub, server)))
 }
 
@@ -712,7 +705,7 @@ pub fn numbered(path: &std::path::Path, k: usize) -> PathBuf {
     PathBuf::from(p)
 }
 
-/// `--count N`: N devices in one loop ([`crate::fleet`]).
+/// `--count N`: N devices in one loop ([`imu_emu_runner::fleet`]).
 fn many(args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
     if args.serial.is_some() {
         return Err(
@@ -815,13 +808,13 @@ fn many_transports<F: NorFlash, P: HostPersonality>(
 }
 
 /// `--motion FILE`, loaded (and said on stderr), if given.
-fn load_vehicle(args: &Args) -> anyhow::Result<Option<crate::vehicle::VehicleSource>> {
+fn load_vehicle(args: &Args) -> anyhow::Result<Option<imu_emu_runner::vehicle::VehicleSource>> {
     let Some(path) = &args.motion else {
         return Ok(None);
     };
     // A file that does not load is a bad argument, as a bad
     // --sensor-profile is (exit status 2).
-    let v = crate::vehicle::VehicleSource::load(path)
+    let v = imu_emu_runner::vehicle::VehicleSource::load(path)
         .map_err(|e| as_usage(e.context(format!("--motion {}", path.display()))))?;
     eprintln!("imu-emu: motion {}: {}", path.display(), v.describe());
     Ok(Some(v))
@@ -834,7 +827,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
     let trajectory = match &args.trajectory {
-        Some(path) => Some(crate::trajectory::Trajectory::load(
+        Some(path) => Some(imu_emu_runner::trajectory::Trajectory::load(
             path,
             args.trajectory_loop,
         )?),
@@ -842,16 +835,16 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     };
     let vehicle = load_vehicle(args)?;
     let control = match &args.control {
-        Some(addr) => Some(crate::control::Control::bind(addr)?),
+        Some(addr) => Some(imu_emu_runner::control::Control::bind(addr)?),
         None => None,
     };
     let mut feeds = Vec::new();
     if let Some(f) = &args.motion_feed {
-        let addr = crate::feed::FeedAddr::parse(f);
+        let addr = imu_emu_runner::feed::FeedAddr::parse(f);
         let n = if args.feed_shared { 1 } else { parts.len() };
         for k in 0..n {
             let a = addr.with(port_plus("--motion-feed", addr.host_port(), k, args.count)?);
-            feeds.push(crate::feed::FeedSocket::bind(&a)?);
+            feeds.push(imu_emu_runner::feed::FeedSocket::bind(&a)?);
         }
     }
     let (product, name) = product_of(args);
@@ -872,7 +865,7 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     }
     out.flush()?;
     drop(out);
-    let setup = crate::fleet::Setup {
+    let setup = imu_emu_runner::fleet::Setup {
         product,
         name,
         speed: args.speed,
@@ -901,8 +894,8 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
         }
     );
     let shared = args.feed_shared;
-    let mut fleet =
-        crate::fleet::Fleet::<F, T, P>::new(parts, setup, control).with_feeds(feeds, shared);
+    let mut fleet = imu_emu_runner::fleet::Fleet::<F, T, P>::new(parts, setup, control)
+        .with_feeds(feeds, shared);
     started.set(true);
     fleet.run(stop)?;
     eprintln!("imu-emu: stopped");
@@ -944,7 +937,7 @@ fn with_transport<F: NorFlash, P: HostPersonality>(
 ) -> anyhow::Result<()> {
     let rate = factory_rate(args.protocol);
     if let Some(dev) = &args.serial {
-        let t = crate::transport::SerialTransport::open(dev, rate)?;
+        let t = imu_emu_runner::transport::SerialTransport::open(dev, rate)?;
         serve::<F, _, P>(flash, t, args, stop)
     } else if args.pty {
         let t = PtyTransport::open(rate, args.link.as_deref())?;
@@ -963,7 +956,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
 ) -> anyhow::Result<()> {
     let trajectory = match &args.trajectory {
         Some(path) => {
-            let t = crate::trajectory::Trajectory::load(path, args.trajectory_loop)?;
+            let t = imu_emu_runner::trajectory::Trajectory::load(path, args.trajectory_loop)?;
             eprintln!(
                 "imu-emu: trajectory {} ({} samples)",
                 path.display(),
@@ -975,12 +968,12 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     };
     let vehicle = load_vehicle(args)?;
     let mut control = match &args.control {
-        Some(addr) => Some(crate::control::Control::bind(addr)?),
+        Some(addr) => Some(imu_emu_runner::control::Control::bind(addr)?),
         None => None,
     };
     let feed = match &args.motion_feed {
-        Some(a) => Some(crate::feed::FeedSocket::bind(
-            &crate::feed::FeedAddr::parse(a),
+        Some(a) => Some(imu_emu_runner::feed::FeedSocket::bind(
+            &imu_emu_runner::feed::FeedAddr::parse(a),
         )?),
         None => None,
     };
@@ -1010,9 +1003,11 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
             }
             if let Some(c) = control.as_mut() {
                 c.poll(&mut |cmd| match cmd {
-                    crate::control::Command::Status => Ok("mode=off".to_owned()),
-                    crate::control::Command::Devices => {
-                        Ok(crate::control::devices_reply(&[transport.describe()]))
+                    imu_emu_runner::control::Command::Status => Ok("mode=off".to_owned()),
+                    imu_emu_runner::control::Command::Devices => {
+                        Ok(imu_emu_runner::control::devices_reply(&[
+                            transport.describe()
+                        ]))
                     }
                     _ => Err(
                         "the device is off: it powers on when a client connects to the UART \
@@ -1021,7 +1016,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
                     ),
                 })?;
             }
-            transport.wait(crate::runner::IDLE_WAKE)?;
+            transport.wait(imu_emu_runner::runner::IDLE_WAKE)?;
             if transport.poll_client()? {
                 break;
             }
@@ -1036,7 +1031,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
     let profile = args.profiles.first().copied().flatten();
     let mut dev = Device::<F, P>::with_profile(cfg, profile, flash, Instant::ZERO);
     dev.personality_mut()
-        .set_gps_time(crate::clock::gps_s_at_power_on(args.gps_time));
+        .set_gps_time(imu_emu_runner::clock::gps_s_at_power_on(args.gps_time));
     transport.set_line_rate(dev.line_rate())?;
     eprintln!(
         "imu-emu: {} powered on at {} bit/s, internal rate {} Hz, flash {}",
@@ -1067,7 +1062,7 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         runner = runner.with_vehicle(v);
     }
     if let (Some(cfg), Some(sock)) = (feed_config(args), feed) {
-        let state = crate::feed::FeedState::new(cfg, 0, true, "");
+        let state = imu_emu_runner::feed::FeedState::new(cfg, 0, true, "");
         runner = runner.with_feed(state, Some(sock));
     }
     runner.run(stop)?;

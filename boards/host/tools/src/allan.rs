@@ -46,12 +46,16 @@ use imu_emu::model::{Capability, Product};
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::time::Instant;
 
-use crate::flash::MemNor;
 use crate::plot::Kind;
 
 /// Flicker floor / B: √(2 ln 2/π) (IEEE 952).
 pub const FLICKER_FLOOR: f64 = 0.664_282;
+/// The flash of the unit run in process: the runner's size (two 4 KiB
+/// sectors, what the parameter store needs); nothing is kept after the run.
+type UnitFlash = imu_emu::nor::RamNor<8192>;
+
 /// Phases kept per axis at most.
+
 const KEEP: usize = 1 << 20;
 /// Channels: gyro X Y Z (°/s), acc X Y Z (g), and on the K120/K220 the
 /// aux accelerometer X Y Z (g): the `client record` column names.
@@ -429,7 +433,7 @@ fn run_kernel(
         seed: a.seed,
     };
     let mut dev =
-        Device::<MemNor, Kernel>::with_profile(cfg, profile, MemNor::new(), Instant::ZERO);
+        Device::<UnitFlash, Kernel>::with_profile(cfg, profile, UnitFlash::new(), Instant::ZERO);
     dev.chain_mut().faults_mut().temperature_c = temperature;
     let period = dev.tick_period_ns();
     let mut now = 0u64;

@@ -135,7 +135,7 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
 /// frames/packets in the first 64 KiB ([`crate::client::protocol_of`];
 /// text with neither is a CSV).
 fn detect(bytes: &[u8]) -> Format {
-    use crate::cli::Protocol;
+    use crate::protocol::Protocol;
     let head = &bytes[..bytes.len().min(1 << 16)];
     let first_line = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
     if std::str::from_utf8(first_line).is_ok_and(|l| {

@@ -34,8 +34,8 @@ use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
 use imu_emu::model::Product;
 
-use crate::cli::Protocol;
 use crate::error::UsageError;
+use crate::protocol::Protocol;
 
 /// Options of `imu-emu client`.
 #[derive(clap::Args, Debug, Clone)]
