@@ -48,6 +48,7 @@ pub mod flash;
 pub mod fleet;
 pub mod link;
 pub mod monitor;
+pub mod protocol;
 pub mod runner;
 pub mod trajectory;
 pub mod transport;

@@ -36,7 +36,8 @@ use imu_emu::time::Instant;
 
 use imu_emu_runner::clock::Speed;
 use imu_emu_runner::flash::{FileNor, MemNor};
-use imu_emu_runner::runner::{HostPersonality, Runner};
+use imu_emu_runner::protocol::HostProtocol;
+use imu_emu_runner::runner::Runner;
 use imu_emu_runner::transport::{PtyTransport, TcpTransport, Transport};
 use imu_emu_tools::error::UsageError;
 use imu_emu_tools::protocol::Protocol;
@@ -638,7 +639,7 @@ fn man(path: &[String], dir: Option<&std::path::Path>) -> anyhow::Result<()> {
 
 /// The web view of `--web`, if asked for: its hub and its running server
 /// (which stops when dropped).
-fn web_view(
+fn web_view<P: HostProtocol>(
     args: &Args,
     product: Product,
     name: &str,
@@ -647,7 +648,7 @@ fn web_view(
     let Some(addr) = &args.web else {
         return Ok(None);
     };
-    let hub = imu_emu_runner::web::Hub::new(args.protocol, product, name, places);
+    let hub = imu_emu_runner::web::Hub::new(P::live(), product, name, places);
     let server = imu_emu_runner::web::Server::start(addr, Arc::clone(&hub))?;
     Ok(Some((hub, server)))
 }
@@ -782,13 +783,13 @@ fn many_with<F: NorFlash>(
     }
 }
 
-fn many_transports<F: NorFlash, P: HostPersonality>(
+fn many_transports<F: NorFlash, P: HostProtocol>(
     flashes: Vec<F>,
     args: &Args,
     stop: &AtomicBool,
     started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
-    let rate = factory_rate(args.protocol);
+    let rate = P::FACTORY_RATE;
     if args.pty {
         let mut parts = Vec::with_capacity(flashes.len());
         for (k, f) in flashes.into_iter().enumerate() {
@@ -820,7 +821,7 @@ fn load_vehicle(args: &Args) -> anyhow::Result<Option<imu_emu_runner::vehicle::V
     Ok(Some(v))
 }
 
-fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
+fn serve_many<F: NorFlash, T: Transport, P: HostProtocol>(
     parts: Vec<(F, T)>,
     args: &Args,
     stop: &AtomicBool,
@@ -847,9 +848,9 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
             feeds.push(imu_emu_runner::feed::FeedSocket::bind(&a)?);
         }
     }
-    let (product, name) = product_of(args);
+    let (product, name) = P::product(args.product());
     let places: Vec<String> = parts.iter().map(|(_, t)| t.describe()).collect();
-    let web = web_view(args, product, &name, &places)?;
+    let web = web_view::<P>(args, product, &name, &places)?;
     let mut out = std::io::stdout().lock();
     for p in &places {
         writeln!(out, "listening on {p}")?;
@@ -902,27 +903,6 @@ fn serve_many<F: NorFlash, T: Transport, P: HostPersonality>(
     Ok(())
 }
 
-/// The rate a port starts at: the protocol's factory rate (KERNEL
-/// Baud_Rate 115 200, IMX ser0BaudRate 921 600), so a client that opens it
-/// before the device powers on sees the rate a factory unit starts at.
-fn factory_rate(protocol: Protocol) -> u32 {
-    match protocol {
-        Protocol::Kernel => 115_200,
-        Protocol::Isb => imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE,
-    }
-}
-
-/// The product a run emulates and its name in messages.
-fn product_of(args: &Args) -> (Product, String) {
-    match args.protocol {
-        Protocol::Kernel => {
-            let m = args.product();
-            (m, m.code().to_string())
-        }
-        Protocol::Isb => (Product::imx5(), "IMX-5 (ISB)".to_owned()),
-    }
-}
-
 fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::Result<()> {
     match args.protocol {
         Protocol::Kernel => with_transport::<F, Kernel>(flash, args, stop),
@@ -930,12 +910,12 @@ fn with_flash<F: NorFlash>(flash: F, args: &Args, stop: &AtomicBool) -> anyhow::
     }
 }
 
-fn with_transport<F: NorFlash, P: HostPersonality>(
+fn with_transport<F: NorFlash, P: HostProtocol>(
     flash: F,
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    let rate = factory_rate(args.protocol);
+    let rate = P::FACTORY_RATE;
     if let Some(dev) = &args.serial {
         let t = imu_emu_runner::transport::SerialTransport::open(dev, rate)?;
         serve::<F, _, P>(flash, t, args, stop)
@@ -948,7 +928,7 @@ fn with_transport<F: NorFlash, P: HostPersonality>(
     }
 }
 
-fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
+fn serve<F: NorFlash, T: Transport, P: HostProtocol>(
     flash: F,
     mut transport: T,
     args: &Args,
@@ -977,8 +957,8 @@ fn serve<F: NorFlash, T: Transport, P: HostPersonality>(
         )?),
         None => None,
     };
-    let (product, name) = product_of(args);
-    let web = web_view(args, product, &name, &[transport.describe()])?;
+    let (product, name) = P::product(args.product());
+    let web = web_view::<P>(args, product, &name, &[transport.describe()])?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "listening on {}", transport.describe())?;
     if let Some(c) = &control {

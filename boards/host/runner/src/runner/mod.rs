@@ -64,10 +64,8 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
-use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
 use imu_emu::line::Pacer;
-use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
@@ -76,69 +74,11 @@ use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
 use crate::feed::{FeedSocket, FeedState};
 use crate::link::Link;
-use crate::monitor::Monitor;
+use crate::monitor::InputMonitor as _;
+use crate::protocol::HostProtocol;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 use crate::vehicle::VehicleSource;
-
-/// What the host runner asks of a personality beyond the core's seam.
-pub trait HostPersonality: Personality {
-    /// The packet rules of this protocol's output, which the link follows to
-    /// count packets (`status frames-sent`, `format=`) and to cut whole ones.
-    fn wire() -> crate::link::Wire;
-
-    /// The live value of a parameter (the KERNEL's Table 5.24), for the
-    /// monitor's reasons (`-v`); `None` where the protocol has no such
-    /// parameters.
-    fn param(&self, id: u16) -> Option<&[u8]>;
-
-    /// Sets GPS time: `gps_s` GPS seconds since 1980-01-06 at device
-    /// instant 0 (`--gps-time`, or the host clock at power-on); nothing
-    /// where the protocol has no GPS.
-    fn set_gps_time(&mut self, _gps_s: u64) {}
-
-    /// A navigation fault (`fault gps|mag|baro on|off`); an error where the
-    /// protocol has no navigation side.
-    fn nav_fault(&mut self, _change: control::NavFault) -> Result<(), String> {
-        Err("no GPS, magnetometer or barometer on this protocol (--protocol isb has them)".into())
-    }
-}
-
-impl HostPersonality for Kernel {
-    fn wire() -> crate::link::Wire {
-        crate::link::Wire::kernel()
-    }
-
-    fn param(&self, id: u16) -> Option<&[u8]> {
-        self.param_ram(id)
-    }
-}
-
-impl HostPersonality for imu_emu::isb::Isb {
-    /// ISB packets (the data set ID at byte 3 of the header).
-    fn wire() -> crate::link::Wire {
-        crate::link::Wire::of::<imu_emu::isb::packet::Isb>(3)
-    }
-
-    fn param(&self, _id: u16) -> Option<&[u8]> {
-        None
-    }
-
-    fn set_gps_time(&mut self, gps_s: u64) {
-        Isb::set_gps_time(self, gps_s.saturating_mul(1_000_000_000));
-    }
-
-    fn nav_fault(&mut self, change: control::NavFault) -> Result<(), String> {
-        let mut f = self.nav().faults();
-        match change {
-            control::NavFault::Gps(on) => f.gps_off = !on,
-            control::NavFault::Mag(on) => f.mag_disturbed = on,
-            control::NavFault::Baro(on) => f.baro_failed = on,
-        }
-        self.set_nav_faults(f);
-        Ok(())
-    }
-}
 
 /// Wake interval while bytes wait for the client.
 pub const BUSY_WAKE: Duration = Duration::from_millis(1);
@@ -208,10 +148,10 @@ pub struct Stats {
 }
 
 /// The board: a device, the shared schedule, a transport and the pins.
-pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
+pub struct Runner<F: NorFlash, T: Transport, P: HostProtocol = Kernel> {
     dev: Device<F, P>,
     sched: Box<Schedule<CHUNK>>,
-    io: HostPort<T>,
+    io: HostPort<T, P>,
     clock: Clock,
     stats: Stats,
     /// Device frames dropped already reported on stderr.
@@ -233,7 +173,7 @@ pub struct Runner<F: NorFlash, T: Transport, P: HostPersonality = Kernel> {
 
 /// What the schedule drives on this board: the transport, the control
 /// socket, the `--pps` generator and the trajectory.
-struct HostPort<T: Transport> {
+struct HostPort<T: Transport, P: HostProtocol> {
     transport: T,
     /// The control socket (`--control`), if any.
     control: Option<Control>,
@@ -250,7 +190,7 @@ struct HostPort<T: Transport> {
     /// Faults between the device's UART and the transport (`link …`).
     link: Link,
     /// The device's input decoded on the host side (logs, `status`).
-    monitor: Monitor,
+    monitor: P::Monitor,
     /// Input past the faults that did not fit the device's read yet.
     rx_carry: std::collections::VecDeque<u8>,
     /// Input credit at the line rate (device time): what the device's
@@ -288,7 +228,7 @@ struct HostPort<T: Transport> {
     last_rx_ns: Option<u64>,
 }
 
-impl<T: Transport> HostPort<T> {
+impl<T: Transport, P: HostProtocol> HostPort<T, P> {
     /// Hands what the link let through to the web view's tap and the
     /// transport.
     #[inline]
@@ -321,7 +261,7 @@ impl<T: Transport> HostPort<T> {
 
     /// `truth`: the vehicle truth in `key=value` words, each key after
     /// `prefix` ([`crate::vehicle::truth_words`]).
-    fn truth<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>, prefix: &str) -> String {
+    fn truth<F: NorFlash>(&self, dev: &Device<F, P>, prefix: &str) -> String {
         let chain = dev.chain();
         let source = if self.trajectory.is_some() {
             "trajectory"
@@ -342,7 +282,7 @@ impl<T: Transport> HostPort<T> {
     }
 
     /// `status`: the device, the line and the link in `key=value` words.
-    fn status<F: NorFlash, P: Personality>(&self, dev: &Device<F, P>) -> String {
+    fn status<F: NorFlash>(&self, dev: &Device<F, P>) -> String {
         use imu_emu::device::Mode;
         let mode = match dev.mode() {
             Mode::Idle => "idle",
@@ -370,7 +310,7 @@ impl<T: Transport> HostPort<T> {
             self.monitor.commands(),
         );
         for (r, n) in rejected {
-            s.push_str(&format!(" rejected-{}={n}", r.name()));
+            s.push_str(&format!(" rejected-{r}={n}"));
         }
         s.push(' ');
         s.push_str(&self.truth(dev, "truth-"));
@@ -393,7 +333,7 @@ impl<T: Transport> HostPort<T> {
     }
 }
 
-impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
+impl<F: NorFlash, T: Transport, P: HostProtocol> Port<F, P> for HostPort<T, P> {
     type Error = anyhow::Error;
 
     fn tx_room(&mut self) -> usize {
@@ -515,9 +455,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
 
     fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> anyhow::Result<()> {
         let product = dev.product();
-        self.monitor.judge(&product, &|id| {
-            P::param(dev.personality(), id).map(<[u8]>::to_vec)
-        });
+        self.monitor.judge(dev.personality(), &product);
         if let Some(mut w) = self.web.take() {
             // The page's commands, through the control socket's executor.
             for p in w.commands() {
@@ -558,10 +496,10 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
     }
 }
 
-impl<T: Transport> HostPort<T> {
+impl<T: Transport, P: HostProtocol> HostPort<T, P> {
     /// Carries out one control command at device time `at`; the answer
     /// for the control client (`Ok` text after `ok`, `Err` after `error`).
-    fn apply<F: NorFlash, P: HostPersonality>(
+    fn apply<F: NorFlash>(
         &mut self,
         dev: &mut Device<F, P>,
         cmd: control::Command,
@@ -620,7 +558,7 @@ impl<T: Transport> HostPort<T> {
     }
 }
 
-impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
+impl<F: NorFlash, T: Transport, P: HostProtocol> Runner<F, T, P> {
     /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
@@ -639,7 +577,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Runner<F, T, P> {
                 feed: None,
                 feed_socket: None,
                 link: Link::with_wire(0, P::wire()),
-                monitor: Monitor::new(),
+                monitor: P::Monitor::default(),
                 rx_carry: std::collections::VecDeque::new(),
                 rx_pacer,
                 rx_held: false,
