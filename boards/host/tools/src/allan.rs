@@ -50,12 +50,12 @@ use crate::plot::Kind;
 
 /// Flicker floor / B: √(2 ln 2/π) (IEEE 952).
 pub const FLICKER_FLOOR: f64 = 0.664_282;
+
 /// The flash of the unit run in process: the runner's size (two 4 KiB
 /// sectors, what the parameter store needs); nothing is kept after the run.
 type UnitFlash = imu_emu::nor::RamNor<8192>;
 
 /// Phases kept per axis at most.
-
 const KEEP: usize = 1 << 20;
 /// Channels: gyro X Y Z (°/s), acc X Y Z (g), and on the K120/K220 the
 /// aux accelerometer X Y Z (g): the `client record` column names.

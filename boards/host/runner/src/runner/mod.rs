@@ -2,6 +2,13 @@
 //! scaled, or as fast as possible ([`crate::clock`], `--speed`; every time
 //! below is device time, ns since power-on).
 //!
+//! In three files by purpose: this one is the loop and its clocks (the
+//! device clock of `--speed`, and in lockstep the feed's samples paced by
+//! a second clock), the builder and the reports; `port.rs` is the port
+//! adapter the core's schedule drives (transport, link, input pacing,
+//! pins, motion sources); `exec.rs` carries out control commands and
+//! answers `status` and `truth`.
+//!
 //! Each pass is one [`Schedule::poll`] of the core's shared tick/pump
 //! schedule ([`imu_emu::schedule`], the same code the firmware shell runs):
 //! ticks on absolute deadlines `k × period`, each with its own deadline as
@@ -63,22 +70,26 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
-use imu_emu::device::{Device, Level, Pin};
+use imu_emu::device::Device;
 use imu_emu::kernel::Kernel;
-use imu_emu::line::Pacer;
-use imu_emu::schedule::{Limits, Pass, Port, Schedule};
-use imu_emu::sensor::Motion;
+use imu_emu::schedule::{Limits, Pass, Schedule};
 use imu_emu::time::Instant;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
 use crate::feed::{FeedSocket, FeedState};
 use crate::link::Link;
-use crate::monitor::InputMonitor as _;
 use crate::protocol::HostProtocol;
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 use crate::vehicle::VehicleSource;
+
+mod exec;
+#[cfg(test)]
+mod fake;
+mod port;
+
+use port::HostPort;
 
 /// Wake interval while bytes wait for the client.
 pub const BUSY_WAKE: Duration = Duration::from_millis(1);
@@ -171,428 +182,17 @@ pub struct Runner<F: NorFlash, T: Transport, P: HostProtocol = Kernel> {
     lockstep_target: u64,
 }
 
-/// What the schedule drives on this board: the transport, the control
-/// socket, the `--pps` generator and the trajectory.
-struct HostPort<T: Transport, P: HostProtocol> {
-    transport: T,
-    /// The control socket (`--control`), if any.
-    control: Option<Control>,
-    /// Next 1PPS edge of the `--pps` generator, ns since the epoch.
-    next_pps_ns: Option<u64>,
-    /// Motion replayed from a file (`--trajectory`), if any.
-    trajectory: Option<Trajectory>,
-    /// The vehicle source (`--motion`, `motion script|file`), if any.
-    vehicle: Option<VehicleSource>,
-    /// The live motion feed's state (`--motion-feed`), if any.
-    feed: Option<FeedState>,
-    /// The feed's socket, unless the feed is shared by a fleet.
-    feed_socket: Option<FeedSocket>,
-    /// Faults between the device's UART and the transport (`link …`).
-    link: Link,
-    /// The device's input decoded on the host side (logs, `status`).
-    monitor: P::Monitor,
-    /// Input past the faults that did not fit the device's read yet.
-    rx_carry: std::collections::VecDeque<u8>,
-    /// Input credit at the line rate (device time): what the device's
-    /// UART could have received by now.
-    rx_pacer: Pacer,
-    /// The last read was bounded by the credit (more input may wait in
-    /// the transport, which is not waited on for input meanwhile).
-    rx_held: bool,
-    /// Deadline of the last tick run, ns, and the tick period: input is
-    /// credited up to the schedule's time, never past the next tick (the
-    /// clock's `now` runs ahead while ticks are behind, and goes back when
-    /// the clock is held back).
-    tick_ns: u64,
-    period_ns: u64,
-    /// Device time of the current pass, ns.
-    now_ns: u64,
-    /// Bytes the line carried (before link faults).
-    line_bytes: u64,
-    /// Device time held back so far (copied from the clock), ns.
-    held_back_ns: u64,
-    /// Reused buffer of what passes the link faults.
-    scratch: Vec<u8>,
-    /// Events (TOV edges) kept for the owner of a shared control socket
-    /// (the many-device mode) instead of sent to `control`.
-    events: Option<Vec<String>>,
-    /// Prefix of stderr messages naming the device (`dev 3: `), or empty.
-    label: String,
-    /// The device is in firmware-update mode (BOOT high at power-on): its
-    /// input is firmware data, not KERNEL commands, so the monitor does
-    /// not decode, log or count it.
-    fw_update: bool,
-    /// The web view's tap (`--web`), if any: never blocks.
-    web: Option<crate::web::Tap>,
-    /// Device time the last input byte reached the device, ns.
-    last_rx_ns: Option<u64>,
-}
-
-impl<T: Transport, P: HostProtocol> HostPort<T, P> {
-    /// Hands what the link let through to the web view's tap and the
-    /// transport.
-    #[inline]
-    fn deliver(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        if let Some(w) = &self.web {
-            w.tx(bytes, self.rx_time());
-        }
-        if bytes.is_empty() {
-            Ok(())
-        } else {
-            self.transport.send(bytes)
-        }
-    }
-
-    /// Device time input is credited up to: the pass's time, but no later
-    /// than the tick after the last one run.
-    fn rx_time(&self) -> u64 {
-        self.now_ns.min(self.tick_ns.saturating_add(self.period_ns))
-    }
-
-    /// Hands the transport what a stall released, if it is over.
-    fn release(&mut self) -> anyhow::Result<()> {
-        let mut out = Vec::new();
-        self.link.release(self.now_ns, &mut out);
-        if !out.is_empty() {
-            self.transport.send(&out)?;
-        }
-        Ok(())
-    }
-
-    /// `truth`: the vehicle truth in `key=value` words, each key after
-    /// `prefix` ([`crate::vehicle::truth_words`]).
-    fn truth<F: NorFlash>(&self, dev: &Device<F, P>, prefix: &str) -> String {
-        let chain = dev.chain();
-        let source = if self.trajectory.is_some() {
-            "trajectory"
-        } else if let Some(v) = &self.vehicle {
-            v.kind()
-        } else if self.feed.as_ref().is_some_and(FeedState::drives_vehicle) {
-            "feed"
-        } else {
-            match chain.core_motion() {
-                Motion::Static { .. } => "static",
-                Motion::ConstantRotation { .. } => "rotation",
-                Motion::Vibration { .. } => "vibration",
-                Motion::Coning { .. } => "coning",
-                Motion::Sample(_) => "sample",
-            }
-        };
-        crate::vehicle::truth_words(&chain.vehicle(), source, chain.temperature(), prefix)
-    }
-
-    /// `status`: the device, the line and the link in `key=value` words.
-    fn status<F: NorFlash>(&self, dev: &Device<F, P>) -> String {
-        use imu_emu::device::Mode;
-        let mode = match dev.mode() {
-            Mode::Idle => "idle",
-            Mode::Aligning => "aligning",
-            Mode::Continuous => "continuous",
-            Mode::FirmwareUpdate => "firmware-update",
-        };
-        let format = match (dev.mode(), self.link.last_id()) {
-            (Mode::Continuous, Some(id)) => format!("{id:#04x}"),
-            _ => "none".to_owned(),
-        };
-        let rate = dev
-            .output_rate()
-            .map_or("none".to_owned(), |r| r.to_string());
-        let rejected = self.monitor.rejected();
-        let total: u64 = rejected.iter().map(|r| r.1).sum();
-        let mut s = format!(
-            "mode={mode} format={format} output-rate={rate} line-rate={} frames-sent={} \
-             bytes-sent={} tx-dropped={} held-back-ms={} commands={} rejected={total}",
-            dev.line_rate(),
-            self.link.frames_sent(),
-            self.line_bytes,
-            dev.tx_dropped(),
-            self.held_back_ns / 1_000_000,
-            self.monitor.commands(),
-        );
-        for (r, n) in rejected {
-            s.push_str(&format!(" rejected-{r}={n}"));
-        }
-        s.push(' ');
-        s.push_str(&self.truth(dev, "truth-"));
-        let l = self.link.stats();
-        s.push_str(&format!(
-            " link={} link-dropped={} link-corrupted={} link-duplicated={} link-noise={} \
-             link-cut={} link-stall-dropped={}",
-            self.link.describe(self.now_ns),
-            l.dropped,
-            l.corrupted,
-            l.duplicated,
-            l.noise,
-            l.cut,
-            l.stall_dropped
-        ));
-        if let Some(f) = &self.feed {
-            s.push_str(&f.status(self.now_ns));
-        }
-        s
-    }
-}
-
-impl<F: NorFlash, T: Transport, P: HostProtocol> Port<F, P> for HostPort<T, P> {
-    type Error = anyhow::Error;
-
-    fn tx_room(&mut self) -> usize {
-        // The transport's backlog takes everything the line carries.
-        usize::MAX
-    }
-
-    fn write(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.line_bytes += bytes.len() as u64;
-        if self.link.clean() {
-            // No link fault: the bytes go as they are, without a copy.
-            self.link.pass(bytes);
-            return self.deliver(bytes);
-        }
-        let mut out = core::mem::take(&mut self.scratch);
-        out.clear();
-        self.link.tx(bytes, self.now_ns, &mut out);
-        let r = self.deliver(&out);
-        self.scratch = out;
-        r
-    }
-
-    fn set_line_rate(&mut self, bps: u32) -> anyhow::Result<()> {
-        eprintln!("imu-emu: {}line rate {bps} bit/s", self.label);
-        self.rx_pacer.set_rate(bps, self.rx_time());
-        self.transport.set_line_rate(bps)
-    }
-
-    fn read(&mut self, buf: &mut [u8]) -> anyhow::Result<usize> {
-        // No more than the line could have carried by now; in lockstep
-        // the simulator owns device time (it stands still between samples,
-        // so a command sent before the first one would never arrive): the
-        // input goes in as it comes, at the device time of the next pass.
-        self.rx_pacer.advance(self.rx_time());
-        let limit = if self.feed.as_ref().is_some_and(FeedState::lockstep) {
-            buf.len()
-        } else {
-            buf.len().min(self.rx_pacer.available())
-        };
-        let buf = &mut buf[..limit];
-        // Input the faults made longer than the last read could take first.
-        let mut n = self.rx_carry.len().min(buf.len());
-        for (b, c) in buf.iter_mut().zip(self.rx_carry.drain(..n)) {
-            *b = c;
-        }
-        // Called even for 0 bytes: the transport also accepts and notices
-        // hang-ups there.
-        let mut raw = Vec::new();
-        self.transport
-            .receive(buf.len() - n, &mut |bytes| raw.extend_from_slice(bytes))?;
-        if !raw.is_empty() || self.link.rx_noise_pending() {
-            let mut got = Vec::with_capacity(raw.len());
-            self.link.rx(&raw, &mut got);
-            let k = got.len().min(buf.len() - n);
-            buf[n..n + k].copy_from_slice(&got[..k]);
-            self.rx_carry.extend(&got[k..]);
-            n += k;
-        }
-        self.rx_pacer.consume(n);
-        if n > 0 {
-            self.last_rx_ns = Some(self.rx_time());
-        }
-        self.rx_held = n == limit;
-        self.transport.hold_input(self.rx_held);
-        if !self.fw_update {
-            self.monitor.feed(&buf[..n]);
-        }
-        Ok(n)
-    }
-
-    fn tov(&mut self, level: Level, at: Instant) -> anyhow::Result<()> {
-        // The host board has no TOV pin: edges go to the control client.
-        let l = if level == Level::High { "high" } else { "low" };
-        if let Some(events) = self.events.as_mut() {
-            events.push(format!("tov {l} {}", at.as_nanos()));
-        } else if let Some(ctl) = self.control.as_mut() {
-            ctl.event(&format!("tov {l} {}", at.as_nanos()));
-        }
-        Ok(())
-    }
-
-    fn before_tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
-        let deadline = deadline.as_nanos();
-        while let Some(pps) = self.next_pps_ns.filter(|&p| p <= deadline) {
-            dev.on_pin(Pin::Pps, Level::High, Instant::from_nanos(pps));
-            self.next_pps_ns = Some(pps + 1_000_000_000);
-        }
-        Ok(())
-    }
-
-    #[inline]
-    fn tick(&mut self, dev: &mut Device<F, P>, deadline: Instant) -> anyhow::Result<()> {
-        let secs = || deadline.as_nanos() as f64 * 1e-9;
-        if let Some(t) = self.trajectory.as_mut() {
-            let (state, truth) = t.vehicle_at(secs());
-            dev.chain_mut().set_vehicle(state, truth);
-        } else if let Some(v) = self.vehicle.as_mut() {
-            let state = v.at(secs());
-            dev.chain_mut().set_vehicle(state, state.truth());
-        }
-        if let Some(f) = self.feed.as_mut() {
-            let (motion, lost) = f.at(deadline.as_nanos());
-            match motion {
-                Some(crate::feed::FeedMotion::Rates(truth)) => {
-                    dev.chain_mut().set_motion(Motion::Sample(truth))
-                }
-                Some(crate::feed::FeedMotion::Vehicle(state)) => {
-                    dev.chain_mut().set_vehicle(state, state.truth())
-                }
-                None => {}
-            }
-            dev.chain_mut().faults_mut().motion_feed_lost = lost;
-        }
-        dev.on_tick(deadline);
-        self.tick_ns = deadline.as_nanos();
-        self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
-        Ok(())
-    }
-
-    fn after_rx(&mut self, dev: &mut Device<F, P>, at: Instant) -> anyhow::Result<()> {
-        let product = dev.product();
-        self.monitor.judge(dev.personality(), &product);
-        if let Some(mut w) = self.web.take() {
-            // The page's commands, through the control socket's executor.
-            for p in w.commands() {
-                p.run(|cmd| self.apply(dev, cmd, at));
-            }
-            if w.publish_due() {
-                // Heading, pitch, roll (deg): the vehicle's when a script,
-                // file, trajectory or feed plays (heading in [0, 360) like
-                // the built-in motion's), else the built-in motion's.
-                let attitude = match dev.chain().vehicle_source() {
-                    Some(v) => {
-                        let [roll, pitch, yaw] = v.euler_rad().map(f64::to_degrees);
-                        Some([yaw.rem_euclid(360.0), pitch, roll].map(|x| x as f32))
-                    }
-                    None => dev
-                        .chain()
-                        .truth_attitude()
-                        .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
-                };
-                // Where the unit is (the vehicle's, or the built-in
-                // motion's fixed place): the page's position track.
-                let v = dev.chain().vehicle();
-                let lla = [v.lat_rad.to_degrees(), v.lon_rad.to_degrees(), v.height_m];
-                let truth = crate::web::Truth { attitude, lla };
-                w.publish(self.status(dev), at.as_nanos(), truth);
-            }
-            self.web = Some(w);
-        }
-        let Some(mut ctl) = self.control.take() else {
-            return Ok(());
-        };
-        let r = ctl.poll(&mut |cmd| {
-            tracing::debug!("control: {cmd:?}");
-            self.apply(dev, cmd, at)
-        });
-        self.control = Some(ctl);
-        r
-    }
-}
-
-impl<T: Transport, P: HostProtocol> HostPort<T, P> {
-    /// Carries out one control command at device time `at`; the answer
-    /// for the control client (`Ok` text after `ok`, `Err` after `error`).
-    fn apply<F: NorFlash>(
-        &mut self,
-        dev: &mut Device<F, P>,
-        cmd: control::Command,
-        at: Instant,
-    ) -> Result<String, String> {
-        match cmd {
-            control::Command::Edge(pin, level) => dev.on_pin(pin, level, at),
-            control::Command::PowerCycle(boot) => {
-                dev.power_cycle_with(boot, at);
-                if let Some(f) = self.feed.as_mut() {
-                    f.new_timeline();
-                }
-                self.fw_update = dev.mode() == imu_emu::device::Mode::FirmwareUpdate;
-                if self.fw_update {
-                    tracing::info!(
-                        "{}firmware-update mode (BOOT high at power-on): input is not decoded \
-                         until the next power cycle",
-                        self.label
-                    );
-                }
-            }
-            control::Command::Fault(change) => change.apply(dev.chain_mut().faults_mut()),
-            control::Command::NavFault(change) => dev.personality_mut().nav_fault(change)?,
-            control::Command::Motion(m) => {
-                self.trajectory = None;
-                self.vehicle = None;
-                dev.chain_mut().set_motion(m);
-            }
-            control::Command::Script(s) => {
-                self.trajectory = None;
-                let v = VehicleSource::script(*s).starting_at(at.as_nanos() as f64 * 1e-9);
-                self.vehicle = Some(v);
-            }
-            control::Command::MotionFile(path) => {
-                let v = VehicleSource::load(&path).map_err(|e| format!("{e:#}"))?;
-                self.trajectory = None;
-                self.vehicle = Some(v.starting_at(at.as_nanos() as f64 * 1e-9));
-            }
-            control::Command::Truth => return Ok(self.truth(dev, "")),
-            control::Command::Link(change) => {
-                let mut noise = Vec::new();
-                self.link.apply(change, self.now_ns, &mut noise);
-                if !noise.is_empty() {
-                    self.transport
-                        .send(&noise)
-                        .map_err(|e| format!("sending the noise: {e}"))?;
-                }
-            }
-            control::Command::Status => return Ok(self.status(dev)),
-            control::Command::Devices => {
-                return Ok(control::devices_reply(&[self.transport.describe()]))
-            }
-            control::Command::Help => {}
-        }
-        Ok(String::new())
-    }
-}
-
 impl<F: NorFlash, T: Transport, P: HostProtocol> Runner<F, T, P> {
     /// Wraps a device powered on at `Instant::ZERO` = `epoch`, in real
     /// time ([`Runner::with_speed`] changes that).
     pub fn new(dev: Device<F, P>, transport: T, epoch: std::time::Instant) -> Self {
         let sched = Box::new(Schedule::new(&dev));
-        let rx_pacer = Pacer::new(dev.line_rate(), 0);
         let period_ns = sched.period_ns();
+        let io = HostPort::new(transport, dev.line_rate(), period_ns);
         Runner {
             dev,
             sched,
-            io: HostPort {
-                transport,
-                control: None,
-                next_pps_ns: None,
-                trajectory: None,
-                vehicle: None,
-                feed: None,
-                feed_socket: None,
-                link: Link::with_wire(0, P::wire()),
-                monitor: P::Monitor::default(),
-                rx_carry: std::collections::VecDeque::new(),
-                rx_pacer,
-                rx_held: false,
-                tick_ns: 0,
-                period_ns,
-                now_ns: 0,
-                line_bytes: 0,
-                held_back_ns: 0,
-                scratch: Vec::new(),
-                events: None,
-                label: String::new(),
-                fw_update: false,
-                web: None,
-                last_rx_ns: None,
-            },
+            io,
             clock: Clock::new(epoch, Speed::default()),
             stats: Stats::default(),
             reported_drops: 0,
@@ -1139,5 +739,88 @@ impl<F: NorFlash, T: Transport, P: HostProtocol> Runner<F, T, P> {
             self.clock.hold_back(lag - max_lag);
         }
         Ok(pass)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fake::Mem;
+    use super::*;
+    use crate::flash::MemNor;
+    use imu_emu::device::PowerOn;
+    use imu_emu::model::Product;
+
+    fn k110() -> Device<MemNor, Kernel> {
+        let cfg = PowerOn {
+            product: Product::parse("K110").unwrap(),
+            boot: None,
+            seed: 1,
+        };
+        Device::new(cfg, MemNor::new(), Instant::ZERO)
+    }
+
+    /// `--speed max`: device time moves in whole batches of ticks, and
+    /// every byte the line carried reached the client (a clean link).
+    #[test]
+    fn speed_max_runs_whole_batches_and_the_client_gets_every_byte() {
+        let mut r = Runner::new(k110(), Mem::default(), std::time::Instant::now())
+            .with_speed(Speed::Max)
+            .with_pps();
+        for _ in 0..4 {
+            r.turn().unwrap();
+        }
+        let s = r.stats();
+        assert!(s.ticks >= MAX_BATCH_TICKS, "{s:?}");
+        assert_eq!(s.ticks % MAX_BATCH_TICKS, 0, "{s:?}");
+        assert!(s.ticks <= 4 * MAX_ROUND_TICKS, "{s:?}");
+        assert_eq!(r.transport().sent.len() as u64, s.tx_bytes);
+        assert_eq!(s.held_back_ns, 0);
+    }
+
+    /// The control executor through the runner: `status` counts the
+    /// frames the line sent, `devices` names the transport.
+    #[test]
+    fn control_answers_status_and_devices() {
+        let mut r = Runner::new(k110(), Mem::default(), std::time::Instant::now())
+            .with_speed(Speed::Max)
+            .with_pps();
+        r.turn().unwrap();
+        let status = r.control(control::Command::Status).unwrap();
+        assert!(status.starts_with("mode="), "{status}");
+        let sent = format!("bytes-sent={}", r.stats().tx_bytes);
+        assert!(status.split(' ').any(|w| w == sent), "{status}");
+        assert_eq!(
+            r.control(control::Command::Devices).unwrap(),
+            control::devices_reply(&["mem test".to_owned()])
+        );
+    }
+
+    /// `--speed max`: a quiet device (nothing to send, no stream, no
+    /// input) stops device time until its next input (repeatable
+    /// sessions).
+    #[test]
+    fn speed_max_stops_device_time_while_the_device_is_quiet() {
+        let mut r =
+            Runner::new(k110(), Mem::default(), std::time::Instant::now()).with_speed(Speed::Max);
+        for _ in 0..8 {
+            r.turn().unwrap();
+        }
+        assert_eq!(r.device().output_rate(), None);
+        let ticks = r.stats().ticks;
+        for _ in 0..8 {
+            r.turn().unwrap();
+        }
+        assert_eq!(r.stats().ticks, ticks);
+        // Input wakes it: device time moves on while the command goes in.
+        let mut buf = [0u8; 16];
+        let n = imu_emu::kernel::command::Command::Stop
+            .encode(&mut buf)
+            .unwrap();
+        r.transport_mut().input.extend(&buf[..n]);
+        for _ in 0..8 {
+            r.turn().unwrap();
+        }
+        assert_eq!(r.stats().rx_bytes, n as u64);
+        assert!(r.stats().ticks > ticks, "{:?}", r.stats());
     }
 }
