@@ -31,7 +31,7 @@
 //! * **Input at the line rate**: whatever the transport delivers at once
 //!   (a 70 KB burst of commands in one TCP write, a pty or serial buffer
 //!   full), the device gets its input no faster than its UART would at
-//!   the line rate: a host-side [`Pacer`] at the device's line rate, in
+//!   the line rate: a host-side [`Pacer`](imu_emu::line::Pacer) at the device's line rate, in
 //!   device time, bounds what each pass reads; the rest waits in the
 //!   transport (the kernel's buffers, then the peer: TCP flow control),
 //!   whose wait does not wake for input meanwhile
