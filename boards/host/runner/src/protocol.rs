@@ -6,7 +6,7 @@
 //! into a type once, where it picks `Kernel` or `Isb`.
 //!
 //! A third protocol is one more impl here: its packet rules, its monitor,
-//! its live decoder, its factory rate and its product.
+//! its live decoder, its factory rate, its RX idle time and its product.
 
 use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
@@ -28,6 +28,10 @@ pub trait HostProtocol: Personality + Sized + 'static {
     /// opens it before the device powers on sees the rate a factory unit
     /// starts at.
     const FACTORY_RATE: u32;
+
+    /// How long after its last input byte the device abandons a frame cut
+    /// short, ns: at `--speed max` the device is not quiet before then.
+    const RX_IDLE_NS: u64;
 
     /// The host-side decoder of what the device receives (logs, `status`).
     type Monitor: InputMonitor<Self>;
@@ -67,6 +71,7 @@ impl HostProtocol for Kernel {
     const PROTOCOL: Protocol = Protocol::Kernel;
     /// Baud_Rate's factory value (Table 5.24).
     const FACTORY_RATE: u32 = 115_200;
+    const RX_IDLE_NS: u64 = imu_emu::kernel::RX_IDLE_ABANDON_NS;
     type Monitor = Monitor;
 
     fn wire() -> Wire {
@@ -90,6 +95,7 @@ impl HostProtocol for Isb {
     const PROTOCOL: Protocol = Protocol::Isb;
     /// ser0BaudRate's factory value (FLASH_CONFIG).
     const FACTORY_RATE: u32 = imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE;
+    const RX_IDLE_NS: u64 = imu_emu::isb::device::RX_IDLE_ABANDON_NS;
     /// The IMX reports its own port counters (PORT_MONITOR).
     type Monitor = Silent;
 

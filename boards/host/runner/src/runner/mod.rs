@@ -71,7 +71,6 @@ use std::time::Duration;
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::Device;
-use imu_emu::kernel::Kernel;
 use imu_emu::schedule::{Limits, Pass, Schedule};
 use imu_emu::time::Instant;
 
@@ -129,18 +128,6 @@ const NO_RX: Limits = Limits {
 /// Most ticks one `--speed max` round runs before it sends and reads
 /// (0.5 s of device time at 2 kHz): input is seen at least this often.
 pub const MAX_ROUND_TICKS: u64 = 1024;
-/// `--speed max`: how long after its last input byte the device is not
-/// quiet ([`Runner::max_quiet`]): the personalities' RX idle time, after
-/// which a frame cut short is abandoned (both 100 ms), and a tick.
-const RX_SETTLE_NS: u64 = {
-    let k = imu_emu::kernel::RX_IDLE_ABANDON_NS;
-    let i = imu_emu::isb::device::RX_IDLE_ABANDON_NS;
-    if k > i {
-        k
-    } else {
-        i
-    }
-};
 
 /// What the runner counted so far.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -159,7 +146,7 @@ pub struct Stats {
 }
 
 /// The board: a device, the shared schedule, a transport and the pins.
-pub struct Runner<F: NorFlash, T: Transport, P: HostProtocol = Kernel> {
+pub struct Runner<F: NorFlash, T: Transport, P: HostProtocol> {
     dev: Device<F, P>,
     sched: Box<Schedule<CHUNK>>,
     io: HostPort<T, P>,
@@ -680,7 +667,9 @@ impl<F: NorFlash, T: Transport, P: HostProtocol> Runner<F, T, P> {
     /// next input, so device time waits for it — nothing to send or
     /// switch on the line ([`Schedule::poll_at`]: no stream, its
     /// alignment included), no software reset waiting, no input held
-    /// back at the line rate or within [`RX_SETTLE_NS`] of its last byte,
+    /// back at the line rate or within the protocol's RX idle time
+    /// ([`HostProtocol::RX_IDLE_NS`]: a frame cut short is abandoned
+    /// after it) and a tick of its last byte,
     /// no link stall to end, no `--pps` generator and no live feed
     /// (their time is the host's business).
     fn max_quiet(&self) -> bool {
@@ -695,7 +684,7 @@ impl<F: NorFlash, T: Transport, P: HostProtocol> Runner<F, T, P> {
             && self
                 .io
                 .last_rx_ns
-                .is_none_or(|t| now > t.saturating_add(RX_SETTLE_NS + self.sched.period_ns()))
+                .is_none_or(|t| now > t.saturating_add(P::RX_IDLE_NS + self.sched.period_ns()))
     }
 
     /// `--speed max`: whether a round reads input at its start. Not while
@@ -748,6 +737,7 @@ mod tests {
     use super::*;
     use crate::flash::MemNor;
     use imu_emu::device::PowerOn;
+    use imu_emu::kernel::Kernel;
     use imu_emu::model::Product;
 
     fn k110() -> Device<MemNor, Kernel> {
