@@ -282,17 +282,23 @@ fn one_trait_holds_what_differs_between_the_protocols() {
     let [_, runner, host] = crates();
     assert_eq!(naming(&runner, "Protocol::"), set(&["protocol"]));
     assert_eq!(naming(&host, "Protocol::"), set(&["cli"]));
-    let per_protocol = set(&["protocol", "monitor", "link", "web", "virtual_device", "clock"]);
+    let per_protocol = set(&[
+        "protocol",
+        "monitor",
+        "link",
+        "web",
+        "virtual_device",
+        "clock",
+    ]);
     for needle in ["imu_emu::kernel", "imu_emu::isb"] {
         let named = naming(&runner, needle);
         let bad: Vec<_> = named.difference(&per_protocol).collect();
         assert!(bad.is_empty(), "{bad:?} name {needle}");
     }
     // In `web`, only its live decoders name a protocol.
-    let web = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("runner/src/web.rs"),
-    )
-    .unwrap();
+    let web =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("runner/src/web.rs"))
+            .unwrap();
     let web = code_of(&web);
     assert!(!web.contains("imu_emu::kernel") && !web.contains("imu_emu::isb"));
 }

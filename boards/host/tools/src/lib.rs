@@ -12,9 +12,9 @@
 //! * [`client`] — `imu-emu client …`: the host side of a KERNEL or ISB
 //!   line (commands, record, decode, plot) and the decoders the runner's
 //!   web view uses too;
-//! * [`allan`], [`allan_input`], [`allan_plot`] — `imu-emu allan`: the
-//!   Allan deviation of a unit run in process or of a recording, its fit
-//!   and its plot;
+//! * [`allan`] — `imu-emu allan`: the Allan deviation of a unit run in
+//!   process or of a recording ([`allan::input`]), its fit
+//!   ([`allan::deviation`]) and its plot ([`allan::plot`]);
 //! * [`plot`] — the one plot style (titled panels, labelled axes with
 //!   units, legend; PNG or SVG; embedded font);
 //! * [`profile_file`] — sensor profile files (`--sensor-profile`,
@@ -23,8 +23,6 @@
 #![deny(missing_docs)]
 
 pub mod allan;
-pub mod allan_input;
-pub mod allan_plot;
 pub mod client;
 pub mod error;
 pub mod plot;
