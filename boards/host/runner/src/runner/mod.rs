@@ -49,8 +49,8 @@
 //!   next tick or [`BUSY_WAKE`], whichever is first), the next `--pps` edge
 //!   or [`IDLE_WAKE`], whichever is first; [`BUSY_WAKE`] while bytes wait
 //!   for the client; not at all while ticks are due. UART input wakes it at
-//!   once. The process asks for a timer slack of 1 ns (`cli::run`), so a
-//!   wake is not up to the kernel's default 50 µs late.
+//!   once. The process asks for a timer slack of 1 ns (the program's
+//!   `cli::run`), so a wake is not up to the kernel's default 50 µs late.
 //! * **`--speed max`**: device time moves on by [`MAX_BATCH_TICKS`] ticks
 //!   a pass (batches end on multiples of it), in rounds of passes that end
 //!   when [`MAX_BACKLOG`] bytes wait for the client (or input came, or
