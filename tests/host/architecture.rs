@@ -7,7 +7,7 @@
 //! module graph, `imu_emu_*` the crates it reaches.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// One host crate's code: root module → the code of its files.
 struct Crate {
@@ -18,16 +18,9 @@ struct Crate {
 /// Root module → the other root modules of its crate its code names.
 type Graph = BTreeMap<String, BTreeSet<String>>;
 
-fn rs_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            rs_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
+#[path = "../common/rs_files.rs"]
+mod rs_files;
+use rs_files::rs_files;
 
 /// Cuts the `{ … }` block that opens at or after `at` (with what precedes
 /// it from `at`).

@@ -175,6 +175,22 @@ mod tests {
         HostPort::new(Mem::default(), P::FACTORY_RATE, 500_000)
     }
 
+    /// `status` after the device's monitor saw a KERNEL Stop command and
+    /// then `more`.
+    fn status_after<P: HostProtocol>(
+        p: &mut HostPort<Mem, P>,
+        dev: &mut Device<MemNor, P>,
+        more: &[u8],
+    ) -> String {
+        let mut buf = [0u8; 16];
+        let n = Command::Stop.encode(&mut buf).unwrap();
+        p.monitor.feed(&buf[..n]);
+        p.monitor.feed(more);
+        p.monitor.judge(dev.personality(), &dev.product());
+        p.apply(dev, control::Command::Status, Instant::ZERO)
+            .unwrap()
+    }
+
     fn word<'a>(status: &'a str, key: &str) -> &'a str {
         status
             .split(' ')
@@ -189,14 +205,8 @@ mod tests {
         let mut dev = device::<Kernel>(Product::parse("K110").unwrap());
         let mut p = port::<Kernel>();
         let mut buf = [0u8; 64];
-        let n = Command::Stop.encode(&mut buf).unwrap();
-        InputMonitor::<Kernel>::feed(&mut p.monitor, &buf[..n]);
         let n = imu_emu::kernel::frame::encode(1, 0, &[0xFE], &mut buf).unwrap();
-        InputMonitor::<Kernel>::feed(&mut p.monitor, &buf[..n]);
-        InputMonitor::judge(&mut p.monitor, dev.personality(), &dev.product());
-        let s = p
-            .apply(&mut dev, control::Command::Status, Instant::ZERO)
-            .unwrap();
+        let s = status_after(&mut p, &mut dev, &buf[..n]);
         assert_eq!(word(&s, "commands"), "1");
         assert_eq!(word(&s, "rejected"), "1");
         assert_eq!(word(&s, "rejected-not-command"), "1");
@@ -209,13 +219,7 @@ mod tests {
     fn an_imx_status_counts_no_kernel_commands() {
         let mut dev = device::<Isb>(Product::imx5());
         let mut p = port::<Isb>();
-        let mut buf = [0u8; 64];
-        let n = Command::Stop.encode(&mut buf).unwrap();
-        InputMonitor::<Isb>::feed(&mut p.monitor, &buf[..n]);
-        InputMonitor::judge(&mut p.monitor, dev.personality(), &dev.product());
-        let s = p
-            .apply(&mut dev, control::Command::Status, Instant::ZERO)
-            .unwrap();
+        let s = status_after(&mut p, &mut dev, &[]);
         assert_eq!(word(&s, "commands"), "0");
         assert_eq!(word(&s, "rejected"), "0");
     }
