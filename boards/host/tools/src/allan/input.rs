@@ -132,7 +132,7 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
 
 /// CSV if the first line names `gyro_x` (a KERNEL's) or `pqr_x` /
 /// `theta_x` (an IMX-5's); else the protocol with more valid
-/// frames/packets in the first 64 KiB ([`crate::client::protocol_of`];
+/// frames/packets in the first 64 KiB ([`Protocol::detect`];
 /// text with neither is a CSV).
 fn detect(bytes: &[u8]) -> Format {
     use crate::protocol::Protocol;
@@ -144,7 +144,7 @@ fn detect(bytes: &[u8]) -> Format {
     }) {
         return Format::Csv;
     }
-    match crate::client::protocol_of(head) {
+    match Protocol::detect(head) {
         Some(Protocol::Isb) => Format::Isb,
         Some(Protocol::Kernel) => Format::Kernel,
         // Neither: text is read as a CSV (whose error names the column
