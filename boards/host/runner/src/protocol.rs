@@ -74,8 +74,9 @@ impl HostProtocol for Kernel {
     const RX_IDLE_NS: u64 = imu_emu::kernel::RX_IDLE_ABANDON_NS;
     type Monitor = Monitor;
 
+    /// KERNEL frames (ICD Table 5.2; the frame ID at byte 3).
     fn wire() -> Wire {
-        Wire::kernel()
+        Wire::of::<imu_emu::kernel::frame::Kernel>(3)
     }
 
     fn live() -> Live {
