@@ -160,6 +160,37 @@ fn gps_timed(did: u8) -> bool {
 mod tests {
     use super::*;
 
+    /// A K110's GA stream (0x8F, Table 5.8), through the virtual device:
+    /// frames of one stream, timed by their 2 kHz counter (which wraps),
+    /// with the client's column names.
+    #[test]
+    fn kernel_ga_frames_carry_their_counter_and_columns() {
+        use std::io::{Read as _, Write as _};
+        let product = Product::parse("K110").unwrap();
+        let mut dev = crate::virtual_device::VirtualDevice::new(product);
+        let mut cmd = [0u8; 16];
+        let n = imu_emu::kernel::command::Command::Data(0x8F)
+            .encode(&mut cmd)
+            .unwrap();
+        dev.write_all(&cmd[..n]).unwrap();
+        dev.advance(200_000_000);
+        let mut bytes = vec![0u8; dev.pending()];
+        dev.read_exact(&mut bytes).unwrap();
+        let mut frames = Vec::new();
+        KernelLive::default().decode(&bytes, &product, &mut frames);
+        assert!(frames.len() >= 10, "{} frames", frames.len());
+        for f in &frames {
+            assert_eq!((f.stream, f.gps, f.rated, f.set), (0x8F, false, true, None));
+            let own = f.own.expect("GA carries the counter");
+            assert_eq!(own.wrap, Some(65_536.0 / COUNTER_HZ));
+            assert!(
+                f.values.iter().any(|(k, _)| k == "gyro_x"),
+                "{:?}",
+                f.values
+            );
+        }
+    }
+
     #[test]
     fn the_gps_timed_sets_are_those_with_a_time_of_week() {
         use imu_emu::isb::did;
