@@ -229,16 +229,60 @@ fn open_files_for(n: usize) {
 }
 
 /// `started` is set once every device is set up and the fleet runs.
+/// A run once its protocol is a type.
+trait Run {
+    fn run<P: HostProtocol>(self) -> anyhow::Result<()>;
+}
+
+/// `run` for the protocol of `--protocol`: the one place the choice
+/// becomes a type.
+fn with_protocol(protocol: Protocol, run: impl Run) -> anyhow::Result<()> {
+    match protocol {
+        Protocol::Kernel => run.run::<Kernel>(),
+        Protocol::Isb => run.run::<Isb>(),
+    }
+}
+
+/// A fleet's run.
+struct Many<'a, F> {
+    flashes: Vec<F>,
+    args: &'a Args,
+    stop: &'a AtomicBool,
+    started: &'a std::cell::Cell<bool>,
+}
+
+impl<F: NorFlash> Run for Many<'_, F> {
+    fn run<P: HostProtocol>(self) -> anyhow::Result<()> {
+        many_transports::<F, P>(self.flashes, self.args, self.stop, self.started)
+    }
+}
+
+/// One device's run.
+struct One<'a, F> {
+    flash: F,
+    args: &'a Args,
+    stop: &'a AtomicBool,
+}
+
+impl<F: NorFlash> Run for One<'_, F> {
+    fn run<P: HostProtocol>(self) -> anyhow::Result<()> {
+        with_transport::<F, P>(self.flash, self.args, self.stop)
+    }
+}
+
 fn many_with<F: NorFlash>(
     flashes: Vec<F>,
     args: &Args,
     stop: &AtomicBool,
     started: &std::cell::Cell<bool>,
 ) -> anyhow::Result<()> {
-    match args.protocol {
-        Protocol::Kernel => many_transports::<F, Kernel>(flashes, args, stop, started),
-        Protocol::Isb => many_transports::<F, Isb>(flashes, args, stop, started),
-    }
+    let run = Many {
+        flashes,
+        args,
+        stop,
+        started,
+    };
+    with_protocol(args.protocol, run)
 }
 
 fn many_transports<F: NorFlash, P: HostProtocol>(
@@ -366,10 +410,7 @@ pub(super) fn with_flash<F: NorFlash>(
     args: &Args,
     stop: &AtomicBool,
 ) -> anyhow::Result<()> {
-    match args.protocol {
-        Protocol::Kernel => with_transport::<F, Kernel>(flash, args, stop),
-        Protocol::Isb => with_transport::<F, Isb>(flash, args, stop),
-    }
+    with_protocol(args.protocol, One { flash, args, stop })
 }
 
 fn with_transport<F: NorFlash, P: HostProtocol>(
