@@ -6,7 +6,7 @@
 //! modules are not part of the graph.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Root module → the other root modules its code names.
 type Graph = BTreeMap<String, BTreeSet<String>>;
@@ -14,16 +14,9 @@ type Graph = BTreeMap<String, BTreeSet<String>>;
 /// The personalities: a module of their own each, above the shell.
 const PERSONALITIES: &[&str] = &["kernel", "isb"];
 
-fn rs_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            rs_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
+#[path = "common/rs_files.rs"]
+mod rs_files;
+use rs_files::rs_files;
 
 /// The source without line comments (doc comments included: an intra-doc
 /// link is not an import) and without `#[cfg(test)] mod … { … }` blocks.

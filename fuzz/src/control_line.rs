@@ -1,7 +1,7 @@
-//! The control grammar (`imu_emu_host::control`): every line, as the
+//! The control grammar (`imu_emu_runner::control`): every line, as the
 //! control socket and the web view's `POST /api/command` take it.
 
-use imu_emu_host::control;
+use imu_emu_runner::control;
 
 /// Parses each line of `data` (lossy UTF-8, split at newlines, trimmed as
 /// the socket does). Invariants: an answer is one line (an error holds no

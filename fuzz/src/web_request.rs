@@ -1,7 +1,7 @@
 //! The web view's HTTP request path: raw bytes on one connection, in
 //! pseudo-random read sizes, through the server loop
-//! (`imu_emu_host::web::server::serve_connection`: head limits, body
-//! limits, pipelining, `HEAD`) to the routes (`imu_emu_host::web::Site`:
+//! (`imu_emu_runner::web::server::serve_connection`: head limits, body
+//! limits, pipelining, `HEAD`) to the routes (`imu_emu_runner::web::Site`:
 //! the `Host` and `X-Imu-Emu` checks, the query parameters, the control
 //! parser of `POST /api/command`, the JSON endpoints) of a one-device hub
 //! whose runner answers every command `ok`.
@@ -10,10 +10,11 @@ use std::io::{Read, Write};
 use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
+use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
-use imu_emu_host::cli::Protocol;
-use imu_emu_host::web::server::{self, Conn, MAX_HEAD};
-use imu_emu_host::web::{Hub, Site, MAX_BODY};
+use imu_emu_runner::protocol::HostProtocol;
+use imu_emu_runner::web::server::{self, Conn, MAX_HEAD};
+use imu_emu_runner::web::{Hub, Site, MAX_BODY};
 
 /// The input as a socket: reads of `chunk` bytes at most, each write one
 /// answer.
@@ -59,7 +60,7 @@ fn site() -> &'static Site {
     SITE.get_or_init(|| {
         let product = Product::parse("K110").expect("K110");
         let hub = Hub::new(
-            Protocol::Kernel,
+            Kernel::live(),
             product,
             "K110",
             &["tcp 127.0.0.1:1".to_owned()],

@@ -181,7 +181,7 @@ fn capture<P: imu_emu::personality::Personality>(
 ) -> Vec<u8> {
     use imu_emu::device::{Device, PowerOn};
     use imu_emu::time::Instant;
-    use imu_emu_host::flash::MemNor;
+    use imu_emu_runner::flash::MemNor;
     let cfg = PowerOn {
         product,
         boot: None,

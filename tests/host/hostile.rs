@@ -26,7 +26,7 @@ use support::{
 };
 
 const GA: u8 = 0x8F;
-/// The web server's connection limit (`boards/host/src/web/server.rs`).
+/// The web server's connection limit (`boards/host/runner/src/web/server.rs`).
 const MAX_CONNECTIONS: usize = 32;
 
 /// The value of `key=` in a status line.

@@ -1,6 +1,6 @@
 //! A tiny KERNEL driver, generic over `embedded_io::{Read, Write}` as a
 //! firmware driver would be, tested against the in-process virtual device
-//! (`imu_emu_host::virtual_device::VirtualDevice`): no thread, no socket,
+//! (`imu_emu_runner::virtual_device::VirtualDevice`): no thread, no socket,
 //! device time moving with the bytes read.
 //!
 //! `cargo run -p imu-emu-host --example kernel_driver` prints a few GA
@@ -118,7 +118,7 @@ impl<P: Read + Write> Driver<P> {
 
 fn main() {
     use imu_emu::model::Product;
-    use imu_emu_host::virtual_device::VirtualDevice;
+    use imu_emu_runner::virtual_device::VirtualDevice;
     let mut d = Driver::new(VirtualDevice::new(Product::parse("K110").unwrap()));
     println!("firmware: {}", d.firmware().unwrap());
     d.start_ga().unwrap();
@@ -131,7 +131,7 @@ fn main() {
 mod tests {
     use super::*;
     use imu_emu::model::Product;
-    use imu_emu_host::virtual_device::VirtualDevice;
+    use imu_emu_runner::virtual_device::VirtualDevice;
 
     #[test]
     fn the_driver_reads_info_and_a_gap_free_ga_stream() {

@@ -11,7 +11,7 @@
 //! (its syntax, whether `dev K` may address it, its parser). The parser,
 //! the `help` answer and the syntax an error names all read it, so a new
 //! command is a new row (what each command does: `docs/host-runner.md`,
-//! "The control protocol"; `runner::HostPort::apply` carries it out).
+//! "The control protocol"; `HostPort::apply`, `runner/exec.rs`, carries it out).
 //!
 //! Link faults ([`crate::link`]) draw from a generator seeded by `--seed`.
 //!
@@ -151,7 +151,7 @@ fn dir(w: Option<&&str>, default: Dir) -> Result<Dir, String> {
 /// answer ([`help`]) and the syntax an error names ([`usage`]).
 ///
 /// Adding a command is adding a row (and, if it needs one, a [`Command`]
-/// variant and what the runner does with it, `runner::HostPort::apply`).
+/// variant and what the runner does with it, `HostPort::apply` in `runner/exec.rs`).
 #[derive(Debug, Clone, Copy)]
 pub struct Form {
     /// Its syntax, as `help` lists it and errors name it; the first word

@@ -5,7 +5,7 @@
 //! lines (white noise N/√τ, the bias-instability floor 0.6643·B, the random
 //! walk K·√(τ/3) where the profile has one) dashed.
 
-use crate::allan::{Curve, FLICKER_FLOOR};
+use super::deviation::{Curve, FLICKER_FLOOR};
 use crate::plot::{Corner, Figure, Panel, Scale, Series};
 use imu_emu::sensor::profile::{SensorProfile, SensorSpec};
 

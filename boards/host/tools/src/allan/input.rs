@@ -30,7 +30,7 @@ use imu_emu::isb::{did, sets};
 use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
 use imu_emu::model::Product;
 
-use crate::allan::{Phases, Source, AXES};
+use super::deviation::{enough, Phases, Source, AXES};
 use crate::client::decode::decode;
 use crate::client::DeviceClock;
 
@@ -83,7 +83,7 @@ pub(crate) fn read(
         f => f,
     };
     let samples = match format {
-        Format::Csv | Format::Auto => return crate::allan::read_csv(path, rate),
+        Format::Csv | Format::Auto => return read_csv(path, rate),
         Format::Kernel => kernel(&bytes, product),
         Format::Isb => isb(&bytes),
     };
@@ -105,7 +105,7 @@ pub(crate) fn read(
     for (y, _) in &samples.rows {
         phases.push(y);
     }
-    crate::allan::enough(path, phases.n)?;
+    enough(path, phases.n)?;
     Ok(Source {
         title: format!(
             "{} ({}, {:.0} Hz{})",
@@ -132,10 +132,10 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
 
 /// CSV if the first line names `gyro_x` (a KERNEL's) or `pqr_x` /
 /// `theta_x` (an IMX-5's); else the protocol with more valid
-/// frames/packets in the first 64 KiB ([`crate::client::protocol_of`];
+/// frames/packets in the first 64 KiB ([`Protocol::detect`];
 /// text with neither is a CSV).
 fn detect(bytes: &[u8]) -> Format {
-    use crate::cli::Protocol;
+    use crate::protocol::Protocol;
     let head = &bytes[..bytes.len().min(1 << 16)];
     let first_line = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
     if std::str::from_utf8(first_line).is_ok_and(|l| {
@@ -144,7 +144,7 @@ fn detect(bytes: &[u8]) -> Format {
     }) {
         return Format::Csv;
     }
-    match crate::client::protocol_of(head) {
+    match Protocol::detect(head) {
         Some(Protocol::Isb) => Format::Isb,
         Some(Protocol::Kernel) => Format::Kernel,
         // Neither: text is read as a CSV (whose error names the column
@@ -257,4 +257,116 @@ fn isb(bytes: &[u8]) -> Samples {
         rows,
         what: format!("ISB {name} packets, {skipped} other packets skipped"),
     }
+}
+
+/// Reads a CSV of `imu-emu client record` or `client decode`
+/// (docs/sensors.md "Recordings"): a KERNEL's (`gyro_*` °/s, `acc_*` g,
+/// `aux_acc_*` when all three are there) or an IMX-5's (a `did` column:
+/// IMU, IMU_RAW, IMU_MAG `pqr_*` rad/s and `acc_*` m/s²; PIMU, PIMU_MAG
+/// `theta_*` rad and `vel_*` m/s over `dt`, read as their means), in the
+/// KERNEL's units. The sample period comes from device time
+/// (`device_time_s`, else `imu_time_ns`), else host time
+/// (`host_time_s`, with a warning: it carries the host's scheduling),
+/// else `rate`.
+pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("allan {}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .with_context(|| format!("allan {}: empty file", path.display()))?
+        .split(',')
+        .collect();
+    let col = |name: &str| header.iter().position(|h| h.trim() == name);
+    let need = |names: &[&str], what: &str| -> anyhow::Result<Vec<usize>> {
+        names
+            .iter()
+            .map(|a| {
+                col(a).with_context(|| format!("allan {}: no {a} column ({what})", path.display()))
+            })
+            .collect()
+    };
+    const RAD_S: [&str; 6] = ["pqr_x", "pqr_y", "pqr_z", "acc_x", "acc_y", "acc_z"];
+    const DELTAS: [&str; 6] = ["theta_x", "theta_y", "theta_z", "vel_x", "vel_y", "vel_z"];
+    let deg = 180.0 / std::f64::consts::PI;
+    let g = f64::from(imu_emu::math::G);
+    // Per column: its index and the factor to °/s or g; a PIMU's `dt`.
+    let (cols, scale, dt, what): (Vec<usize>, Vec<f64>, Option<usize>, &str) =
+        if col("did").is_some() {
+            let isb = "an IMX-5 `client record --protocol isb` CSV of IMU or PIMU?";
+            if col("pqr_x").is_some() {
+                let c = need(&RAD_S, isb)?;
+                (
+                    c,
+                    vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g],
+                    None,
+                    "ISB IMU",
+                )
+            } else {
+                let c = need(&DELTAS, isb)?;
+                let dt = need(&["dt"], isb)?[0];
+                let s = vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g];
+                (c, s, Some(dt), "ISB PIMU (Δθ/dt, Δv/dt)")
+            }
+        } else {
+            let mut c = need(
+                &AXES[..6],
+                "a `client record` CSV of GA, GAm or UDD with gyro and acc, or an IMX-5's with pqr",
+            )?;
+            // The aux accelerometer too, when the recording has all three.
+            let aux: Option<Vec<usize>> = AXES[6..].iter().map(|a| col(a)).collect();
+            c.extend(aux.into_iter().flatten());
+            let n = c.len();
+            (c, vec![1.0; n], None, "KERNEL")
+        };
+    let rows: Vec<Vec<f64>> = lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.trim().parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let median_step = |c: usize, scale: f64| -> Option<f64> {
+        let t: Vec<f64> = rows
+            .iter()
+            .filter_map(|r| Some(r.get(c)? * scale))
+            .collect();
+        median_step(&t)
+    };
+    let (tau0, clock) = if let Some(t) = col("device_time_s").and_then(|c| median_step(c, 1.0)) {
+        (t, "device time")
+    } else if let Some(t) = col("imu_time_ns").and_then(|c| median_step(c, 1e-9)) {
+        (t, "device time")
+    } else if let Some(t) = col("host_time_s").and_then(|c| median_step(c, 1.0)) {
+        eprintln!(
+            "imu-emu allan: warning: {}: no device time (device_time_s, imu_time_ns): the rate \
+             comes from host_time_s, the host's arrival times",
+            path.display()
+        );
+        (t, "host time")
+    } else {
+        (1.0 / f64::from(rate.max(1)), "--rate")
+    };
+    let mut phases = Phases::new(tau0, rows.len(), cols.len());
+    let mut y = vec![0.0; cols.len()];
+    for r in &rows {
+        let per_s = dt.map_or(1.0, |c| 1.0 / r.get(c).copied().unwrap_or(f64::NAN));
+        for ((v, &i), k) in y.iter_mut().zip(&cols).zip(&scale) {
+            *v = r.get(i).copied().unwrap_or(f64::NAN) * k * per_s;
+        }
+        if y.iter().all(|v| v.is_finite()) {
+            phases.push(&y);
+        }
+    }
+    enough(path, phases.n)?;
+    Ok(Source {
+        title: format!(
+            "{} ({what} CSV, {:.0} Hz from {clock})",
+            path.display(),
+            1.0 / tau0
+        ),
+        profile: None,
+        phases,
+    })
 }

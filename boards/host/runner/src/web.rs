@@ -12,8 +12,8 @@
 //!   of these takes its lock with `try_lock`: when the web thread holds it,
 //!   the bytes are counted as lost to the view (`Slot::lost`) and the
 //!   loop goes on. A closed or slow tab therefore costs the device nothing.
-//! - **The web thread** drains the ring, decodes the frames (the client's
-//!   decoders: [`crate::client::decode`], [`crate::client::isb`]), keeps
+//! - **The web thread** drains the ring, decodes the frames (the
+//!   protocol's [`live::LiveDecoder`], on the client's decoders), keeps
 //!   the last [`KEEP_POINTS`] points per device with their device time
 //!   (and, for ISB, their data set's name: field names repeat across sets),
 //!   and answers the page's polls.
@@ -50,13 +50,12 @@ use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
 use imu_emu::model::Product;
 
-use crate::cli::Protocol;
-use crate::client;
 use crate::control;
+use live::{Frame, Live, LiveDecoder, Own, WEEK_S};
 
+pub mod live;
 pub mod server;
 
 /// How often a runner publishes its status (host time): 25 Hz.
@@ -80,10 +79,6 @@ const ANSWER_WITHIN: Duration = Duration::from_secs(2);
 /// A stream's own step and its line stamps may differ by this much (the
 /// TX queue's and the line's delay) before it starts again at its stamp.
 pub const REANCHOR_S: f64 = 0.3;
-/// The KERNEL's computation counter rate (ICD Tables 5.7, 5.10 note 3).
-const COUNTER_HZ: f64 = 2000.0;
-/// A GPS week, s.
-const WEEK_S: f64 = 604_800.0;
 
 const INDEX_HTML: &str = include_str!("web/index.html");
 const APP_JS: &str = include_str!("web/app.js");
@@ -143,15 +138,16 @@ pub struct Slot {
 /// The devices the web view shows.
 #[derive(Debug)]
 pub struct Hub {
-    protocol: Protocol,
+    live: Live,
     slots: Vec<Arc<Slot>>,
 }
 
 impl Hub {
-    /// A hub for devices named `name` at `places` (`tcp 127.0.0.1:7000`).
-    pub fn new(protocol: Protocol, product: Product, name: &str, places: &[String]) -> Arc<Hub> {
+    /// A hub for devices named `name` at `places` (`tcp 127.0.0.1:7000`),
+    /// whose output `live` decodes.
+    pub fn new(live: Live, product: Product, name: &str, places: &[String]) -> Arc<Hub> {
         Arc::new(Hub {
-            protocol,
+            live,
             slots: places
                 .iter()
                 .map(|p| {
@@ -265,13 +261,6 @@ struct Stream {
     own: Option<f64>,
 }
 
-/// A frame's own clock: its value (s) and the period it wraps at.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Own {
-    value: f64,
-    wrap: Option<f64>,
-}
-
 /// Puts every frame on the device clock (module doc, "One device clock").
 #[derive(Debug, Default)]
 struct Timing {
@@ -317,19 +306,13 @@ impl Timing {
     }
 }
 
-/// Whether an ISB data set's time ([`imu_emu::isb::did::device_time`])
-/// is GPS time of week: the set has a `timeOfWeek` or `timeOfWeekMs`
-/// field (the others count seconds since boot, `time`).
-fn gps_timed(did: u8) -> bool {
-    imu_emu::isb::did::set(did)
-        .is_some_and(|(_, fields)| fields.iter().any(|f| f.name.starts_with("timeOfWeek")))
-}
-
 /// The web thread's view of one device.
 struct View {
     slot: Arc<Slot>,
-    kernel: Box<KernelDecoder<4096>>,
-    isb: Box<imu_emu::isb::packet::Decoder<{ imu_emu::isb::packet::MAX_PACKET }>>,
+    /// The protocol's decoder of the output.
+    live: Box<dyn LiveDecoder>,
+    /// Reused list of the frames one chunk held.
+    frames_of_chunk: Vec<Frame>,
     timing: Timing,
     /// GPS time of week at device time 0, s (an IMX's GPS-timed sets).
     gps_tow_at_zero: Option<f64>,
@@ -341,11 +324,11 @@ struct View {
 }
 
 impl View {
-    fn new(slot: Arc<Slot>) -> View {
+    fn new(slot: Arc<Slot>, live: Box<dyn LiveDecoder>) -> View {
         View {
             slot,
-            kernel: Box::new(KernelDecoder::new()),
-            isb: Box::new(imu_emu::isb::packet::Decoder::new()),
+            live,
+            frames_of_chunk: Vec::new(),
             timing: Timing::default(),
             gps_tow_at_zero: None,
             points: VecDeque::new(),
@@ -357,7 +340,7 @@ impl View {
     }
 
     /// Takes what the runner published; decodes the new bytes.
-    fn refresh(&mut self, protocol: Protocol) -> (String, u64, bool) {
+    fn refresh(&mut self) -> (String, u64, bool) {
         let (bytes, marks, status, device_ns, truth, on) = {
             let Ok(mut s) = self.slot.shared.lock() else {
                 return ("mode=off".to_owned(), 0, false);
@@ -389,71 +372,26 @@ impl View {
         for (ns, n) in marks {
             let chunk = &bytes[at.min(bytes.len())..(at + n).min(bytes.len())];
             at += n;
-            self.decode(protocol, chunk, ns as f64 * 1e-9, rate);
+            self.decode(chunk, ns as f64 * 1e-9, rate);
         }
         (status, device_ns, on)
     }
 
-    /// Decodes `chunk`, which left the line at device time `stamp` (s).
-    fn decode(&mut self, protocol: Protocol, chunk: &[u8], stamp: f64, rate: Option<f64>) {
-        let mut input = chunk;
+    /// Decodes `chunk`, which left the line at device time `stamp` (s),
+    /// the stream's known output rate `rate` (Hz) if any.
+    fn decode(&mut self, chunk: &[u8], stamp: f64, rate: Option<f64>) {
         let product = self.slot.product;
-        match protocol {
-            Protocol::Kernel => {
-                while let Some(f) = self.kernel.next_frame(&mut input) {
-                    if f.msg_type != TYPE_DATA {
-                        continue;
-                    }
-                    let Some(d) = client::decode::decode(f.id, f.payload, &product) else {
-                        continue;
-                    };
-                    let own = match (d.get("imu_time_ns"), d.get("counter")) {
-                        (Some(ns), _) => Some(Own {
-                            value: ns * 1e-9,
-                            wrap: None,
-                        }),
-                        (None, Some(c)) => Some(Own {
-                            value: c / COUNTER_HZ,
-                            wrap: Some(65_536.0 / COUNTER_HZ),
-                        }),
-                        _ => None,
-                    };
-                    let t = self.timing.time(u16::from(f.id), stamp, own, rate);
-                    let values = d
-                        .values
-                        .iter()
-                        .map(|(k, v)| ((*k).to_owned(), *v))
-                        .collect();
-                    self.push(t, None, values);
-                }
+        let mut frames = core::mem::take(&mut self.frames_of_chunk);
+        self.live.decode(chunk, &product, &mut frames);
+        for f in frames.drain(..) {
+            let rate = if f.rated { rate } else { None };
+            let t = self.timing.time(f.stream, stamp, f.own, rate);
+            if let (true, Some(o)) = (f.gps, f.own) {
+                self.gps_tow_at_zero = Some((o.value - t).rem_euclid(WEEK_S));
             }
-            Protocol::Isb => {
-                while let Some(p) = self.isb.next_packet(&mut input) {
-                    let p = client::isb::Packet {
-                        flags: p.flags,
-                        did: p.did,
-                        payload: p.payload.to_vec(),
-                    };
-                    let Some((did, b)) = p.whole_set() else {
-                        continue;
-                    };
-                    let gps = gps_timed(did);
-                    let own = imu_emu::isb::did::device_time(did, b).map(|value| Own {
-                        value,
-                        wrap: gps.then_some(WEEK_S),
-                    });
-                    // An ISB stream's period is its own (no known rate):
-                    // a set without a time is placed at its stamp.
-                    let t = self.timing.time(256 + u16::from(did), stamp, own, None);
-                    if let (true, Some(o)) = (gps, own) {
-                        self.gps_tow_at_zero = Some((o.value - t).rem_euclid(WEEK_S));
-                    }
-                    let values = client::isb::numbers(did, b);
-                    let set = imu_emu::isb::did::set(did).map(|(name, _)| name);
-                    self.push(t, set, values);
-                }
-            }
+            self.push(t, f.set, f.values);
         }
+        self.frames_of_chunk = frames;
     }
 
     fn push(&mut self, t: f64, set: Option<&'static str>, values: Vec<(String, f64)>) {
@@ -510,7 +448,7 @@ impl Site {
         let views = hub
             .slots
             .iter()
-            .map(|s| Mutex::new(View::new(Arc::clone(s))))
+            .map(|s| Mutex::new(View::new(Arc::clone(s), (hub.live.decoder)())))
             .collect();
         Site { hub, views, bound }
     }
@@ -608,11 +546,7 @@ fn handle(
             let Ok(mut v) = views[k].lock() else {
                 return text(500, "error internal");
             };
-            (
-                200,
-                JSON,
-                state_json(hub.protocol, &mut v, since, truth_since),
-            )
+            (200, JSON, state_json(&mut v, since, truth_since))
         }
         (Post, "/api/command") => {
             if !p.marked {
@@ -724,10 +658,7 @@ fn json_num(x: f64) -> String {
 }
 
 fn devices_json(hub: &Hub) -> String {
-    let protocol = match hub.protocol {
-        Protocol::Kernel => "kernel",
-        Protocol::Isb => "isb",
-    };
+    let protocol = hub.live.protocol.name();
     let devs: Vec<String> = hub
         .slots
         .iter()
@@ -747,8 +678,8 @@ fn devices_json(hub: &Hub) -> String {
     )
 }
 
-fn state_json(protocol: Protocol, v: &mut View, since: u64, truth_since: u64) -> String {
-    let (status, device_ns, on) = v.refresh(protocol);
+fn state_json(v: &mut View, since: u64, truth_since: u64) -> String {
+    let (status, device_ns, on) = v.refresh();
     let words: Vec<String> = status
         .split_whitespace()
         .filter_map(|w| w.split_once('='))
@@ -806,11 +737,12 @@ fn state_json(protocol: Protocol, v: &mut View, since: u64, truth_since: u64) ->
 
 #[cfg(test)]
 mod tests {
+    use super::live::COUNTER_HZ;
     use super::*;
 
     fn hub() -> Arc<Hub> {
         Hub::new(
-            Protocol::Kernel,
+            <imu_emu::kernel::Kernel as crate::protocol::HostProtocol>::live(),
             Product::parse("K110").unwrap(),
             "K110",
             &["tcp 127.0.0.1:1".to_owned()],
@@ -821,7 +753,7 @@ mod tests {
         let views: Vec<Mutex<View>> = hub
             .slots
             .iter()
-            .map(|s| Mutex::new(View::new(Arc::clone(s))))
+            .map(|s| Mutex::new(View::new(Arc::clone(s), (hub.live.decoder)())))
             .collect();
         let bound: SocketAddr = "127.0.0.1:8080".parse().unwrap();
         let p = Parts {
@@ -856,11 +788,10 @@ mod tests {
     #[test]
     fn isb_points_name_their_set_and_stay_json_without_values() {
         let h = hub();
-        let mut v = View::new(Arc::clone(&h.slots[0]));
+        let mut v = View::new(Arc::clone(&h.slots[0]), Box::new(live::IsbLive::default()));
         v.push(1.5, Some("INS_2"), vec![("lla_x".to_owned(), 45.0)]);
         v.push(2.0, None, Vec::new());
-        let s: serde_json::Value =
-            serde_json::from_str(&state_json(Protocol::Isb, &mut v, 0, 0)).unwrap();
+        let s: serde_json::Value = serde_json::from_str(&state_json(&mut v, 0, 0)).unwrap();
         assert_eq!(
             s["points"],
             serde_json::json!([
@@ -914,7 +845,7 @@ mod tests {
     #[test]
     fn isb_sets_on_two_clocks_share_the_device_clock() {
         let h = hub();
-        let mut v = View::new(Arc::clone(&h.slots[0]));
+        let mut v = View::new(Arc::clone(&h.slots[0]), Box::new(live::IsbLive::default()));
         let mut ins = [0u8; 128];
         let mut imu = [0u8; 64];
         for k in 0..20u32 {
@@ -938,7 +869,7 @@ mod tests {
                 .unwrap();
                 bytes.extend_from_slice(&pkt[..n]);
             }
-            v.decode(Protocol::Isb, &bytes, t + 0.002, None);
+            v.decode(&bytes, t + 0.002, None);
         }
         let last = |set: &str| {
             v.points
@@ -950,23 +881,6 @@ mod tests {
         };
         assert!((last("INS_2") - last("IMU")).abs() < 1e-9);
         assert!((v.gps_tow_at_zero.unwrap() - 403_168.0).abs() < 0.01);
-    }
-
-    #[test]
-    fn the_gps_timed_sets_are_those_with_a_time_of_week() {
-        use imu_emu::isb::did;
-        for d in [
-            did::INS_1,
-            did::INS_2,
-            did::GPS1_POS,
-            did::GPS1_VEL,
-            did::SYS_PARAMS,
-        ] {
-            assert!(gps_timed(d), "{d}");
-        }
-        for d in [did::IMU, did::PIMU, did::MAGNETOMETER, did::BAROMETER] {
-            assert!(!gps_timed(d), "{d}");
-        }
     }
 
     #[test]

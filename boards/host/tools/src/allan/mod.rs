@@ -10,7 +10,7 @@
 //! IMX-5`, its signal chain averaged over each output interval (what its
 //! IMU message carries); or from a recording (`--input FILE`: the CSV of
 //! `imu-emu client record` or a raw KERNEL/ISB capture,
-//! [`crate::allan_input`]).
+//! [`input`]).
 //!
 //! **Allan deviation.** The phase `x_k = Σ y_i·τ₀` of each axis is kept
 //! every `S`-th sample (S chosen so that at most 2²⁰ values are kept:
@@ -35,9 +35,9 @@
 //! the long τ).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::device::{Device, PowerOn};
 use imu_emu::dsp::variant::OutputVariant;
@@ -46,26 +46,17 @@ use imu_emu::model::{Capability, Product};
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::time::Instant;
 
-use crate::flash::MemNor;
 use crate::plot::Kind;
 
-/// Flicker floor / B: √(2 ln 2/π) (IEEE 952).
-pub const FLICKER_FLOOR: f64 = 0.664_282;
-/// Phases kept per axis at most.
-const KEEP: usize = 1 << 20;
-/// Channels: gyro X Y Z (°/s), acc X Y Z (g), and on the K120/K220 the
-/// aux accelerometer X Y Z (g): the `client record` column names.
-pub const AXES: [&str; 9] = [
-    "gyro_x",
-    "gyro_y",
-    "gyro_z",
-    "acc_x",
-    "acc_y",
-    "acc_z",
-    "aux_acc_x",
-    "aux_acc_y",
-    "aux_acc_z",
-];
+pub mod deviation;
+pub mod input;
+pub mod plot;
+
+use deviation::{curves, fit, too_short, Fit, Phases, Source, AXES};
+
+/// The flash of the unit run in process: the runner's size (two 4 KiB
+/// sectors, what the parameter store needs); nothing is kept after the run.
+type UnitFlash = imu_emu::nor::RamNor<8192>;
 
 /// `imu-emu allan …`.
 #[derive(clap::Args, Debug, Clone)]
@@ -105,8 +96,8 @@ pub struct AllanArgs {
     #[arg(long, value_name = "FILE")]
     pub input: Option<PathBuf>,
     /// What --input holds: auto (from its content), csv, kernel or isb.
-    #[arg(long, value_enum, default_value_t = crate::allan_input::Format::Auto)]
-    pub format: crate::allan_input::Format,
+    #[arg(long, value_enum, default_value_t = input::Format::Auto)]
+    pub format: input::Format,
     /// Plot to this PNG file.
     #[arg(long, value_name = "FILE")]
     pub png: Option<PathBuf>,
@@ -116,210 +107,6 @@ pub struct AllanArgs {
     /// Write the Allan deviations (τ and σ of each axis) to this CSV.
     #[arg(long, value_name = "FILE")]
     pub table: Option<PathBuf>,
-}
-
-/// Phases of the channels (the first `channels` of [`AXES`]), kept every
-/// `stride` samples.
-pub(crate) struct Phases {
-    tau0: f64,
-    stride: usize,
-    /// Samples pushed.
-    pub(crate) n: usize,
-    acc: Vec<f64>,
-    first: Option<Vec<f64>>,
-    kept: Vec<Vec<f64>>,
-}
-
-impl Phases {
-    pub(crate) fn new(tau0: f64, expected: usize, channels: usize) -> Self {
-        let stride = expected.div_ceil(KEEP).max(1);
-        let mut p = Phases {
-            tau0,
-            stride,
-            n: 0,
-            acc: vec![0.0; channels],
-            first: None,
-            kept: vec![Vec::new(); channels],
-        };
-        for k in &mut p.kept {
-            k.reserve(expected / stride + 2);
-            k.push(0.0);
-        }
-        p
-    }
-
-    /// The channels' count.
-    fn channels(&self) -> usize {
-        self.acc.len()
-    }
-
-    /// One sample of every channel (`y.len()` = [`Phases::channels`]).
-    pub(crate) fn push(&mut self, y: &[f64]) {
-        // Relative to the first sample: the phases stay small (the Allan
-        // deviation ignores a constant).
-        let y0 = self.first.get_or_insert_with(|| y.to_vec());
-        for ((a, v), v0) in self.acc.iter_mut().zip(y).zip(y0.iter()) {
-            *a += (v - v0) * self.tau0;
-        }
-        self.n += 1;
-        if self.n.is_multiple_of(self.stride) {
-            for (k, a) in self.kept.iter_mut().zip(&self.acc) {
-                k.push(*a);
-            }
-        }
-    }
-}
-
-/// One axis's Allan deviation: (τ s, σ, samples n/m) points.
-#[derive(Debug, Clone)]
-pub struct Curve {
-    /// (τ, σ(τ), n/m).
-    pub points: Vec<(f64, f64, f64)>,
-}
-
-fn curves(p: &Phases) -> Vec<Curve> {
-    let kept = p.kept[0].len();
-    let max_k = (kept.saturating_sub(1)) / 4;
-    let mut ks: Vec<usize> = Vec::new();
-    let mut e = 0.0f64;
-    while 10f64.powf(e / 10.0) <= max_k as f64 {
-        let k = 10f64.powf(e / 10.0).round() as usize;
-        if ks.last() != Some(&k) {
-            ks.push(k);
-        }
-        e += 1.0;
-    }
-    p.kept
-        .iter()
-        .map(|x| {
-            let points = ks
-                .iter()
-                .map(|&k| {
-                    let m = k * p.stride;
-                    let tau = m as f64 * p.tau0;
-                    let terms = x.len() - 2 * k;
-                    let s: f64 = (0..terms)
-                        .map(|i| {
-                            let d = x[i + 2 * k] - 2.0 * x[i + k] + x[i];
-                            d * d
-                        })
-                        .sum();
-                    let var = s / (2.0 * tau * tau * terms as f64);
-                    (tau, var.sqrt(), p.n as f64 / m as f64)
-                })
-                .collect();
-            Curve { points }
-        })
-        .collect()
-}
-
-/// Fitted terms of one axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fit {
-    /// White-noise density, unit/√Hz.
-    pub n: f64,
-    /// Bias instability B = floor / 0.6643, unit.
-    pub b: f64,
-    /// Rate random walk, unit/√s.
-    pub k: f64,
-    /// The datasheet reading: min σ / 0.6643 over τ ≤ `tau_min_max`
-    /// (where each estimate averages ≥ 100 intervals: the minimum of a
-    /// noisier estimate reads low), unit.
-    pub b_min: f64,
-}
-
-/// Weighted least squares of the curve (module doc) over τ ≤ `tau_max`;
-/// the datasheet reading over τ ≤ `tau_min_max`.
-pub fn fit(c: &Curve, tau_max: f64, tau_min_max: f64) -> Fit {
-    let pts: Vec<&(f64, f64, f64)> = c
-        .points
-        .iter()
-        .filter(|p| p.0 <= tau_max && p.1 > 0.0)
-        .collect();
-    let mut on = [true; 3];
-    let mut x = [0.0f64; 3];
-    for _ in 0..3 {
-        let idx: Vec<usize> = (0..3).filter(|&i| on[i]).collect();
-        let n = idx.len();
-        let mut a = vec![vec![0.0f64; n]; n];
-        let mut b = vec![0.0f64; n];
-        for &&(tau, sigma, dof) in &pts {
-            let v = sigma * sigma;
-            let f = [1.0 / tau, 1.0, tau / 3.0];
-            let w = dof / (v * v);
-            for (r, &i) in idx.iter().enumerate() {
-                b[r] += w * f[i] * v;
-                for (s, &j) in idx.iter().enumerate() {
-                    a[r][s] += w * f[i] * f[j];
-                }
-            }
-        }
-        let sol = solve(a, b);
-        x = [0.0; 3];
-        for (r, &i) in idx.iter().enumerate() {
-            x[i] = sol[r];
-        }
-        match (0..3).find(|&i| on[i] && x[i] < 0.0) {
-            Some(i) => on[i] = false,
-            None => break,
-        }
-    }
-    let x = x.map(|v| v.max(0.0));
-    let b_min = pts
-        .iter()
-        .filter(|p| p.0 <= tau_min_max)
-        .map(|p| p.1)
-        .fold(f64::INFINITY, f64::min)
-        / FLICKER_FLOOR;
-    Fit {
-        n: x[0].sqrt(),
-        b: x[1].sqrt() / FLICKER_FLOOR,
-        k: x[2].sqrt(),
-        b_min,
-    }
-}
-
-/// Gaussian elimination with partial pivoting (n ≤ 3).
-#[allow(clippy::needless_range_loop)] // rows and columns by index
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for c in 0..n {
-        let p = (c..n)
-            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
-            .unwrap_or(c);
-        a.swap(c, p);
-        b.swap(c, p);
-        if a[c][c] == 0.0 {
-            continue;
-        }
-        for r in c + 1..n {
-            let k = a[r][c] / a[c][c];
-            for j in c..n {
-                a[r][j] -= k * a[c][j];
-            }
-            b[r] -= k * b[c];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for c in (0..n).rev() {
-        let s: f64 = (c + 1..n).map(|j| a[c][j] * x[j]).sum();
-        x[c] = if a[c][c] == 0.0 {
-            0.0
-        } else {
-            (b[c] - s) / a[c][c]
-        };
-    }
-    x
-}
-
-/// What was analysed, for the report.
-pub(crate) struct Source {
-    /// Plot and report title.
-    pub(crate) title: String,
-    /// The profile to compare with, if known.
-    pub(crate) profile: Option<SensorProfile>,
-    /// The channels' phases.
-    pub(crate) phases: Phases,
 }
 
 /// Runs a unit in process (module doc).
@@ -334,7 +121,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         Some(path) => Some(Box::leak(Box::new(crate::profile_file::load(path)?))),
         None => None,
     };
-    let product = crate::allan_input::product(&a.model)?;
+    let product = input::product(&a.model)?;
     let imx = core::ptr::eq(product.model, &imu_emu::model::IMX5);
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
@@ -429,7 +216,7 @@ fn run_kernel(
         seed: a.seed,
     };
     let mut dev =
-        Device::<MemNor, Kernel>::with_profile(cfg, profile, MemNor::new(), Instant::ZERO);
+        Device::<UnitFlash, Kernel>::with_profile(cfg, profile, UnitFlash::new(), Instant::ZERO);
     dev.chain_mut().faults_mut().temperature_c = temperature;
     let period = dev.tick_period_ns();
     let mut now = 0u64;
@@ -493,166 +280,6 @@ fn run_kernel(
                 got += 1;
             }
         }
-    }
-    Ok(())
-}
-
-/// Reads a CSV of `imu-emu client record` or `client decode`
-/// (docs/sensors.md "Recordings"): a KERNEL's (`gyro_*` °/s, `acc_*` g,
-/// `aux_acc_*` when all three are there) or an IMX-5's (a `did` column:
-/// IMU, IMU_RAW, IMU_MAG `pqr_*` rad/s and `acc_*` m/s²; PIMU, PIMU_MAG
-/// `theta_*` rad and `vel_*` m/s over `dt`, read as their means), in the
-/// KERNEL's units. The sample period comes from device time
-/// (`device_time_s`, else `imu_time_ns`), else host time
-/// (`host_time_s`, with a warning: it carries the host's scheduling),
-/// else `rate`.
-pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("allan {}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines
-        .next()
-        .with_context(|| format!("allan {}: empty file", path.display()))?
-        .split(',')
-        .collect();
-    let col = |name: &str| header.iter().position(|h| h.trim() == name);
-    let need = |names: &[&str], what: &str| -> anyhow::Result<Vec<usize>> {
-        names
-            .iter()
-            .map(|a| {
-                col(a).with_context(|| format!("allan {}: no {a} column ({what})", path.display()))
-            })
-            .collect()
-    };
-    const RAD_S: [&str; 6] = ["pqr_x", "pqr_y", "pqr_z", "acc_x", "acc_y", "acc_z"];
-    const DELTAS: [&str; 6] = ["theta_x", "theta_y", "theta_z", "vel_x", "vel_y", "vel_z"];
-    let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::math::G);
-    // Per column: its index and the factor to °/s or g; a PIMU's `dt`.
-    let (cols, scale, dt, what): (Vec<usize>, Vec<f64>, Option<usize>, &str) =
-        if col("did").is_some() {
-            let isb = "an IMX-5 `client record --protocol isb` CSV of IMU or PIMU?";
-            if col("pqr_x").is_some() {
-                let c = need(&RAD_S, isb)?;
-                (
-                    c,
-                    vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g],
-                    None,
-                    "ISB IMU",
-                )
-            } else {
-                let c = need(&DELTAS, isb)?;
-                let dt = need(&["dt"], isb)?[0];
-                let s = vec![deg, deg, deg, 1.0 / g, 1.0 / g, 1.0 / g];
-                (c, s, Some(dt), "ISB PIMU (Δθ/dt, Δv/dt)")
-            }
-        } else {
-            let mut c = need(
-                &AXES[..6],
-                "a `client record` CSV of GA, GAm or UDD with gyro and acc, or an IMX-5's with pqr",
-            )?;
-            // The aux accelerometer too, when the recording has all three.
-            let aux: Option<Vec<usize>> = AXES[6..].iter().map(|a| col(a)).collect();
-            c.extend(aux.into_iter().flatten());
-            let n = c.len();
-            (c, vec![1.0; n], None, "KERNEL")
-        };
-    let rows: Vec<Vec<f64>> = lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.trim().parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
-    let median_step = |c: usize, scale: f64| -> Option<f64> {
-        let t: Vec<f64> = rows
-            .iter()
-            .filter_map(|r| Some(r.get(c)? * scale))
-            .collect();
-        crate::allan_input::median_step(&t)
-    };
-    let (tau0, clock) = if let Some(t) = col("device_time_s").and_then(|c| median_step(c, 1.0)) {
-        (t, "device time")
-    } else if let Some(t) = col("imu_time_ns").and_then(|c| median_step(c, 1e-9)) {
-        (t, "device time")
-    } else if let Some(t) = col("host_time_s").and_then(|c| median_step(c, 1.0)) {
-        eprintln!(
-            "imu-emu allan: warning: {}: no device time (device_time_s, imu_time_ns): the rate \
-             comes from host_time_s, the host's arrival times",
-            path.display()
-        );
-        (t, "host time")
-    } else {
-        (1.0 / f64::from(rate.max(1)), "--rate")
-    };
-    let mut phases = Phases::new(tau0, rows.len(), cols.len());
-    let mut y = vec![0.0; cols.len()];
-    for r in &rows {
-        let per_s = dt.map_or(1.0, |c| 1.0 / r.get(c).copied().unwrap_or(f64::NAN));
-        for ((v, &i), k) in y.iter_mut().zip(&cols).zip(&scale) {
-            *v = r.get(i).copied().unwrap_or(f64::NAN) * k * per_s;
-        }
-        if y.iter().all(|v| v.is_finite()) {
-            phases.push(&y);
-        }
-    }
-    enough(path, phases.n)?;
-    Ok(Source {
-        title: format!(
-            "{} ({what} CSV, {:.0} Hz from {clock})",
-            path.display(),
-            1.0 / tau0
-        ),
-        profile: None,
-        phases,
-    })
-}
-
-/// The warning for a run too short for the figures past the white noise:
-/// on some axis the Allan deviation still falls at its longest τ (a
-/// quarter of the run), so the floor (bias instability) and a rise (rate
-/// random walk) lie beyond the data and those columns are upper bounds of
-/// noise, not readings (docs/sensors.md "The datasheet reading": a floor
-/// shows from about 100 times the τ where the white noise meets it, hours
-/// for the built-in profiles). `None` when every curve turns.
-pub fn too_short(cs: &[Curve], seconds: f64) -> Option<String> {
-    let falling: Vec<&str> = cs
-        .iter()
-        .zip(AXES)
-        .filter(|(c, _)| {
-            let lowest = c
-                .points
-                .iter()
-                .enumerate()
-                .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
-                .map(|(i, _)| i);
-            c.points.len() < 2 || lowest == Some(c.points.len() - 1)
-        })
-        .map(|(_, ax)| ax)
-        .collect();
-    if falling.is_empty() {
-        return None;
-    }
-    let longest = cs
-        .first()
-        .and_then(|c| c.points.last())
-        .map_or(0.0, |p| p.0);
-    Some(format!(
-        "the record ({seconds:.1} s) is too short for bias instability and rate random walk: \
-         the Allan deviation of {} still falls at its longest τ ({longest:.3} s), so their \
-         figures below are upper bounds, not readings; only the white noise (ARW/VRW) is read",
-        falling.join(" ")
-    ))
-}
-
-/// A recording needs 100 samples or more.
-pub(crate) fn enough(path: &Path, n: usize) -> anyhow::Result<()> {
-    if n < 100 {
-        bail!(
-            "allan {}: {n} usable samples (need 100 or more)",
-            path.display()
-        );
     }
     Ok(())
 }
@@ -723,8 +350,8 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let src = match &a.input {
         Some(path) => {
-            let product = crate::allan_input::product(&a.model)?;
-            crate::allan_input::read(path, a.format, &product, a.rate)?
+            let product = input::product(&a.model)?;
+            input::read(path, a.format, &product, a.rate)?
         }
         None => run_unit(a)?,
     };
@@ -760,7 +387,7 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
         }
         std::fs::write(path, t).with_context(|| format!("allan --table {}", path.display()))?;
     }
-    let fig = crate::allan_plot::figure(&src.title, &cs, src.profile.as_ref());
+    let fig = plot::figure(&src.title, &cs, src.profile.as_ref());
     for (path, kind) in [(&a.png, Kind::Png), (&a.svg, Kind::Svg)] {
         if let Some(p) = path {
             crate::plot::render_as(&fig, p, kind)
@@ -768,26 +395,4 @@ pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// White noise of known density: the fit reads it (and no floor).
-    #[test]
-    fn the_fit_reads_white_noise() {
-        let mut rng = imu_emu::sensor::rng::Rng::new(3);
-        let n = 0.01;
-        let rate = 100.0;
-        let mut p = Phases::new(1.0 / rate, 200_000, 6);
-        for _ in 0..200_000 {
-            let w = f64::from(rng.gaussian()) * n * rate.sqrt();
-            p.push(&[w, w, w, w, w, w]);
-        }
-        let c = curves(&p);
-        let f = fit(&c[0], 200.0, 20.0);
-        assert!((f.n / n - 1.0).abs() < 0.03, "{f:?}");
-        assert!(f.b < 0.1 * n, "{f:?}");
-    }
 }

@@ -139,11 +139,6 @@ impl Wire {
         }
     }
 
-    /// KERNEL frames (ICD Table 5.2).
-    pub fn kernel() -> Self {
-        Self::of::<imu_emu::kernel::frame::Kernel>(3)
-    }
-
     /// The total length of a packet starting with `hdr` (its first
     /// `header_len` bytes), if it is one (longer than its header).
     fn total(&self, hdr: &[u8]) -> Option<usize> {
@@ -240,14 +235,9 @@ pub struct Link {
 }
 
 impl Link {
-    /// A clean link for KERNEL output whose random draws derive from
-    /// `seed` (`--seed`).
-    pub fn new(seed: u64) -> Self {
-        Self::with_wire(seed, Wire::kernel())
-    }
-
-    /// A clean link for output framed by `wire` (another personality's
-    /// packets: `Wire::of::<imu_emu::isb::packet::Isb>(…)`).
+    /// A clean link for output framed by `wire` (the protocol's,
+    /// `HostProtocol::wire`) whose random draws derive from `seed`
+    /// (`--seed`).
     pub fn with_wire(seed: u64, wire: Wire) -> Self {
         Link {
             wire,
@@ -555,6 +545,13 @@ impl Link {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    impl Link {
+        /// A clean link for KERNEL output.
+        fn new(seed: u64) -> Self {
+            Self::with_wire(seed, Wire::of::<imu_emu::kernel::frame::Kernel>(3))
+        }
+    }
 
     fn frame(id: u8, payload: &[u8]) -> Vec<u8> {
         let mut f = vec![0u8; payload.len() + 8];

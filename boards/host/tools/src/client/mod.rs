@@ -34,8 +34,8 @@ use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::params::{self, Kind, ParamSpec, PARAMS};
 use imu_emu::model::Product;
 
-use crate::cli::Protocol;
 use crate::error::UsageError;
+use crate::protocol::Protocol;
 
 /// Options of `imu-emu client`.
 #[derive(clap::Args, Debug, Clone)]
@@ -791,7 +791,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
 }
 
 /// `client decode FILE`: the capture's protocol is `--protocol`, else
-/// detected from its first 64 KiB ([`protocol_of`]); bytes in which no
+/// detected from its first 64 KiB ([`Protocol::detect`]); bytes in which no
 /// data frame (no data-set packet) decodes are an error, not an empty
 /// output with status 0.
 fn decode_file(
@@ -816,7 +816,7 @@ fn decode_file(
     let protocol = match args.protocol {
         Some(p) => p,
         None => {
-            let p = protocol_of(src.get_ref().0.get_ref()).unwrap_or(Protocol::Kernel);
+            let p = Protocol::detect(src.get_ref().0.get_ref()).unwrap_or(Protocol::Kernel);
             if p == Protocol::Isb {
                 eprintln!(
                     "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb",
@@ -909,30 +909,6 @@ fn quiet_on_closed_output(r: anyhow::Result<()>) -> anyhow::Result<()> {
     match r {
         Err(e) if is_broken_pipe(&e) => Ok(()),
         r => r,
-    }
-}
-
-/// The protocol whose frames or packets `head` holds more of (KERNEL on
-/// a tie), or `None` when it holds neither.
-pub fn protocol_of(head: &[u8]) -> Option<Protocol> {
-    let mut k = Box::new(Decoder::<CAP>::new());
-    let mut input = head;
-    let mut frames = 0usize;
-    while k.next_frame(&mut input).is_some() {
-        frames += 1;
-    }
-    let mut i = Box::new(imu_emu::isb::packet::Decoder::<
-        { imu_emu::isb::packet::MAX_PACKET },
-    >::new());
-    let mut input = head;
-    let mut packets = 0usize;
-    while i.next_packet(&mut input).is_some() {
-        packets += 1;
-    }
-    match (frames, packets) {
-        (0, 0) => None,
-        (f, p) if p > f => Some(Protocol::Isb),
-        _ => Some(Protocol::Kernel),
     }
 }
 

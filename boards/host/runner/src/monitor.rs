@@ -1,6 +1,8 @@
 //! What the device received, decoded on the host side: every command
 //! frame logged, every frame the device rejects or ignores counted with
-//! the reason (`status` on the control socket, `-v` logs).
+//! the reason (`status` on the control socket, `-v` logs). Each protocol
+//! names its monitor ([`InputMonitor`], `HostProtocol::Monitor`): the
+//! KERNEL's [`Monitor`], or [`Silent`].
 //!
 //! The core is `no_std` and does not log; the host decodes the same bytes
 //! the device's UART received (after the link faults) with the core's own
@@ -278,6 +280,65 @@ impl Monitor {
             .map(|&r| (r, self.rejected[r as usize]))
             .filter(|&(_, n)| n > 0)
             .collect()
+    }
+}
+
+/// What the runner asks of a protocol's monitor of the device's input
+/// (`crate::protocol::HostProtocol::Monitor`): fed what the device's UART
+/// received, judged after the device took it, counted in `status`.
+pub trait InputMonitor<P>: Default {
+    /// Feeds bytes the device received.
+    fn feed(&mut self, bytes: &[u8]);
+    /// Judges what was fed since the last call against the device's
+    /// personality `dev` of `product` (logs, counters).
+    fn judge(&mut self, dev: &P, product: &Product);
+    /// Commands decoded so far (`status commands=`).
+    fn commands(&self) -> u64;
+    /// Input rejected or ignored so far, per reason word (`status
+    /// rejected-…=`, the non-zero ones, in a fixed order).
+    fn rejected(&self) -> Vec<(&'static str, u64)>;
+}
+
+/// The KERNEL's: the commands and the reasons of Table 5.24's rules, read
+/// against the device's parameter RAM.
+impl InputMonitor<imu_emu::kernel::Kernel> for Monitor {
+    fn feed(&mut self, bytes: &[u8]) {
+        Monitor::feed(self, bytes);
+    }
+
+    fn judge(&mut self, dev: &imu_emu::kernel::Kernel, product: &Product) {
+        Monitor::judge(self, product, &|id| dev.param_ram(id).map(<[u8]>::to_vec));
+    }
+
+    fn commands(&self) -> u64 {
+        Monitor::commands(self)
+    }
+
+    fn rejected(&self) -> Vec<(&'static str, u64)> {
+        Monitor::rejected(self)
+            .into_iter()
+            .map(|(r, n)| (r.name(), n))
+            .collect()
+    }
+}
+
+/// No host-side decoding of the input: `status` counts no commands and no
+/// rejections, nothing is logged (a protocol whose device reports its own
+/// input counters, as the IMX-5's PORT_MONITOR does).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Silent;
+
+impl<P> InputMonitor<P> for Silent {
+    fn feed(&mut self, _bytes: &[u8]) {}
+
+    fn judge(&mut self, _dev: &P, _product: &Product) {}
+
+    fn commands(&self) -> u64 {
+        0
+    }
+
+    fn rejected(&self) -> Vec<(&'static str, u64)> {
+        Vec::new()
     }
 }
 

@@ -36,7 +36,8 @@ use imu_emu::time::Instant;
 use crate::clock::Speed;
 use crate::control::{Command, Control};
 use crate::feed::{FeedConfig, FeedSocket, FeedState};
-use crate::runner::{HostPersonality, Runner, IDLE_WAKE};
+use crate::protocol::HostProtocol;
+use crate::runner::{Runner, IDLE_WAKE};
 use crate::trajectory::Trajectory;
 use crate::transport::Transport;
 
@@ -78,13 +79,13 @@ pub struct Setup {
 }
 
 /// One device: off (waiting for its first client) or running.
-enum Slot<F: NorFlash, T: Transport, P: HostPersonality> {
+enum Slot<F: NorFlash, T: Transport, P: HostProtocol> {
     Off { flash: F, transport: T },
     On(Box<Runner<F, T, P>>),
 }
 
 /// N devices, one loop.
-pub struct Fleet<F: NorFlash, T: Transport, P: HostPersonality> {
+pub struct Fleet<F: NorFlash, T: Transport, P: HostProtocol> {
     slots: Vec<Option<Slot<F, T, P>>>,
     setup: Setup,
     control: Option<Control>,
@@ -101,7 +102,7 @@ pub struct Fleet<F: NorFlash, T: Transport, P: HostPersonality> {
     shared_counts: imu_emu::feed::Counts,
 }
 
-impl<F: NorFlash, T: Transport, P: HostPersonality> Fleet<F, T, P> {
+impl<F: NorFlash, T: Transport, P: HostProtocol> Fleet<F, T, P> {
     /// Devices on `parts` (flash and transport of device K at index K),
     /// all off until [`Fleet::run`] powers them on.
     pub fn new(parts: Vec<(F, T)>, setup: Setup, control: Option<Control>) -> Self {
