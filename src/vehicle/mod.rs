@@ -176,31 +176,69 @@ pub fn housing_to_body(v: &V3) -> V3 {
     body_to_housing(v)
 }
 
-/// The state of a built-in [`Motion`] at `time_s`: its site (latitude,
-/// [`DEFAULT_LONGITUDE_DEG`], the height where WGS84 normal gravity is the
-/// ICD's g: [`wgs84::height_of_gravity`]), at rest, with the attitude the motion
+/// Where a built-in [`Motion`] stands: its latitude, the height where
+/// WGS84 normal gravity is the ICD's g ([`wgs84::height_of_gravity`]) and
+/// the level attitude at its heading. Fixed for a motion, so the chain
+/// keeps it ([`Site::of`] when the motion is chosen) instead of solving
+/// for the height and turning the heading each time the vehicle is read
+/// (about 100 000 instructions of soft double precision on the M4F).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Site {
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Height above the ellipsoid, m.
+    pub height_m: f64,
+    /// Level at the site's heading, body (FRD) → NED.
+    pub level: Q4,
+}
+
+impl Site {
+    /// The site of `motion` (its latitude and heading,
+    /// [`DEFAULT_LONGITUDE_DEG`]).
+    pub fn of(motion: &Motion) -> Site {
+        let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
+        let lat = f64::from(lat_deg).to_radians();
+        Site {
+            lat_rad: lat,
+            height_m: wgs84::height_of_gravity(lat, G_ICD),
+            level: quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
+        }
+    }
+
+    /// A placeholder (the equator, height 0, facing north), for a chain
+    /// not yet powered on.
+    pub const fn placeholder() -> Site {
+        Site {
+            lat_rad: 0.0,
+            height_m: 0.0,
+            level: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// The state of a built-in motion at `time_s`: its `site` ([`Site::of`]
+/// the motion: latitude, [`DEFAULT_LONGITUDE_DEG`], the height where WGS84
+/// normal gravity is the ICD's g), at rest, with the attitude the motion
 /// reports (housing → ENU, Appendix C; `None`: level at the site's
 /// heading) and its truth as the measurement (housing axes, °/s and g).
 /// The built-ins rotate and vibrate in place (docs/motion.md).
 pub fn builtin_state(
-    motion: &Motion,
+    site: &Site,
     attitude: Option<crate::math::rotation::Quat>,
     truth: &Truth,
     time_s: f64,
 ) -> VehicleState {
-    let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
-    let lat = f64::from(lat_deg).to_radians();
     let q_nb = match attitude {
         Some(q) => housing_enu_to_body_ned(&q.map(f64::from)),
-        None => quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
+        None => site.level,
     };
     let w = housing_to_body(&truth.rate_dps.map(|x| f64::from(x).to_radians()));
     let f = housing_to_body(&truth.specific_force_g.map(|x| f64::from(x) * G_ICD));
     VehicleState {
         time_s,
-        lat_rad: lat,
+        lat_rad: site.lat_rad,
         lon_rad: DEFAULT_LONGITUDE_DEG.to_radians(),
-        height_m: wgs84::height_of_gravity(lat, G_ICD),
+        height_m: site.height_m,
         vel_ned: [0.0; 3],
         q_nb,
         rate_ib_b: w,
@@ -290,7 +328,12 @@ mod tests {
         };
         let src = crate::sensor::motion::BuiltinMotion::new(m, 0.0005);
         let truth = src.truth_now();
-        let s = builtin_state(&m, crate::sensor::MotionSource::attitude(&src), &truth, 0.0);
+        let s = builtin_state(
+            &Site::of(&m),
+            crate::sensor::MotionSource::attitude(&src),
+            &truth,
+            0.0,
+        );
         let mut again = s;
         again.measure(&Motion6 {
             acc_ned: [0.0; 3],
