@@ -629,8 +629,7 @@ impl<I: Integrate> SignalChain<I> {
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
         self.vehicle = None;
-        self.site = crate::vehicle::Site::of(&m);
-        self.core.set_motion(m, self.dt);
+        self.play(m);
     }
 
     /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
@@ -640,8 +639,18 @@ impl<I: Integrate> SignalChain<I> {
     /// ([`SignalChain::vehicle`]) until the next call or
     /// [`SignalChain::set_motion`].
     pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
-        self.core.set_motion(Motion::Sample(truth), self.dt);
+        self.play(Motion::Sample(truth));
         self.vehicle = Some(state);
+    }
+
+    /// `m` into the core, the site kept with it (a live feed or a vehicle
+    /// source sets a sample every tick, always at the same site: not
+    /// computed again then).
+    fn play(&mut self, m: Motion) {
+        if crate::sensor::motion::site(&m) != crate::sensor::motion::site(self.core_motion()) {
+            self.site = crate::vehicle::Site::of(&m);
+        }
+        self.core.set_motion(m, self.dt);
     }
 
     /// The unit's vehicle now: the state a board's source set

@@ -176,6 +176,11 @@ pub fn housing_to_body(v: &V3) -> V3 {
     body_to_housing(v)
 }
 
+/// [`wgs84::height_of_gravity`] at
+/// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] and the ICD's g, m
+/// (bit for bit: `the_default_site_height_is_the_solved_one`).
+pub const DEFAULT_SITE_HEIGHT_M: f64 = f64::from_bits(0x404f_3f3d_7f72_7bd1);
+
 /// Where a built-in [`Motion`] stands: its latitude, the height where
 /// WGS84 normal gravity is the ICD's g ([`wgs84::height_of_gravity`]) and
 /// the level attitude at its heading. Fixed for a motion, so the chain
@@ -198,9 +203,17 @@ impl Site {
     pub fn of(motion: &Motion) -> Site {
         let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
         let lat = f64::from(lat_deg).to_radians();
+        // Every power-on starts at the default site: its height is a
+        // constant (the solution's own bits, checked by a test) rather
+        // than a solve in soft double precision on each reset.
+        let height_m = if lat_deg == crate::sensor::motion::DEFAULT_LATITUDE_DEG {
+            DEFAULT_SITE_HEIGHT_M
+        } else {
+            wgs84::height_of_gravity(lat, G_ICD)
+        };
         Site {
             lat_rad: lat,
-            height_m: wgs84::height_of_gravity(lat, G_ICD),
+            height_m,
             level: quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
         }
     }
@@ -320,6 +333,14 @@ mod tests {
     /// The static built-in motion's truth is its state's measurement: the
     /// 1 g of the ICD is normal gravity at the site's height, and the Earth
     /// rate agrees to the f32 constant's precision.
+    #[test]
+    fn the_default_site_height_is_the_solved_one() {
+        let lat = f64::from(crate::sensor::motion::DEFAULT_LATITUDE_DEG).to_radians();
+        let h = wgs84::height_of_gravity(lat, G_ICD);
+        assert_eq!(h.to_bits(), DEFAULT_SITE_HEIGHT_M.to_bits());
+        assert_eq!(Site::of(&Motion::default()).height_m.to_bits(), h.to_bits());
+    }
+
     #[test]
     fn builtin_static_is_self_consistent() {
         let m = Motion::Static {
