@@ -1097,7 +1097,9 @@ impl State {
             out[..b.len()].copy_from_slice(b);
             b.len()
         };
-        let truth = self.truth(cx);
+        // The truth only for the data sets that read it (the INS's do
+        // not: a conversion in soft double precision on the M4F).
+        let truth = || self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
         // INS, magnetometer, barometer: stamped on their output grid (the
@@ -1150,13 +1152,13 @@ impl State {
         let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
         // The receiver's fix only where it is reported (a conversion in
         // soft double precision on the M4F).
-        let fix = || self.nav.gnss(&truth, &cfg);
+        let fix = || self.nav.gnss(&truth(), &cfg);
         let tick = cx.time().ticks();
         match did {
-            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
-            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&cfg), &cfg).encode()),
+            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&cfg)).encode()),
+            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&cfg)).encode()),
+            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&cfg)).encode()),
             // Without RTK the receiver's solution is GPS1_POS.
             did::GPS1_POS | did::GPS1_RCVR_POS => {
                 put(&ins::gps_pos(&epoch, fix(), tow_offset).encode())
@@ -1166,10 +1168,10 @@ impl State {
             // The signals of the satellites GPS1_SAT reports.
             did::GPS1_SIG => put(&aux_sets::gps_sig_of(&self.nav.gps_sat(&epoch)).encode()),
             did::MAGNETOMETER => {
-                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
+                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth(), tick)).encode())
             }
             did::BAROMETER => {
-                let p = self.nav.pressure_kpa(&truth, tick);
+                let p = self.nav.pressure_kpa(&truth(), tick);
                 put(&ins::barometer(since_s, p, cx.chain().temperature()).encode())
             }
             did::INL2_STATES => put(&self.nav.inl2_states(h.time_of_week).encode()),

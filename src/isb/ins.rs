@@ -681,9 +681,9 @@ impl NavState {
             self.align(t_s, inc, aid, cfg);
             return;
         }
-        let f_n = self.nom.mechanise(inc);
+        let dv_n = self.nom.mechanise(inc);
         self.prop_dt += inc.dt;
-        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + f_n[k] * inc.dt);
+        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
         self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
         // Every aiding source enters at the receiver's epochs, so the state
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
@@ -875,18 +875,24 @@ impl NavState {
             return false;
         }
         let f_n = self.prop_dv_n.map(|x| (x / dt) as f32);
-        let c = crate::math::double::dcm_from_quat(&self.nom.q);
-        let c_nb = c.map(|r| r.map(|x| x as f32));
-        let wie = wgs84::earth_rate_ned(self.nom.lat);
-        let wen = wgs84::transport_rate_ned(self.nom.lat, self.nom.h, &self.nom.v);
-        let w_in = [0, 1, 2].map(|k| (wie[k] + wen[k]) as f32);
-        let g = wgs84::normal_gravity(self.nom.lat, self.nom.h);
+        // The Earth's terms at the position, on this tick rather than a
+        // navigation period's (`mech`'s anchor).
+        self.nom.refresh();
+        let (e, v) = (self.nom.earth, self.nom.v);
+        let (nh, mh) = (e.rn + self.nom.h, e.rm + self.nom.h);
+        let w_in = [
+            wgs84::OMEGA_IE * e.cos_lat + v[1] / nh,
+            -v[0] / mh,
+            -wgs84::OMEGA_IE * e.sin_lat - v[1] * e.sin_lat / (e.cos_lat * nh),
+        ]
+        .map(|x| x as f32);
         let iv = Interval {
             dt: dt as f32,
             f_n,
-            c_nb,
+            // The same DCM as `math::double`'s, in the covariance's `f32`.
+            c_nb: crate::math::rotation::dcm_from_quat(&self.nom.q.map(|x| x as f32)),
             w_in,
-            grav_grad: (2.0 * g / wgs84::A) as f32,
+            grav_grad: (2.0 * e.g / wgs84::A) as f32,
         };
         self.kf.propagate(&iv, &self.q);
         self.prop_dt = 0.0;
@@ -907,7 +913,11 @@ impl NavState {
     /// NED), the antenna's lever arm taken out.
     fn fuse_gnss_pos(&mut self, e: &mut Epoch, fix: &Fix) {
         let (lla, v) = fix;
-        let ant = rotate(&self.nom.q, &e.cfg.gps1_ant_offset.map(f64::from));
+        let ant = if e.cfg.gps1_ant_offset == [0.0; 3] {
+            [0.0; 3]
+        } else {
+            rotate(&self.nom.q, &e.cfg.gps1_ant_offset.map(f64::from))
+        };
         e.ant = ant;
         e.speed = libm::hypot(v[0], v[1]);
         e.hdg_sigma = self.kf.sigma(ATT + 2);
@@ -940,14 +950,16 @@ impl NavState {
             self.declination_at = self.nav_t;
             self.phase = Phase::Nav;
         } else {
-            let (m, n) = wgs84::radii(self.nom.lat);
+            // The radii and the latitude's cosine of the mechanisation's
+            // anchor (a few metres away: 10⁻⁸ of a residual of metres).
+            let e = self.nom.earth;
             let p = self.nom.lla();
             let d = [
-                (lla[0] - p[0]).to_radians() * (m + p[2]) - ant[0],
+                (lla[0] - p[0]).to_radians() * (e.rm + p[2]) - ant[0],
                 // Across ±180° the difference of longitudes wraps.
                 crate::math::double::wrap_pi((lla[1] - p[1]).to_radians())
-                    * (n + p[2])
-                    * libm::cos(self.nom.lat)
+                    * (e.rn + p[2])
+                    * e.cos_lat
                     - ant[1],
                 -(lla[2] - p[2]) - ant[2],
             ];
@@ -1032,22 +1044,29 @@ impl NavState {
     }
 
     /// The magnetometer's heading minus the estimate's, rad, if the
-    /// reading looks like the field learnt in alignment.
+    /// reading looks like the field learnt in alignment. With the reading
+    /// turned into NED (`m_n = C m`), the levelled reading is `m_n` turned
+    /// back by the heading ψ about the vertical: its dip is `m_n`'s, and
+    /// the measured heading `D − atan2(lvl_E, lvl_N)` less ψ is `D −
+    /// atan2(m_n,E, m_n,N)`. In `f32` (the FPU; 10⁻⁷ rad against a 1°
+    /// measurement).
     fn mag_residual(&self, mag: &[f32; 3]) -> Option<f32> {
         let (norm0, dip0) = self.mag_ref?;
-        let m = mag.map(f64::from);
-        let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-        if norm.is_nan() || norm <= 0.0 || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
+        let c = crate::math::rotation::dcm_from_quat(&self.nom.q.map(|x| x as f32));
+        let m = crate::math::rotation::mat_vec(&c, mag);
+        let norm = libm::sqrtf(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if norm.is_nan()
+            || norm <= 0.0
+            || (f64::from(norm) / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE
+        {
             return None;
         }
-        let e = euler_from_quat(&self.nom.q);
-        let lvl = rotate(&quat_from_euler(e[0], e[1], 0.0), &m);
-        let dip = libm::asin((lvl[2] / norm).clamp(-1.0, 1.0));
-        if (dip - dip0).abs() > MAG_DIP_TOLERANCE {
+        let dip = libm::asinf((m[2] / norm).clamp(-1.0, 1.0));
+        if (f64::from(dip) - dip0).abs() > MAG_DIP_TOLERANCE {
             return None;
         }
-        let yaw = self.declination - atan2(lvl[1], lvl[0]);
-        Some(crate::math::double::wrap_pi(yaw - e[2]) as f32)
+        let y = self.declination as f32 - libm::atan2f(m[1], m[0]);
+        Some(crate::math::double::wrap_pi(f64::from(y)) as f32)
     }
 
     /// `insStatus` now ([`status`]).
@@ -1081,9 +1100,8 @@ impl NavState {
     /// The INS solution of the output point (`insRotation`, `insOffset`):
     /// the filter's state; while aligning level, facing north, at rest at
     /// `lastLla`; as an AHRS (position and velocity not estimated) the
-    /// filter's attitude at `lastLla`, at rest. The truth is not read.
-    pub fn solution(&self, truth: &NavTruth, cfg: &NavConfig) -> Solution {
-        let _ = truth;
+    /// filter's attitude at `lastLla`, at rest.
+    pub fn solution(&self, cfg: &NavConfig) -> Solution {
         // The usual insRotation is none: no trigonometry then.
         let q_nb = if cfg.ins_rotation == [0.0; 3] {
             self.nom.q
@@ -1200,7 +1218,12 @@ impl NavState {
         if !self.fixed {
             return None;
         }
-        let ant = rotate(&(truth.q_nb), &cfg.gps1_ant_offset.map(f64::from));
+        // The usual antenna offset is none: no rotation then.
+        let ant = if cfg.gps1_ant_offset == [0.0; 3] {
+            [0.0; 3]
+        } else {
+            rotate(&(truth.q_nb), &cfg.gps1_ant_offset.map(f64::from))
+        };
         let mut d = [0.0; 3];
         let mut v = [0.0; 3];
         for k in 0..3 {

@@ -262,22 +262,14 @@ pub fn builtin_state(
 
 /// A housing → ENU attitude (the built-in motions', Appendix C) as body
 /// (FRD) → NED: `C_nb = P C_eh P` with P the swap of the first two axes
-/// and the sign of the third (ENU ↔ NED and RFU ↔ FRD alike).
+/// and the sign of the third (ENU ↔ NED and RFU ↔ FRD alike). P is the
+/// half turn about (1, 1, 0)/√2, so on the quaternion it swaps X and Y and
+/// negates Z: `(w, x, y, z) → (w, y, x, −z)` (normalised, w ≥ 0) — no
+/// matrix and back (soft double precision on the firmware, where the
+/// truth is read at every receiver step).
 pub fn housing_enu_to_body_ned(q_eh: &Q4) -> Q4 {
-    let c = dcm_from_quat(q_eh);
-    let p = |i: usize| match i {
-        0 => 1,
-        1 => 0,
-        _ => 2,
-    };
-    let sgn = |i: usize| if i == 2 { -1.0 } else { 1.0 };
-    let mut n = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            n[i][j] = sgn(i) * sgn(j) * c[p(i)][p(j)];
-        }
-    }
-    quat_from_dcm(&n)
+    let [w, x, y, z] = *q_eh;
+    quat_normalize(&[w, y, x, -z])
 }
 
 #[cfg(test)]
@@ -314,6 +306,29 @@ mod tests {
         assert!(close(&s.rate_ib_b, &wgs84::earth_rate_ned(lat), 1e-18));
         let t = s.truth();
         assert!((f64::from(t.specific_force_g[2]) - g / G_ICD).abs() < 1e-7);
+    }
+
+    /// The quaternion form of `P C P` is the matrix form.
+    #[test]
+    fn the_axes_swap_on_the_quaternion_is_the_matrix_one() {
+        for e in [
+            [0.3, -0.2, 2.0],
+            [-1.2, 0.7, -2.9],
+            [0.0, 0.0, 0.0],
+            [3.0, 1.5, 0.1],
+        ] {
+            let q = quat_from_euler(e[0], e[1], e[2]);
+            let c = dcm_from_quat(&q);
+            let p = |i: usize| [1, 0, 2][i];
+            let sgn = |i: usize| if i == 2 { -1.0 } else { 1.0 };
+            let n: [V3; 3] =
+                core::array::from_fn(|i| core::array::from_fn(|j| sgn(i) * sgn(j) * c[p(i)][p(j)]));
+            let want = quat_from_dcm(&n);
+            let got = housing_enu_to_body_ned(&q);
+            for k in 0..4 {
+                assert!((want[k] - got[k]).abs() < 1e-12, "{e:?}: {want:?} {got:?}");
+            }
+        }
     }
 
     /// The built-in motions' attitude maps to the same heading, pitch and
