@@ -967,7 +967,13 @@ impl State {
             | did::BAROMETER
             | did::INL2_STATES
             | did::INL2_NED_SIGMA => {
-                let hdw = self.sys_params(cx, now).hdw_status;
+                // hdwStatus only where a header carries it (the INS sets).
+                let hdw = match did {
+                    did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => {
+                        self.sys_params(cx, now).hdw_status
+                    }
+                    _ => 0,
+                };
                 self.nav_image(cx, did, hdw, out)
             }
             did::SYS_SENSORS => put(&self.sys_sensors(cx).encode()),
@@ -1161,7 +1167,8 @@ impl State {
             did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&cfg)).encode()),
             // Without RTK the receiver's solution is GPS1_POS.
             did::GPS1_POS | did::GPS1_RCVR_POS => {
-                put(&ins::gps_pos(&epoch, fix(), tow_offset).encode())
+                let r = self.nav.gps_report(&truth(), &cfg);
+                put(&ins::gps_pos(&epoch, r.as_ref(), tow_offset).encode())
             }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix()).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),

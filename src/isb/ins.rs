@@ -14,6 +14,8 @@ pub mod filter;
 pub mod mech;
 pub mod status;
 
+use core::cell::Cell;
+
 use libm::{atan2, exp, log, pow, sqrt};
 
 use super::nav::{
@@ -217,6 +219,33 @@ impl Default for StartTimes {
 /// (m/s).
 pub type Fix = ([f64; 3], [f64; 3]);
 
+/// What the receiver reports of a fix (GPS1_POS): the antenna's position
+/// (deg, deg, m above the ellipsoid), NED velocity (m/s), ECEF position
+/// (m) and height above mean sea level (EGM96, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GnssReport {
+    /// Latitude °, longitude °, height m.
+    pub lla: [f64; 3],
+    /// NED velocity, m/s.
+    pub v: [f64; 3],
+    /// ECEF, m.
+    pub ecef: [f64; 3],
+    /// Height above mean sea level, m.
+    pub h_msl: f32,
+}
+
+/// What a [`GnssReport`] is made of, compared exactly
+/// ([`NavState::gps_report`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ReportKey {
+    pos: [f64; 3],
+    v: [f64; 3],
+    q: [f64; 4],
+    err_pos: [f64; 3],
+    err_vel: [f64; 3],
+    ant: [f32; 3],
+}
+
 /// What the aiding sensors read at a navigation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aiding {
@@ -292,6 +321,9 @@ pub struct NavState {
     period_s: f64,
     /// The receiver epoch's work still to do ([`NavState::work`]).
     epoch: Option<Epoch>,
+    /// The last receiver report and what it was made of
+    /// ([`NavState::gps_report`]).
+    report: Cell<Option<(ReportKey, GnssReport)>>,
     /// A GNSS update entered the state since the last period's start
     /// (shown as [`NavState::gps_step`] from the next period).
     gps_step_next: bool,
@@ -309,17 +341,25 @@ enum Input {
 }
 
 /// The steps of a receiver epoch's work, in order (`docs/navigation.md`
-/// "Firmware cost"): each a share of the tick budget.
+/// "Firmware cost"): each a share of the tick budget, seven at most (the
+/// ticks of a navigation period between its grid ticks).
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 enum Stage {
+    /// The covariance to the epoch.
     Propagate,
+    /// The receiver's fix and the GNSS position updates.
     Fix,
-    GnssPos,
+    /// The GNSS velocity updates and their correction.
     GnssVel,
-    Mag,
+    /// The barometer's height (the AHRS's zero velocity).
     Baro,
+    /// The declination, every [`DECLINATION_EVERY_S`].
     Declination,
+    /// The magnetometer read and fused, the epoch's correction.
     MagUpdate,
+    /// The receiver's report of the epoch ([`NavState::gps_report`]) made
+    /// ready for the GPS data sets.
+    Report,
     Done,
 }
 
@@ -337,7 +377,7 @@ struct Epoch {
     speed: f64,
     hdg_sigma: f32,
     first: bool,
-    /// The readings (resolved at [`Stage::Mag`], [`Stage::Baro`]).
+    /// The magnetometer's reading (resolved at [`Stage::MagUpdate`]).
     mag: [f32; 3],
     year: f64,
 }
@@ -447,6 +487,7 @@ impl NavState {
             period_s: 0.0,
             epoch: None,
             gps_step_next: false,
+            report: Cell::new(None),
         }
     }
 
@@ -736,13 +777,12 @@ impl NavState {
             let stage = e.stage;
             e.stage = match stage {
                 Stage::Propagate => Stage::Fix,
-                Stage::Fix => Stage::GnssPos,
-                Stage::GnssPos => Stage::GnssVel,
-                Stage::GnssVel => Stage::Mag,
-                Stage::Mag => Stage::Baro,
+                Stage::Fix => Stage::GnssVel,
+                Stage::GnssVel => Stage::Baro,
                 Stage::Baro => Stage::Declination,
                 Stage::Declination => Stage::MagUpdate,
-                Stage::MagUpdate | Stage::Done => Stage::Done,
+                Stage::MagUpdate => Stage::Report,
+                Stage::Report | Stage::Done => Stage::Done,
             };
             let busy = self.stage(&mut e, stage);
             if e.stage == Stage::Done {
@@ -762,30 +802,23 @@ impl NavState {
         let gps_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
         match stage {
             Stage::Propagate => self.propagate(),
-            Stage::Fix => match e.input {
-                Input::Truth(truth, _, _) if gps_fusion => {
-                    e.fix = self.gnss(&truth, &cfg);
-                    true
+            Stage::Fix => {
+                if let Input::Truth(truth, _, _) = e.input {
+                    if gps_fusion {
+                        e.fix = self.gnss(&truth, &cfg);
+                    }
                 }
-                _ => false,
-            },
-            Stage::GnssPos => match e.fix {
-                Some(fix) if gps_fusion => {
-                    self.fuse_gnss_pos(e, &fix);
-                    true
+                match e.fix {
+                    Some(fix) if gps_fusion => {
+                        self.fuse_gnss_pos(e, &fix);
+                        true
+                    }
+                    _ => false,
                 }
-                _ => false,
-            },
+            }
             Stage::GnssVel => match e.fix {
                 Some(fix) if gps_fusion => {
                     self.fuse_gnss_vel(e, &fix);
-                    true
-                }
-                _ => false,
-            },
-            Stage::Mag => match e.input {
-                Input::Truth(truth, tick, _) if mag_fusion && self.mag_ref.is_some() => {
-                    e.mag = self.magnetometer(&truth, tick);
                     true
                 }
                 _ => false,
@@ -805,10 +838,26 @@ impl NavState {
                 }
             }
             Stage::MagUpdate => {
+                if let Input::Truth(truth, tick, _) = e.input {
+                    if mag_fusion && self.mag_ref.is_some() {
+                        e.mag = self.magnetometer(&truth, tick);
+                    }
+                }
                 self.fuse_mag(e);
                 self.check_last_lla(&cfg);
                 true
             }
+            // The truth of a unit at a built-in site (every firmware
+            // image's) does not move: the report made here is the one the
+            // epoch's GPS data sets find. A moving vehicle's is made again
+            // when they are sent.
+            Stage::Report => match e.input {
+                Input::Truth(truth, _, _) if self.fixed => {
+                    let _ = self.gps_report(&truth, &cfg);
+                    true
+                }
+                _ => false,
+            },
             Stage::Done => false,
         }
     }
@@ -1012,10 +1061,12 @@ impl NavState {
             Input::Read(_, a) => a.pressure_kpa,
             Input::Truth(truth, tick, _) => self.pressure_kpa(&truth, tick),
         };
-        let p = f64::from(p);
         if p > 0.0 {
             let lla = self.nom.lla();
-            let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
+            // ISA's height in `f32` (the FPU): 3 mm of rounding against
+            // the measurement's 0.5 m.
+            let isa = (1.0 - libm::powf(p / 101.325, 1.0 / 5.255_88)) / 2.255_77e-5;
+            let h = f64::from(isa) + geoid_undulation_m(lla[0], lla[1]);
             let y = (lla[2] - h) as f32;
             self.kf
                 .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
@@ -1212,6 +1263,44 @@ impl NavState {
         }
     }
 
+    /// The receiver's report of its fix now ([`GnssReport`]), if it has
+    /// one: remembered with everything it is made of (the truth's
+    /// position, velocity and — with an antenna offset — attitude, the
+    /// receiver's errors, the offset), so that a report asked for again of
+    /// the same is not converted again (soft double precision on the
+    /// firmware: [`Stage::Report`]).
+    pub fn gps_report(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<GnssReport> {
+        if !self.fixed {
+            return None;
+        }
+        let key = ReportKey {
+            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
+            v: truth.v_ned,
+            q: if cfg.gps1_ant_offset == [0.0; 3] {
+                [0.0; 4]
+            } else {
+                truth.q_nb
+            },
+            err_pos: self.gnss_pos,
+            err_vel: self.gnss_vel,
+            ant: cfg.gps1_ant_offset,
+        };
+        if let Some((k, r)) = self.report.get() {
+            if k == key {
+                return Some(r);
+            }
+        }
+        let (lla, v) = self.gnss(truth, cfg)?;
+        let r = GnssReport {
+            lla,
+            v,
+            ecef: ecef_of(&lla),
+            h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
+        };
+        self.report.set(Some((key, r)));
+        Some(r)
+    }
+
     /// The receiver's position (of the antenna) and NED velocity, if it
     /// has a fix: the truth plus the receiver's errors.
     pub fn gnss(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<([f64; 3], [f64; 3])> {
@@ -1380,14 +1469,19 @@ fn f32s<const N: usize>(v: [f64; N]) -> [f32; N] {
 
 /// INS_1 of `s`.
 pub fn ins1(h: &InsHeader, s: &Solution, cfg: &NavConfig) -> Ins1 {
-    let uvw = rotate_inv(&s.q_nb, &s.v_ned);
     Ins1 {
         header: *h,
         theta: f32s(euler_from_quat(&s.q_nb)),
-        uvw: f32s(uvw),
+        uvw: uvw(s),
         lla: s.lla,
         ned: f32s(ned_from_ref(&s.lla, &cfg.ref_lla)),
     }
+}
+
+/// The body-frame velocity of `s`, in `f32` (the FPU; the field is `f32`).
+fn uvw(s: &Solution) -> [f32; 3] {
+    let c = crate::math::rotation::dcm_from_quat(&f32s(s.q_nb));
+    crate::math::rotation::mat_t_vec(&c, &f32s(s.v_ned))
 }
 
 /// INS_2 of `s`.
@@ -1395,7 +1489,7 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
     Ins2 {
         header: *h,
         qn2b: f32s(s.q_nb),
-        uvw: f32s(rotate_inv(&s.q_nb, &s.v_ned)),
+        uvw: uvw(s),
         lla: s.lla,
     }
 }
@@ -1419,21 +1513,24 @@ pub fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
     }
 }
 
-/// GPS1_POS of a receiver epoch `t` (`fix`: position and NED velocity if
-/// the receiver has one), `tow_offset` s.
-pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) -> GpsPos {
-    match fix {
-        Some((lla, _)) => GpsPos {
+/// `gps_pos_t.status` with a fix: the satellites used, a 3D fix, time
+/// synchronised by the PPS (as hdwStatus says with a fix).
+const FIX_STATUS: u32 = SATS as u32
+    | (gps_status::FIX_3D << gps_status::FIX_SHIFT)
+    | gps_status::FIX_OK
+    | gps_status::TIME_PPS_SYNC;
+
+/// GPS1_POS of a receiver epoch `t` (`report`: the receiver's report if it
+/// has a fix, [`NavState::gps_report`]), `tow_offset` s.
+pub fn gps_pos(t: &GpsTime, report: Option<&GnssReport>, tow_offset: f64) -> GpsPos {
+    match report {
+        Some(r) => GpsPos {
             week: t.week,
             time_of_week_ms: t.tow_ms(),
-            // Time synchronised by the PPS, as hdwStatus says with a fix.
-            status: u32::from(SATS)
-                | (gps_status::FIX_3D << gps_status::FIX_SHIFT)
-                | gps_status::FIX_OK
-                | gps_status::TIME_PPS_SYNC,
-            ecef: ecef_of(&lla),
-            lla,
-            h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
+            status: FIX_STATUS,
+            ecef: r.ecef,
+            lla: r.lla,
+            h_msl: r.h_msl,
             h_acc: H_ACC_M,
             v_acc: V_ACC_M,
             p_dop: P_DOP,
@@ -1457,13 +1554,12 @@ pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) 
 
 /// GPS1_VEL of a receiver epoch (ECEF velocity).
 pub fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
-    let p = gps_pos(t, fix, 0.0);
     match fix {
         Some((lla, v)) => GpsVel {
             time_of_week_ms: t.tow_ms(),
             vel: f32s(rotate(&(quat_e2n(lla[0], lla[1])), &v)),
             s_acc: S_ACC_MPS,
-            status: p.status,
+            status: FIX_STATUS,
         },
         None => GpsVel {
             time_of_week_ms: t.tow_ms(),

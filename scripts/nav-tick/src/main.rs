@@ -141,7 +141,6 @@ fn parts(dev: &Dev) {
     let h = InsHeader::default();
     let sol = nav.solution(&cfg);
     let t = GpsTime::of_ns(1_451_606_400_000_000_000);
-    let fix = nav.gnss(&truth, &cfg);
     let inc = Increment {
         dtheta: [1e-5, -2e-5, 3e-5],
         dv: [0.001, 0.002, -0.0392],
@@ -181,7 +180,7 @@ fn parts(dev: &Dev) {
             f
         }),
         cost(|| nav.gnss(&truth, &cfg)),
-        cost(|| ins::gps_pos(&t, fix, 0.0).encode()),
+        cost(|| ins::gps_pos(&t, nav.gps_report(&truth, &cfg).as_ref(), 0.0).encode()),
         cost(|| nav.inl2_ned_sigma(0).encode()),
         cost(|| t.decimal_year()),
         cost(|| imu_emu::earth::geoid_undulation_m(truth.lat_deg, truth.lon_deg)),
