@@ -204,6 +204,8 @@ struct State {
     nav: NavState,
     /// The receiver's cold and warm start times (kept across resets).
     start_times: StartTimes,
+    /// Whether the navigation filter runs ([`Isb::set_navigation`]).
+    navigation: bool,
     /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
     /// board: `Isb::set_gps_time`).
     gps_ns_at_zero: u64,
@@ -252,6 +254,7 @@ impl Personality for Isb {
                 gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
                 nav: NavState::new(0),
                 start_times: StartTimes::default(),
+                navigation: true,
                 gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
                 truth: Cell::new(None),
             },
@@ -314,6 +317,7 @@ impl Personality for Isb {
             None => st.nav.set_profile(&product.sensor_profile()),
         }
         st.nav.boot(&st.nav_config(), st.start_times);
+        st.nav.set_enabled(st.navigation);
         cx.set_line_rate(st.baud);
         if cx.firmware_update() {
             return;
@@ -472,6 +476,14 @@ impl Isb {
     /// start (from the next power-on or reset).
     pub fn set_start_times(&mut self, t: StartTimes) {
         self.st.start_times = t;
+    }
+
+    /// Whether the navigation filter runs, now and at every power-on (on
+    /// by default; [`NavState::set_enabled`]): a board whose processor
+    /// cannot afford it turns it off.
+    pub fn set_navigation(&mut self, on: bool) {
+        self.st.navigation = on;
+        self.st.nav.set_enabled(on);
     }
 
     /// DIDs streaming now, in the order they were started.
@@ -1031,6 +1043,10 @@ impl State {
     /// — in body axes, the receiver's fix, the magnetometer and barometer
     /// as the unit reads them; then `lastLla` saved if the INS asks.
     fn navigate(&mut self, cx: &mut impl Context<Integrals>) {
+        // No filter, nothing to give it (`Isb::set_navigation`).
+        if self.nav.phase() == ins::Phase::Off {
+            return;
+        }
         let w = integrals::window(&self.nav_grid[0], &self.nav_grid[1], rate(cx));
         let tick = cx.time().ticks();
         let t_s = tick as f64 / f64::from(rate(cx));

@@ -516,6 +516,26 @@ impl NavState {
         }
     }
 
+    /// Whether the navigation filter runs (from power-on it does). Off,
+    /// the INS reports no solution (`insStatus` solution 0, `lastLla`, at
+    /// rest, level, facing north: [`NavState::solution`]) and computes
+    /// nothing of its own; the aiding sensors' models (GNSS receiver,
+    /// magnetometer, barometer) and their data sets run as before. What an
+    /// image serves whose processor cannot afford the filter
+    /// (`docs/navigation.md` "Firmware cost": the RP2040). On again, the
+    /// INS starts aligning.
+    pub fn set_enabled(&mut self, on: bool) {
+        match (on, self.phase) {
+            (false, _) => {
+                self.phase = Phase::Off;
+                self.epoch = None;
+                self.prop_due = false;
+            }
+            (true, Phase::Off) => self.phase = Phase::Aligning,
+            _ => {}
+        }
+    }
+
     /// The receiver's time to first fix for this power-on, s.
     pub fn ttff_s(&self) -> f64 {
         if self.warm {
@@ -701,6 +721,9 @@ impl NavState {
         self.gps_step = core::mem::take(&mut self.gps_step_next);
         self.mag_aiding &= self.mag_ok;
         if inc.dt.is_nan() || inc.dt <= 0.0 {
+            return;
+        }
+        if self.phase == Phase::Off {
             return;
         }
         self.period_s = inc.dt;
@@ -1161,7 +1184,7 @@ impl NavState {
             normalize(&quat_mul(&self.nom.q, &quat_from_euler(r, p, y)))
         };
         match self.phase {
-            Phase::Aligning => Solution {
+            Phase::Off | Phase::Aligning => Solution {
                 lla: cfg.last_lla,
                 v_ned: [0.0; 3],
                 q_nb: [1.0, 0.0, 0.0, 0.0],

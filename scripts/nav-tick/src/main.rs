@@ -7,7 +7,8 @@
 //! soft float, run here on the M4 model). The probe streams what the
 //! conformance test `tick_cost_navigating` streams (INS_2 every navigation
 //! period, INL2_NED_SIGMA every 100 ms, GPS1_POS every receiver epoch),
-//! with the receiver's cold start shortened to 6 s, waits for NAV, and
+//! with the receiver's cold start shortened to 6 s, waits for NAV (with
+//! `--features nav-off`, the filter off: for the receiver's fix), and
 //! prints over semihosting, for 12 s of navigation (60 receiver epochs, a declination among them):
 //! `1 worst mean`, then `2 phase worst` for each tick of the 8-tick
 //! navigation period, then `3 tick-in-epoch instructions` for the 8 dearest
@@ -217,12 +218,22 @@ fn main() -> ! {
     });
     r.dev.power_cycle(r.now);
     r.n = 0;
+    let filter = !cfg!(feature = "nav-off");
+    r.dev.personality_mut().set_navigation(filter);
     r.tick();
     r.get(did::INS_2, 1);
     r.get(did::INL2_NED_SIGMA, 25);
     r.get(did::GPS1_POS, 1);
     let mut n = 0u32;
-    while r.dev.personality().nav().phase() != Phase::Nav {
+    let ready = |d: &Dev| {
+        let nav = d.personality().nav();
+        if filter {
+            nav.phase() == Phase::Nav
+        } else {
+            nav.has_fix()
+        }
+    };
+    while !ready(&r.dev) {
         r.tick();
         n += 1;
         if n > 40_000 {
