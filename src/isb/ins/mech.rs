@@ -331,6 +331,36 @@ mod tests {
         }
     }
 
+    /// What [`turn`] adds in `f32` is the `f64` product's change to
+    /// within `f32`'s precision of the change (not of the quaternion).
+    #[test]
+    fn the_f32_turn_is_the_f64_one() {
+        let q = quat_normalize(&[0.7, -0.3, 0.5, 0.4]);
+        for (th, u) in [
+            ([1e-7, -2e-7, 3e-7], [1e-7, 0.0, -1.5e-7]),
+            ([0.004, -0.001, 0.002], [2e-7, 0.0, -1e-7]),
+            ([0.11, 0.1, -0.09], [1e-6, 3e-7, -2e-6]),
+        ] {
+            let th32 = th.map(|x: f64| x as f32);
+            let u32_ = u.map(|x: f64| x as f32);
+            let dq = turn(&q, &th32, &u32_).unwrap();
+            let body = quat_from_rotvec(&th32.map(f64::from));
+            let nav = quat_from_rotvec(&u32_.map(|x| 2.0 * f64::from(x)));
+            let want = quat_mul(&nav, &quat_mul(&q, &body));
+            let size = (th32.iter().map(|x| x * x).sum::<f32>()).sqrt() as f64;
+            for k in 0..4 {
+                let got = q[k] + f64::from(dq[k]);
+                assert!(
+                    (got - want[k]).abs() < 2e-7 * size + 1e-12,
+                    "{th:?}: {k} {got} {}",
+                    want[k]
+                );
+            }
+        }
+        assert!(turn(&q, &[0.3, 0.0, 0.0], &[0.0; 3]).is_none());
+        assert!(turn(&q, &[f32::NAN, 0.0, 0.0], &[0.0; 3]).is_none());
+    }
+
     #[test]
     fn rest_stays_at_rest() {
         let s = VehicleState::at_rest(0.7, 0.1, 50.0, 1.0);
