@@ -604,7 +604,12 @@ impl NavState {
         for x in w.iter_mut() {
             *x = f64::from(self.rng.gaussian());
         }
-        if self.gm.0 != dt {
+        // The step is fixed, but `dt` is a difference of seconds since
+        // boot that rounds differently from step to step: the coefficients
+        // (an `exp` and a `sqrt` each, soft double precision on the
+        // firmware) are computed again only when it changes by more than
+        // a nanosecond (their relative change then is under 10⁻¹⁰).
+        if !((self.gm.0 - dt).abs() <= 1e-9) {
             self.gm = (
                 dt,
                 [

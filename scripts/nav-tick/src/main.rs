@@ -160,7 +160,7 @@ fn parts(dev: &Dev) {
         bg: 1e-14,
         ba: 1e-10,
     };
-    let items: [u32; 16] = [
+    let items: [u32; 18] = [
         cost(|| nav::truth_of(dev.chain())),
         cost(|| nav.solution(&cfg)),
         cost(|| ins::ins2(&h, &sol).encode()),
@@ -188,6 +188,12 @@ fn parts(dev: &Dev) {
         cost(|| nav::ecef_of(&sol.lla)),
         cost(|| ins::ins1(&h, &sol, &cfg).encode()),
         cost(|| nav.inl2_states(0.0).encode()),
+        cost(|| nav.clone()),
+        cost(|| {
+            let mut n = nav.clone();
+            n.step(100.0, &truth);
+            n
+        }),
     ];
     for (i, c) in items.iter().enumerate() {
         print(&[5, i as u32 + 1, *c]);
