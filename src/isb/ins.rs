@@ -609,7 +609,8 @@ impl NavState {
         // (an `exp` and a `sqrt` each, soft double precision on the
         // firmware) are computed again only when it changes by more than
         // a nanosecond (their relative change then is under 10⁻¹⁰).
-        if !((self.gm.0 - dt).abs() <= 1e-9) {
+        let same_step = (self.gm.0 - dt).abs() <= 1e-9;
+        if !same_step {
             self.gm = (
                 dt,
                 [
