@@ -374,6 +374,8 @@ pub struct SignalChain<I: Integrate = NoIntegrals> {
     /// The vehicle a board's source set for this tick
     /// ([`SignalChain::set_vehicle`]); `None`: the built-in motion's.
     vehicle: Option<VehicleState>,
+    /// The built-in motion's site (set with the motion).
+    site: crate::vehicle::Site,
 }
 
 fn triad<T: Copy>(x: &[T; CHANNELS], i: usize) -> [T; 3] {
@@ -511,6 +513,7 @@ impl<I: Integrate> SignalChain<I> {
             interval: dt,
             integrals: I::default(),
             vehicle: None,
+            site: crate::vehicle::Site::placeholder(),
         }
     }
 
@@ -570,6 +573,7 @@ impl<I: Integrate> SignalChain<I> {
             interval,
             integrals,
             vehicle,
+            site,
         } = self;
         *product_ = product;
         *dt_ = dt;
@@ -596,6 +600,7 @@ impl<I: Integrate> SignalChain<I> {
         *interval = dt;
         *integrals = I::default();
         *vehicle = None;
+        *site = crate::vehicle::Site::of(&Motion::default());
         self.refresh_errors();
     }
 
@@ -624,7 +629,7 @@ impl<I: Integrate> SignalChain<I> {
     /// heading, phase 0), from the next tick on.
     pub fn set_motion(&mut self, m: Motion) {
         self.vehicle = None;
-        self.core.set_motion(m, self.dt);
+        self.play(m);
     }
 
     /// A board's vehicle source ([`crate::vehicle`]) for the next tick:
@@ -634,8 +639,18 @@ impl<I: Integrate> SignalChain<I> {
     /// ([`SignalChain::vehicle`]) until the next call or
     /// [`SignalChain::set_motion`].
     pub fn set_vehicle(&mut self, state: VehicleState, truth: Truth) {
-        self.core.set_motion(Motion::Sample(truth), self.dt);
+        self.play(Motion::Sample(truth));
         self.vehicle = Some(state);
+    }
+
+    /// `m` into the core, the site kept with it (a live feed or a vehicle
+    /// source sets a sample every tick, always at the same site: not
+    /// computed again then).
+    fn play(&mut self, m: Motion) {
+        if crate::sensor::motion::site(&m) != crate::sensor::motion::site(self.core_motion()) {
+            self.site = crate::vehicle::Site::of(&m);
+        }
+        self.core.set_motion(m, self.dt);
     }
 
     /// The unit's vehicle now: the state a board's source set
@@ -647,7 +662,7 @@ impl<I: Integrate> SignalChain<I> {
         match &self.vehicle {
             Some(v) => *v,
             None => crate::vehicle::builtin_state(
-                self.core.motion.motion(),
+                &self.site,
                 self.core.motion.attitude(),
                 &self.core.motion.truth_now(),
                 self.ticks as f64 * f64::from(self.dt),

@@ -1819,3 +1819,53 @@ fn can_config_is_set_read_back_and_kept_in_flash() {
     let mut b = b.power_cycle();
     assert_eq!(b.get_once(did::CAN_CONFIG), want);
 }
+
+/// The navigation filter off (what the RP2040 image serves: its tick cannot
+/// afford the filter): every INS_2 says so — solution OFF, not NAV — and
+/// reports `lastLla`, level, at rest, also after a power cycle, while the
+/// receiver's fix still reaches GPS1_POS.
+#[test]
+fn without_the_navigation_filter_the_ins_reports_no_solution() {
+    let mut b = Bench::new();
+    b.dev.personality_mut().set_start_times(ins::StartTimes {
+        cold_s: 6.0,
+        warm_s: 6.0,
+    });
+    b.dev.personality_mut().set_navigation(false);
+    b.dev.power_cycle(Instant(b.now));
+    let last_lla: Vec<f64> = (0..3)
+        .map(|k| {
+            let off = flash::LAST_LLA + 8 * k;
+            f64::from_le_bytes(b.flash_config()[off..off + 8].try_into().unwrap())
+        })
+        .collect();
+    b.send(&get(did::INS_2, 1));
+    b.send(&get(did::GPS1_POS, 1));
+    let out = b.run_ticks(14_000);
+    let ins: Vec<Ins2> = out
+        .iter()
+        .filter(|p| p.did == did::INS_2)
+        .map(|p| Ins2::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert!(ins.len() > 1_700, "{}", ins.len());
+    for i in &ins {
+        let s = i.header.ins_status;
+        assert_eq!(
+            (s & ins_status::SOLUTION_MASK) >> ins_status::SOLUTION_SHIFT,
+            ins_status::SOLUTION_OFF
+        );
+        assert_eq!(s & ins_status::NAV_MODE, 0);
+        assert_eq!(i.lla.to_vec(), last_lla);
+        assert_eq!((i.qn2b, i.uvw), ([1.0, 0.0, 0.0, 0.0], [0.0; 3]));
+    }
+    let pos: Vec<GpsPos> = out
+        .iter()
+        .filter(|p| p.did == did::GPS1_POS)
+        .map(|p| GpsPos::decode(&p.payload.clone().try_into().unwrap()))
+        .collect();
+    assert_ne!(
+        pos.last().unwrap().status & imu_emu::isb::nav_sets::gps_status::FIX_OK,
+        0
+    );
+    assert_eq!(b.dev.personality().nav().phase(), ins::Phase::Off);
+}

@@ -22,7 +22,7 @@ use imu_emu::sensor::motion::{
 
 use imu_emu::time::Instant;
 use imu_emu::vehicle::{
-    builtin_state, fullstate, FullStateLayout, FullStateRow, Manoeuvres, Script, Strapdown,
+    builtin_state, fullstate, FullStateLayout, FullStateRow, Manoeuvres, Script, Site, Strapdown,
     VehicleState,
 };
 
@@ -409,16 +409,17 @@ fn built_in_integrates_back_to_its_state(m: Motion) {
     let dt = run.1;
     let ns = (dt * 1e9) as u64;
     let name = format!("{m:?}");
+    let site = Site::of(&m);
     let mut float = BuiltinMotion::new(m, dt as f32);
     check(&name, Samples::Point, &[Build::Float], run, 1.0, |k| {
         let t = float.next(Instant::from_nanos(k * ns), dt as f32);
-        (builtin_state(&m, float.attitude(), &t, k as f64 * dt), t)
+        (builtin_state(&site, float.attitude(), &t, k as f64 * dt), t)
     });
     let mut fixed = BuiltinMotionFixed::new(m, dt as f32);
     check(&name, Samples::Point, &[Build::Fixed], run, 1.0, |k| {
         fixed.step();
         let t = fixed.truth_now();
-        (builtin_state(&m, fixed.attitude(), &t, k as f64 * dt), t)
+        (builtin_state(&site, fixed.attitude(), &t, k as f64 * dt), t)
     });
 }
 

@@ -215,6 +215,8 @@ struct State {
     nav: NavState,
     /// The receiver's cold and warm start times (kept across resets).
     start_times: StartTimes,
+    /// Whether the navigation filter runs ([`Isb::set_navigation`]).
+    navigation: bool,
     /// GPS nanoseconds since the GPS epoch at device instant 0 (set by the
     /// board: `Isb::set_gps_time`).
     gps_ns_at_zero: u64,
@@ -264,6 +266,7 @@ impl Personality for Isb {
                 gps_dt_ms: flash::DEFAULT_GPS_DT_MS,
                 nav: NavState::new(0),
                 start_times: StartTimes::default(),
+                navigation: true,
                 gps_ns_at_zero: nav::DEFAULT_GPS_S_AT_ZERO * 1_000_000_000,
                 truth: Cell::new(None),
             },
@@ -312,6 +315,7 @@ impl Personality for Isb {
             None => st.nav.set_profile(&product.sensor_profile()),
         }
         st.nav.boot(&st.nav_config(), st.start_times);
+        st.nav.set_enabled(st.navigation);
         cx.set_line_rate(st.baud);
         if cx.firmware_update() {
             return;
@@ -450,6 +454,14 @@ impl Isb {
     /// start (from the next power-on or reset).
     pub fn set_start_times(&mut self, t: StartTimes) {
         self.st.start_times = t;
+    }
+
+    /// Whether the navigation filter runs, now and at every power-on (on
+    /// by default; [`NavState::set_enabled`]): a board whose processor
+    /// cannot afford it turns it off.
+    pub fn set_navigation(&mut self, on: bool) {
+        self.st.navigation = on;
+        self.st.nav.set_enabled(on);
     }
 
     /// DIDs streaming now, in the order they were started.

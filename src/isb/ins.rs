@@ -14,6 +14,8 @@ pub mod filter;
 pub mod mech;
 pub mod status;
 
+use core::cell::Cell;
+
 use libm::{atan2, exp, log, pow, sqrt};
 
 use super::nav::{
@@ -217,6 +219,33 @@ impl Default for StartTimes {
 /// (m/s).
 pub type Fix = ([f64; 3], [f64; 3]);
 
+/// What the receiver reports of a fix (GPS1_POS): the antenna's position
+/// (deg, deg, m above the ellipsoid), NED velocity (m/s), ECEF position
+/// (m) and height above mean sea level (EGM96, m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GnssReport {
+    /// Latitude °, longitude °, height m.
+    pub lla: [f64; 3],
+    /// NED velocity, m/s.
+    pub v: [f64; 3],
+    /// ECEF, m.
+    pub ecef: [f64; 3],
+    /// Height above mean sea level, m.
+    pub h_msl: f32,
+}
+
+/// What a [`GnssReport`] is made of, compared exactly
+/// ([`NavState::gps_report`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ReportKey {
+    pos: [f64; 3],
+    v: [f64; 3],
+    q: [f64; 4],
+    err_pos: [f64; 3],
+    err_vel: [f64; 3],
+    ant: [f32; 3],
+}
+
 /// What the aiding sensors read at a navigation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aiding {
@@ -294,6 +323,9 @@ pub struct NavState {
     period_s: f64,
     /// The receiver epoch's work still to do ([`NavState::work`]).
     epoch: Option<Epoch>,
+    /// The last receiver report and what it was made of
+    /// ([`NavState::gps_report`]).
+    report: Cell<Option<(ReportKey, GnssReport)>>,
     /// A GNSS update entered the state since the last period's start
     /// (shown as [`NavState::gps_step`] from the next period).
     gps_step_next: bool,
@@ -311,17 +343,25 @@ enum Input {
 }
 
 /// The steps of a receiver epoch's work, in order (`docs/navigation.md`
-/// "Firmware cost"): each a share of the tick budget.
+/// "Firmware cost"): each a share of the tick budget, seven at most (the
+/// ticks of a navigation period between its grid ticks).
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 enum Stage {
+    /// The covariance to the epoch.
     Propagate,
+    /// The receiver's fix and the GNSS position updates.
     Fix,
-    GnssPos,
+    /// The GNSS velocity updates and their correction.
     GnssVel,
-    Mag,
+    /// The barometer's height (the AHRS's zero velocity).
     Baro,
+    /// The declination, every [`DECLINATION_EVERY_S`].
     Declination,
+    /// The magnetometer read and fused, the epoch's correction.
     MagUpdate,
+    /// The receiver's report of the epoch ([`NavState::gps_report`]) made
+    /// ready for the GPS data sets.
+    Report,
     Done,
 }
 
@@ -339,7 +379,7 @@ struct Epoch {
     speed: f64,
     hdg_sigma: f32,
     first: bool,
-    /// The readings (resolved at [`Stage::Mag`], [`Stage::Baro`]).
+    /// The magnetometer's reading (resolved at [`Stage::MagUpdate`]).
     mag: [f32; 3],
     year: f64,
 }
@@ -450,6 +490,7 @@ impl NavState {
             period_s: 0.0,
             epoch: None,
             gps_step_next: false,
+            report: Cell::new(None),
         }
     }
 
@@ -475,6 +516,26 @@ impl NavState {
         self.nom = Nominal::at(&cfg.last_lla);
         if self.warm {
             self.saved_lla = Some(cfg.last_lla);
+        }
+    }
+
+    /// Whether the navigation filter runs (from power-on it does). Off,
+    /// the INS reports no solution (`insStatus` solution 0, `lastLla`, at
+    /// rest, level, facing north: [`NavState::solution`]) and computes
+    /// nothing of its own; the aiding sensors' models (GNSS receiver,
+    /// magnetometer, barometer) and their data sets run as before. What an
+    /// image serves whose processor cannot afford the filter
+    /// (`docs/navigation.md` "Firmware cost": the RP2040). On again, the
+    /// INS starts aligning.
+    pub fn set_enabled(&mut self, on: bool) {
+        match (on, self.phase) {
+            (false, _) => {
+                self.phase = Phase::Off;
+                self.epoch = None;
+                self.prop_due = false;
+            }
+            (true, Phase::Off) => self.phase = Phase::Aligning,
+            _ => {}
         }
     }
 
@@ -546,7 +607,13 @@ impl NavState {
         for x in w.iter_mut() {
             *x = f64::from(self.rng.gaussian());
         }
-        if self.gm.0 != dt {
+        // The step is fixed, but `dt` is a difference of seconds since
+        // boot that rounds differently from step to step: the coefficients
+        // (an `exp` and a `sqrt` each, soft double precision on the
+        // firmware) are computed again only when it changes by more than
+        // a nanosecond (their relative change then is under 10⁻¹⁰).
+        let same_step = (self.gm.0 - dt).abs() <= 1e-9;
+        if !same_step {
             self.gm = (
                 dt,
                 [
@@ -665,6 +732,9 @@ impl NavState {
         if inc.dt.is_nan() || inc.dt <= 0.0 {
             return;
         }
+        if self.phase == Phase::Off {
+            return;
+        }
         self.period_s = inc.dt;
         // The epoch at the end of the next period: its aiding is read now
         // and fused on the ticks of that period.
@@ -684,9 +754,9 @@ impl NavState {
             self.align(t_s, inc, aid, cfg);
             return;
         }
-        let f_n = self.nom.mechanise(inc);
+        let dv_n = self.nom.mechanise(inc);
         self.prop_dt += inc.dt;
-        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + f_n[k] * inc.dt);
+        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
         self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
         // Every aiding source enters at the receiver's epochs, so the state
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
@@ -739,13 +809,12 @@ impl NavState {
             let stage = e.stage;
             e.stage = match stage {
                 Stage::Propagate => Stage::Fix,
-                Stage::Fix => Stage::GnssPos,
-                Stage::GnssPos => Stage::GnssVel,
-                Stage::GnssVel => Stage::Mag,
-                Stage::Mag => Stage::Baro,
+                Stage::Fix => Stage::GnssVel,
+                Stage::GnssVel => Stage::Baro,
                 Stage::Baro => Stage::Declination,
                 Stage::Declination => Stage::MagUpdate,
-                Stage::MagUpdate | Stage::Done => Stage::Done,
+                Stage::MagUpdate => Stage::Report,
+                Stage::Report | Stage::Done => Stage::Done,
             };
             let busy = self.stage(&mut e, stage);
             if e.stage == Stage::Done {
@@ -765,30 +834,23 @@ impl NavState {
         let gps_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
         match stage {
             Stage::Propagate => self.propagate(),
-            Stage::Fix => match e.input {
-                Input::Truth(truth, _, _) if gps_fusion => {
-                    e.fix = self.gnss(&truth, &cfg);
-                    true
+            Stage::Fix => {
+                if let Input::Truth(truth, _, _) = e.input {
+                    if gps_fusion {
+                        e.fix = self.gnss(&truth, &cfg);
+                    }
                 }
-                _ => false,
-            },
-            Stage::GnssPos => match e.fix {
-                Some(fix) if gps_fusion => {
-                    self.fuse_gnss_pos(e, &fix);
-                    true
+                match e.fix {
+                    Some(fix) if gps_fusion => {
+                        self.fuse_gnss_pos(e, &fix);
+                        true
+                    }
+                    _ => false,
                 }
-                _ => false,
-            },
+            }
             Stage::GnssVel => match e.fix {
                 Some(fix) if gps_fusion => {
                     self.fuse_gnss_vel(e, &fix);
-                    true
-                }
-                _ => false,
-            },
-            Stage::Mag => match e.input {
-                Input::Truth(truth, tick, _) if mag_fusion && self.mag_ref.is_some() => {
-                    e.mag = self.magnetometer(&truth, tick);
                     true
                 }
                 _ => false,
@@ -808,10 +870,26 @@ impl NavState {
                 }
             }
             Stage::MagUpdate => {
+                if let Input::Truth(truth, tick, _) = e.input {
+                    if mag_fusion && self.mag_ref.is_some() {
+                        e.mag = self.magnetometer(&truth, tick);
+                    }
+                }
                 self.fuse_mag(e);
                 self.check_last_lla(&cfg);
                 true
             }
+            // The truth of a unit at a built-in site (every firmware
+            // image's) does not move: the report made here is the one the
+            // epoch's GPS data sets find. A moving vehicle's is made again
+            // when they are sent.
+            Stage::Report => match e.input {
+                Input::Truth(truth, _, _) if self.fixed => {
+                    let _ = self.gps_report(&truth, &cfg);
+                    true
+                }
+                _ => false,
+            },
             Stage::Done => false,
         }
     }
@@ -878,18 +956,24 @@ impl NavState {
             return false;
         }
         let f_n = self.prop_dv_n.map(|x| (x / dt) as f32);
-        let c = crate::math::double::dcm_from_quat(&self.nom.q);
-        let c_nb = c.map(|r| r.map(|x| x as f32));
-        let wie = wgs84::earth_rate_ned(self.nom.lat);
-        let wen = wgs84::transport_rate_ned(self.nom.lat, self.nom.h, &self.nom.v);
-        let w_in = [0, 1, 2].map(|k| (wie[k] + wen[k]) as f32);
-        let g = wgs84::normal_gravity(self.nom.lat, self.nom.h);
+        // The Earth's terms at the position, on this tick rather than a
+        // navigation period's (`mech`'s anchor).
+        self.nom.refresh();
+        let (e, v) = (self.nom.earth, self.nom.v);
+        let (nh, mh) = (e.rn + self.nom.h, e.rm + self.nom.h);
+        let w_in = [
+            wgs84::OMEGA_IE * e.cos_lat + v[1] / nh,
+            -v[0] / mh,
+            -wgs84::OMEGA_IE * e.sin_lat - v[1] * e.sin_lat / (e.cos_lat * nh),
+        ]
+        .map(|x| x as f32);
         let iv = Interval {
             dt: dt as f32,
             f_n,
-            c_nb,
+            // The same DCM as `math::double`'s, in the covariance's `f32`.
+            c_nb: crate::math::rotation::dcm_from_quat(&self.nom.q.map(|x| x as f32)),
             w_in,
-            grav_grad: (2.0 * g / wgs84::A) as f32,
+            grav_grad: (2.0 * e.g / wgs84::A) as f32,
         };
         self.kf.propagate(&iv, &self.q);
         self.prop_dt = 0.0;
@@ -910,7 +994,11 @@ impl NavState {
     /// NED), the antenna's lever arm taken out.
     fn fuse_gnss_pos(&mut self, e: &mut Epoch, fix: &Fix) {
         let (lla, v) = fix;
-        let ant = rotate(&self.nom.q, &e.cfg.gps1_ant_offset.map(f64::from));
+        let ant = if e.cfg.gps1_ant_offset == [0.0; 3] {
+            [0.0; 3]
+        } else {
+            rotate(&self.nom.q, &e.cfg.gps1_ant_offset.map(f64::from))
+        };
         e.ant = ant;
         e.speed = libm::hypot(v[0], v[1]);
         e.hdg_sigma = self.kf.sigma(ATT + 2);
@@ -943,14 +1031,16 @@ impl NavState {
             self.declination_at = self.nav_t;
             self.phase = Phase::Nav;
         } else {
-            let (m, n) = wgs84::radii(self.nom.lat);
+            // The radii and the latitude's cosine of the mechanisation's
+            // anchor (a few metres away: 10⁻⁸ of a residual of metres).
+            let e = self.nom.earth;
             let p = self.nom.lla();
             let d = [
-                (lla[0] - p[0]).to_radians() * (m + p[2]) - ant[0],
+                (lla[0] - p[0]).to_radians() * (e.rm + p[2]) - ant[0],
                 // Across ±180° the difference of longitudes wraps.
                 crate::math::double::wrap_pi((lla[1] - p[1]).to_radians())
-                    * (n + p[2])
-                    * libm::cos(self.nom.lat)
+                    * (e.rn + p[2])
+                    * e.cos_lat
                     - ant[1],
                 -(lla[2] - p[2]) - ant[2],
             ];
@@ -1003,10 +1093,12 @@ impl NavState {
             Input::Read(_, a) => a.pressure_kpa,
             Input::Truth(truth, tick, _) => self.pressure_kpa(&truth, tick),
         };
-        let p = f64::from(p);
         if p > 0.0 {
             let lla = self.nom.lla();
-            let h = isa_height_m(p) + geoid_undulation_m(lla[0], lla[1]);
+            // ISA's height in `f32` (the FPU): 3 mm of rounding against
+            // the measurement's 0.5 m.
+            let isa = (1.0 - libm::powf(p / 101.325, 1.0 / 5.255_88)) / 2.255_77e-5;
+            let h = f64::from(isa) + geoid_undulation_m(lla[0], lla[1]);
             let y = (lla[2] - h) as f32;
             self.kf
                 .update(&[(POS + 2, 1.0)], y, BARO_SIGMA_M * BARO_SIGMA_M, 5.0);
@@ -1035,22 +1127,29 @@ impl NavState {
     }
 
     /// The magnetometer's heading minus the estimate's, rad, if the
-    /// reading looks like the field learnt in alignment.
+    /// reading looks like the field learnt in alignment. With the reading
+    /// turned into NED (`m_n = C m`), the levelled reading is `m_n` turned
+    /// back by the heading ψ about the vertical: its dip is `m_n`'s, and
+    /// the measured heading `D − atan2(lvl_E, lvl_N)` less ψ is `D −
+    /// atan2(m_n,E, m_n,N)`. In `f32` (the FPU; 10⁻⁷ rad against a 1°
+    /// measurement).
     fn mag_residual(&self, mag: &[f32; 3]) -> Option<f32> {
         let (norm0, dip0) = self.mag_ref?;
-        let m = mag.map(f64::from);
-        let norm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-        if norm.is_nan() || norm <= 0.0 || (norm / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE {
+        let c = crate::math::rotation::dcm_from_quat(&self.nom.q.map(|x| x as f32));
+        let m = crate::math::rotation::mat_vec(&c, mag);
+        let norm = libm::sqrtf(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        if norm.is_nan()
+            || norm <= 0.0
+            || (f64::from(norm) / norm0 - 1.0).abs() > MAG_NORM_TOLERANCE
+        {
             return None;
         }
-        let e = euler_from_quat(&self.nom.q);
-        let lvl = self.mag_levelled(mag);
-        let dip = libm::asin((lvl[2] / norm).clamp(-1.0, 1.0));
-        if (dip - dip0).abs() > MAG_DIP_TOLERANCE {
+        let dip = libm::asinf((m[2] / norm).clamp(-1.0, 1.0));
+        if (f64::from(dip) - dip0).abs() > MAG_DIP_TOLERANCE {
             return None;
         }
-        let yaw = self.declination - atan2(lvl[1], lvl[0]);
-        Some(crate::math::double::wrap_pi(yaw - e[2]) as f32)
+        let y = self.declination as f32 - libm::atan2f(m[1], m[0]);
+        Some(crate::math::double::wrap_pi(f64::from(y)) as f32)
     }
 
     /// `insStatus` now ([`status`]; MAG_RECALIBRATING while a
@@ -1111,9 +1210,8 @@ impl NavState {
     /// The INS solution of the output point (`insRotation`, `insOffset`):
     /// the filter's state; while aligning level, facing north, at rest at
     /// `lastLla`; as an AHRS (position and velocity not estimated) the
-    /// filter's attitude at `lastLla`, at rest. The truth is not read.
-    pub fn solution(&self, truth: &NavTruth, cfg: &NavConfig) -> Solution {
-        let _ = truth;
+    /// filter's attitude at `lastLla`, at rest.
+    pub fn solution(&self, cfg: &NavConfig) -> Solution {
         // The usual insRotation is none: no trigonometry then.
         let q_nb = if cfg.ins_rotation == [0.0; 3] {
             self.nom.q
@@ -1122,7 +1220,7 @@ impl NavState {
             normalize(&quat_mul(&self.nom.q, &quat_from_euler(r, p, y)))
         };
         match self.phase {
-            Phase::Aligning => Solution {
+            Phase::Off | Phase::Aligning => Solution {
                 lla: cfg.last_lla,
                 v_ned: [0.0; 3],
                 q_nb: [1.0, 0.0, 0.0, 0.0],
@@ -1224,13 +1322,56 @@ impl NavState {
         }
     }
 
+    /// The receiver's report of its fix now ([`GnssReport`]), if it has
+    /// one: remembered with everything it is made of (the truth's
+    /// position, velocity and — with an antenna offset — attitude, the
+    /// receiver's errors, the offset), so that a report asked for again of
+    /// the same is not converted again (soft double precision on the
+    /// firmware: [`Stage::Report`]).
+    pub fn gps_report(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<GnssReport> {
+        if !self.fixed {
+            return None;
+        }
+        let key = ReportKey {
+            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
+            v: truth.v_ned,
+            q: if cfg.gps1_ant_offset == [0.0; 3] {
+                [0.0; 4]
+            } else {
+                truth.q_nb
+            },
+            err_pos: self.gnss_pos,
+            err_vel: self.gnss_vel,
+            ant: cfg.gps1_ant_offset,
+        };
+        if let Some((k, r)) = self.report.get() {
+            if k == key {
+                return Some(r);
+            }
+        }
+        let (lla, v) = self.gnss(truth, cfg)?;
+        let r = GnssReport {
+            lla,
+            v,
+            ecef: ecef_of(&lla),
+            h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
+        };
+        self.report.set(Some((key, r)));
+        Some(r)
+    }
+
     /// The receiver's position (of the antenna) and NED velocity, if it
     /// has a fix: the truth plus the receiver's errors.
     pub fn gnss(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<([f64; 3], [f64; 3])> {
         if !self.fixed {
             return None;
         }
-        let ant = rotate(&(truth.q_nb), &cfg.gps1_ant_offset.map(f64::from));
+        // The usual antenna offset is none: no rotation then.
+        let ant = if cfg.gps1_ant_offset == [0.0; 3] {
+            [0.0; 3]
+        } else {
+            rotate(&(truth.q_nb), &cfg.gps1_ant_offset.map(f64::from))
+        };
         let mut d = [0.0; 3];
         let mut v = [0.0; 3];
         for k in 0..3 {
@@ -1387,14 +1528,19 @@ fn f32s<const N: usize>(v: [f64; N]) -> [f32; N] {
 
 /// INS_1 of `s`.
 pub fn ins1(h: &InsHeader, s: &Solution, cfg: &NavConfig) -> Ins1 {
-    let uvw = rotate_inv(&s.q_nb, &s.v_ned);
     Ins1 {
         header: *h,
         theta: f32s(euler_from_quat(&s.q_nb)),
-        uvw: f32s(uvw),
+        uvw: uvw(s),
         lla: s.lla,
         ned: f32s(ned_from_ref(&s.lla, &cfg.ref_lla)),
     }
+}
+
+/// The body-frame velocity of `s`, in `f32` (the FPU; the field is `f32`).
+fn uvw(s: &Solution) -> [f32; 3] {
+    let c = crate::math::rotation::dcm_from_quat(&f32s(s.q_nb));
+    crate::math::rotation::mat_t_vec(&c, &f32s(s.v_ned))
 }
 
 /// INS_2 of `s`.
@@ -1402,7 +1548,7 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
     Ins2 {
         header: *h,
         qn2b: f32s(s.q_nb),
-        uvw: f32s(rotate_inv(&s.q_nb, &s.v_ned)),
+        uvw: uvw(s),
         lla: s.lla,
     }
 }
@@ -1426,21 +1572,24 @@ pub fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
     }
 }
 
-/// GPS1_POS of a receiver epoch `t` (`fix`: position and NED velocity if
-/// the receiver has one), `tow_offset` s.
-pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) -> GpsPos {
-    match fix {
-        Some((lla, _)) => GpsPos {
+/// `gps_pos_t.status` with a fix: the satellites used, a 3D fix, time
+/// synchronised by the PPS (as hdwStatus says with a fix).
+const FIX_STATUS: u32 = SATS as u32
+    | (gps_status::FIX_3D << gps_status::FIX_SHIFT)
+    | gps_status::FIX_OK
+    | gps_status::TIME_PPS_SYNC;
+
+/// GPS1_POS of a receiver epoch `t` (`report`: the receiver's report if it
+/// has a fix, [`NavState::gps_report`]), `tow_offset` s.
+pub fn gps_pos(t: &GpsTime, report: Option<&GnssReport>, tow_offset: f64) -> GpsPos {
+    match report {
+        Some(r) => GpsPos {
             week: t.week,
             time_of_week_ms: t.tow_ms(),
-            // Time synchronised by the PPS, as hdwStatus says with a fix.
-            status: u32::from(SATS)
-                | (gps_status::FIX_3D << gps_status::FIX_SHIFT)
-                | gps_status::FIX_OK
-                | gps_status::TIME_PPS_SYNC,
-            ecef: ecef_of(&lla),
-            lla,
-            h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
+            status: FIX_STATUS,
+            ecef: r.ecef,
+            lla: r.lla,
+            h_msl: r.h_msl,
             h_acc: H_ACC_M,
             v_acc: V_ACC_M,
             p_dop: P_DOP,
@@ -1464,13 +1613,12 @@ pub fn gps_pos(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>, tow_offset: f64) 
 
 /// GPS1_VEL of a receiver epoch (ECEF velocity).
 pub fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
-    let p = gps_pos(t, fix, 0.0);
     match fix {
         Some((lla, v)) => GpsVel {
             time_of_week_ms: t.tow_ms(),
             vel: f32s(rotate(&(quat_e2n(lla[0], lla[1])), &v)),
             s_acc: S_ACC_MPS,
-            status: p.status,
+            status: FIX_STATUS,
         },
         None => GpsVel {
             time_of_week_ms: t.tow_ms(),

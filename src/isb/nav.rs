@@ -6,7 +6,7 @@
 //! [`truth_of`] is the one place the truth is read: the unit's vehicle
 //! ([`crate::vehicle`]), whatever its source.
 
-use libm::{cos, sin, sqrt};
+use libm::{cos, sincos, sqrt};
 
 use crate::chain::SignalChain;
 use crate::dsp::integrals::Integrate;
@@ -81,25 +81,27 @@ pub fn quat_e2n(lat_deg: f64, lon_deg: f64) -> [f64; 4] {
 
 /// WGS84 latitude (deg), longitude (deg), height (m) → ECEF (m).
 pub fn ecef_of(lla: &[f64; 3]) -> [f64; 3] {
-    let (lat, lon) = (lla[0].to_radians(), lla[1].to_radians());
-    let n = WGS84_A / sqrt(1.0 - WGS84_E2 * sin(lat) * sin(lat));
+    // One argument reduction for a sine and its cosine (soft double
+    // precision on the M4F).
+    let ((sl, cl), (so, co)) = (sincos(lla[0].to_radians()), sincos(lla[1].to_radians()));
+    let n = WGS84_A / sqrt(1.0 - WGS84_E2 * sl * sl);
     [
-        (n + lla[2]) * cos(lat) * cos(lon),
-        (n + lla[2]) * cos(lat) * sin(lon),
-        (n * (1.0 - WGS84_E2) + lla[2]) * sin(lat),
+        (n + lla[2]) * cl * co,
+        (n + lla[2]) * cl * so,
+        (n * (1.0 - WGS84_E2) + lla[2]) * sl,
     ]
 }
 
 /// A small NED displacement (m) added to a position (deg, deg, m), with
 /// the WGS84 radii of curvature.
 pub fn lla_plus_ned(lla: &[f64; 3], d: &[f64; 3]) -> [f64; 3] {
-    let lat = lla[0].to_radians();
-    let s2 = sin(lat) * sin(lat);
+    let (sl, cl) = sincos(lla[0].to_radians());
+    let s2 = sl * sl;
     let rn = WGS84_A / sqrt(1.0 - WGS84_E2 * s2);
     let rm = rn * (1.0 - WGS84_E2) / (1.0 - WGS84_E2 * s2);
     [
         lla[0] + (d[0] / (rm + lla[2])).to_degrees(),
-        lla[1] + (d[1] / ((rn + lla[2]) * cos(lat))).to_degrees(),
+        lla[1] + (d[1] / ((rn + lla[2]) * cl)).to_degrees(),
         lla[2] - d[2],
     ]
 }

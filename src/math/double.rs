@@ -187,6 +187,11 @@ pub fn body_rate_of_euler(e: &V3, rates: &V3) -> V3 {
 
 /// `x` wrapped into (−π, π].
 pub fn wrap_pi(x: f64) -> f64 {
+    // Already inside (what a navigation period's longitude nearly always
+    // is): no `fmod` in soft double precision.
+    if x > -core::f64::consts::PI && x <= core::f64::consts::PI {
+        return x;
+    }
     let tau = core::f64::consts::TAU;
     let mut y = libm::fmod(x, tau);
     if y > core::f64::consts::PI {

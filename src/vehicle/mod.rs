@@ -176,31 +176,82 @@ pub fn housing_to_body(v: &V3) -> V3 {
     body_to_housing(v)
 }
 
-/// The state of a built-in [`Motion`] at `time_s`: its site (latitude,
-/// [`DEFAULT_LONGITUDE_DEG`], the height where WGS84 normal gravity is the
-/// ICD's g: [`wgs84::height_of_gravity`]), at rest, with the attitude the motion
+/// [`wgs84::height_of_gravity`] at
+/// [`crate::sensor::motion::DEFAULT_LATITUDE_DEG`] and the ICD's g, m
+/// (bit for bit: `the_default_site_height_is_the_solved_one`).
+pub const DEFAULT_SITE_HEIGHT_M: f64 = f64::from_bits(0x404f_3f3d_7f72_7bd1);
+
+/// Where a built-in [`Motion`] stands: its latitude, the height where
+/// WGS84 normal gravity is the ICD's g ([`wgs84::height_of_gravity`]) and
+/// the level attitude at its heading. Fixed for a motion, so the chain
+/// keeps it ([`Site::of`] when the motion is chosen) instead of solving
+/// for the height and turning the heading each time the vehicle is read
+/// (about 100 000 instructions of soft double precision on the M4F).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Site {
+    /// Latitude, rad.
+    pub lat_rad: f64,
+    /// Height above the ellipsoid, m.
+    pub height_m: f64,
+    /// Level at the site's heading, body (FRD) → NED.
+    pub level: Q4,
+}
+
+impl Site {
+    /// The site of `motion` (its latitude and heading,
+    /// [`DEFAULT_LONGITUDE_DEG`]).
+    pub fn of(motion: &Motion) -> Site {
+        let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
+        let lat = f64::from(lat_deg).to_radians();
+        // Every power-on starts at the default site: its height is a
+        // constant (the solution's own bits, checked by a test) rather
+        // than a solve in soft double precision on each reset.
+        let height_m = if lat_deg == crate::sensor::motion::DEFAULT_LATITUDE_DEG {
+            DEFAULT_SITE_HEIGHT_M
+        } else {
+            wgs84::height_of_gravity(lat, G_ICD)
+        };
+        Site {
+            lat_rad: lat,
+            height_m,
+            level: quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
+        }
+    }
+
+    /// A placeholder (the equator, height 0, facing north), for a chain
+    /// not yet powered on.
+    pub const fn placeholder() -> Site {
+        Site {
+            lat_rad: 0.0,
+            height_m: 0.0,
+            level: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// The state of a built-in motion at `time_s`: its `site` ([`Site::of`]
+/// the motion: latitude, [`DEFAULT_LONGITUDE_DEG`], the height where WGS84
+/// normal gravity is the ICD's g), at rest, with the attitude the motion
 /// reports (housing → ENU, Appendix C; `None`: level at the site's
 /// heading) and its truth as the measurement (housing axes, °/s and g).
 /// The built-ins rotate and vibrate in place (docs/motion.md).
 pub fn builtin_state(
-    motion: &Motion,
+    site: &Site,
     attitude: Option<crate::math::rotation::Quat>,
     truth: &Truth,
     time_s: f64,
 ) -> VehicleState {
-    let (lat_deg, heading_deg) = crate::sensor::motion::site(motion);
-    let lat = f64::from(lat_deg).to_radians();
     let q_nb = match attitude {
         Some(q) => housing_enu_to_body_ned(&q.map(f64::from)),
-        None => quat_from_euler(0.0, 0.0, f64::from(heading_deg).to_radians()),
+        None => site.level,
     };
     let w = housing_to_body(&truth.rate_dps.map(|x| f64::from(x).to_radians()));
     let f = housing_to_body(&truth.specific_force_g.map(|x| f64::from(x) * G_ICD));
     VehicleState {
         time_s,
-        lat_rad: lat,
+        lat_rad: site.lat_rad,
         lon_rad: DEFAULT_LONGITUDE_DEG.to_radians(),
-        height_m: wgs84::height_of_gravity(lat, G_ICD),
+        height_m: site.height_m,
         vel_ned: [0.0; 3],
         q_nb,
         rate_ib_b: w,
@@ -211,22 +262,14 @@ pub fn builtin_state(
 
 /// A housing → ENU attitude (the built-in motions', Appendix C) as body
 /// (FRD) → NED: `C_nb = P C_eh P` with P the swap of the first two axes
-/// and the sign of the third (ENU ↔ NED and RFU ↔ FRD alike).
+/// and the sign of the third (ENU ↔ NED and RFU ↔ FRD alike). P is the
+/// half turn about (1, 1, 0)/√2, so on the quaternion it swaps X and Y and
+/// negates Z: `(w, x, y, z) → (w, y, x, −z)` (normalised, w ≥ 0) — no
+/// matrix and back (soft double precision on the firmware, where the
+/// truth is read at every receiver step).
 pub fn housing_enu_to_body_ned(q_eh: &Q4) -> Q4 {
-    let c = dcm_from_quat(q_eh);
-    let p = |i: usize| match i {
-        0 => 1,
-        1 => 0,
-        _ => 2,
-    };
-    let sgn = |i: usize| if i == 2 { -1.0 } else { 1.0 };
-    let mut n = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            n[i][j] = sgn(i) * sgn(j) * c[p(i)][p(j)];
-        }
-    }
-    quat_from_dcm(&n)
+    let [w, x, y, z] = *q_eh;
+    quat_normalize(&[w, y, x, -z])
 }
 
 #[cfg(test)]
@@ -265,6 +308,29 @@ mod tests {
         assert!((f64::from(t.specific_force_g[2]) - g / G_ICD).abs() < 1e-7);
     }
 
+    /// The quaternion form of `P C P` is the matrix form.
+    #[test]
+    fn the_axes_swap_on_the_quaternion_is_the_matrix_one() {
+        for e in [
+            [0.3, -0.2, 2.0],
+            [-1.2, 0.7, -2.9],
+            [0.0, 0.0, 0.0],
+            [3.0, 1.5, 0.1],
+        ] {
+            let q = quat_from_euler(e[0], e[1], e[2]);
+            let c = dcm_from_quat(&q);
+            let p = |i: usize| [1, 0, 2][i];
+            let sgn = |i: usize| if i == 2 { -1.0 } else { 1.0 };
+            let n: [V3; 3] =
+                core::array::from_fn(|i| core::array::from_fn(|j| sgn(i) * sgn(j) * c[p(i)][p(j)]));
+            let want = quat_from_dcm(&n);
+            let got = housing_enu_to_body_ned(&q);
+            for k in 0..4 {
+                assert!((want[k] - got[k]).abs() < 1e-12, "{e:?}: {want:?} {got:?}");
+            }
+        }
+    }
+
     /// The built-in motions' attitude maps to the same heading, pitch and
     /// roll in NED (heading 90°: the body's x points east).
     #[test]
@@ -283,6 +349,14 @@ mod tests {
     /// 1 g of the ICD is normal gravity at the site's height, and the Earth
     /// rate agrees to the f32 constant's precision.
     #[test]
+    fn the_default_site_height_is_the_solved_one() {
+        let lat = f64::from(crate::sensor::motion::DEFAULT_LATITUDE_DEG).to_radians();
+        let h = wgs84::height_of_gravity(lat, G_ICD);
+        assert_eq!(h.to_bits(), DEFAULT_SITE_HEIGHT_M.to_bits());
+        assert_eq!(Site::of(&Motion::default()).height_m.to_bits(), h.to_bits());
+    }
+
+    #[test]
     fn builtin_static_is_self_consistent() {
         let m = Motion::Static {
             lat_deg: 45.0,
@@ -290,7 +364,12 @@ mod tests {
         };
         let src = crate::sensor::motion::BuiltinMotion::new(m, 0.0005);
         let truth = src.truth_now();
-        let s = builtin_state(&m, crate::sensor::MotionSource::attitude(&src), &truth, 0.0);
+        let s = builtin_state(
+            &Site::of(&m),
+            crate::sensor::MotionSource::attitude(&src),
+            &truth,
+            0.0,
+        );
         let mut again = s;
         again.measure(&Motion6 {
             acc_ned: [0.0; 3],

@@ -466,10 +466,10 @@ pub fn an_extrig_edge_gives_strobe_in_time_and_pstrb(kind: Kind) {
 /// (the cold start's fix at 30 s) the figures are zeroed, and a second of
 /// navigation (GNSS epochs with their updates, propagations, the
 /// mechanisation every period) is measured. The guide's budget, 50 000
-/// cycles a tick, is NOT met (docs/performance.md "Navigation filter":
-/// 207 360 instructions at the worst tick once a GNSS epoch's filter work
-/// is spread over the navigation period's ticks, 497 240 before, measured
-/// 2026-12-06); the bound here catches a tick made dearer than that.
+/// cycles a tick, is met (docs/performance.md "Navigation filter": 38 960
+/// instructions at the worst tick, measured 2026-12-06, from 207 360 and
+/// 497 240 before); the bound is that figure plus 15 %, under the budget:
+/// a change that makes the navigating tick dearer by more fails here.
 pub fn tick_cost_navigating(kind: Kind) {
     assert_eq!(kind, Kind::Qemu);
     let mut d = Dut::start(
@@ -506,5 +506,5 @@ pub fn tick_cost_navigating(kind: Kind) {
         get("stack"),
     );
     assert!(get("ticks") > 0);
-    assert!(get("on_tick_max_ns") < 250_000, "{stats:?}");
+    assert!(get("on_tick_max_ns") < 45_000, "{stats:?}");
 }

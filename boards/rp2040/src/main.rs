@@ -181,6 +181,11 @@ mod app {
         let cfg = image::power_on_config(boot);
         let flash = RomFlash::new(cx.local.boot2);
         let dev = fw_shell::power_on(cx.local.device, cfg, flash);
+        // No FPU: the IMX-5's navigation filter (soft double and single
+        // precision) does not fit a 62 500-cycle tick, so this image serves
+        // the IMX-5 without it (docs/navigation.md "Firmware cost").
+        #[cfg(feature = "isb")]
+        dev.personality_mut().set_navigation(false);
         let (rx_in, rx_out) = cx.local.rxq.split();
         let (edges_in, edges_out) = cx.local.edgeq.split();
         let uart = Uart0 { rx: rx_out, clk_hz };

@@ -161,7 +161,11 @@ encoders! {
 
     /// INS_1..4, INL2_*, GPS1_*, MAGNETOMETER, BAROMETER ([`State::nav_image`]).
     fn navigation(st, cx, did, now, out) {
-        let hdw = st.sys_params(cx, now).hdw_status;
+        // hdwStatus only where a header carries it (the INS sets).
+        let hdw = match did {
+            did::INS_1 | did::INS_2 | did::INS_3 | did::INS_4 => st.sys_params(cx, now).hdw_status,
+            _ => 0,
+        };
         st.nav_image(cx, did, hdw, out)
     }
 

@@ -61,6 +61,10 @@ impl State {
     /// — in body axes, the receiver's fix, the magnetometer and barometer
     /// as the unit reads them; then `lastLla` saved if the INS asks.
     pub(super) fn navigate(&mut self, cx: &mut impl Context<Integrals>) {
+        // No filter, nothing to give it (`Isb::set_navigation`).
+        if self.nav.phase() == ins::Phase::Off {
+            return;
+        }
         let w = integrals::window(&self.nav_grid[0], &self.nav_grid[1], rate(cx));
         let tick = cx.time().ticks();
         let t_s = tick as f64 / f64::from(rate(cx));
@@ -133,7 +137,9 @@ impl State {
             out[..b.len()].copy_from_slice(b);
             b.len()
         };
-        let truth = self.truth(cx);
+        // The truth only for the data sets that read it (the INS's do
+        // not: a conversion in soft double precision on the M4F).
+        let truth = || self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
         // INS, magnetometer, barometer: stamped on their output grid (the
@@ -162,11 +168,13 @@ impl State {
         let gps = GpsTime::of_ns(
             (u64::from(gps.week) * nav::WEEK_S * 1_000_000_000 + gps.tow_ns).saturating_sub(back),
         );
-        let since_s = since_ns as f64 / 1e9;
+        // Seconds (a soft double division on the M4F) where they are sent.
+        let since_s = || since_ns as f64 / 1e9;
         let valid = self.nav.gps_time_valid();
-        let h = InsHeader {
+        // The INS header only where one is sent.
+        let h = || InsHeader {
             week: if valid { gps.week } else { 0 },
-            time_of_week: if valid { gps.tow_s() } else { since_s },
+            time_of_week: if valid { gps.tow_s() } else { since_s() },
             ins_status: self.nav.ins_status(),
             hdw_status: hdw,
         };
@@ -183,32 +191,33 @@ impl State {
                 tow_ns: since_ns - since_ns % gps_dt_ns,
             }
         };
-        let tow_offset = if valid { gps.tow_s() - since_s } else { 0.0 };
+        let tow_offset = || if valid { gps.tow_s() - since_s() } else { 0.0 };
         // The receiver's fix only where it is reported (a conversion in
         // soft double precision on the M4F).
-        let fix = || self.nav.gnss(&truth, &cfg);
+        let fix = || self.nav.gnss(&truth(), &cfg);
         let tick = cx.time().ticks();
         match did {
-            did::INS_1 => put(&ins::ins1(&h, &self.nav.solution(&truth, &cfg), &cfg).encode()),
-            did::INS_2 => put(&ins::ins2(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::INS_3 => put(&ins::ins3(&h, &self.nav.solution(&truth, &cfg)).encode()),
-            did::INS_4 => put(&ins::ins4(&h, &self.nav.solution(&truth, &cfg)).encode()),
+            did::INS_1 => put(&ins::ins1(&h(), &self.nav.solution(&cfg), &cfg).encode()),
+            did::INS_2 => put(&ins::ins2(&h(), &self.nav.solution(&cfg)).encode()),
+            did::INS_3 => put(&ins::ins3(&h(), &self.nav.solution(&cfg)).encode()),
+            did::INS_4 => put(&ins::ins4(&h(), &self.nav.solution(&cfg)).encode()),
             // Without RTK the receiver's solution is GPS1_POS.
             did::GPS1_POS | did::GPS1_RCVR_POS => {
-                put(&ins::gps_pos(&epoch, fix(), tow_offset).encode())
+                let r = self.nav.gps_report(&truth(), &cfg);
+                put(&ins::gps_pos(&epoch, r.as_ref(), tow_offset()).encode())
             }
             did::GPS1_VEL => put(&ins::gps_vel(&epoch, fix()).encode()),
             did::GPS1_SAT => put(&self.nav.gps_sat(&epoch).encode()),
             // The signals of the satellites GPS1_SAT reports.
             did::GPS1_SIG => put(&aux_sets::gps_sig_of(&self.nav.gps_sat(&epoch)).encode()),
             did::MAGNETOMETER => {
-                put(&ins::magnetometer(since_s, self.nav.magnetometer(&truth, tick)).encode())
+                put(&ins::magnetometer(since_s(), self.nav.magnetometer(&truth(), tick)).encode())
             }
             did::BAROMETER => {
-                let p = self.nav.pressure_kpa(&truth, tick);
-                put(&ins::barometer(since_s, p, cx.chain().temperature()).encode())
+                let p = self.nav.pressure_kpa(&truth(), tick);
+                put(&ins::barometer(since_s(), p, cx.chain().temperature()).encode())
             }
-            did::INL2_STATES => put(&self.nav.inl2_states(h.time_of_week).encode()),
+            did::INL2_STATES => put(&self.nav.inl2_states(h().time_of_week).encode()),
             did::INL2_NED_SIGMA => {
                 let ms = if valid {
                     gps.tow_ms()

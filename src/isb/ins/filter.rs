@@ -159,27 +159,36 @@ impl Filter {
             }
         }
         phi[VEL + 2][POS + 2] = iv.grav_grad * dt;
-        // A = Φ P, skipping Φ's zeros; then P = A Φᵀ.
+        // Φ's non-zeros by row (at most 8: the diagonal, two of a skew
+        // matrix or one gradient, three of C); A = Φ P, then the upper
+        // triangle of P = A Φᵀ (symmetric), each through them only.
+        let mut nz = [[(0usize, 0.0f32); 8]; N];
+        let mut len = [0usize; N];
+        for (i, row) in phi.iter().enumerate() {
+            for (k, &x) in row.iter().enumerate() {
+                if x != 0.0 && len[i] < 8 {
+                    nz[i][len[i]] = (k, x);
+                    len[i] += 1;
+                }
+            }
+        }
         let mut a = [[0.0f32; N]; N];
-        for i in 0..N {
-            for k in 0..N {
-                let x = phi[i][k];
-                if x != 0.0 {
-                    for j in 0..N {
-                        a[i][j] += x * self.p[k][j];
-                    }
+        for (i, ai) in a.iter_mut().enumerate() {
+            for &(k, x) in &nz[i][..len[i]] {
+                for (aij, pkj) in ai.iter_mut().zip(&self.p[k]) {
+                    *aij += x * pkj;
                 }
             }
         }
         let mut p = [[0.0f32; N]; N];
-        for j in 0..N {
-            for k in 0..N {
-                let x = phi[j][k];
-                if x != 0.0 {
-                    for i in 0..N {
-                        p[i][j] += a[i][k] * x;
-                    }
+        for i in 0..N {
+            for j in i..N {
+                let mut s = 0.0;
+                for &(k, x) in &nz[j][..len[j]] {
+                    s += a[i][k] * x;
                 }
+                p[i][j] = s;
+                p[j][i] = s;
             }
         }
         for k in 0..3 {

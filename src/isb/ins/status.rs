@@ -14,7 +14,7 @@
 //! | MAG_AIDING_HEADING | the last magnetometer heading entered the filter |
 //! | MAG_INTERFERENCE_OR_BAD_CAL | the last magnetometer sample was refused (field or dip unlike alignment's, or gated) |
 //! | NAV_MODE | NAV (from the first fix on) |
-//! | solution | 1 aligning; AHRS 5, or 6 when tilt σ > [`TILT_HIGH_VAR_RAD`] or heading σ > [`HDG_COARSE_RAD`]; NAV 3, or 4 when the position is no longer FINE |
+//! | solution | 0 off (no filter: [`super::NavState::set_enabled`]); 1 aligning; AHRS 5, or 6 when tilt σ > [`TILT_HIGH_VAR_RAD`] or heading σ > [`HDG_COARSE_RAD`]; NAV 3, or 4 when the position is no longer FINE |
 
 use super::filter::{Filter, ATT, POS, VEL};
 use crate::isb::nav_sets::ins_status::*;
@@ -37,6 +37,9 @@ pub const POS_COARSE_M: f32 = 500.0;
 /// The phase of the INS after power-on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Phase {
+    /// No navigation filter runs ([`super::NavState::set_enabled`]: an
+    /// image whose processor cannot afford it): no solution.
+    Off,
     /// Coarse alignment: the unit is assumed still, its accelerometers and
     /// magnetometer averaged ([`super::ALIGN_S`]).
     Aligning,
@@ -70,8 +73,10 @@ pub fn ins_status(x: &Inputs<'_>) -> u32 {
     let hdg = kf.sigma(ATT + 2);
     let tilt = kf.sigma(ATT).max(kf.sigma(ATT + 1));
     let mut s = 0;
-    if x.phase == Phase::Aligning {
-        return SOLUTION_ALIGNING << SOLUTION_SHIFT;
+    match x.phase {
+        Phase::Off => return SOLUTION_OFF << SOLUTION_SHIFT,
+        Phase::Aligning => return SOLUTION_ALIGNING << SOLUTION_SHIFT,
+        _ => {}
     }
     if hdg < HDG_FINE_RAD {
         s |= HDG_ALIGN_FINE;

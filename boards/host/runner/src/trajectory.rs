@@ -113,6 +113,7 @@ impl Trajectory {
         let (sd, last) = self.vehicle.get_or_insert_with(|| {
             let site = Motion::default();
             let at_rest = imu_emu::sensor::motion::BuiltinMotion::new(site, 1.0).truth_now();
+            let site = imu_emu::vehicle::Site::of(&site);
             let mut start = imu_emu::vehicle::builtin_state(&site, None, &at_rest, t);
             start.rate_ib_b = w;
             start.force_b = f;
