@@ -489,7 +489,12 @@ fn nav_streams_start_on_the_grid_and_step_by_the_period() {
         // The first packet answers at once with the last step's state.
         assert!((t[0] - 1.0).abs() < 1e-9, "{d}: first at {}", t[0]);
         for w in t.windows(2) {
-            assert!((w[1] - w[0] - 0.004).abs() < 1e-9, "{d}: {} -> {}", w[0], w[1]);
+            assert!(
+                (w[1] - w[0] - 0.004).abs() < 1e-9,
+                "{d}: {} -> {}",
+                w[0],
+                w[1]
+            );
         }
     }
 }
