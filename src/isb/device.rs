@@ -761,7 +761,7 @@ impl State {
                 match cmd {
                     Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(cx),
                     Some(sys_cmd::SAVE_FLASH) => self.save(cx),
-                    Some(sys_cmd::SOFTWARE_RESET) => cx.request_reset(),
+                    Some(sys_cmd::SOFTWARE_RESET) => self.software_reset(cx),
                     Some(sys_cmd::MANF_UNLOCK) => self.unlocked = true,
                     // FLASH_CONFIG back to the factory defaults, saved, then
                     // a reset (docs/isb.md); only right after the unlock.
@@ -849,7 +849,7 @@ impl State {
                 self.nmea.table.stop();
             }
             Nmea::SavePersistent => self.save_persistent(cx),
-            Nmea::SoftwareReset => cx.request_reset(),
+            Nmea::SoftwareReset => self.software_reset(cx),
         }
     }
 
@@ -871,6 +871,17 @@ impl State {
         }
         self.persist_nmea = self.nmea.table.to_image();
         self.save(cx);
+    }
+
+    /// A software reset (`$SRST`, SYS_CMD): a FLASH_CONFIG write still
+    /// waiting for its tick is saved first, since the reset discards the
+    /// RAM copy and the write was acknowledged (a write and a reset within
+    /// one tick kept the old line rate).
+    fn software_reset(&mut self, cx: &mut impl Context<Integrals>) {
+        if self.save_pending {
+            self.save(cx);
+        }
+        cx.request_reset();
     }
 
     /// Writes FLASH_CONFIG and the persistent streams (power-fail safe); a
