@@ -33,9 +33,13 @@
 //! packet against its own time (`late_p50_us`, `late_p99_us`,
 //! `late_p999_us`, `late_max_us`: its arrival − its time field, aligned on
 //! that device's earliest, so ≥ 0: how far the stream ran behind real time
-//! at worst), and the client's own CPU (`client_cpu_pct`). With `--pid`:
+//! at worst; only in real time, a `factor` below 1.5), and the client's own
+//! CPU (`client_cpu_pct`). With `--pid`:
 //! the emulator's CPU share of one core over the window (`cpu_pct`,
-//! `/proc/PID/stat` utime + stime) and its memory (`rss_kib`, `hwm_kib`).
+//! `/proc/PID/stat` utime + stime), the device seconds it computed per
+//! second of its CPU (`device_s_per_cpu_s`: about what `--speed max` reaches
+//! with a core of its own and a client that keeps up) and its memory (`rss_kib`,
+//! `hwm_kib`).
 //! With `--control` (the emulator's control socket): the emulator's own
 //! counts summed over the devices at the end — frames its TX queues
 //! dropped (`emu_tx_dropped`), bytes its transports' backlogs dropped for a
@@ -337,7 +341,6 @@ fn main() {
     print!(
         "devices={} packets={} checked={} wrong_steps={} missing_periods={} repeated={} \
          timebase_switches={} decoder_errors={} wall_s={secs:.1} factor={factor:.3} \
-         late_p50_us={:.0} late_p99_us={:.0} late_p999_us={:.0} late_max_us={:.0} \
          client_cpu_pct={:.1}",
         devs.len(),
         sum(|d| d.packets),
@@ -347,16 +350,23 @@ fn main() {
         sum(|d| d.repeated),
         sum(|d| d.switches),
         devs.iter().map(|d| u64::from(d.dec.errors())).sum::<u64>(),
-        pct(0.5),
-        pct(0.99),
-        pct(0.999),
-        late.last().copied().unwrap_or(0.0),
         (self1 - self0) as f64 / hz / secs * 100.0,
     );
-    if let Some(pid) = &pid {
+    if factor < 1.5 {
         print!(
-            " cpu_pct={:.1} rss_kib={} hwm_kib={}",
-            (cpu1 - cpu0.unwrap_or(cpu1)) as f64 / hz / secs * 100.0,
+            " late_p50_us={:.0} late_p99_us={:.0} late_p999_us={:.0} late_max_us={:.0}",
+            pct(0.5),
+            pct(0.99),
+            pct(0.999),
+            late.last().copied().unwrap_or(0.0),
+        );
+    }
+    if let Some(pid) = &pid {
+        let cpu_s = (cpu1 - cpu0.unwrap_or(cpu1)) as f64 / hz;
+        print!(
+            " cpu_pct={:.1} device_s_per_cpu_s={:.0} rss_kib={} hwm_kib={}",
+            cpu_s / secs * 100.0,
+            factor * secs / cpu_s.max(0.01),
             status_kib(pid, "VmRSS:"),
             status_kib(pid, "VmHWM:"),
         );
