@@ -659,6 +659,37 @@ fn the_line_follows_ser0_baud_rate_after_a_reset() {
     );
 }
 
+/// A FLASH_CONFIG write and a software reset in one write (both within
+/// one tick, as a client sends them back to back, or as a host that fell
+/// behind reads them): the acknowledged write is saved before the reset,
+/// not lost with the RAM copy the reset discards — by `$SRST` and by
+/// SYS_CMD alike, and it survives a power cycle.
+#[test]
+fn a_flash_config_write_and_a_reset_in_one_write_keep_the_write() {
+    let resets = [
+        b"$SRST*06\r\n".to_vec(),
+        set(
+            did::SYS_CMD,
+            0,
+            &SystemCommand::new(sys_cmd::SOFTWARE_RESET).encode(),
+        ),
+    ];
+    for reset in resets {
+        let mut b = Bench::new();
+        let mut bytes = set(
+            did::FLASH_CONFIG,
+            flash::SER0_BAUD_RATE as u16,
+            &230_400u32.to_le_bytes(),
+        );
+        bytes.extend_from_slice(&reset);
+        b.send(&bytes);
+        b.run_ticks(1);
+        assert_eq!(b.dev.line_rate(), 230_400);
+        let b = b.power_cycle();
+        assert_eq!(b.dev.line_rate(), 230_400, "saved");
+    }
+}
+
 /// IMU_RAW streams every `startupImuDtMs` (1 ms by default) multiple.
 #[test]
 fn imu_raw_streams_every_imu_period() {

@@ -391,3 +391,67 @@ fn a_power_cycle_after_nav_is_a_warm_start() {
     r.fly_s(5.3);
     assert!(nav(&mut r), "NAV right after the alignment");
 }
+
+/// A nav-period packet's own time, s: the INS header's time of week,
+/// INL2_STATES' time of week, INL2_NED_SIGMA's in ms (their SDK 2.7.1
+/// layouts, docs/isb-data-sets.md).
+fn nav_time(d: u8, p: &[u8]) -> f64 {
+    let f64_at = |o: usize| f64::from_le_bytes(p[o..o + 8].try_into().unwrap());
+    match d {
+        did::INL2_STATES => f64_at(0),
+        did::INL2_NED_SIGMA => f64::from(u32::from_le_bytes(p[0..4].try_into().unwrap())) / 1e3,
+        _ => f64_at(4),
+    }
+}
+
+/// Streams of every navigation-period data set asked for between two
+/// navigation periods start on the navigation grid and step by exactly
+/// the period from their first packet (a client checking the period from
+/// the packets' own times sees no step but 4 ms), and one-shot GETs read
+/// the last period's time: the filter's state is the last navigation
+/// step's, whichever data set carries it (INL2_STATES and INL2_NED_SIGMA
+/// were stamped "now", half a millisecond off the grid).
+#[test]
+fn nav_streams_start_on_the_grid_and_step_by_the_period() {
+    const NAV: [u8; 6] = [
+        did::INS_1,
+        did::INS_2,
+        did::INS_3,
+        did::INS_4,
+        did::INL2_STATES,
+        did::INL2_NED_SIGMA,
+    ];
+    let mut r = Run::new(&IMX5_PROFILE, 3);
+    // 1.0015 s: between two 4 ms periods.
+    r.fly(2003);
+    for d in NAV {
+        let p = r.send(&get(d, 0));
+        assert_eq!(p.len(), 1, "{d}");
+        assert!((nav_time(d, &p[0].1) - 1.0).abs() < 1e-9, "one-shot {d}");
+    }
+    // 1.003 s.
+    r.fly(3);
+    let mut got = Vec::new();
+    for d in NAV {
+        got.extend(r.send(&get(d, 1)));
+    }
+    got.extend(r.fly_s(2.0));
+    for d in NAV {
+        let t: Vec<f64> = got
+            .iter()
+            .filter(|(id, _)| *id == d)
+            .map(|(_, p)| nav_time(d, p))
+            .collect();
+        assert!(t.len() >= 499, "{d}: {} packets", t.len());
+        // The first packet answers at once with the last step's state.
+        assert!((t[0] - 1.0).abs() < 1e-9, "{d}: first at {}", t[0]);
+        for w in t.windows(2) {
+            assert!(
+                (w[1] - w[0] - 0.004).abs() < 1e-9,
+                "{d}: {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+    }
+}

@@ -142,9 +142,10 @@ impl State {
         let truth = || self.truth(cx);
         let cfg = self.nav_config();
         let (since_ns, gps) = self.gps_time(cx);
-        // INS, magnetometer, barometer: stamped on their output grid (the
-        // last multiple of the source period), as streams are, also in a
-        // one-shot GET.
+        // INS, the filter's states and sigmas, magnetometer, barometer:
+        // stamped on their output grid (the last multiple of the source
+        // period: the navigation step the state is from), as streams are,
+        // also in a one-shot GET and a stream's first packet.
         let back = match did::lookup(u16::from(did)) {
             Some(set)
                 if matches!(
@@ -153,6 +154,8 @@ impl State {
                         | did::INS_2
                         | did::INS_3
                         | did::INS_4
+                        | did::INL2_STATES
+                        | did::INL2_NED_SIGMA
                         | did::MAGNETOMETER
                         | did::BAROMETER
                 ) =>

@@ -99,6 +99,17 @@ impl State {
         self.save(cx);
     }
 
+    /// A software reset (`$SRST`, SYS_CMD): a FLASH_CONFIG write still
+    /// waiting for its tick is saved first, since the reset discards the
+    /// RAM copy and the write was acknowledged (a write and a reset within
+    /// one tick kept the old line rate).
+    pub(super) fn software_reset(&mut self, cx: &mut impl Context<Integrals>) {
+        if self.save_pending {
+            self.save(cx);
+        }
+        cx.request_reset();
+    }
+
     /// Writes FLASH_CONFIG and the persistent streams (power-fail safe); a
     /// flash failure leaves the write pending.
     pub(super) fn save(&mut self, cx: &mut impl Context<Integrals>) {

@@ -110,7 +110,7 @@ impl State {
                 match cmd {
                     Some(sys_cmd::SAVE_PERSISTENT_MESSAGES) => self.save_persistent(cx),
                     Some(sys_cmd::SAVE_FLASH) => self.save(cx),
-                    Some(sys_cmd::SOFTWARE_RESET) => cx.request_reset(),
+                    Some(sys_cmd::SOFTWARE_RESET) => self.software_reset(cx),
                     Some(sys_cmd::MANF_UNLOCK) => self.unlocked = true,
                     // FLASH_CONFIG back to the factory defaults, saved, then
                     // a reset (docs/isb.md); only right after the unlock.
@@ -169,7 +169,7 @@ impl State {
                 self.nmea.table.stop();
             }
             Nmea::SavePersistent => self.save_persistent(cx),
-            Nmea::SoftwareReset => cx.request_reset(),
+            Nmea::SoftwareReset => self.software_reset(cx),
         }
     }
 }

@@ -119,11 +119,13 @@ impl<T: Transport, P: HostProtocol> HostPort<T, P> {
         let total: u64 = rejected.iter().map(|r| r.1).sum();
         let mut s = format!(
             "mode={mode} format={format} output-rate={rate} line-rate={} frames-sent={} \
-             bytes-sent={} tx-dropped={} held-back-ms={} commands={} rejected={total}",
+             bytes-sent={} tx-dropped={} backlog-dropped={} held-back-ms={} commands={} \
+             rejected={total}",
             dev.line_rate(),
             self.link.frames_sent(),
             self.line_bytes,
             dev.tx_dropped(),
+            self.transport.backlog_dropped(),
             self.held_back_ns / 1_000_000,
             self.monitor.commands(),
         );

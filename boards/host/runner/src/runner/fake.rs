@@ -73,6 +73,10 @@ impl Transport for Mem {
         0
     }
 
+    fn backlog_dropped(&self) -> u64 {
+        0
+    }
+
     fn connected(&self) -> bool {
         true
     }

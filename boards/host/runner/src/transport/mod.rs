@@ -84,6 +84,10 @@ pub trait Transport {
     /// Bytes waiting in the backlog.
     fn backlog_len(&self) -> usize;
 
+    /// Bytes the backlog dropped so far because the client did not read
+    /// them in time (`status backlog-dropped=`).
+    fn backlog_dropped(&self) -> u64;
+
     /// Whether a client is connected (a TCP client accepted, the pty's
     /// slave open), as of the last [`Transport::wait`],
     /// [`Transport::receive`] or [`Transport::poll_client`]. While none is,

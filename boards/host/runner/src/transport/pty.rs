@@ -338,6 +338,10 @@ impl Transport for PtyTransport {
         self.backlog.len()
     }
 
+    fn backlog_dropped(&self) -> u64 {
+        self.backlog.dropped()
+    }
+
     fn connected(&self) -> bool {
         self.open
     }

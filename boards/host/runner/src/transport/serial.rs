@@ -266,6 +266,10 @@ impl Transport for SerialTransport {
         self.backlog.len()
     }
 
+    fn backlog_dropped(&self) -> u64 {
+        self.backlog.dropped()
+    }
+
     fn connected(&self) -> bool {
         self.open.is_some()
     }

@@ -179,7 +179,12 @@ impl Transport for TcpTransport {
         // Level-triggered: a listener not polled (backing off) is not
         // accepted from; what is not seen now is seen at the next wait.
         self.listener_ready = listener.is_some_and(|r| r.intersects(readable));
-        self.client_ready = client.is_some_and(|r| r.intersects(readable));
+        // A wait that held input back did not ask for it, so seeing
+        // nothing says nothing: the next receive reads (else the rest of a
+        // command cut by the line-rate pacing waited a pass longer, one
+        // that ran up to 128 ms of ticks and so let the device abandon the
+        // command's first part).
+        self.client_ready = self.hold || client.is_some_and(|r| r.intersects(readable));
         if client.is_some_and(|r| r.intersects(gone)) {
             self.hung_up = true;
         }
@@ -268,6 +273,10 @@ impl Transport for TcpTransport {
         self.backlog.len()
     }
 
+    fn backlog_dropped(&self) -> u64 {
+        self.backlog.dropped()
+    }
+
     fn connected(&self) -> bool {
         self.client.is_some()
     }
@@ -283,6 +292,7 @@ impl Transport for TcpTransport {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::backlog::DEFAULT_CAPACITY;
     use std::io::Write as _;
     use std::time::Duration;
 
@@ -351,5 +361,65 @@ mod tests {
             got
         };
         assert_eq!(got, b"hi");
+    }
+
+    /// Output a client does not read fills the kernel's buffers, then the
+    /// 64 KiB backlog, then is dropped oldest first and counted
+    /// (`status backlog-dropped=`): every byte sent is read, waiting or
+    /// counted as dropped, none twice.
+    #[test]
+    fn what_a_client_does_not_read_in_time_is_counted_as_dropped() {
+        let mut t = TcpTransport::bind("127.0.0.1:0").unwrap();
+        let mut c = TcpStream::connect(t.local_addr()).unwrap();
+        assert!(t.poll_client().unwrap());
+        let chunk: Vec<u8> = (0..=255u8).cycle().take(64 * 1024).collect();
+        let mut sent = 0u64;
+        // Far more than the loopback socket's buffers take.
+        while t.backlog_dropped() == 0 && sent < 1 << 30 {
+            t.send(&chunk).unwrap();
+            t.flush().unwrap();
+            sent += chunk.len() as u64;
+        }
+        assert!(t.backlog_dropped() > 0);
+        assert_eq!(t.backlog_len(), DEFAULT_CAPACITY);
+        c.set_nonblocking(true).unwrap();
+        let mut read = 0u64;
+        let mut buf = vec![0u8; 1 << 16];
+        loop {
+            t.flush().unwrap();
+            match c.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => read += n as u64,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    if t.backlog_len() == 0 {
+                        break;
+                    }
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                Err(e) => panic!("{e}"),
+            }
+        }
+        assert_eq!(t.backlog_len(), 0);
+        assert_eq!(read + t.backlog_dropped(), sent);
+    }
+
+    /// Input held back ([`Transport::hold_input`]) is read at the first
+    /// receive after a wait, though that wait did not ask for it: the rest
+    /// of a command the line-rate pacing cut must reach the device at the
+    /// next pass, not a pass later.
+    #[test]
+    fn held_input_is_read_after_the_next_wait() {
+        let mut t = TcpTransport::bind("127.0.0.1:0").unwrap();
+        let mut c = TcpStream::connect(t.local_addr()).unwrap();
+        assert!(t.poll_client().unwrap());
+        c.write_all(b"abcdef").unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        let mut got = Vec::new();
+        t.receive(2, &mut |b| got.extend_from_slice(b)).unwrap();
+        assert_eq!(got, b"ab");
+        t.hold_input(true);
+        t.wait(Duration::from_millis(1)).unwrap();
+        t.hold_input(false);
+        assert_eq!(received(&mut t), b"cdef");
     }
 }

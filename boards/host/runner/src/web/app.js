@@ -80,11 +80,12 @@ function showStatus(s, on, deviceTime) {
     ["mode", "mode"], ["format", "output format"], ["output-rate", "output rate, Hz"],
     ["line-rate", "line rate, bit/s"], ["frames-sent", "frames sent"], ["bytes-sent", "bytes sent"],
     ["tx-dropped", "frames dropped (TX full)"], ["commands", "commands received"],
+    ["backlog-dropped", "bytes dropped (client too slow)"],
     ["held-back-ms", "device time held back, ms"],
   ];
   row(t, "device time, s", deviceTime.toFixed(3));
   if (state.towAtZero !== null) row(t, "GPS time of week, s", tow(deviceTime).toFixed(3));
-  for (const [k, label] of keys) if (k in s) row(t, label, s[k], k === "tx-dropped" && s[k] !== "0");
+  for (const [k, label] of keys) if (k in s) row(t, label, s[k], (k === "tx-dropped" || k === "backlog-dropped") && s[k] !== "0");
   const rj = $("rejected");
   rj.replaceChildren();
   row(rj, "total", s.rejected || "0", s.rejected && s.rejected !== "0");
