@@ -465,7 +465,7 @@ pub fn an_extrig_edge_gives_strobe_in_time_and_pstrb(kind: Kind) {
 /// and GPS1_POS every 200 ms stream from power-on; once INS_2 says NAV
 /// (the cold start's fix at 30 s) the figures are zeroed, and a second of
 /// navigation (GNSS epochs with their updates, propagations, the
-/// mechanisation every period) is measured. The guide's budget, 50 000
+/// mechanisation every period) is measured. The budget, 50 000
 /// cycles a tick, is met (docs/performance.md "Navigation filter": 38 960
 /// instructions at the worst tick, measured 2026-12-06, from 207 360 and
 /// 497 240 before); the bound is that figure plus 15 %, under the budget:
