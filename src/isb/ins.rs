@@ -1327,7 +1327,7 @@ impl NavState {
     /// position, velocity and — with an antenna offset — attitude, the
     /// receiver's errors, the offset), so that a report asked for again of
     /// the same is not converted again (soft double precision on the
-    /// firmware: [`Stage::Report`]).
+    /// firmware: `Stage::Report`).
     pub fn gps_report(&self, truth: &NavTruth, cfg: &NavConfig) -> Option<GnssReport> {
         if !self.fixed {
             return None;

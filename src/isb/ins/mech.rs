@@ -144,9 +144,9 @@ impl Nominal {
         }
     }
 
-    /// Moves the anchor of [`Nominal::earth`] to the position, and scales
+    /// Moves the anchor of `Nominal::earth` to the position, and scales
     /// the attitude back to unit length (the periods since the last call
-    /// left it within 10⁻⁹ of one: [`turn`]).
+    /// left it within 10⁻⁹ of one: `turn`).
     pub fn refresh(&mut self) {
         self.earth = Earth::at(self.lat, self.h);
         self.q = quat_normalize(&self.q);
