@@ -26,6 +26,7 @@ pub mod fields;
 pub mod ins;
 pub mod layout;
 pub mod message;
+pub mod model;
 pub mod nav;
 pub mod nav_sets;
 pub mod nmea;
@@ -35,3 +36,4 @@ pub mod packet;
 pub mod sets;
 
 pub use device::Isb;
+pub use model::IMX5;

@@ -8,9 +8,11 @@ pub mod device;
 pub mod fields;
 pub mod formats;
 pub mod frame;
+pub mod model;
 pub mod params;
 pub mod rate;
 pub mod status;
 pub mod udd;
 
 pub use device::{Kernel, KernelDevice, MAX_FRAME, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+pub use model::{Capability, ProductError, MODELS};

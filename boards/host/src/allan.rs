@@ -41,8 +41,9 @@ use anyhow::{bail, Context as _};
 use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::device::{Device, PowerOn};
 use imu_emu::dsp::variant::OutputVariant;
+use imu_emu::kernel::Capability;
 use imu_emu::kernel::Kernel;
-use imu_emu::model::{Capability, Product};
+use imu_emu::model::Product;
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::time::Instant;
 
@@ -335,7 +336,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         None => None,
     };
     let product = crate::allan_input::product(&a.model)?;
-    let imx = core::ptr::eq(product.model, &imu_emu::model::IMX5);
+    let imx = core::ptr::eq(product.model, &imu_emu::isb::IMX5);
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
         return Err(crate::error::UsageError(format!(
