@@ -27,7 +27,7 @@
 //!    a stall loses no frame the line had time for;
 //! 2. feeds at most [`MAX_RX`] bytes the UART received into `on_rx`;
 //! 3. drains `poll_tx` into the UART at the line rate
-//!    ([`imu_emu::line::Pacer`]): bytes allowed = elapsed × `line_rate()/10`
+//!    ([`imu_emu::Pacer`]): bytes allowed = elapsed × `line_rate()/10`
 //!    with a fractional accumulator, never more than the UART's room, never
 //!    blocking;
 //! 4. acts on events: `LineRate` → the UART switches once everything before

@@ -38,14 +38,14 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
-use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::device::{Device, PowerOn};
-use imu_emu::dsp::variant::OutputVariant;
 use imu_emu::kernel::Capability;
 use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::time::Instant;
+use imu_emu::OutputVariant;
+use imu_emu::{ChainConfig, SignalChain};
 
 use crate::flash::MemNor;
 use crate::plot::Kind;
@@ -528,7 +528,7 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
     const RAD_S: [&str; 6] = ["pqr_x", "pqr_y", "pqr_z", "acc_x", "acc_y", "acc_z"];
     const DELTAS: [&str; 6] = ["theta_x", "theta_y", "theta_z", "vel_x", "vel_y", "vel_z"];
     let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::math::G);
+    let g = f64::from(imu_emu::G);
     // Per column: its index and the factor to °/s or g; a PIMU's `dt`.
     let (cols, scale, dt, what): (Vec<usize>, Vec<f64>, Option<usize>, &str) =
         if col("did").is_some() {
@@ -778,7 +778,7 @@ mod tests {
     /// White noise of known density: the fit reads it (and no floor).
     #[test]
     fn the_fit_reads_white_noise() {
-        let mut rng = imu_emu::sensor::rng::Rng::new(3);
+        let mut rng = imu_emu::sensor::Rng::new(3);
         let n = 0.01;
         let rate = 100.0;
         let mut p = Phases::new(1.0 / rate, 200_000, 6);

@@ -206,7 +206,7 @@ fn isb(bytes: &[u8]) -> Samples {
     let mut rows = Vec::new();
     let mut skipped = 0usize;
     let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::math::G);
+    let g = f64::from(imu_emu::G);
     while let Some(p) = rx.next_packet(&mut input) {
         // A data set from its start (with or without the offset flag).
         let data = (p.kind() == Some(PacketType::Data))

@@ -6,7 +6,7 @@
 //! schedule ([`imu_emu::schedule`], the same code the firmware shell runs):
 //! ticks on absolute deadlines `k × period`, each with its own deadline as
 //! `now`; before each tick the line is advanced to that deadline and the
-//! device's TX queue drained at the line rate ([`imu_emu::line::Pacer`]);
+//! device's TX queue drained at the line rate ([`imu_emu::Pacer`]);
 //! input after the ticks due; a line-rate switch after the bytes queued
 //! before it. This board adds:
 //!
@@ -66,11 +66,11 @@ use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
 use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
-use imu_emu::line::Pacer;
 use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Pass, Port, Schedule};
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
+use imu_emu::Pacer;
 
 use crate::clock::{Clock, Speed, MAX_BACKLOG, MAX_BATCH_TICKS};
 use crate::control::{self, Control};
@@ -183,7 +183,7 @@ pub const MAX_ROUND_TICKS: u64 = 1024;
 /// which a frame cut short is abandoned (both 100 ms), and a tick.
 const RX_SETTLE_NS: u64 = {
     let k = imu_emu::kernel::RX_IDLE_ABANDON_NS;
-    let i = imu_emu::isb::device::RX_IDLE_ABANDON_NS;
+    let i = imu_emu::isb::RX_IDLE_ABANDON_NS;
     if k > i {
         k
     } else {
@@ -535,7 +535,7 @@ impl<F: NorFlash, T: Transport, P: HostPersonality> Port<F, P> for HostPort<T> {
                     None => dev
                         .chain()
                         .truth_attitude()
-                        .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
+                        .map(|q| imu_emu::euler_from_quat(&q).map(f32::to_degrees)),
                 };
                 // Where the unit is (the vehicle's, or the built-in
                 // motion's fixed place): the page's position track.
