@@ -183,7 +183,7 @@ use crate::dsp::fir::{self, Bandwidth, FirDesign, CHANNELS};
 use crate::dsp::integrals::{Integrals, Integrate, NoIntegrals};
 use crate::dsp::variant::OutputVariant;
 use crate::math::rotation::{Quat, Vec3};
-use crate::model::{Capability, Product};
+use crate::model::Product;
 use crate::sensor::errors::ErrorModel;
 use crate::sensor::motion::{Motion, MotionSource, Truth, TruthFrame};
 use crate::sensor::profile::SensorProfile;
@@ -524,7 +524,7 @@ impl<I: Integrate> SignalChain<I> {
     pub fn reset(&mut self, product: Product, seed: u64) {
         let rate_hz = product.model.internal_rate_hz;
         let dt = 1.0 / rate_hz as f32;
-        let has_aux = product.model.has(Capability::AuxAccel);
+        let has_aux = product.model.aux_accel;
         let mut rng = Rng::new(seed);
         let profile = match self.profile {
             Some(p) => *p,

@@ -166,8 +166,8 @@ impl Core {
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         Core {
             engines: [
-                TriadEngineFixed::new(product.gyro.full_scale() as f32, GYRO_BITS),
-                TriadEngineFixed::new(product.accel.full_scale() as f32, ACC_BITS),
+                TriadEngineFixed::new(product.gyro_range_dps as f32, GYRO_BITS),
+                TriadEngineFixed::new(product.accel_range_g as f32, ACC_BITS),
                 TriadEngineFixed::new(AUX_RANGE_G, ACC_BITS),
             ],
             motion: BuiltinMotionFixed::new(Motion::default(), dt),

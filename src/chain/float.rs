@@ -118,8 +118,8 @@ impl Core {
         #[allow(unused_mut)]
         let mut core = Core {
             engines: [
-                TriadEngine::new(product.gyro.full_scale() as f32),
-                TriadEngine::new(product.accel.full_scale() as f32),
+                TriadEngine::new(product.gyro_range_dps as f32),
+                TriadEngine::new(product.accel_range_g as f32),
                 TriadEngine::new(AUX_RANGE_G),
             ],
             motion: BuiltinMotion::new(Motion::default(), dt),
@@ -130,8 +130,7 @@ impl Core {
         };
         // A unit without the aux accelerometer does not filter its (zero)
         // channels; no output reads them (`Core::take`).
-        core.cascade
-            .set_aux_live(product.model.has(crate::model::Capability::AuxAccel));
+        core.cascade.set_aux_live(product.model.aux_accel);
         core
     }
 

@@ -22,22 +22,40 @@
 //! - [`asce`]: the `$ASCE` table and parser; [`nmea_out`]: the sentences
 //!   the IMX-5 prints; [`nmea_stream`]: when each is due.
 
-pub mod asce;
-pub mod aux_sets;
-pub mod can;
-pub mod device;
+//!
+//! The codec façade a host tool needs is [`packet`] (framing), [`message`]
+//! (the requests and replies), [`did`] (the data sets and their sizes),
+//! [`layout`] (decoding by field name: the field tables and
+//! [`layout::read`]), [`sets`] (the data sets' layouts,
+//! their typed decoders and the command sets: SYS_CMD, BIT, FLASH_CONFIG),
+//! [`nmea`] (the NMEA checksum and commands), and the few items
+//! re-exported here; the rest is the
+//! personality's insides.
+
 pub mod did;
-pub mod ins;
 pub mod layout;
-pub mod magcal;
 pub mod message;
-pub mod nav;
-pub mod nav_sets;
 pub mod nmea;
-pub mod nmea_out;
-pub mod nmea_stream;
 pub mod packet;
-pub mod rtos;
 pub mod sets;
 
-pub use device::Isb;
+internal! {
+    mod asce;
+    mod aux_sets;
+    mod can;
+    mod device;
+    mod ins;
+    mod magcal;
+    mod model;
+    mod nav;
+    mod nav_sets;
+    mod nmea_out;
+    mod nmea_stream;
+    mod rtos;
+}
+
+pub use device::{Isb, RX_IDLE_ABANDON_NS};
+pub use ins::NavFaults;
+pub use model::IMX5;
+pub use nav::{gps_s_of_unix, GPS_EPOCH_UNIX_S};
+pub use nav_sets::Ins2;

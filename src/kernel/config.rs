@@ -98,7 +98,7 @@ pub fn chain_config(block: &Block, product: &Product) -> ChainConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::MODELS;
+    use crate::kernel::model::MODELS;
 
     /// Power-on is unchanged: the chain's own defaults are what the KERNEL's
     /// factory block selects, for every product of every model.
@@ -107,16 +107,16 @@ mod tests {
         for m in MODELS {
             for &(gyro, accel) in m.products {
                 let p = Product {
-                    model: m,
-                    gyro,
-                    accel,
+                    model: &m.model,
+                    gyro_range_dps: gyro.full_scale(),
+                    accel_range_g: accel.full_scale(),
                 };
                 let block = params::factory_block(&p);
                 assert_eq!(
                     chain_config(&block, &p),
                     ChainConfig::defaults(&p),
                     "{}",
-                    m.short
+                    m.model.short
                 );
             }
         }

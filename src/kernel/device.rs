@@ -14,10 +14,11 @@ use crate::kernel::command::{self, Command};
 use crate::kernel::fields::{self, Field, OutputCtx};
 use crate::kernel::formats::{self, UDD};
 use crate::kernel::frame::{self, Decoder, TYPE_COMMAND, TYPE_DATA};
+use crate::kernel::model::{self, Capability};
 use crate::kernel::params::{self, Apply, Block, ParamSpec, BLOCK_LEN};
 use crate::kernel::{config, rate, status, udd};
 use crate::line::TX_CAP;
-use crate::model::{Capability, Product};
+use crate::model::Product;
 use crate::personality::{Context, Personality};
 use crate::store::KernelImage;
 use crate::time::Instant;
@@ -658,7 +659,7 @@ fn dev_info(cx: &impl Context<NoIntegrals>) -> [u8; 166] {
     let fw = &fw[..fw.len().min(40)];
     p[0..8].copy_from_slice(&sn);
     p[8..8 + fw.len()].copy_from_slice(fw);
-    p[49] = product.model.imu_type;
+    p[49] = model::row(product.model).imu_type;
     p[50..58].copy_from_slice(&sn);
     p[58..58 + fw.len()].copy_from_slice(fw);
     p

@@ -364,9 +364,9 @@ impl Field {
         // The triads first, through one call site of each writer (so
         // that it can be inlined once).
         let triad = match self {
-            Field::Gyro => Some((&s.gyro, ctx.product.gyro.kg(), false)),
+            Field::Gyro => Some((&s.gyro, ctx.product.gyro().kg(), false)),
             Field::GyroHr => Some((&s.gyro, RATE_HR_SCALE, true)),
-            Field::Acc => Some((&s.acc, ctx.product.accel.ka(), false)),
+            Field::Acc => Some((&s.acc, ctx.product.accel().ka(), false)),
             Field::AccHr => Some((&s.acc, ACC_HR_SCALE, true)),
             Field::AuxAccHr => Some((&s.aux_acc, ACC_HR_SCALE, true)),
             Field::GyroBiasCompHr => Some((&s.gyro_filtered, RATE_HR_SCALE, true)),
@@ -451,8 +451,8 @@ impl Scales {
     /// The scales `product` encodes with (Table 5.6).
     pub const fn of(product: &Product) -> Scales {
         Scales {
-            kg: product.gyro.kg(),
-            ka: product.accel.ka(),
+            kg: product.gyro().kg(),
+            ka: product.accel().ka(),
         }
     }
 }

@@ -1,16 +1,29 @@
 //! The KERNEL protocol personality (ICD section 5, Appendix A).
+//!
+//! The codec façade a host tool needs: [`frame`] (framing: encode, the
+//! streaming decoder), [`command`] (the commands), [`params`] (the
+//! parameter table, 5.24), [`decode`] (typed values of every format and
+//! UDD type; [`Field`], [`Value`]), [`formats`] (the format table),
+//! [`rate`] (Formula 5.1), [`model`] (the models and product codes); the personality [`Kernel`]. The rest is the
+//! personality's insides.
 
-pub mod block;
 pub mod command;
-pub mod config;
 pub mod decode;
-pub mod device;
-pub mod fields;
 pub mod formats;
 pub mod frame;
+pub mod model;
 pub mod params;
 pub mod rate;
-pub mod status;
-pub mod udd;
+
+internal! {
+    mod block;
+    mod config;
+    mod device;
+    mod fields;
+    mod status;
+    mod udd;
+}
 
 pub use device::{Kernel, KernelDevice, MAX_FRAME, RX_FRAME_CAP, RX_IDLE_ABANDON_NS};
+pub use fields::{Field, Scales, Value};
+pub use model::{Capability, ProductError, MODELS};

@@ -7,7 +7,8 @@
 //! by [`crate::store`]. Each row gives the length, type, default, validation
 //! rule and *when a saved value reaches the running device* ([`Apply`]).
 
-use crate::model::{Capability, Product};
+use crate::kernel::model::{self, Capability};
+use crate::model::Product;
 
 pub use super::block::{Block, BLOCK_LEN, UDD_CONFIG_OFFSET, UDD_MAX_TYPES};
 
@@ -430,7 +431,7 @@ impl ParamSpec {
                 let v = int();
                 v == 0 || product.model.supports_format(v as u8)
             }
-            Rule::Lpf => product.model.lpf_codes.contains(&(int() as u8)),
+            Rule::Lpf => model::row(product.model).lpf_codes.contains(&(int() as u8)),
             Rule::Switch {
                 cap,
                 exclusive_with,
@@ -511,8 +512,8 @@ mod tests {
 
     #[test]
     fn every_default_validates_on_every_model() {
-        for m in crate::model::MODELS {
-            let product = Product::parse(m.short).unwrap();
+        for m in crate::kernel::model::MODELS {
+            let product = Product::parse(m.model.short).unwrap();
             let block = factory_block(&product);
             for p in PARAMS {
                 if matches!(p.rule, Rule::ReadOnly | Rule::Unsupported) {
@@ -523,7 +524,7 @@ mod tests {
                     Ok(()),
                     "{} on {}",
                     p.name,
-                    m.short
+                    m.model.short
                 );
             }
         }

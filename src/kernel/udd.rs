@@ -3,7 +3,8 @@
 
 use super::block::{Block, UDD_CONFIG_OFFSET, UDD_MAX_TYPES};
 use super::fields::Field;
-use crate::model::{Capability, Product};
+use crate::kernel::model::Capability;
+use crate::model::Product;
 
 /// One UDD type of Table 5.15.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,7 +127,7 @@ pub fn find(code: u8) -> Option<&'static UddType> {
 /// The row of `code` if `product` supports it.
 pub fn supported(code: u8, product: &Product) -> Option<&'static UddType> {
     find(code).filter(|t| {
-        (t.starred || !product.model.udd_starred_only)
+        (t.starred || !crate::kernel::model::row(product.model).udd_starred_only)
             && t.requires.is_none_or(|c| product.model.has(c))
     })
 }

@@ -6,17 +6,21 @@
 //! [`crate::chain`]; the filters in [`crate::dsp`], alignment and attitude in
 //! [`crate::ahrs`].
 
-pub mod bandwidth;
-pub mod errors;
-pub mod motion;
 pub mod profile;
 pub mod profiles;
-pub mod rng;
-pub mod temperature;
+
+internal! {
+    mod bandwidth;
+    mod errors;
+    mod motion;
+    mod rng;
+    mod temperature;
+}
 
 pub use errors::{AxisErrors, ErrorModel, SensorErrors};
-pub use motion::{Motion, MotionSource, Truth, TruthFrame};
+pub use motion::{BuiltinMotion, Motion, MotionSource, Truth, TruthFrame, DEFAULT_LATITUDE_DEG};
 pub use profile::{SensorProfile, SensorSpec, TemperatureSpec};
+pub use rng::Rng;
 
 /// One sample of everything the output formats carry, in physical units and
 /// carrier axes (ICD 5.2 notes: X lateral, Y longitudinal, Z vertical), after

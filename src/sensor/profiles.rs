@@ -29,7 +29,8 @@
 //!   before profiles existed; misalignment 0.01° 1σ is ICD 2.2
 //!   ("non-orthogonality … in the order of 0.01°"). Ranges are those of the
 //!   model's first product code (ICD 3.2.2); a product code's range option
-//!   replaces them (`crate::model::Product::sensor_profile`).
+//!   replaces them (`crate::model::Product::sensor_profile`, the ranges
+//!   of `kernel/model.rs`).
 //!
 //! | profile | gyro ARW °/√h | gyro B °/h | acc VRW m/s/√h | acc B µg |
 //! |---|---|---|---|---|

@@ -27,7 +27,7 @@
 //!    a stall loses no frame the line had time for;
 //! 2. feeds at most [`MAX_RX`] bytes the UART received into `on_rx`;
 //! 3. drains `poll_tx` into the UART at the line rate
-//!    ([`imu_emu::line::Pacer`]): bytes allowed = elapsed × `line_rate()/10`
+//!    ([`imu_emu::Pacer`]): bytes allowed = elapsed × `line_rate()/10`
 //!    with a fractional accumulator, never more than the UART's room, never
 //!    blocking;
 //! 4. acts on events: `LineRate` → the UART switches once everything before
@@ -52,7 +52,6 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Deque;
 pub use imu_emu;
 use imu_emu::device::{Device, Level, Pin, PowerOn};
-use imu_emu::kernel::Kernel;
 use imu_emu::personality::Personality;
 use imu_emu::schedule::{Limits, Port, Schedule};
 use imu_emu::time::Instant;
@@ -180,17 +179,10 @@ pub struct Stats {
 /// copies of it on the stack.
 ///
 /// `P` is the device's protocol personality ([`Personality`]; ARCHITECTURE.md
-/// "Shell and personalities"): the KERNEL by default, or e.g.
-/// [`imu_emu::isb::Isb`]. One image carries one personality.
-pub struct Shell<
-    'd,
-    F: NorFlash,
-    U: Uart,
-    C: Clock,
-    T: TovPin,
-    E: EdgeSource,
-    P: Personality = Kernel,
-> {
+/// "Shell and personalities"), e.g. [`imu_emu::kernel::Kernel`] or
+/// [`imu_emu::isb::Isb`], with no default. One image carries one
+/// personality ([`image::Proto`] chooses it for the MCU boards).
+pub struct Shell<'d, F: NorFlash, U: Uart, C: Clock, T: TovPin, E: EdgeSource, P: Personality> {
     dev: &'d mut Device<F, P>,
     sched: Schedule<CHUNK>,
     io: Io<U, C, T, E>,

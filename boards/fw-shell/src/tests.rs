@@ -6,6 +6,7 @@ use std::rc::Rc;
 use std::vec::Vec;
 
 use imu_emu::device::{Level, Pin, PowerOn};
+use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
 use imu_emu::nor::RamNor;
 use imu_emu::time::Instant;
@@ -88,7 +89,7 @@ impl EdgeSource for FakeEdges {
     }
 }
 
-type TestShell = Shell<'static, RamNor<8192>, FakeUart, FakeClock, FakeTov, FakeEdges>;
+type TestShell = Shell<'static, RamNor<8192>, FakeUart, FakeClock, FakeTov, FakeEdges, Kernel>;
 
 /// A K110 powered on at board time 1 ms (so the epoch is not 0).
 fn shell() -> (TestShell, Shared) {

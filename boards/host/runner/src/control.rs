@@ -36,9 +36,9 @@ use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 
-use imu_emu::chain::Faults;
 use imu_emu::device::{Level, Pin};
 use imu_emu::sensor::Motion;
+use imu_emu::Faults;
 
 use crate::link::{Dir, LinkChange, MAX_NOISE};
 use crate::transport::AcceptGuard;

@@ -18,7 +18,7 @@
 //!   The same feed and seed give the same output bytes.
 //!
 //! Full-state rows (after a full-state header, `docs/feed.md`) drive the
-//! unit's vehicle ([`imu_emu::chain::SignalChain::set_vehicle`]) instead of
+//! unit's vehicle ([`imu_emu::SignalChain::set_vehicle`]) instead of
 //! its rates and forces: in real time the newest row's state holds, its
 //! rates and forces the row's own or, without them, derived from the last
 //! two rows at the newest ([`fullstate::between`]); in lockstep the state
@@ -30,7 +30,7 @@
 //! after one that does not end a line). Every sample and rejection is
 //! counted ([`FeedState::status`]); a rejection is logged at `-v`.
 //!
-//! [`Faults::motion_feed_lost`]: imu_emu::chain::Faults::motion_feed_lost
+//! [`Faults::motion_feed_lost`]: imu_emu::Faults::motion_feed_lost
 
 use std::collections::VecDeque;
 use std::io;

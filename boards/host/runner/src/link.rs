@@ -26,7 +26,7 @@
 use std::collections::VecDeque;
 
 use imu_emu::framing::Framing;
-use imu_emu::sensor::rng::Rng;
+use imu_emu::sensor::Rng;
 
 /// Most bytes a stall holds back; beyond it output is dropped (counted in
 /// [`LinkStats::stall_dropped`]). 1 s of line at 921 600 bit/s.

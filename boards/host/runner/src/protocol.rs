@@ -96,7 +96,7 @@ impl HostProtocol for Isb {
     const PROTOCOL: Protocol = Protocol::Isb;
     /// ser0BaudRate's factory value (FLASH_CONFIG).
     const FACTORY_RATE: u32 = imu_emu::isb::sets::flash::DEFAULT_BAUD_RATE;
-    const RX_IDLE_NS: u64 = imu_emu::isb::device::RX_IDLE_ABANDON_NS;
+    const RX_IDLE_NS: u64 = imu_emu::isb::RX_IDLE_ABANDON_NS;
     /// The IMX reports its own port counters (PORT_MONITOR).
     type Monitor = Silent;
 

@@ -112,7 +112,7 @@ impl Trajectory {
         let f = housing_to_body(&truth.specific_force_g.map(|x| f64::from(x) * G_ICD));
         let (sd, last) = self.vehicle.get_or_insert_with(|| {
             let site = Motion::default();
-            let at_rest = imu_emu::sensor::motion::BuiltinMotion::new(site, 1.0).truth_now();
+            let at_rest = imu_emu::sensor::BuiltinMotion::new(site, 1.0).truth_now();
             let site = imu_emu::vehicle::Site::of(&site);
             let mut start = imu_emu::vehicle::builtin_state(&site, None, &at_rest, t);
             start.rate_ib_b = w;

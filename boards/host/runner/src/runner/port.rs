@@ -7,10 +7,10 @@
 
 use embedded_storage::nor_flash::NorFlash;
 use imu_emu::device::{Device, Level, Pin};
-use imu_emu::line::Pacer;
 use imu_emu::schedule::Port;
 use imu_emu::sensor::Motion;
 use imu_emu::time::Instant;
+use imu_emu::Pacer;
 
 use crate::control::Control;
 use crate::feed::{FeedSocket, FeedState};
@@ -281,7 +281,7 @@ impl<F: NorFlash, T: Transport, P: HostProtocol> Port<F, P> for HostPort<T, P> {
                     None => dev
                         .chain()
                         .truth_attitude()
-                        .map(|q| imu_emu::math::rotation::euler_from_quat(&q).map(f32::to_degrees)),
+                        .map(|q| imu_emu::euler_from_quat(&q).map(f32::to_degrees)),
                 };
                 // Where the unit is (the vehicle's, or the built-in
                 // motion's fixed place): the page's position track.

@@ -288,7 +288,7 @@ mod tests {
     /// White noise of known density: the fit reads it (and no floor).
     #[test]
     fn the_fit_reads_white_noise() {
-        let mut rng = imu_emu::sensor::rng::Rng::new(3);
+        let mut rng = imu_emu::sensor::Rng::new(3);
         let n = 0.01;
         let rate = 100.0;
         let mut p = Phases::new(1.0 / rate, 200_000, 6);

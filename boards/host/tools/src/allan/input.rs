@@ -206,7 +206,7 @@ fn isb(bytes: &[u8]) -> Samples {
     let mut rows = Vec::new();
     let mut skipped = 0usize;
     let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::math::G);
+    let g = f64::from(imu_emu::G);
     while let Some(p) = rx.next_packet(&mut input) {
         // A data set from its start (with or without the offset flag).
         let data = (p.kind() == Some(PacketType::Data))
@@ -289,7 +289,7 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
     const RAD_S: [&str; 6] = ["pqr_x", "pqr_y", "pqr_z", "acc_x", "acc_y", "acc_z"];
     const DELTAS: [&str; 6] = ["theta_x", "theta_y", "theta_z", "vel_x", "vel_y", "vel_z"];
     let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::math::G);
+    let g = f64::from(imu_emu::G);
     // Per column: its index and the factor to °/s or g; a PIMU's `dt`.
     let (cols, scale, dt, what): (Vec<usize>, Vec<f64>, Option<usize>, &str) =
         if col("did").is_some() {

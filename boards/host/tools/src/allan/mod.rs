@@ -38,13 +38,14 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use imu_emu::chain::{ChainConfig, SignalChain};
 use imu_emu::device::{Device, PowerOn};
-use imu_emu::dsp::variant::OutputVariant;
+use imu_emu::kernel::Capability;
 use imu_emu::kernel::Kernel;
-use imu_emu::model::{Capability, Product};
+use imu_emu::model::Product;
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
 use imu_emu::time::Instant;
+use imu_emu::OutputVariant;
+use imu_emu::{ChainConfig, SignalChain};
 
 use crate::plot::Kind;
 
@@ -122,7 +123,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         None => None,
     };
     let product = input::product(&a.model)?;
-    let imx = core::ptr::eq(product.model, &imu_emu::model::IMX5);
+    let imx = core::ptr::eq(product.model, &imu_emu::isb::IMX5);
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
         return Err(crate::error::UsageError(format!(

@@ -5,8 +5,8 @@
 //! (Table 5.4).
 
 use imu_emu::kernel::decode as kernel;
-use imu_emu::kernel::fields::{Field, Scales, Value};
 use imu_emu::kernel::formats;
+use imu_emu::kernel::{Field, Scales, Value};
 use imu_emu::model::Product;
 
 /// One decoded frame: its identifier and `(column, value)` pairs in
