@@ -246,6 +246,25 @@ struct ReportKey {
     ant: [f32; 3],
 }
 
+impl ReportKey {
+    /// The key of a report of `truth` with the receiver's errors `err`
+    /// (position, velocity) and `cfg`'s antenna offset.
+    fn of(truth: &NavTruth, cfg: &NavConfig, err: &([f64; 3], [f64; 3])) -> Self {
+        ReportKey {
+            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
+            v: truth.v_ned,
+            q: if cfg.gps1_ant_offset == [0.0; 3] {
+                [0.0; 4]
+            } else {
+                truth.q_nb
+            },
+            err_pos: err.0,
+            err_vel: err.1,
+            ant: cfg.gps1_ant_offset,
+        }
+    }
+}
+
 /// What the aiding sensors read at a navigation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aiding {
@@ -359,8 +378,9 @@ enum Stage {
     Declination,
     /// The magnetometer read and fused, the epoch's correction.
     MagUpdate,
-    /// The receiver's report of the epoch ([`NavState::gps_report`]) made
-    /// ready for the GPS data sets.
+    /// The receiver's report of the epoch ([`NavState::gps_report`]), of
+    /// the fix [`Stage::Fix`] read, made ready for the GPS data sets (also
+    /// with the filter off).
     Report,
     Done,
 }
@@ -371,8 +391,10 @@ struct Epoch {
     input: Input,
     cfg: NavConfig,
     stage: Stage,
-    /// The fix (resolved at [`Stage::Fix`]).
+    /// The fix (resolved at [`Stage::Fix`]) and the receiver's errors
+    /// (position, velocity) it was made with (its report's key).
     fix: Option<Fix>,
+    err: ([f64; 3], [f64; 3]),
     /// Fusing the fix: the antenna's lever arm in NED, the ground speed,
     /// the heading σ before the updates, whether it began NAV.
     ant: V3,
@@ -522,7 +544,9 @@ impl NavState {
     /// Whether the navigation filter runs (from power-on it does). Off,
     /// the INS reports no solution (`insStatus` solution 0, `lastLla`, at
     /// rest, level, facing north: [`NavState::solution`]) and computes
-    /// nothing of its own; the aiding sensors' models (GNSS receiver,
+    /// nothing of its own but the receiver's report of each epoch, made
+    /// ready on the ticks before it as with the filter ([`Stage::Report`]:
+    /// the firmware's tick budget); the aiding sensors' models (GNSS receiver,
     /// magnetometer, barometer) and their data sets run as before. What an
     /// image serves whose processor cannot afford the filter
     /// (`docs/navigation.md` "Firmware cost": the RP2040). On again, the
@@ -732,9 +756,6 @@ impl NavState {
         if inc.dt.is_nan() || inc.dt <= 0.0 {
             return;
         }
-        if self.phase == Phase::Off {
-            return;
-        }
         self.period_s = inc.dt;
         // The epoch at the end of the next period: its aiding is read now
         // and fused on the ticks of that period.
@@ -754,10 +775,14 @@ impl NavState {
             self.align(t_s, inc, aid, cfg);
             return;
         }
-        let dv_n = self.nom.mechanise(inc);
-        self.prop_dt += inc.dt;
-        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
-        self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
+        // The filter off, the epoch's work is the receiver's report alone
+        // ([`Stage::Report`]), made ready ahead of the epoch all the same.
+        if self.phase != Phase::Off {
+            let dv_n = self.nom.mechanise(inc);
+            self.prop_dt += inc.dt;
+            self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
+            self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
+        }
         // Every aiding source enters at the receiver's epochs, so the state
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
         // on the next period's outputs); between them the position is the
@@ -779,6 +804,7 @@ impl NavState {
                 cfg: *cfg,
                 stage: Stage::Propagate,
                 fix,
+                err: ([0.0; 3], [0.0; 3]),
                 ant: [0.0; 3],
                 speed: 0.0,
                 hdg_sigma: 0.0,
@@ -830,22 +856,30 @@ impl NavState {
     /// One step of a receiver epoch; whether it had anything to do.
     fn stage(&mut self, e: &mut Epoch, stage: Stage) -> bool {
         let cfg = e.cfg;
+        // The filter off, only the receiver's fix and report are made.
+        let on = self.phase != Phase::Off;
+        if !on && !matches!(stage, Stage::Fix | Stage::Report) {
+            return false;
+        }
         let mag_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0;
-        let gps_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
+        let gps_fusion = on && cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
         match stage {
             Stage::Propagate => self.propagate(),
             Stage::Fix => {
+                // The fix the report is made of too ([`Stage::Report`]):
+                // one conversion a step (the firmware's tick budget).
+                let mut read = false;
                 if let Input::Truth(truth, _, _) = e.input {
-                    if gps_fusion {
-                        e.fix = self.gnss(&truth, &cfg);
-                    }
+                    e.fix = self.gnss(&truth, &cfg);
+                    e.err = (self.gnss_pos, self.gnss_vel);
+                    read = e.fix.is_some();
                 }
                 match e.fix {
                     Some(fix) if gps_fusion => {
                         self.fuse_gnss_pos(e, &fix);
                         true
                     }
-                    _ => false,
+                    _ => read,
                 }
             }
             Stage::GnssVel => match e.fix {
@@ -880,12 +914,16 @@ impl NavState {
                 true
             }
             // The truth of a unit at a built-in site (every firmware
-            // image's) does not move: the report made here is the one the
-            // epoch's GPS data sets find. A moving vehicle's is made again
-            // when they are sent.
-            Stage::Report => match e.input {
-                Input::Truth(truth, _, _) if self.fixed => {
-                    let _ = self.gps_report(&truth, &cfg);
+            // image's) does not move: the report made here, of the epoch's
+            // fix, is the one the epoch's GPS data sets find. A moving
+            // vehicle's is made again when they are sent.
+            Stage::Report => match (e.input, e.fix) {
+                (Input::Truth(truth, _, _), Some(fix)) => {
+                    let key = ReportKey::of(&truth, &cfg, &e.err);
+                    if self.report.get().is_some_and(|(k, _)| k == key) {
+                        return false;
+                    }
+                    self.remember_report(key, fix);
                     true
                 }
                 _ => false,
@@ -1332,24 +1370,19 @@ impl NavState {
         if !self.fixed {
             return None;
         }
-        let key = ReportKey {
-            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
-            v: truth.v_ned,
-            q: if cfg.gps1_ant_offset == [0.0; 3] {
-                [0.0; 4]
-            } else {
-                truth.q_nb
-            },
-            err_pos: self.gnss_pos,
-            err_vel: self.gnss_vel,
-            ant: cfg.gps1_ant_offset,
-        };
+        let key = ReportKey::of(truth, cfg, &(self.gnss_pos, self.gnss_vel));
         if let Some((k, r)) = self.report.get() {
             if k == key {
                 return Some(r);
             }
         }
-        let (lla, v) = self.gnss(truth, cfg)?;
+        let fix = self.gnss(truth, cfg)?;
+        Some(self.remember_report(key, fix))
+    }
+
+    /// The report of the fix `(lla, v)` (its ECEF position and MSL
+    /// height), remembered as made of `key`.
+    fn remember_report(&self, key: ReportKey, (lla, v): Fix) -> GnssReport {
         let r = GnssReport {
             lla,
             v,
@@ -1357,7 +1390,7 @@ impl NavState {
             h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
         };
         self.report.set(Some((key, r)));
-        Some(r)
+        r
     }
 
     /// The receiver's position (of the antenna) and NED velocity, if it
