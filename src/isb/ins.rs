@@ -712,29 +712,29 @@ impl NavState {
             t_s,
             inc,
             gps_dt_s,
-            aiding.map(|(f, a)| Input::Read(f, a)),
-            cfg,
+            aiding.map(|(f, a)| (Input::Read(f, a), cfg)),
         );
     }
 
     /// [`NavState::navigate`] with the epoch's aiding read by the INS
     /// itself, from the truth `truth` at tick `tick` (the date `year`),
     /// on the ticks of [`NavState::work`]: what the device does, so that
-    /// no tick carries a whole epoch (the firmware's tick budget).
+    /// no tick carries a whole epoch (the firmware's tick budget). The
+    /// configuration `cfg` comes with the epoch: the INS reads nothing of
+    /// it between epochs (its parse on every period was a tick's margin on
+    /// the M4F).
     pub fn navigate_truth(
         &mut self,
         t_s: f64,
         inc: &Increment,
         gps_dt_s: f64,
-        epoch: Option<(NavTruth, u64, f64)>,
-        cfg: &NavConfig,
+        epoch: Option<(NavTruth, u64, f64, &NavConfig)>,
     ) {
         self.begin(
             t_s,
             inc,
             gps_dt_s,
-            epoch.map(|(t, k, y)| Input::Truth(t, k, y)),
-            cfg,
+            epoch.map(|(t, k, y, cfg)| (Input::Truth(t, k, y), cfg)),
         );
     }
 
@@ -746,8 +746,7 @@ impl NavState {
         t_s: f64,
         inc: &Increment,
         gps_dt_s: f64,
-        input: Option<Input>,
-        cfg: &NavConfig,
+        input: Option<(Input, &NavConfig)>,
     ) {
         while self.work() {}
         self.nav_t = t_s;
@@ -764,15 +763,18 @@ impl NavState {
         self.gnss_epoch = epoch;
         let input = if due { input } else { None };
         if self.phase == Phase::Aligning {
-            let aid = input.map(|i| match i {
-                Input::Read(_, a) => a,
-                Input::Truth(truth, tick, year) => Aiding {
-                    mag: self.magnetometer(&truth, tick),
-                    pressure_kpa: 0.0,
-                    year,
-                },
+            let aid = input.map(|(i, cfg)| match i {
+                Input::Read(_, a) => (a, cfg),
+                Input::Truth(truth, tick, year) => (
+                    Aiding {
+                        mag: self.magnetometer(&truth, tick),
+                        pressure_kpa: 0.0,
+                        year,
+                    },
+                    cfg,
+                ),
             });
-            self.align(t_s, inc, aid, cfg);
+            self.align(t_s, inc, aid);
             return;
         }
         // The filter off, the epoch's work is the receiver's report alone
@@ -787,7 +789,7 @@ impl NavState {
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
         // on the next period's outputs); between them the position is the
         // integral of the velocity.
-        self.epoch = input.map(|input| {
+        self.epoch = input.map(|(input, cfg)| {
             let (fix, aid) = match input {
                 Input::Read(f, a) => (f, a),
                 Input::Truth(_, _, year) => (
@@ -937,9 +939,9 @@ impl NavState {
     /// pitch from the mean specific force, heading from the levelled mean
     /// magnetometer reading and the declination, the covariance from the
     /// profile.
-    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<Aiding>, cfg: &NavConfig) {
+    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<(Aiding, &NavConfig)>) {
         self.align_dv = [0, 1, 2].map(|k| self.align_dv[k] + inc.dv[k]);
-        let Some(aid) = aid else {
+        let Some((aid, cfg)) = aid else {
             return;
         };
         self.align_mag = [0, 1, 2].map(|k| self.align_mag[k] + f64::from(aid.mag[k]));

@@ -92,13 +92,14 @@ impl State {
                 dt,
             }
         };
-        let cfg = self.nav_config();
-        let epoch = due.then(|| {
+        // FLASH_CONFIG with the epoch (the INS reads it for nothing else).
+        let cfg = due.then(|| self.nav_config());
+        let epoch = cfg.as_ref().map(|cfg| {
             let (_, gps) = self.gps_time(cx);
             let year = ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s());
-            (self.truth(cx), tick, year)
+            (self.truth(cx), tick, year, cfg)
         });
-        self.nav.navigate_truth(t_s, &inc, gps_dt_s, epoch, &cfg);
+        self.nav.navigate_truth(t_s, &inc, gps_dt_s, epoch);
         self.save_last_lla(cx);
     }
 
