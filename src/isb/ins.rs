@@ -558,7 +558,11 @@ impl NavState {
                 self.epoch = None;
                 self.prop_due = false;
             }
-            (true, Phase::Off) => self.phase = Phase::Aligning,
+            // An epoch begun with the filter off was for the report only.
+            (true, Phase::Off) => {
+                self.phase = Phase::Aligning;
+                self.epoch = None;
+            }
             _ => {}
         }
     }
@@ -1683,18 +1687,57 @@ pub fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
 mod tests {
     use super::*;
 
+    /// The truth of a unit at rest, level, facing north at `lla`.
+    fn still_at(lla: [f64; 3]) -> NavTruth {
+        NavTruth {
+            lat_deg: lla[0],
+            lon_deg: lla[1],
+            h_m: lla[2],
+            v_ned: [0.0; 3],
+            q_nb: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+
+    /// With the filter off an epoch's steps make the receiver's report
+    /// ready and nothing else; the filter turned on in the middle of one
+    /// starts aligning, the epoch not fused.
+    #[test]
+    fn the_filter_off_epoch_makes_the_report_only() {
+        let truth = still_at([45.5, 7.25, 300.0]);
+        let cfg = NavConfig::default();
+        let inc = Increment {
+            dtheta: [0.0; 3],
+            dv: [0.0; 3],
+            dt: 0.004,
+        };
+        let mut n = NavState::new(3);
+        n.set_enabled(false);
+        n.step(COLD_START_S + 1.0, &truth);
+        // The period ending 4 ms before the epoch at 40 s takes its truth.
+        let t = 40.0 - 0.004;
+        n.navigate_truth(t - 0.004, &inc, 0.2, None);
+        assert!(n.epoch_due(t, 0.2));
+        let mut off = n.clone();
+        off.navigate_truth(t, &inc, 0.2, Some((truth, 0, 2026.9, &cfg)));
+        // The fix, then its report: two steps.
+        assert!(off.work() && off.work() && !off.work());
+        assert_eq!(off.phase(), Phase::Off);
+        let want = n.gps_report(&truth, &cfg);
+        assert!(want.is_some());
+        assert_eq!(off.report.get().map(|(_, r)| r), want);
+        n.navigate_truth(t, &inc, 0.2, Some((truth, 0, 2026.9, &cfg)));
+        assert!(n.work());
+        n.set_enabled(true);
+        assert!(!n.work());
+        assert_eq!(n.phase(), Phase::Aligning);
+    }
+
     /// GPS1_SAT is a function of the seed (and the fix) only: the same
     /// seed gives the same records, another seed another bearing; none
     /// before the fix.
     #[test]
     fn the_constellation_comes_from_the_seed() {
-        let truth = NavTruth {
-            lat_deg: 45.0,
-            lon_deg: 0.0,
-            h_m: 0.0,
-            v_ned: [0.0; 3],
-            q_nb: [1.0, 0.0, 0.0, 0.0],
-        };
+        let truth = still_at([45.0, 0.0, 0.0]);
         let t = GpsTime {
             week: 2399,
             tow_ns: 1_000_000_000,
