@@ -1900,3 +1900,51 @@ fn without_the_navigation_filter_the_ins_reports_no_solution() {
     );
     assert_eq!(b.dev.personality().nav().phase(), ins::Phase::Off);
 }
+
+/// With the navigation filter off (the RP2040 image) the receiver's report
+/// of an epoch is made ready on the ticks before it, as with the filter
+/// (`docs/navigation.md` "Firmware cost"): every GPS1_POS with a fix
+/// carries exactly the report computed directly from the receiver's fix at
+/// its tick (ECEF, ellipsoid and MSL heights, bit for bit), and the stream's
+/// bytes are the ones the unit sent when the report was made on the epoch's
+/// own tick (their digest recorded then).
+#[test]
+fn without_the_navigation_filter_gps1_pos_carries_the_receivers_report() {
+    let mut b = Bench::new();
+    b.dev.personality_mut().set_start_times(ins::StartTimes {
+        cold_s: 6.0,
+        warm_s: 6.0,
+    });
+    b.dev.personality_mut().set_navigation(false);
+    b.dev.power_cycle(Instant(b.now));
+    b.send(&get(did::GPS1_POS, 1));
+    let cfg = ins::NavConfig::default();
+    // FNV-1a over every GPS1_POS payload, in order.
+    let mut digest = 0xcbf2_9ce4_8422_2325u64;
+    let (mut sent, mut fixed) = (0, 0);
+    for _ in 0..20_000 {
+        for p in b.run_ticks(1) {
+            if p.did != did::GPS1_POS {
+                continue;
+            }
+            sent += 1;
+            for &x in &p.payload {
+                digest = (digest ^ u64::from(x)).wrapping_mul(0x100_0000_01b3);
+            }
+            let pos = GpsPos::decode(&p.payload.clone().try_into().unwrap());
+            let nav = b.dev.personality().nav();
+            let Some((lla, _)) = nav.gnss(&nav::truth_of(b.dev.chain()), &cfg) else {
+                assert_eq!(pos.status, 0, "no fix, no position");
+                continue;
+            };
+            fixed += 1;
+            let bits = |v: [f64; 3]| v.map(f64::to_bits);
+            assert_eq!(bits(pos.lla), bits(lla));
+            assert_eq!(bits(pos.ecef), bits(nav::ecef_of(&lla)));
+            let msl = (lla[2] - earth::geoid_undulation_m(lla[0], lla[1])) as f32;
+            assert_eq!(pos.h_msl.to_bits(), msl.to_bits());
+        }
+    }
+    assert_eq!((sent, fixed), (50, 20));
+    assert_eq!(digest, 0x01a0_e6c2_226f_741d, "GPS1_POS's bytes changed");
+}

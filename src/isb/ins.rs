@@ -246,6 +246,25 @@ struct ReportKey {
     ant: [f32; 3],
 }
 
+impl ReportKey {
+    /// The key of a report of `truth` with the receiver's errors `err`
+    /// (position, velocity) and `cfg`'s antenna offset.
+    fn of(truth: &NavTruth, cfg: &NavConfig, err: &([f64; 3], [f64; 3])) -> Self {
+        ReportKey {
+            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
+            v: truth.v_ned,
+            q: if cfg.gps1_ant_offset == [0.0; 3] {
+                [0.0; 4]
+            } else {
+                truth.q_nb
+            },
+            err_pos: err.0,
+            err_vel: err.1,
+            ant: cfg.gps1_ant_offset,
+        }
+    }
+}
+
 /// What the aiding sensors read at a navigation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aiding {
@@ -359,8 +378,9 @@ enum Stage {
     Declination,
     /// The magnetometer read and fused, the epoch's correction.
     MagUpdate,
-    /// The receiver's report of the epoch ([`NavState::gps_report`]) made
-    /// ready for the GPS data sets.
+    /// The receiver's report of the epoch ([`NavState::gps_report`]), of
+    /// the fix [`Stage::Fix`] read, made ready for the GPS data sets (also
+    /// with the filter off).
     Report,
     Done,
 }
@@ -371,8 +391,10 @@ struct Epoch {
     input: Input,
     cfg: NavConfig,
     stage: Stage,
-    /// The fix (resolved at [`Stage::Fix`]).
+    /// The fix (resolved at [`Stage::Fix`]) and the receiver's errors
+    /// (position, velocity) it was made with (its report's key).
     fix: Option<Fix>,
+    err: ([f64; 3], [f64; 3]),
     /// Fusing the fix: the antenna's lever arm in NED, the ground speed,
     /// the heading σ before the updates, whether it began NAV.
     ant: V3,
@@ -522,7 +544,9 @@ impl NavState {
     /// Whether the navigation filter runs (from power-on it does). Off,
     /// the INS reports no solution (`insStatus` solution 0, `lastLla`, at
     /// rest, level, facing north: [`NavState::solution`]) and computes
-    /// nothing of its own; the aiding sensors' models (GNSS receiver,
+    /// nothing of its own but the receiver's report of each epoch, made
+    /// ready on the ticks before it as with the filter ([`Stage::Report`]:
+    /// the firmware's tick budget); the aiding sensors' models (GNSS receiver,
     /// magnetometer, barometer) and their data sets run as before. What an
     /// image serves whose processor cannot afford the filter
     /// (`docs/navigation.md` "Firmware cost": the RP2040). On again, the
@@ -534,7 +558,11 @@ impl NavState {
                 self.epoch = None;
                 self.prop_due = false;
             }
-            (true, Phase::Off) => self.phase = Phase::Aligning,
+            // An epoch begun with the filter off was for the report only.
+            (true, Phase::Off) => {
+                self.phase = Phase::Aligning;
+                self.epoch = None;
+            }
             _ => {}
         }
     }
@@ -688,29 +716,29 @@ impl NavState {
             t_s,
             inc,
             gps_dt_s,
-            aiding.map(|(f, a)| Input::Read(f, a)),
-            cfg,
+            aiding.map(|(f, a)| (Input::Read(f, a), cfg)),
         );
     }
 
     /// [`NavState::navigate`] with the epoch's aiding read by the INS
     /// itself, from the truth `truth` at tick `tick` (the date `year`),
     /// on the ticks of [`NavState::work`]: what the device does, so that
-    /// no tick carries a whole epoch (the firmware's tick budget).
+    /// no tick carries a whole epoch (the firmware's tick budget). The
+    /// configuration `cfg` comes with the epoch: the INS reads nothing of
+    /// it between epochs (its parse on every period was a tick's margin on
+    /// the M4F).
     pub fn navigate_truth(
         &mut self,
         t_s: f64,
         inc: &Increment,
         gps_dt_s: f64,
-        epoch: Option<(NavTruth, u64, f64)>,
-        cfg: &NavConfig,
+        epoch: Option<(NavTruth, u64, f64, &NavConfig)>,
     ) {
         self.begin(
             t_s,
             inc,
             gps_dt_s,
-            epoch.map(|(t, k, y)| Input::Truth(t, k, y)),
-            cfg,
+            epoch.map(|(t, k, y, cfg)| (Input::Truth(t, k, y), cfg)),
         );
     }
 
@@ -722,17 +750,13 @@ impl NavState {
         t_s: f64,
         inc: &Increment,
         gps_dt_s: f64,
-        input: Option<Input>,
-        cfg: &NavConfig,
+        input: Option<(Input, &NavConfig)>,
     ) {
         while self.work() {}
         self.nav_t = t_s;
         self.gps_step = core::mem::take(&mut self.gps_step_next);
         self.mag_aiding &= self.mag_ok;
         if inc.dt.is_nan() || inc.dt <= 0.0 {
-            return;
-        }
-        if self.phase == Phase::Off {
             return;
         }
         self.period_s = inc.dt;
@@ -743,26 +767,33 @@ impl NavState {
         self.gnss_epoch = epoch;
         let input = if due { input } else { None };
         if self.phase == Phase::Aligning {
-            let aid = input.map(|i| match i {
-                Input::Read(_, a) => a,
-                Input::Truth(truth, tick, year) => Aiding {
-                    mag: self.magnetometer(&truth, tick),
-                    pressure_kpa: 0.0,
-                    year,
-                },
+            let aid = input.map(|(i, cfg)| match i {
+                Input::Read(_, a) => (a, cfg),
+                Input::Truth(truth, tick, year) => (
+                    Aiding {
+                        mag: self.magnetometer(&truth, tick),
+                        pressure_kpa: 0.0,
+                        year,
+                    },
+                    cfg,
+                ),
             });
-            self.align(t_s, inc, aid, cfg);
+            self.align(t_s, inc, aid);
             return;
         }
-        let dv_n = self.nom.mechanise(inc);
-        self.prop_dt += inc.dt;
-        self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
-        self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
+        // The filter off, the epoch's work is the receiver's report alone
+        // ([`Stage::Report`]), made ready ahead of the epoch all the same.
+        if self.phase != Phase::Off {
+            let dv_n = self.nom.mechanise(inc);
+            self.prop_dt += inc.dt;
+            self.prop_dv_n = [0, 1, 2].map(|k| self.prop_dv_n[k] + dv_n[k]);
+            self.prop_due = self.prop_dt >= PROPAGATE_S - 1e-9;
+        }
         // Every aiding source enters at the receiver's epochs, so the state
         // steps only there (GPS_UPDATE_IN_SOLUTION marks those with a fix,
         // on the next period's outputs); between them the position is the
         // integral of the velocity.
-        self.epoch = input.map(|input| {
+        self.epoch = input.map(|(input, cfg)| {
             let (fix, aid) = match input {
                 Input::Read(f, a) => (f, a),
                 Input::Truth(_, _, year) => (
@@ -779,6 +810,7 @@ impl NavState {
                 cfg: *cfg,
                 stage: Stage::Propagate,
                 fix,
+                err: ([0.0; 3], [0.0; 3]),
                 ant: [0.0; 3],
                 speed: 0.0,
                 hdg_sigma: 0.0,
@@ -830,22 +862,30 @@ impl NavState {
     /// One step of a receiver epoch; whether it had anything to do.
     fn stage(&mut self, e: &mut Epoch, stage: Stage) -> bool {
         let cfg = e.cfg;
+        // The filter off, only the receiver's fix and report are made.
+        let on = self.phase != Phase::Off;
+        if !on && !matches!(stage, Stage::Fix | Stage::Report) {
+            return false;
+        }
         let mag_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_MAG_FUSION == 0;
-        let gps_fusion = cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
+        let gps_fusion = on && cfg.sys_cfg_bits & SYS_CFG_NO_GPS1_FUSION == 0;
         match stage {
             Stage::Propagate => self.propagate(),
             Stage::Fix => {
+                // The fix the report is made of too ([`Stage::Report`]):
+                // one conversion a step (the firmware's tick budget).
+                let mut read = false;
                 if let Input::Truth(truth, _, _) = e.input {
-                    if gps_fusion {
-                        e.fix = self.gnss(&truth, &cfg);
-                    }
+                    e.fix = self.gnss(&truth, &cfg);
+                    e.err = (self.gnss_pos, self.gnss_vel);
+                    read = e.fix.is_some();
                 }
                 match e.fix {
                     Some(fix) if gps_fusion => {
                         self.fuse_gnss_pos(e, &fix);
                         true
                     }
-                    _ => false,
+                    _ => read,
                 }
             }
             Stage::GnssVel => match e.fix {
@@ -880,12 +920,16 @@ impl NavState {
                 true
             }
             // The truth of a unit at a built-in site (every firmware
-            // image's) does not move: the report made here is the one the
-            // epoch's GPS data sets find. A moving vehicle's is made again
-            // when they are sent.
-            Stage::Report => match e.input {
-                Input::Truth(truth, _, _) if self.fixed => {
-                    let _ = self.gps_report(&truth, &cfg);
+            // image's) does not move: the report made here, of the epoch's
+            // fix, is the one the epoch's GPS data sets find. A moving
+            // vehicle's is made again when they are sent.
+            Stage::Report => match (e.input, e.fix) {
+                (Input::Truth(truth, _, _), Some(fix)) => {
+                    let key = ReportKey::of(&truth, &cfg, &e.err);
+                    if self.report.get().is_some_and(|(k, _)| k == key) {
+                        return false;
+                    }
+                    self.remember_report(key, fix);
                     true
                 }
                 _ => false,
@@ -899,9 +943,9 @@ impl NavState {
     /// pitch from the mean specific force, heading from the levelled mean
     /// magnetometer reading and the declination, the covariance from the
     /// profile.
-    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<Aiding>, cfg: &NavConfig) {
+    fn align(&mut self, t_s: f64, inc: &Increment, aid: Option<(Aiding, &NavConfig)>) {
         self.align_dv = [0, 1, 2].map(|k| self.align_dv[k] + inc.dv[k]);
-        let Some(aid) = aid else {
+        let Some((aid, cfg)) = aid else {
             return;
         };
         self.align_mag = [0, 1, 2].map(|k| self.align_mag[k] + f64::from(aid.mag[k]));
@@ -1332,24 +1376,19 @@ impl NavState {
         if !self.fixed {
             return None;
         }
-        let key = ReportKey {
-            pos: [truth.lat_deg, truth.lon_deg, truth.h_m],
-            v: truth.v_ned,
-            q: if cfg.gps1_ant_offset == [0.0; 3] {
-                [0.0; 4]
-            } else {
-                truth.q_nb
-            },
-            err_pos: self.gnss_pos,
-            err_vel: self.gnss_vel,
-            ant: cfg.gps1_ant_offset,
-        };
+        let key = ReportKey::of(truth, cfg, &(self.gnss_pos, self.gnss_vel));
         if let Some((k, r)) = self.report.get() {
             if k == key {
                 return Some(r);
             }
         }
-        let (lla, v) = self.gnss(truth, cfg)?;
+        let fix = self.gnss(truth, cfg)?;
+        Some(self.remember_report(key, fix))
+    }
+
+    /// The report of the fix `(lla, v)` (its ECEF position and MSL
+    /// height), remembered as made of `key`.
+    fn remember_report(&self, key: ReportKey, (lla, v): Fix) -> GnssReport {
         let r = GnssReport {
             lla,
             v,
@@ -1357,7 +1396,7 @@ impl NavState {
             h_msl: (lla[2] - geoid_undulation_m(lla[0], lla[1])) as f32,
         };
         self.report.set(Some((key, r)));
-        Some(r)
+        r
     }
 
     /// The receiver's position (of the antenna) and NED velocity, if it
@@ -1648,18 +1687,57 @@ pub fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
 mod tests {
     use super::*;
 
+    /// The truth of a unit at rest, level, facing north at `lla`.
+    fn still_at(lla: [f64; 3]) -> NavTruth {
+        NavTruth {
+            lat_deg: lla[0],
+            lon_deg: lla[1],
+            h_m: lla[2],
+            v_ned: [0.0; 3],
+            q_nb: [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+
+    /// With the filter off an epoch's steps make the receiver's report
+    /// ready and nothing else; the filter turned on in the middle of one
+    /// starts aligning, the epoch not fused.
+    #[test]
+    fn the_filter_off_epoch_makes_the_report_only() {
+        let truth = still_at([45.5, 7.25, 300.0]);
+        let cfg = NavConfig::default();
+        let inc = Increment {
+            dtheta: [0.0; 3],
+            dv: [0.0; 3],
+            dt: 0.004,
+        };
+        let mut n = NavState::new(3);
+        n.set_enabled(false);
+        n.step(COLD_START_S + 1.0, &truth);
+        // The period ending 4 ms before the epoch at 40 s takes its truth.
+        let t = 40.0 - 0.004;
+        n.navigate_truth(t - 0.004, &inc, 0.2, None);
+        assert!(n.epoch_due(t, 0.2));
+        let mut off = n.clone();
+        off.navigate_truth(t, &inc, 0.2, Some((truth, 0, 2026.9, &cfg)));
+        // The fix, then its report: two steps.
+        assert!(off.work() && off.work() && !off.work());
+        assert_eq!(off.phase(), Phase::Off);
+        let want = n.gps_report(&truth, &cfg);
+        assert!(want.is_some());
+        assert_eq!(off.report.get().map(|(_, r)| r), want);
+        n.navigate_truth(t, &inc, 0.2, Some((truth, 0, 2026.9, &cfg)));
+        assert!(n.work());
+        n.set_enabled(true);
+        assert!(!n.work());
+        assert_eq!(n.phase(), Phase::Aligning);
+    }
+
     /// GPS1_SAT is a function of the seed (and the fix) only: the same
     /// seed gives the same records, another seed another bearing; none
     /// before the fix.
     #[test]
     fn the_constellation_comes_from_the_seed() {
-        let truth = NavTruth {
-            lat_deg: 45.0,
-            lon_deg: 0.0,
-            h_m: 0.0,
-            v_ned: [0.0; 3],
-            q_nb: [1.0, 0.0, 0.0, 0.0],
-        };
+        let truth = still_at([45.0, 0.0, 0.0]);
         let t = GpsTime {
             week: 2399,
             tow_ns: 1_000_000_000,

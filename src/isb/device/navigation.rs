@@ -59,30 +59,47 @@ impl State {
     /// navigation grid): the chain's coning- and sculling-corrected
     /// increments of the period — the Δθ, Δv a PIMU of that period reports
     /// — in body axes, the receiver's fix, the magnetometer and barometer
-    /// as the unit reads them; then `lastLla` saved if the INS asks.
+    /// as the unit reads them; then `lastLla` saved if the INS asks. With
+    /// the filter off (`Isb::set_navigation`) a period is only the epoch's
+    /// truth, for the receiver's report made ready ahead of the epoch.
     pub(super) fn navigate(&mut self, cx: &mut impl Context<Integrals>) {
-        // No filter, nothing to give it (`Isb::set_navigation`).
-        if self.nav.phase() == ins::Phase::Off {
-            return;
-        }
-        let w = integrals::window(&self.nav_grid[0], &self.nav_grid[1], rate(cx));
         let tick = cx.time().ticks();
         let t_s = tick as f64 / f64::from(rate(cx));
-        let inc = mech::Increment {
-            dtheta: crate::vehicle::housing_to_body(&w.dtheta_rad),
-            dv: crate::vehicle::housing_to_body(&w.dv_mps),
-            dt: w.samples as f64 / f64::from(rate(cx)),
-        };
-        let cfg = self.nav_config();
         let gps_dt_s = f64::from(self.gps_dt_ms) / 1000.0;
-        let (_, gps) = self.gps_time(cx);
         // The aiding sensors are read at the receiver's epochs only, by the
         // INS on the ticks that follow (`nav_work`).
-        let epoch = self.nav.epoch_due(t_s, gps_dt_s).then(|| {
+        let due = self.nav.epoch_due(t_s, gps_dt_s);
+        // The filter off takes no increments (their conversion is soft
+        // double precision on the RP2040, whose filter is off), and a
+        // period without an epoch brings it nothing.
+        let off = self.nav.phase() == ins::Phase::Off;
+        if off && !due {
+            return;
+        }
+        let [start, end] = &self.nav_grid;
+        let dt = end.samples.wrapping_sub(start.samples) as f64 / f64::from(rate(cx));
+        let inc = if off {
+            mech::Increment {
+                dtheta: [0.0; 3],
+                dv: [0.0; 3],
+                dt,
+            }
+        } else {
+            let w = integrals::window(start, end, rate(cx));
+            mech::Increment {
+                dtheta: crate::vehicle::housing_to_body(&w.dtheta_rad),
+                dv: crate::vehicle::housing_to_body(&w.dv_mps),
+                dt,
+            }
+        };
+        // FLASH_CONFIG with the epoch (the INS reads it for nothing else).
+        let cfg = due.then(|| self.nav_config());
+        let epoch = cfg.as_ref().map(|cfg| {
+            let (_, gps) = self.gps_time(cx);
             let year = ins::decimal_year(gps.week as f64 * nav::WEEK_S as f64 + gps.tow_s());
-            (self.truth(cx), tick, year)
+            (self.truth(cx), tick, year, cfg)
         });
-        self.nav.navigate_truth(t_s, &inc, gps_dt_s, epoch, &cfg);
+        self.nav.navigate_truth(t_s, &inc, gps_dt_s, epoch);
         self.save_last_lla(cx);
     }
 
