@@ -27,7 +27,7 @@
 //! **The codec façades**: what a host tool needs to speak each protocol —
 //! [`kernel`] ([`kernel::frame`], [`kernel::command`], [`kernel::params`],
 //! [`kernel::decode`]) and [`isb`] ([`isb::packet`], [`isb::message`],
-//! [`isb::did`], [`isb::sets`], [`isb::fields`]); [`framing`] is the
+//! [`isb::did`], [`isb::sets`], [`isb::layout`]); [`framing`] is the
 //! scanner trait both decoders implement.
 //!
 //! ```

@@ -8,7 +8,7 @@
 //!
 //! * [`runner`] — the loop: the core's shared tick/pump schedule
 //!   ([`imu_emu::schedule`]: ticks on absolute deadlines, line-rate pacing
-//!   with [`imu_emu::line::Pacer`], input) with bounded work per pass, and
+//!   with [`imu_emu::Pacer`], input) with bounded work per pass, and
 //!   sleeping;
 //! * [`clock`] — device time against the host clock (`--speed`);
 //! * [`transport`] — TCP ([`transport::TcpTransport`]), pty

@@ -13,7 +13,7 @@
 //! schedule ([`imu_emu::schedule`], the same code the firmware shell runs):
 //! ticks on absolute deadlines `k × period`, each with its own deadline as
 //! `now`; before each tick the line is advanced to that deadline and the
-//! device's TX queue drained at the line rate ([`imu_emu::line::Pacer`]);
+//! device's TX queue drained at the line rate ([`imu_emu::Pacer`]);
 //! input after the ticks due; a line-rate switch after the bytes queued
 //! before it. This board adds:
 //!
@@ -31,7 +31,7 @@
 //! * **Input at the line rate**: whatever the transport delivers at once
 //!   (a 70 KB burst of commands in one TCP write, a pty or serial buffer
 //!   full), the device gets its input no faster than its UART would at
-//!   the line rate: a host-side [`Pacer`](imu_emu::line::Pacer) at the device's line rate, in
+//!   the line rate: a host-side [`Pacer`](imu_emu::Pacer) at the device's line rate, in
 //!   device time, bounds what each pass reads; the rest waits in the
 //!   transport (the kernel's buffers, then the peer: TCP flow control),
 //!   whose wait does not wake for input meanwhile
