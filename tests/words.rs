@@ -60,11 +60,11 @@ fn offending_lines(text: &str) -> Vec<usize> {
     let mut bad = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let l = line.to_lowercase();
-        let numbered = l.match_indices(&issue).any(|(i, _)| {
-            l[i + issue.len()..]
-                .chars()
-                .next()
-                .is_some_and(|c| c.is_ascii_digit())
+        // "issue 13", "issues 17–22", "issue-16".
+        let numbered = l.match_indices(&issue[..5]).any(|(i, _)| {
+            let rest = l[i + 5..].trim_start_matches('s');
+            let rest = rest.strip_prefix([' ', '-']).unwrap_or("");
+            rest.chars().next().is_some_and(|c| c.is_ascii_digit())
         });
         let guide_word = |w: &str| {
             l.match_indices(w).any(|(i, _)| {
@@ -114,8 +114,10 @@ fn no_issue_numbers_or_guide_references_outside_the_changelog() {
 fn the_check_finds_what_it_looks_for() {
     let issue = ["Iss", "ue 22 item 2: a flood"].concat();
     assert_eq!(offending_lines(&issue), vec![1]);
+    let plural = ["## After iss", "ues 17–22\nthe iss", "ue-16 main"].concat();
+    assert_eq!(offending_lines(&plural), vec![1, 2]);
     let guide = ["ok\nwithin ", "the guide's budget"].concat();
     assert_eq!(offending_lines(&guide), vec![2]);
     // Words that only look alike pass.
-    assert!(offending_lines("the issue left a choice; guidelines; issues 4 ways").is_empty());
+    assert!(offending_lines("the issue left a choice; guidelines; two issues remain").is_empty());
 }
