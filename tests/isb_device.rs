@@ -1851,12 +1851,9 @@ fn can_config_is_set_read_back_and_kept_in_flash() {
     assert_eq!(b.get_once(did::CAN_CONFIG), want);
 }
 
-/// The navigation filter off (what the RP2040 image serves: its tick cannot
-/// afford the filter): every INS_2 says so — solution OFF, not NAV — and
-/// reports `lastLla`, level, at rest, also after a power cycle, while the
-/// receiver's fix still reaches GPS1_POS.
-#[test]
-fn without_the_navigation_filter_the_ins_reports_no_solution() {
+/// A unit with the navigation filter off (as the RP2040 image runs it),
+/// its receiver's first fix 6 s after power-on.
+fn without_the_filter() -> Bench {
     let mut b = Bench::new();
     b.dev.personality_mut().set_start_times(ins::StartTimes {
         cold_s: 6.0,
@@ -1864,6 +1861,16 @@ fn without_the_navigation_filter_the_ins_reports_no_solution() {
     });
     b.dev.personality_mut().set_navigation(false);
     b.dev.power_cycle(Instant(b.now));
+    b
+}
+
+/// The navigation filter off (what the RP2040 image serves: its tick cannot
+/// afford the filter): every INS_2 says so — solution OFF, not NAV — and
+/// reports `lastLla`, level, at rest, also after a power cycle, while the
+/// receiver's fix still reaches GPS1_POS.
+#[test]
+fn without_the_navigation_filter_the_ins_reports_no_solution() {
+    let mut b = without_the_filter();
     let last_lla: Vec<f64> = (0..3)
         .map(|k| {
             let off = flash::LAST_LLA + 8 * k;
@@ -1910,13 +1917,7 @@ fn without_the_navigation_filter_the_ins_reports_no_solution() {
 /// own tick (their digest recorded then).
 #[test]
 fn without_the_navigation_filter_gps1_pos_carries_the_receivers_report() {
-    let mut b = Bench::new();
-    b.dev.personality_mut().set_start_times(ins::StartTimes {
-        cold_s: 6.0,
-        warm_s: 6.0,
-    });
-    b.dev.personality_mut().set_navigation(false);
-    b.dev.power_cycle(Instant(b.now));
+    let mut b = without_the_filter();
     b.send(&get(did::GPS1_POS, 1));
     let cfg = ins::NavConfig::default();
     // FNV-1a over every GPS1_POS payload, in order.
