@@ -166,12 +166,14 @@ impl FeedSocket {
     /// decoded outcome to `each` with how long ago (host time) the bytes
     /// that ended it reached the socket: the kernel's receive timestamp
     /// (`SO_TIMESTAMPNS`; for TCP that of the newest segment a read took),
-    /// zero where there is none. Never blocks.
+    /// zero where there is none. Never blocks. A waiting TCP client is
+    /// not taken here: the caller takes it with [`FeedSocket::accept`]
+    /// first, which tells it a new timeline begins (a client taken here
+    /// silently would have its first samples judged on the old timeline).
     pub fn read_stamped(
         &mut self,
         each: &mut dyn FnMut(Result<Sample, Reject>, Duration),
     ) -> anyhow::Result<()> {
-        self.accept()?;
         let mut buf = [0u8; 4096];
         let mut got = 0;
         match &mut self.socket {
@@ -718,7 +720,7 @@ mod tests {
             let mut send: Sender = if let FeedAddr::Tcp(_) = addr {
                 let mut c = std::net::TcpStream::connect(local).unwrap();
                 std::thread::sleep(Duration::from_millis(20));
-                sock.read_stamped(&mut |_, _| {}).unwrap(); // accept
+                assert!(sock.accept().unwrap());
                 Box::new(move |b| std::io::Write::write_all(&mut c, b).unwrap())
             } else {
                 let c = UdpSocket::bind("127.0.0.1:0").unwrap();
