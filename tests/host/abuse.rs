@@ -356,7 +356,7 @@ fn allow_remote_accepts_with_a_loud_warning() {
     start_ga(&mut c);
     let mut ctl = Control::connect(&format!("127.0.0.1:{port}"));
     assert_eq!(ctl.cmd("pps"), "ok");
-    let err = emu.stderr();
+    let err = emu.log_with(&format!("--control {control}"));
     let warnings: Vec<&str> = err.lines().filter(|l| l.contains("WARNING")).collect();
     assert_eq!(warnings.len(), 2, "{err}");
     assert!(warnings[0].contains("--tcp 0.0.0.0:0") && warnings[0].contains("network"));
@@ -424,11 +424,8 @@ fn a_half_closed_client_keeps_receiving_the_stream() {
         t0.elapsed() >= Duration::from_secs(1)
     });
     assert!(n >= 90, "{n} GA frames in 1 s after the half-close");
-    assert!(
-        emu.stderr().contains("closed its sending side"),
-        "{}",
-        emu.stderr()
-    );
+    let log = emu.log_with("closed its sending side");
+    assert!(log.contains("closed its sending side"), "{log}");
 }
 
 /// A port in use is one line with the hint `--tcp 127.0.0.1:0`, never a

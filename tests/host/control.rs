@@ -306,8 +306,7 @@ fn verbose_logs_name_why_a_frame_was_refused() {
     c.send(&command(0x77));
     c.send(&command(GET_DEV_INFO));
     c.frame_with_id(GET_DEV_INFO);
-    std::thread::sleep(Duration::from_millis(100));
-    let log = emu.stderr();
+    let log = emu.log_with("command GetDevInfo");
     assert!(
         log.contains("SaveFlash Data_Rate 33: not a divisor of 2000 — no reply, ICD 5.3.7"),
         "{log}"

@@ -189,7 +189,8 @@ fn dev_info_over_a_pty() {
     c.send(&isb_get(did::DEV_INFO, 0));
     let p = isb_packet(&mut c);
     assert_eq!((p.flags, p.did, p.payload.len()), (4, 1, 84));
-    assert!(emu.stderr().contains("921600 bit/s"), "{}", emu.stderr());
+    let log = emu.log_with("921600 bit/s");
+    assert!(log.contains("921600 bit/s"), "{log}");
 }
 
 /// GPS1_POS and INS_1 over a pty at `--speed 20` from `--gps-time`: the

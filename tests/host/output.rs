@@ -412,7 +412,7 @@ fn in_firmware_update_mode_the_monitor_does_not_decode_the_input() {
         st.contains(" commands=1 ") && st.contains(" rejected=0"),
         "{st}"
     );
-    let log = emu.stderr();
+    let log = emu.log_with("firmware-update mode (BOOT high at power-on)");
     assert!(
         log.contains("firmware-update mode (BOOT high at power-on)"),
         "{log}"

@@ -95,7 +95,7 @@ fn a_baud_mismatch_on_the_pty_garbles_both_ways_until_the_client_follows() {
     let deadline = std::time::Instant::now() + Duration::from_millis(300);
     assert!(c.frame_before(deadline).is_none());
     assert!(c.received > before);
-    let log = emu.stderr();
+    let log = emu.log_with("the client's port is at 9600 bit/s");
     let warnings: Vec<&str> = log
         .lines()
         .filter(|l| l.contains("the client's port is at"))
@@ -132,18 +132,6 @@ fn a_link_to_a_live_pty_is_refused_not_stolen() {
     assert_eq!(std::fs::read_link(&link).unwrap(), first.pty_path());
 }
 
-/// Waits (up to 3 s) for the emulator's stderr to hold `what`.
-fn wait_log(emu: &Emu, what: &str) -> String {
-    let deadline = std::time::Instant::now() + Duration::from_secs(3);
-    loop {
-        let log = emu.stderr();
-        if log.contains(what) || std::time::Instant::now() > deadline {
-            return log;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
 /// A client that sets its port's speed with serialport-rs (as the
 /// project's own client does: termios2, `BOTHER` and the integer rate,
 /// which the classic `CBAUD` bits cannot say) at 9 600 bit/s against an
@@ -177,14 +165,14 @@ fn a_termios2_client_at_the_wrong_rate_is_warned_naming_both_rates() {
     let mut c = Conn::new(Box::new(port));
     let warning = "the client's port is at 9600 bit/s, the device's line at 921600 bit/s: \
                    bytes are garbled both ways as on a real line";
-    let log = wait_log(&emu, warning);
+    let log = emu.log_with(warning);
     assert!(log.contains(warning), "{log}");
     // DEV_INFO requested at the wrong rate: garbled, unanswered.
     c.send(&support::isb_get(imu_emu::isb::did::DEV_INFO, 0));
     assert_eq!(c.drain_for(Duration::from_millis(300)), 0);
     handle.set_baud_rate(921_600).unwrap();
     let again = "the client's port matches the line rate again (921600 bit/s)";
-    let log = wait_log(&emu, again);
+    let log = emu.log_with(again);
     assert!(log.contains(again), "{log}");
     c.send(&support::isb_get(imu_emu::isb::did::DEV_INFO, 0));
     let p = support::isb_packet(&mut c);

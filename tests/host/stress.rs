@@ -242,7 +242,8 @@ fn a_closed_idle_client_frees_its_descriptor_for_the_control_socket() {
     BufReader::new(ctl).read_line(&mut line).unwrap();
     assert!(line.starts_with("ok mode=idle "), "{line:?}");
     assert!(emu.running());
-    let err = emu.stderr();
+    emu.log_with("control accept failed");
+    let err = emu.log_with("was sent nothing for 1 s: closed");
     assert!(err.contains("control accept failed"), "{err}");
     assert!(err.contains("was sent nothing for 1 s: closed"), "{err}");
 }
@@ -326,7 +327,7 @@ fn a_hung_up_serial_port_is_waited_on_and_opened_again() {
     std::os::unix::fs::symlink(&path, &link).unwrap();
     let mut c = support::Conn::new(Box::new(support::Master(master)));
     assert!(dev_info_answered(&mut c), "{}", emu.stderr());
-    let err = emu.stderr();
+    let err = emu.log_with("the port is back");
     assert_eq!(err.matches("the port hung up").count(), 1, "{err}");
     assert_eq!(err.matches("the port is back").count(), 1, "{err}");
     assert!(!err.contains("when a client connects"), "{err}");
@@ -524,7 +525,7 @@ fn failed_flash_writes_are_reported_at_most_once_a_second() {
     c.send(&support::read_ram(0x0012, 2));
     c.frame_with_id(0xB1);
     let secs = t0.elapsed().as_secs() + 1;
-    let err = emu.stderr();
+    let err = emu.log_with("failed writes so far");
     let lines = err.lines().filter(|l| l.contains("File too large")).count();
     assert!(lines >= 1, "{err}");
     assert!(lines as u64 <= secs, "{lines} lines in {secs} s: {err}");

@@ -365,6 +365,8 @@ pub struct Emu {
     /// What follows `listening on ` on the first stdout line.
     pub listening: String,
     stderr: Arc<Mutex<String>>,
+    /// Set when the stderr pipe reached its end (the process exited).
+    stderr_closed: Arc<std::sync::atomic::AtomicBool>,
     /// The stdout lines after the first.
     stdout: Arc<Mutex<Vec<String>>>,
 }
@@ -390,12 +392,15 @@ impl Emu {
         let stderr_pipe = child.stderr.take().unwrap();
         let stderr = Arc::new(Mutex::new(String::new()));
         let sink = Arc::clone(&stderr);
+        let stderr_closed = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let closed = Arc::clone(&stderr_closed);
         std::thread::spawn(move || {
             for line in BufReader::new(stderr_pipe).lines().map_while(Result::ok) {
                 let mut s = sink.lock().unwrap();
                 s.push_str(&line);
                 s.push('\n');
             }
+            closed.store(true, std::sync::atomic::Ordering::Release);
         });
         let (tx, rx) = mpsc::channel();
         let rest = Arc::new(Mutex::new(Vec::new()));
@@ -415,6 +420,7 @@ impl Emu {
             child,
             listening: String::new(),
             stderr,
+            stderr_closed,
             stdout: rest,
         };
         let line = rx
@@ -497,9 +503,28 @@ impl Emu {
         self.child.try_wait().unwrap().is_none()
     }
 
-    /// What the emulator wrote to stderr so far.
+    /// What the emulator wrote to stderr so far. A line the emulator
+    /// has just written may not be here yet (a thread reads the pipe):
+    /// to check for one, use [`Emu::log_with`].
     pub fn stderr(&self) -> String {
         self.stderr.lock().unwrap().clone()
+    }
+
+    /// The stderr log once it holds `what`, waiting (bounded by
+    /// `TIMEOUT`, or until the pipe closes) for the reader thread to
+    /// catch up; the caller asserts on what it returns.
+    pub fn log_with(&self, what: &str) -> String {
+        let deadline = Instant::now() + TIMEOUT;
+        loop {
+            let closed = self
+                .stderr_closed
+                .load(std::sync::atomic::Ordering::Acquire);
+            let log = self.stderr();
+            if log.contains(what) || closed || Instant::now() > deadline {
+                return log;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
     /// Sends SIGTERM and waits (bounded) for the exit status.
@@ -511,6 +536,15 @@ impl Emu {
         let deadline = Instant::now() + TIMEOUT;
         loop {
             if let Some(st) = self.child.try_wait().unwrap() {
+                // Let the reader thread take the last lines, so that
+                // `stderr()` after `terminate()` holds all of them.
+                while !self
+                    .stderr_closed
+                    .load(std::sync::atomic::Ordering::Acquire)
+                    && Instant::now() < deadline
+                {
+                    std::thread::sleep(Duration::from_millis(5));
+                }
                 return st;
             }
             assert!(Instant::now() < deadline, "no exit after SIGTERM");

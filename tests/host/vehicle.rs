@@ -125,11 +125,8 @@ fn a_manoeuvre_script_moves_the_unit() {
     );
     let (emu, mut c, mut ctl) = start(&["--speed", "4", "--motion", script.path()]);
     let frames = ga_until(&mut c, 10.0);
-    assert!(
-        emu.stderr().contains("manoeuvre script (2 segments, 63 s)"),
-        "{}",
-        emu.stderr()
-    );
+    let log = emu.log_with("manoeuvre script (2 segments, 63 s)");
+    assert!(log.contains("manoeuvre script (2 segments, 63 s)"), "{log}");
     let at = |secs: f64| {
         frames
             .iter()
