@@ -109,9 +109,11 @@ def render_docs_part(layouts):
         "a host reads by name (`imu-emu client --protocol isb`, the Python",
         "`imu_emu.isb` decoders): their `data_sets.h` name, offset, type and",
         "unit, as the `data_set!` declarations in `src/isb/` give them. Fields",
-        "no host reads by name (reserved bytes, `wheelConfig`, the strings of",
-        "GPS1_VERSION, the satellites and signals after the first) are in the",
-        "hand-written sections around this one.",
+        "no host reads by name (reserved bytes, `wheelConfig`'s transform, the",
+        "strings of GPS1_VERSION, the satellites and signals after the first)",
+        "are in the hand-written sections around this one. FLASH_CONFIG also",
+        "shows each field's factory value, read from the factory image the unit",
+        "restores.",
     ]
     for s in layouts["data_sets"]:
         out += [
@@ -122,9 +124,14 @@ def render_docs_part(layouts):
         if not s["fields"]:
             out.append("No field named.")
             continue
-        out += ["| offset | type | field | unit |", "|---|---|---|---|"]
+        factory = all("factory" in f for f in s["fields"])
+        if factory:
+            out += ["| offset | type | field | unit | factory |", "|---|---|---|---|---|"]
+        else:
+            out += ["| offset | type | field | unit |", "|---|---|---|---|"]
         for f in s["fields"]:
-            out.append("| %d | %s | %s | %s |" % (f["offset"], C_TYPES[f["kind"]], f["name"], f["unit"]))
+            row = "| %d | %s | %s | %s |" % (f["offset"], C_TYPES[f["kind"]], f["name"], f["unit"])
+            out.append(row + (" %s |" % f["factory"] if factory else ""))
     out += ["", END]
     return "\n".join(out)
 

@@ -400,14 +400,14 @@ crate::data_set! {
     #[derive(Debug, Clone, Copy, PartialEq, Default)]
     pub struct WheelConfig in mod wheel_config, 60 bytes {
         /// Config bits.
-        bits: u32 = BITS @ 0,
+        bits: u32 = BITS @ 0 => ["bits"],
         /// `transform_t`: Euler angles and offset from IMU to wheel frame,
         /// with their sigmas (12 × f32).
         transform: [f32; 12] = TRANSFORM @ 4,
         /// Track width, m.
-        track_width: f32 = TRACK_WIDTH @ 52,
+        track_width: f32 = TRACK_WIDTH @ 52 => ["track_width" in "m"],
         /// Wheel radius, m.
-        radius: f32 = RADIUS @ 56,
+        radius: f32 = RADIUS @ 56 => ["radius" in "m"],
     }
 }
 
@@ -485,15 +485,15 @@ crate::data_set! {
         /// Serial port 2 rate.
         ser2_baud_rate: u32 = SER2_BAUD_RATE @ 204 => ["ser2BaudRate" in "bit/s"],
         /// Wheel encoder configuration.
-        wheel_config: WheelConfig = WHEEL_CONFIG @ 208,
+        wheel_config: WheelConfig = WHEEL_CONFIG @ 208 => [.. "bits" => "wheelConfig.bits", "track_width" => "wheelConfig.track_width", "radius" => "wheelConfig.radius"],
         /// Magnetometer interference threshold.
         mag_interference_threshold: f32 = MAG_INTERFERENCE_THRESHOLD @ 268 => ["magInterferenceThreshold"],
         /// Magnetometer calibration quality threshold.
         mag_calibration_quality_threshold: f32 = MAG_CALIBRATION_QUALITY_THRESHOLD @ 272 => ["magCalibrationQualityThreshold"],
         /// Minimum GNSS C/N0, dBHz.
-        gnss_cn0_minimum: u8 = GNSS_CN0_MINIMUM @ 276,
+        gnss_cn0_minimum: u8 = GNSS_CN0_MINIMUM @ 276 => ["gnssCn0Minimum" in "dBHz"],
         /// Dynamic C/N0 minimum offset, dBHz.
-        gnss_cn0_dyn_min_offset: u8 = GNSS_CN0_DYN_MIN_OFFSET @ 277,
+        gnss_cn0_dyn_min_offset: u8 = GNSS_CN0_DYN_MIN_OFFSET @ 277 => ["gnssCn0DynMinOffset" in "dBHz"],
         /// IMU gyro fault rejection threshold, low.
         imu_reject_thresh_gyro_low: u8 = IMU_REJECT_THRESH_GYRO_LOW @ 278 => ["imuRejectThreshGyroLow"],
         /// IMU gyro fault rejection threshold, high.
@@ -505,15 +505,15 @@ crate::data_set! {
         /// IMU shock rejection options.
         imu_shock_options: u8 = IMU_SHOCK_OPTIONS @ 282 => ["imuShockOptions"],
         /// `imuShockDeltaAccHighThreshold`.
-        imu_shock_delta_acc_high: u8 = IMU_SHOCK_DELTA_ACC_HIGH @ 283,
+        imu_shock_delta_acc_high: u8 = IMU_SHOCK_DELTA_ACC_HIGH @ 283 => ["imuShockDeltaAccHighThreshold"],
         /// `imuShockDeltaAccLowThreshold`.
-        imu_shock_delta_acc_low: u8 = IMU_SHOCK_DELTA_ACC_LOW @ 284,
+        imu_shock_delta_acc_low: u8 = IMU_SHOCK_DELTA_ACC_LOW @ 284 => ["imuShockDeltaAccLowThreshold"],
         /// `imuShockDeltaGyroHighThreshold`.
-        imu_shock_delta_gyro_high: u8 = IMU_SHOCK_DELTA_GYRO_HIGH @ 285,
+        imu_shock_delta_gyro_high: u8 = IMU_SHOCK_DELTA_GYRO_HIGH @ 285 => ["imuShockDeltaGyroHighThreshold"],
         /// `imuShockDeltaGyroLowThreshold`.
-        imu_shock_delta_gyro_low: u8 = IMU_SHOCK_DELTA_GYRO_LOW @ 286,
+        imu_shock_delta_gyro_low: u8 = IMU_SHOCK_DELTA_GYRO_LOW @ 286 => ["imuShockDeltaGyroLowThreshold"],
         /// Hardware interface configuration bits, second word.
-        io_config2: u8 = IO_CONFIG2 @ 287,
+        io_config2: u8 = IO_CONFIG2 @ 287 => ["ioConfig2"],
     }
     /// First byte the checksum covers.
     pub const CHECKSUM_START: usize = 8;

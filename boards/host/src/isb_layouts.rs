@@ -1,7 +1,9 @@
 //! `imu-emu isb-layouts [--json]`: the layouts of the ISB data sets the
 //! emulated IMX-5 serves, from the one declaration of each
 //! (`imu_emu::isb::did::DATA_SETS` and the `data_set!` field tables): DID,
-//! name, C struct, size and the named fields (offset, kind, unit).
+//! name, C struct, size and the named fields (offset, kind, unit; for
+//! FLASH_CONFIG also each field's factory value, read from the factory
+//! image the emulated unit restores).
 //! `scripts/isb-layouts.py` writes the Python table
 //! (`python/imu_emu/isb_layouts.py`) and the layout part of
 //! `docs/isb-data-sets.md` from the JSON form; `python/tests` checks the
@@ -9,7 +11,9 @@
 
 use std::fmt::Write as _;
 
-use imu_emu::isb::did::{DataSet, DATA_SETS};
+use imu_emu::isb::did::{self, DataSet, DATA_SETS};
+use imu_emu::isb::layout::{self, FieldSpec, Kind, Value};
+use imu_emu::isb::sets::FlashConfig;
 
 /// `isb-layouts`: JSON (one data set a line) or a text table on stdout.
 pub fn run(json: bool) -> anyhow::Result<()> {
@@ -42,16 +46,53 @@ fn quoted(s: &str) -> String {
     o
 }
 
+/// The image a set starts from when the unit has one to restore: the
+/// factory FLASH_CONFIG.
+fn factory_image(did: u8) -> Option<Vec<u8>> {
+    (did == did::FLASH_CONFIG).then(|| FlashConfig::factory().0.to_vec())
+}
+
+/// `field`'s value in `image` as the docs write it: integers in decimal
+/// (bit words and the checksum also in hex), floats at their own
+/// precision.
+fn value_text(field: &FieldSpec, image: &[u8]) -> String {
+    let float = |x: f64| match field.kind {
+        // An f32 at the digits that round-trip it, not its f64 widening.
+        Kind::F32 | Kind::F32x3 | Kind::F32x4 => format!("{}", x as f32),
+        _ => format!("{x}"),
+    };
+    match layout::read(field, image) {
+        Value::Unsigned(n) if n != 0 && is_bit_word(field.name) => format!("{n} (0x{n:X})"),
+        Value::Unsigned(n) => n.to_string(),
+        Value::Float(x) => float(x),
+        Value::Vec3(v) => v.map(float).join(", "),
+        Value::Vec4(v) => v.map(float).join(", "),
+        Value::Version(v) => v.map(|b| b.to_string()).join("."),
+        Value::Text(b, n) => String::from_utf8_lossy(&b[..n]).into_owned(),
+    }
+}
+
+/// Whether a field is read as bits (`sysCfgBits`, `ioConfig`, …) or is
+/// the checksum: its value is clearer in hex.
+fn is_bit_word(name: &str) -> bool {
+    name.ends_with("Bits") || name.ends_with("Config") || name == "checksum"
+}
+
 /// `{"data_sets": [...]}`, one set a line, in table order.
 pub fn to_json(sets: &[DataSet]) -> String {
     let mut o = String::from("{\"data_sets\": [\n");
     for (i, s) in sets.iter().enumerate() {
+        let image = factory_image(s.did);
         let fields: Vec<String> = s
             .fields
             .iter()
             .map(|f| {
+                let factory = image
+                    .as_deref()
+                    .map(|b| format!(", \"factory\": {}", quoted(&value_text(f, b))))
+                    .unwrap_or_default();
                 format!(
-                    "{{\"name\": {}, \"offset\": {}, \"kind\": {}, \"unit\": {}}}",
+                    "{{\"name\": {}, \"offset\": {}, \"kind\": {}, \"unit\": {}{factory}}}",
                     quoted(f.name),
                     f.offset,
                     quoted(f.kind.name()),
@@ -105,6 +146,23 @@ mod tests {
             "{\"did\": 58, \"name\": \"IMU\", \"struct\": \"imu_t\", \"size\": 36, \"fields\": [{\"name\": \"time\", \"offset\": 0, \"kind\": \"f64\", \"unit\": \"s\"}"
         ));
         assert_eq!(quoted("a\"b\\c\n"), "\"a\\\"b\\\\c\\u000a\"");
+    }
+
+    #[test]
+    fn flash_config_fields_carry_the_factory_values() {
+        let j = to_json(&DATA_SETS);
+        let line = j.lines().find(|l| l.contains("\"FLASH_CONFIG\"")).unwrap();
+        for want in [
+            "{\"name\": \"startupNavDtMs\", \"offset\": 16, \"kind\": \"u32\", \"unit\": \"ms\", \"factory\": \"4\"}",
+            "\"name\": \"ioConfig\", \"offset\": 132, \"kind\": \"u32\", \"unit\": \"\", \"factory\": \"70 (0x46)\"}",
+            "\"name\": \"gpsMinimumElevation\", \"offset\": 200, \"kind\": \"f32\", \"unit\": \"rad\", \"factory\": \"0.17453292\"}",
+            "\"name\": \"gnssCn0Minimum\", \"offset\": 276, \"kind\": \"u8\", \"unit\": \"dBHz\", \"factory\": \"30\"}",
+        ] {
+            assert!(line.contains(want), "{want} not in {line}");
+        }
+        // Sets without a factory image have no such key.
+        let imu = j.lines().find(|l| l.contains("\"imu_t\"")).unwrap();
+        assert!(!imu.contains("factory"), "{imu}");
     }
 
     #[test]
