@@ -130,10 +130,13 @@ fn a_manoeuvre_script_moves_the_unit() {
     let at = |secs: f64| {
         frames
             .iter()
-            .filter(move |f| (secs..secs + 1.0).contains(&ga_time(f)))
+            .filter(move |f| (secs..secs + 2.0).contains(&ga_time(f)))
     };
-    // Means over a second of frames (the K110's noise is ≈ 0.1 °/s a
-    // frame at LPF 262 Hz).
+    // Means over two seconds of frames (the K110's noise is ≈ 0.1 °/s a
+    // frame at LPF 262 Hz, and which internal samples the frames carry
+    // follows the phase at which the client's start command arrived: a
+    // difference of two means varies by ≈ 0.01 °/s from run to run, so
+    // the bounds below are 0.05 °/s).
     let mean = |secs: f64| {
         let (mut w, mut a, mut n) = ([0.0; 3], [0.0; 3], 0.0);
         for f in at(secs) {
@@ -144,7 +147,7 @@ fn a_manoeuvre_script_moves_the_unit() {
             }
             n += 1.0;
         }
-        assert_eq!(n, GA_HZ, "frames at {secs} s");
+        assert_eq!(n, 2.0 * GA_HZ, "frames at {secs} s");
         (w.map(|x| x / n), a.map(|x| x / n))
     };
     // Level flight before the turn: gravity only (γ at 45°, 300 m is
@@ -161,9 +164,9 @@ fn a_manoeuvre_script_moves_the_unit() {
     let (w, a) = mean(7.0);
     let dw = [w[0] - w0[0], w[1] - w0[1], w[2] - w0[2]];
     let da = [a[0] - a0[0], a[1] - a0[1], a[2] - a0[2]];
-    assert!((dw[0] - 6.0 * bank.sin()).abs() < 0.03, "{dw:?}");
-    assert!(dw[1].abs() < 0.03, "{dw:?}");
-    assert!((dw[2] + 6.0 * bank.cos()).abs() < 0.03, "{dw:?}");
+    assert!((dw[0] - 6.0 * bank.sin()).abs() < 0.05, "{dw:?}");
+    assert!(dw[1].abs() < 0.05, "{dw:?}");
+    assert!((dw[2] + 6.0 * bank.cos()).abs() < 0.05, "{dw:?}");
     assert!(
         (da[2] - 0.99946 * (1.0 / bank.cos() - 1.0)).abs() < 0.002,
         "{da:?}"
