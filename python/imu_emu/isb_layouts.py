@@ -347,7 +347,7 @@ LAYOUTS: Dict[int, Tuple[str, str, int, Sequence[Field]]] = {
         ("towOffset", 80, 'f64', "s"),
         ("leapS", 88, 'u8', "s"),
         ("satsUsed", 89, 'u8', ""),
-        ("cnoMeanSigma", 90, 'u8', "dBHz"),
+        ("cnoMeanSigma", 90, 'u8', "0.1 dBHz"),
         ("status2", 91, 'u8', ""),
     )),
     GPS1_RCVR_POS: ('GPS1_RCVR_POS', 'gps_pos_t', 92, (
@@ -364,7 +364,7 @@ LAYOUTS: Dict[int, Tuple[str, str, int, Sequence[Field]]] = {
         ("towOffset", 80, 'f64', "s"),
         ("leapS", 88, 'u8', "s"),
         ("satsUsed", 89, 'u8', ""),
-        ("cnoMeanSigma", 90, 'u8', "dBHz"),
+        ("cnoMeanSigma", 90, 'u8', "0.1 dBHz"),
         ("status2", 91, 'u8', ""),
     )),
     GPS1_VEL: ('GPS1_VEL', 'gps_vel_t', 24, (

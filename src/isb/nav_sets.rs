@@ -113,7 +113,7 @@ crate::data_set! {
         /// Satellites in the solution.
         sats_used: u8 = SATS_USED @ 89 => ["satsUsed"],
         /// Standard deviation of `cno_mean` over 5 s, 0.1 dBHz.
-        cno_mean_sigma: u8 = CNO_MEAN_SIGMA @ 90 => ["cnoMeanSigma" in "dBHz"],
+        cno_mean_sigma: u8 = CNO_MEAN_SIGMA @ 90 => ["cnoMeanSigma" in "0.1 dBHz"],
         /// Jamming / spoofing flags (`eGpsStatus2`).
         status2: u8 = STATUS2 @ 91 => ["status2"],
     }
