@@ -30,6 +30,8 @@
 //!   the runners without blocking them);
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
+//! * [`unit`] — a unit run in process for `imu-emu allan` (no line, as
+//!   fast as the host computes);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`error`] — the bind errors, below every other module.
 //!
@@ -53,6 +55,7 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod unit;
 pub mod vehicle;
 pub mod virtual_device;
 pub mod web;

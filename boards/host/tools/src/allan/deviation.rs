@@ -59,12 +59,8 @@ impl Phases {
         p
     }
 
-    /// The channels' count.
-    pub(crate) fn channels(&self) -> usize {
-        self.acc.len()
-    }
-
-    /// One sample of every channel (`y.len()` = [`Phases::channels`]).
+    /// One sample of every channel (`y.len()` = the `channels` it was
+    /// made with).
     pub(crate) fn push(&mut self, y: &[f64]) {
         // Relative to the first sample: the phases stay small (the Allan
         // deviation ignores a constant).
