@@ -30,7 +30,7 @@
 //!   the runners without blocking them);
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
-//! * [`unit`] — a unit run in process for `imu-emu allan` (no line, as
+//! * [`mod@unit`] — a unit run in process for `imu-emu allan` (no line, as
 //!   fast as the host computes);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`error`] — the bind errors, below every other module.

@@ -177,6 +177,23 @@ mod tests {
         assert_eq!(name, "IMX-5 (ISB)");
     }
 
+    /// The tools' side of each protocol (`ToolProtocol`, keyed by the same
+    /// `Protocol`) reads the unit this side serves.
+    #[test]
+    fn the_tools_of_a_protocol_speak_its_product() {
+        use imu_emu_tools::client::tool_protocol;
+        let k = Product::parse("K120").unwrap();
+        fn check<P: HostProtocol>(k: Product) {
+            let tools = tool_protocol::of(P::PROTOCOL);
+            assert_eq!(tools.protocol(), P::PROTOCOL);
+            let (product, name) = P::product(k);
+            assert!(tools.speaks(&product), "{name}");
+            assert_eq!(tool_protocol::of_product(&product).protocol(), P::PROTOCOL);
+        }
+        check::<Kernel>(k);
+        check::<Isb>(k);
+    }
+
     #[test]
     fn only_the_imx_has_navigation_faults() {
         use imu_emu::device::{Device, PowerOn};

@@ -32,7 +32,7 @@ const GA: u8 = 0x8F;
 
 /// A KERNEL device streaming at `unit.rate`: `unit.outputs` frames
 /// decoded, each frame's channels to `sample`. GA (gyro and acc), or with
-/// `unit.aux` a UDD of [`AUX_UDD`] (GA does not carry the aux
+/// `unit.aux` a UDD of `AUX_UDD` (GA does not carry the aux
 /// accelerometer). The flash is in memory (the runner's size) and nothing
 /// is kept after the run.
 pub fn kernel_frames(unit: &Unit, sample: &mut dyn FnMut(&[f64])) -> anyhow::Result<String> {

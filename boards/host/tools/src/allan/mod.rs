@@ -159,7 +159,7 @@ fn run_unit(a: &AllanArgs, run_unit: RunUnit<'_>) -> anyhow::Result<Source> {
         None => None,
     };
     let product = input::product(&a.model)?;
-    let imx = core::ptr::eq(product.model, &imu_emu::isb::IMX5);
+    let protocol = crate::client::tool_protocol::of_product(&product).protocol();
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
         return Err(crate::error::UsageError(format!(
@@ -170,14 +170,15 @@ fn run_unit(a: &AllanArgs, run_unit: RunUnit<'_>) -> anyhow::Result<Source> {
     }
     let used = profile.copied().unwrap_or_else(|| product.sensor_profile());
     let unit = Unit {
-        protocol: if imx { Protocol::Isb } else { Protocol::Kernel },
+        protocol,
         product,
         seed: a.seed,
         profile,
         temperature_c: steady(&used, a.warming),
         rate: a.rate,
         outputs: (seconds * f64::from(a.rate)).round() as usize,
-        aux: !imx && product.model.has(Capability::AuxAccel),
+        // The IMX-5 has none (its chain gives gyro and acc).
+        aux: product.model.has(Capability::AuxAccel),
     };
     let mut phases = Phases::new(1.0 / f64::from(a.rate), unit.outputs, unit.channels());
     let title = run_unit(&unit, &mut |y| phases.push(y))?;
