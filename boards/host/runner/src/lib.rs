@@ -36,7 +36,8 @@
 //! * [`error`] — the bind errors, below every other module.
 //!
 //! It builds on the core and on the tools crate (`imu_emu_tools`: the
-//! protocol choice, the usage error, the decoders of the web view); the
+//! protocol choice, the usage error, the decoders of the web view, the
+//! unit `imu-emu allan` asks for); the
 //! `imu-emu` program's command line wires it up.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
