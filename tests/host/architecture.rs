@@ -268,14 +268,22 @@ fn the_protocol_choice_and_the_usage_error_import_nothing() {
 /// What differs between the protocols is `runner::protocol::HostProtocol`:
 /// the rest of the runner matches on no protocol and names none of the
 /// core's — only the protocols' own pieces do (the KERNEL's monitor, the
-/// live decoders), the in-process virtual KERNEL and GPS time; the
+/// live decoders), the in-process virtual KERNEL, the units `allan` runs
+/// in process and GPS time; the
 /// program turns the choice into a type in `cli` only.
 #[test]
 fn one_trait_holds_what_differs_between_the_protocols() {
     let [_, runner, host] = crates();
     assert_eq!(naming(&runner, "Protocol::"), set(&["protocol"]));
     assert_eq!(naming(&host, "Protocol::"), set(&["cli"]));
-    let per_protocol = set(&["protocol", "monitor", "web", "virtual_device", "clock"]);
+    let per_protocol = set(&[
+        "protocol",
+        "monitor",
+        "web",
+        "virtual_device",
+        "clock",
+        "unit",
+    ]);
     for needle in ["imu_emu::kernel", "imu_emu::isb"] {
         let named = naming(&runner, needle);
         let bad: Vec<_> = named.difference(&per_protocol).collect();
@@ -287,4 +295,200 @@ fn one_trait_holds_what_differs_between_the_protocols() {
             .unwrap();
     let web = code_of(&web);
     assert!(!web.contains("imu_emu::kernel") && !web.contains("imu_emu::isb"));
+}
+
+/// The code of each file of the crate at `dir` (relative to
+/// `boards/host`), by its path below `src/`.
+fn files(dir: &str) -> BTreeMap<String, String> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir).join("src");
+    let mut paths = Vec::new();
+    rs_files(&src, &mut paths);
+    paths
+        .iter()
+        .map(|f| {
+            let rel = f.strip_prefix(&src).unwrap().to_str().unwrap();
+            let text = std::fs::read_to_string(f).unwrap();
+            (rel.replace('\\', "/"), code_of(&text))
+        })
+        .collect()
+}
+
+/// Expands the use tree at the start of `rest` under `prefix` into `out`
+/// (`a::{b, c::{self, D}}` gives `a::b`, `a::c` and `a::c::D`).
+fn use_tree(rest: &str, prefix: &str, out: &mut BTreeSet<String>) {
+    let rest = rest.trim_start();
+    if let Some(group) = rest.strip_prefix('{') {
+        let mut depth = 0usize;
+        let mut start = 0;
+        for (k, c) in group.char_indices() {
+            let end = match c {
+                '{' => {
+                    depth += 1;
+                    false
+                }
+                '}' if depth == 0 => true,
+                '}' => {
+                    depth -= 1;
+                    false
+                }
+                ',' => depth == 0,
+                _ => false,
+            };
+            if end {
+                let item = &group[start..k];
+                if !item.trim().is_empty() {
+                    use_tree(item, prefix, out);
+                }
+                start = k + 1;
+                if c == '}' {
+                    return;
+                }
+            }
+        }
+        return;
+    }
+    let id: String = rest
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    if id == "self" || id.is_empty() {
+        // `x::{self}`, or `x::<T>` (turbofish): the path so far.
+        if !prefix.is_empty() {
+            out.insert(prefix.to_owned());
+        }
+        return;
+    }
+    let path = if prefix.is_empty() {
+        id.clone()
+    } else {
+        format!("{prefix}::{id}")
+    };
+    match rest[id.len()..].strip_prefix("::") {
+        Some(next) => use_tree(next, &path, out),
+        None => {
+            out.insert(path);
+        }
+    }
+}
+
+/// Every path below the crate `krate` that `code` names (in `use` lines
+/// and in place), without the crate's name.
+fn paths_of(code: &str, krate: &str) -> BTreeSet<String> {
+    let root = format!("{krate}::");
+    let mut out = BTreeSet::new();
+    for (i, _) in code.match_indices(&root) {
+        let before = code[..i].chars().next_back();
+        if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_') {
+            continue;
+        }
+        use_tree(&code[i + root.len()..], "", &mut out);
+    }
+    out
+}
+
+/// What of the core the tools may name: each protocol's codec façade
+/// (framing, commands, parameters, decoding, its units), the scanner both
+/// decoders implement, the unit model a codec's scales come from, the
+/// sensor profile declaration a profile file reads, and g. Not the
+/// device, the personalities, the chain, the clock or the flash: a unit
+/// run in process is the runner's.
+const TOOLS_FACADE: &[&str] = &[
+    "kernel::command",
+    "kernel::decode",
+    "kernel::formats",
+    "kernel::frame",
+    "kernel::model",
+    "kernel::params",
+    "kernel::rate",
+    "kernel::Field",
+    "kernel::Scales",
+    "kernel::Value",
+    "kernel::Capability",
+    "kernel::ProductError",
+    "kernel::MODELS",
+    "isb::did",
+    "isb::layout",
+    "isb::message",
+    "isb::nmea",
+    "isb::packet",
+    "isb::sets",
+    "isb::IMX5",
+    "framing",
+    "model::Product",
+    "model::Model",
+    "sensor::profile",
+    "sensor::profiles",
+    "G",
+];
+
+/// The paths of `paths` under none of `allowed`.
+fn outside<'a>(paths: &'a BTreeSet<String>, allowed: &[&str]) -> Vec<&'a String> {
+    paths
+        .iter()
+        .filter(|p| {
+            !allowed
+                .iter()
+                .any(|a| p.as_str() == *a || p.starts_with(&format!("{a}::")))
+        })
+        .collect()
+}
+
+/// The tools name only the core's codec façades ([`TOOLS_FACADE`]).
+#[test]
+fn the_tools_name_only_the_cores_codec_facades() {
+    let got = paths_of(
+        "use imu_emu::isb::{did, layout::{self, Kind},\n sets};\nlet d = \
+         imu_emu::kernel::frame::Decoder::<9>::new(); use imu_emu_tools::x;",
+        "imu_emu",
+    );
+    assert_eq!(
+        got,
+        set(&[
+            "isb::did",
+            "isb::layout",
+            "isb::layout::Kind",
+            "isb::sets",
+            "kernel::frame::Decoder"
+        ])
+    );
+    let bad = set(&[
+        "device::Device",
+        "kernel::Kernel",
+        "time::Instant",
+        "SignalChain",
+    ]);
+    assert_eq!(outside(&bad, TOOLS_FACADE).len(), 4);
+    let mut seen = BTreeSet::new();
+    for (file, code) in files("tools") {
+        let paths = paths_of(&code, "imu_emu");
+        let bad = outside(&paths, TOOLS_FACADE);
+        assert!(bad.is_empty(), "tools/src/{file} names imu_emu::{bad:?}");
+        seen.extend(paths);
+    }
+    // Paths the tools name for certain (the reader reads them).
+    for p in [
+        "kernel::frame::Decoder",
+        "isb::packet",
+        "sensor::profile::SensorProfile",
+    ] {
+        assert!(seen.contains(p), "{p} not seen in {seen:?}");
+    }
+}
+
+/// What differs between the protocols on the tools' side is
+/// `client::tool_protocol::ToolProtocol`: only the choice itself
+/// (`protocol.rs`) and the one place that turns it into a protocol's tools
+/// (`client/tool_protocol.rs`) name a protocol's value.
+#[test]
+fn the_tools_name_a_protocol_only_where_it_is_chosen() {
+    let mut naming = BTreeSet::new();
+    for (file, code) in files("tools") {
+        if ["Protocol::Kernel", "Protocol::Isb"]
+            .iter()
+            .any(|v| code.contains(v))
+        {
+            naming.insert(file);
+        }
+    }
+    assert_eq!(naming, set(&["client/tool_protocol.rs", "protocol.rs"]));
 }

@@ -30,11 +30,14 @@
 //!   the runners without blocking them);
 //! * [`virtual_device`] — an in-process virtual KERNEL for Rust driver
 //!   tests (`std::io` and `embedded_io` `Read + Write`, simulated time);
+//! * [`mod@unit`] — a unit run in process for `imu-emu allan` (no line, as
+//!   fast as the host computes);
 //! * [`uart`] — what a UART at the wrong rate reads (pty baud mismatch);
 //! * [`error`] — the bind errors, below every other module.
 //!
 //! It builds on the core and on the tools crate (`imu_emu_tools`: the
-//! protocol choice, the usage error, the decoders of the web view); the
+//! protocol choice, the usage error, the decoders of the web view, the
+//! unit `imu-emu allan` asks for); the
 //! `imu-emu` program's command line wires it up.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -53,6 +56,7 @@ pub mod runner;
 pub mod trajectory;
 pub mod transport;
 pub mod uart;
+pub mod unit;
 pub mod vehicle;
 pub mod virtual_device;
 pub mod web;

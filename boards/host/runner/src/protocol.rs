@@ -6,12 +6,14 @@
 //! into a type once, where it picks `Kernel` or `Isb`.
 //!
 //! A third protocol is one more impl here: its packet rules, its monitor,
-//! its live decoder, its factory rate, its RX idle time and its product.
+//! its live decoder, its factory rate, its RX idle time, its product and
+//! the unit `imu-emu allan` runs in process.
 
 use imu_emu::isb::Isb;
 use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
 use imu_emu::personality::Personality;
+use imu_emu_tools::allan::Unit;
 use imu_emu_tools::protocol::Protocol;
 
 use crate::control::NavFault;
@@ -48,6 +50,10 @@ pub trait HostProtocol: Personality + Sized + 'static {
     /// KERNEL model `--model` names (a protocol of one product ignores
     /// it).
     fn product(kernel_model: Product) -> (Product, String);
+
+    /// Runs `unit` in process for `imu-emu allan` ([`crate::unit`]): its
+    /// samples to `sample`, and the run's title.
+    fn run_unit(unit: &Unit, sample: &mut dyn FnMut(&[f64])) -> anyhow::Result<String>;
 
     /// Sets GPS time: `gps_s` GPS seconds since 1980-01-06 at device
     /// instant 0 (`--gps-time`, or the host clock at power-on); nothing
@@ -89,6 +95,11 @@ impl HostProtocol for Kernel {
     fn product(kernel_model: Product) -> (Product, String) {
         (kernel_model, kernel_model.code().to_string())
     }
+
+    /// Its data frames, as a host reads them.
+    fn run_unit(unit: &Unit, sample: &mut dyn FnMut(&[f64])) -> anyhow::Result<String> {
+        crate::unit::kernel_frames(unit, sample)
+    }
 }
 
 /// The Inertial Sense IMX-5 over ISB (protocol 2.1).
@@ -114,6 +125,12 @@ impl HostProtocol for Isb {
 
     fn product(_kernel_model: Product) -> (Product, String) {
         (Product::imx5(), "IMX-5 (ISB)".to_owned())
+    }
+
+    /// Its chain averaged over each output interval, what its IMU message
+    /// carries.
+    fn run_unit(unit: &Unit, sample: &mut dyn FnMut(&[f64])) -> anyhow::Result<String> {
+        crate::unit::chain_averaged(unit, sample)
     }
 
     fn set_gps_time(&mut self, gps_s: u64) {
@@ -158,6 +175,23 @@ mod tests {
         let (p, name) = Isb::product(k);
         assert_eq!(p.code().to_string(), Product::imx5().code().to_string());
         assert_eq!(name, "IMX-5 (ISB)");
+    }
+
+    /// The tools' side of each protocol (`ToolProtocol`, keyed by the same
+    /// `Protocol`) reads the unit this side serves.
+    #[test]
+    fn the_tools_of_a_protocol_speak_its_product() {
+        use imu_emu_tools::client::tool_protocol;
+        let k = Product::parse("K120").unwrap();
+        fn check<P: HostProtocol>(k: Product) {
+            let tools = tool_protocol::of(P::PROTOCOL);
+            assert_eq!(tools.protocol(), P::PROTOCOL);
+            let (product, name) = P::product(k);
+            assert!(tools.speaks(&product), "{name}");
+            assert_eq!(tool_protocol::of_product(&product).protocol(), P::PROTOCOL);
+        }
+        check::<Kernel>(k);
+        check::<Isb>(k);
     }
 
     #[test]

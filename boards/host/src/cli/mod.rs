@@ -112,7 +112,7 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     match args.command {
         Some(Sub::Client(c)) => return imu_emu_tools::client::run(*c),
         Some(Sub::SensorProfile(s)) => return sensor_profile(&s),
-        Some(Sub::Allan(a)) => return imu_emu_tools::allan::run(&a),
+        Some(Sub::Allan(a)) => return imu_emu_tools::allan::run(&a, &serve::run_unit),
         Some(Sub::IsbLayouts { json }) => return crate::isb_layouts::run(json),
         Some(Sub::Completions { shell }) => return print_all(&completions(shell)),
         Some(Sub::Man { command, dir }) => return man(&command, dir.as_deref()),

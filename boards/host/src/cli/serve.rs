@@ -20,6 +20,7 @@ use imu_emu_runner::flash::{FileNor, MemNor};
 use imu_emu_runner::protocol::HostProtocol;
 use imu_emu_runner::runner::Runner;
 use imu_emu_runner::transport::{PtyTransport, TcpTransport, Transport};
+use imu_emu_tools::allan::Unit;
 use imu_emu_tools::error::UsageError;
 use imu_emu_tools::protocol::Protocol;
 
@@ -231,12 +232,14 @@ fn open_files_for(n: usize) {
 /// `started` is set once every device is set up and the fleet runs.
 /// A run once its protocol is a type.
 trait Run {
-    fn run<P: HostProtocol>(self) -> anyhow::Result<()>;
+    /// What the run gives back.
+    type Out;
+    fn run<P: HostProtocol>(self) -> anyhow::Result<Self::Out>;
 }
 
-/// `run` for the protocol of `--protocol`: the one place the choice
-/// becomes a type.
-fn with_protocol(protocol: Protocol, run: impl Run) -> anyhow::Result<()> {
+/// `run` for the protocol of `--protocol` (or of the unit `imu-emu allan`
+/// runs): the one place the choice becomes a type.
+fn with_protocol<R: Run>(protocol: Protocol, run: R) -> anyhow::Result<R::Out> {
     match protocol {
         Protocol::Kernel => run.run::<Kernel>(),
         Protocol::Isb => run.run::<Isb>(),
@@ -252,6 +255,7 @@ struct Many<'a, F> {
 }
 
 impl<F: NorFlash> Run for Many<'_, F> {
+    type Out = ();
     fn run<P: HostProtocol>(self) -> anyhow::Result<()> {
         many_transports::<F, P>(self.flashes, self.args, self.stop, self.started)
     }
@@ -265,9 +269,29 @@ struct One<'a, F> {
 }
 
 impl<F: NorFlash> Run for One<'_, F> {
+    type Out = ();
     fn run<P: HostProtocol>(self) -> anyhow::Result<()> {
         with_transport::<F, P>(self.flash, self.args, self.stop)
     }
+}
+
+/// The unit `imu-emu allan` runs in process ([`imu_emu_tools::allan::Unit`]).
+struct AllanUnit<'a> {
+    unit: &'a Unit,
+    sample: &'a mut dyn FnMut(&[f64]),
+}
+
+impl Run for AllanUnit<'_> {
+    type Out = String;
+    fn run<P: HostProtocol>(self) -> anyhow::Result<String> {
+        P::run_unit(self.unit, self.sample)
+    }
+}
+
+/// Runs `unit` in process, as its protocol's runner does
+/// ([`HostProtocol::run_unit`]): `imu-emu allan`'s [`imu_emu_tools::allan::RunUnit`].
+pub fn run_unit(unit: &Unit, sample: &mut dyn FnMut(&[f64])) -> anyhow::Result<String> {
+    with_protocol(unit.protocol, AllanUnit { unit, sample })
 }
 
 fn many_with<F: NorFlash>(

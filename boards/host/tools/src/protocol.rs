@@ -1,8 +1,10 @@
 //! The protocol a unit speaks (`--protocol`, or detected in a capture):
 //! the one choice the program, the runner and the tools share, in the
-//! lowest module so that none of them imports another for it. What differs between the protocols on the
-//! runner's side is `imu_emu_runner::protocol::HostProtocol`, not matches
-//! on this enum.
+//! lowest module so that none of them imports another for it. What differs
+//! between the protocols is not matches on this enum but a trait per side:
+//! the tools' [`crate::client::tool_protocol::ToolProtocol`] (a host
+//! reading a line or a capture) and the runner's
+//! `imu_emu_runner::protocol::HostProtocol` (serving a unit).
 
 use imu_emu::isb::packet::{Decoder as IsbDecoder, MAX_PACKET};
 use imu_emu::kernel::frame::Decoder as KernelDecoder;
@@ -10,10 +12,11 @@ use imu_emu::kernel::frame::Decoder as KernelDecoder;
 /// Largest KERNEL frame [`Protocol::detect`] decodes.
 const KERNEL_FRAME_CAP: usize = 4096;
 
-/// The emulated device's protocol (`--protocol`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+/// The emulated device's protocol (`--protocol`); the KERNEL by default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Protocol {
     /// Inertial Labs KERNEL (ICD rev 1.42).
+    #[default]
     Kernel,
     /// Inertial Sense IMX-5 over ISB (protocol 2.1).
     Isb,

@@ -15,19 +15,7 @@ pub const FLICKER_FLOOR: f64 = 0.664_282;
 /// Phases kept per axis at most.
 const KEEP: usize = 1 << 20;
 
-/// Channels: gyro X Y Z (°/s), acc X Y Z (g), and on the K120/K220 the
-/// aux accelerometer X Y Z (g): the `client record` column names.
-pub const AXES: [&str; 9] = [
-    "gyro_x",
-    "gyro_y",
-    "gyro_z",
-    "acc_x",
-    "acc_y",
-    "acc_z",
-    "aux_acc_x",
-    "aux_acc_y",
-    "aux_acc_z",
-];
+pub use crate::client::decode::AXES;
 
 /// Phases of the channels (the first `channels` of [`AXES`]), kept every
 /// `stride` samples.
@@ -59,12 +47,8 @@ impl Phases {
         p
     }
 
-    /// The channels' count.
-    pub(crate) fn channels(&self) -> usize {
-        self.acc.len()
-    }
-
-    /// One sample of every channel (`y.len()` = [`Phases::channels`]).
+    /// One sample of every channel (`y.len()` = the `channels` it was
+    /// made with).
     pub(crate) fn push(&mut self, y: &[f64]) {
         // Relative to the first sample: the phases stay small (the Allan
         // deviation ignores a constant).

@@ -20,19 +20,18 @@
 //!   `time`.
 //!
 //! Bytes that are no valid frame or packet are skipped (the decoders
-//! resynchronise), and counted in the title.
+//! resynchronise), and counted in the title. Each protocol's samples come
+//! from its tools ([`tool_protocol::ToolProtocol::imu_samples`]).
 
 use std::path::Path;
 
 use anyhow::{bail, Context as _};
-use imu_emu::isb::packet::{Decoder as IsbDecoder, PacketType, MAX_PACKET};
-use imu_emu::isb::{did, sets};
-use imu_emu::kernel::frame::{Decoder as KernelDecoder, TYPE_DATA};
+use clap::ValueEnum as _;
 use imu_emu::model::Product;
 
 use super::deviation::{enough, Phases, Source, AXES};
-use crate::client::decode::decode;
-use crate::client::DeviceClock;
+use crate::client::tool_protocol;
+use crate::protocol::Protocol;
 
 /// What `--input` holds (`--format`).
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -50,6 +49,16 @@ pub enum Format {
     Isb,
 }
 
+impl Format {
+    /// The protocol of a raw capture of this format: `kernel` and `isb`
+    /// are the `--protocol` values ([`Protocol`]); `None` for a CSV (and
+    /// for `auto`, decided from the content).
+    fn capture(self) -> Option<Protocol> {
+        let name = self.to_possible_value()?;
+        Protocol::from_str(name.get_name(), false).ok()
+    }
+}
+
 /// The product `--model` names: a KERNEL model or product code, or the
 /// IMX-5.
 pub fn product(model: &str) -> anyhow::Result<Product> {
@@ -59,13 +68,6 @@ pub fn product(model: &str) -> anyhow::Result<Product> {
     Product::parse(model).map_err(|e| {
         crate::error::UsageError(format!("allan --model {model}: {e} (or IMX-5)")).into()
     })
-}
-
-/// Samples decoded from a raw capture: per sample the channels and the
-/// device time (s) when the frames carry one.
-struct Samples {
-    rows: Vec<(Vec<f64>, Option<f64>)>,
-    what: String,
 }
 
 /// Reads `path` as `format` (module doc); `product` gives the KG/KA
@@ -78,24 +80,20 @@ pub(crate) fn read(
     rate: u32,
 ) -> anyhow::Result<Source> {
     let bytes = std::fs::read(path).with_context(|| format!("allan {}", path.display()))?;
-    let format = match format {
+    let capture = match format {
         Format::Auto => detect(&bytes),
-        f => f,
+        f => f.capture(),
     };
-    let samples = match format {
-        Format::Csv | Format::Auto => return read_csv(path, rate),
-        Format::Kernel => kernel(&bytes, product),
-        Format::Isb => isb(&bytes),
+    let Some(protocol) = capture else {
+        return read_csv(path, rate);
     };
+    let tools = tool_protocol::of(protocol);
+    let samples = tools.imu_samples(&bytes, product);
     let Some(first) = samples.rows.first() else {
         bail!(
             "allan {}: no {} with gyro and accelerometer data",
             path.display(),
-            if format == Format::Isb {
-                "IMU or PIMU packet"
-            } else {
-                "KERNEL data frame"
-            }
+            tools.imu_frames()
         );
     };
     let channels = first.0.len();
@@ -130,132 +128,24 @@ pub fn median_step(t: &[f64]) -> Option<f64> {
     d.get(d.len() / 2).copied()
 }
 
-/// CSV if the first line names `gyro_x` (a KERNEL's) or `pqr_x` /
-/// `theta_x` (an IMX-5's); else the protocol with more valid
-/// frames/packets in the first 64 KiB ([`Protocol::detect`];
-/// text with neither is a CSV).
-fn detect(bytes: &[u8]) -> Format {
-    use crate::protocol::Protocol;
+/// CSV (`None`) if the first line names `gyro_x` (a KERNEL's) or
+/// `pqr_x` / `theta_x` (an IMX-5's); else the protocol with more valid
+/// frames/packets in the first 64 KiB ([`Protocol::detect`]; text with
+/// neither is a CSV, whose error names the column it lacks, anything else
+/// the default protocol's bytes).
+fn detect(bytes: &[u8]) -> Option<Protocol> {
     let head = &bytes[..bytes.len().min(1 << 16)];
     let first_line = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
     if std::str::from_utf8(first_line).is_ok_and(|l| {
         l.split(',')
             .any(|c| matches!(c.trim(), "gyro_x" | "pqr_x" | "theta_x"))
     }) {
-        return Format::Csv;
+        return None;
     }
     match Protocol::detect(head) {
-        Some(Protocol::Isb) => Format::Isb,
-        Some(Protocol::Kernel) => Format::Kernel,
-        // Neither: text is read as a CSV (whose error names the column
-        // it lacks), anything else as KERNEL bytes.
-        None if std::str::from_utf8(head).is_ok() => Format::Csv,
-        None => Format::Kernel,
-    }
-}
-
-/// The KERNEL frames of `bytes` (module doc).
-fn kernel(bytes: &[u8], product: &Product) -> Samples {
-    let mut rx = Box::new(KernelDecoder::<4096>::new());
-    let mut input = bytes;
-    let mut stream: Option<(u8, usize)> = None;
-    let mut clock = DeviceClock::default();
-    let mut rows = Vec::new();
-    let mut skipped = 0usize;
-    while let Some(f) = rx.next_frame(&mut input) {
-        let d = (f.msg_type == TYPE_DATA)
-            .then(|| decode(f.id, f.payload, product))
-            .flatten();
-        let Some(d) = d else {
-            skipped += 1;
-            continue;
-        };
-        // Gyro and acc, and the aux accelerometer when the format has it.
-        let has = |names: &[&str]| names.iter().all(|n| d.get(n).is_some());
-        if stream.is_none() && has(&AXES[..6]) {
-            stream = Some((f.id, if has(&AXES) { 9 } else { 6 }));
-        }
-        let Some((_, channels)) = stream.filter(|s| s.0 == f.id) else {
-            skipped += 1;
-            continue;
-        };
-        if !has(&AXES[..channels]) {
-            skipped += 1;
-            continue;
-        }
-        let y = AXES[..channels]
-            .iter()
-            .map(|n| d.get(n).unwrap_or(0.0))
-            .collect();
-        rows.push((y, clock.time(&d)));
-    }
-    let name = stream.map_or("none".to_owned(), |(id, _)| {
-        imu_emu::kernel::formats::find(id).map_or_else(|| "UDD".to_owned(), |f| f.name.to_owned())
-    });
-    Samples {
-        rows,
-        what: format!("KERNEL {name} frames, {skipped} other frames skipped"),
-    }
-}
-
-/// The ISB packets of `bytes` (module doc).
-fn isb(bytes: &[u8]) -> Samples {
-    let mut rx = Box::new(IsbDecoder::<MAX_PACKET>::new());
-    let mut input = bytes;
-    let mut stream: Option<u8> = None;
-    let mut rows = Vec::new();
-    let mut skipped = 0usize;
-    let deg = 180.0 / std::f64::consts::PI;
-    let g = f64::from(imu_emu::G);
-    while let Some(p) = rx.next_packet(&mut input) {
-        // A data set from its start (with or without the offset flag).
-        let data = (p.kind() == Some(PacketType::Data))
-            .then(|| p.offset_and_data())
-            .flatten()
-            .filter(|d| d.0 == 0)
-            .map_or(&[][..], |d| d.1);
-        let row = match p.did {
-            did::IMU | did::IMU_RAW | did::IMU_MAG => data
-                .get(..sets::imu::SIZE)
-                .and_then(|b| b.try_into().ok())
-                .map(|b| {
-                    let s = sets::Imu::decode(b);
-                    let y = [s.pqr, s.acc];
-                    (y, 1.0, s.time)
-                }),
-            did::PIMU | did::PIMU_MAG => data
-                .get(..sets::pimu::SIZE)
-                .and_then(|b| b.try_into().ok())
-                .map(|b| {
-                    let s = sets::Pimu::decode(b);
-                    ([s.theta, s.vel], 1.0 / f64::from(s.dt), s.time)
-                })
-                .filter(|r| r.1.is_finite() && r.1 > 0.0),
-            _ => None,
-        };
-        let Some(([w, a], per_s, time)) = row else {
-            skipped += 1;
-            continue;
-        };
-        if *stream.get_or_insert(p.did) != p.did {
-            skipped += 1;
-            continue;
-        }
-        let y = w
-            .iter()
-            .map(|v| f64::from(*v) * per_s * deg)
-            .chain(a.iter().map(|v| f64::from(*v) * per_s / g))
-            .collect();
-        rows.push((y, Some(time)));
-    }
-    let name = match stream {
-        Some(did::PIMU | did::PIMU_MAG) => "PIMU (Δθ/dt, Δv/dt)",
-        Some(_) => "IMU",
-        None => "no IMU",
-    };
-    Samples {
-        rows,
-        what: format!("ISB {name} packets, {skipped} other packets skipped"),
+        Some(p) => Some(p),
+        None if std::str::from_utf8(head).is_ok() => None,
+        None => Some(Protocol::default()),
     }
 }
 
@@ -369,4 +259,28 @@ pub(crate) fn read_csv(path: &Path, rate: u32) -> anyhow::Result<Source> {
         profile: None,
         phases,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn raw_formats_are_the_protocols_they_name() {
+        assert_eq!(Format::Kernel.capture(), Some(Protocol::Kernel));
+        assert_eq!(Format::Isb.capture(), Some(Protocol::Isb));
+        assert_eq!(Format::Csv.capture(), None);
+        assert_eq!(Format::Auto.capture(), None);
+    }
+
+    #[test]
+    fn content_tells_a_csv_from_a_capture() {
+        assert_eq!(detect(b"frame,gyro_x,gyro_y\n1,2,3\n"), None);
+        assert_eq!(detect(b"did,theta_x\n"), None);
+        assert_eq!(detect(b"no columns here\n"), None);
+        assert_eq!(detect(&[0xFF, 0x00, 0x13]), Some(Protocol::Kernel));
+        let mut frame = [0u8; 64];
+        let n = imu_emu::kernel::frame::encode(1, 0x8F, &[0; 10], &mut frame).unwrap();
+        assert_eq!(detect(&frame[..n]), Some(Protocol::Kernel));
+    }
 }

@@ -3,14 +3,15 @@
 //! log-log plot (docs/sensors.md).
 //!
 //! The data come either from a unit run **in process** as fast as the host
-//! computes (no TCP): a KERNEL `Device` streaming GA frames at `--rate`
-//! with the average output variant (on the K120/K220 a UDD with the aux
-//! accelerometer; the frames decoded with the core's typed decoder,
-//! `client::decode`), or, for `--model
-//! IMX-5`, its signal chain averaged over each output interval (what its
-//! IMU message carries); or from a recording (`--input FILE`: the CSV of
-//! `imu-emu client record` or a raw KERNEL/ISB capture,
-//! [`input`]).
+//! computes (no TCP; a [`Unit`], which the side that owns devices runs —
+//! the program hands [`run`] the runner's): a KERNEL `Device` streaming GA
+//! frames at `--rate` with the average output variant (on the K120/K220 a
+//! UDD with the aux accelerometer; the frames decoded with the core's
+//! typed decoder, `client::decode`), or, for `--model IMX-5`, its signal
+//! chain averaged over each output interval (what its IMU message
+//! carries); or from a recording (`--input FILE`: the CSV of `imu-emu
+//! client record` or a raw KERNEL/ISB capture, [`input`]). This crate
+//! only analyses the samples it is given.
 //!
 //! **Allan deviation.** The phase `x_k = Σ y_i·τ₀` of each axis is kept
 //! every `S`-th sample (S chosen so that at most 2²⁰ values are kept:
@@ -38,26 +39,18 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use imu_emu::device::{Device, PowerOn};
 use imu_emu::kernel::Capability;
-use imu_emu::kernel::Kernel;
 use imu_emu::model::Product;
 use imu_emu::sensor::profile::{density_to_arw, density_to_vrw, SensorProfile, SensorSpec};
-use imu_emu::time::Instant;
-use imu_emu::OutputVariant;
-use imu_emu::{ChainConfig, SignalChain};
 
 use crate::plot::Kind;
+use crate::protocol::Protocol;
 
 pub mod deviation;
 pub mod input;
 pub mod plot;
 
 use deviation::{curves, fit, too_short, Fit, Phases, Source, AXES};
-
-/// The flash of the unit run in process: the runner's size (two 4 KiB
-/// sectors, what the parameter store needs); nothing is kept after the run.
-type UnitFlash = imu_emu::nor::RamNor<8192>;
 
 /// `imu-emu allan …`.
 #[derive(clap::Args, Debug, Clone)]
@@ -110,8 +103,51 @@ pub struct AllanArgs {
     pub table: Option<PathBuf>,
 }
 
-/// Runs a unit in process (module doc).
-fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
+/// A unit run in process, as `imu-emu allan` asks the side that owns
+/// devices for it (the program hands [`run`] a [`RunUnit`]): a KERNEL
+/// `Device` streaming at `rate` with the average output variant (GA, or
+/// with `aux` a UDD of gyro, acc and the aux accelerometer), or an IMX-5's
+/// signal chain averaged over each output interval.
+#[derive(Debug, Clone, Copy)]
+pub struct Unit {
+    /// The protocol of the unit (`--model IMX-5` is ISB).
+    pub protocol: Protocol,
+    /// The unit (`--model`).
+    pub product: Product,
+    /// Seed of its random processes (`--seed`).
+    pub seed: u64,
+    /// The profile it runs instead of its built-in one (`--sensor-profile`).
+    pub profile: Option<&'static SensorProfile>,
+    /// The sensor temperature it is held at, °C (`None`: `--warming`, the
+    /// profile's warm-up model).
+    pub temperature_c: Option<f32>,
+    /// Output rate, Hz (a divisor of the internal rate).
+    pub rate: u32,
+    /// Outputs to deliver.
+    pub outputs: usize,
+    /// Whether each output carries the aux accelerometer too (9 channels,
+    /// else 6).
+    pub aux: bool,
+}
+
+impl Unit {
+    /// The channels of each sample: the first this many of [`AXES`].
+    pub fn channels(&self) -> usize {
+        if self.aux {
+            AXES.len()
+        } else {
+            6
+        }
+    }
+}
+
+/// Runs a [`Unit`] in process: hands each output's channels (°/s, g;
+/// [`Unit::channels`] of [`AXES`]), `outputs` of them, to `sample`, and
+/// returns the run's title (what ran, and how it was read).
+pub type RunUnit<'a> = &'a dyn Fn(&Unit, &mut dyn FnMut(&[f64])) -> anyhow::Result<String>;
+
+/// The unit `a` asks for, run by `run_unit` (module doc).
+fn run_unit(a: &AllanArgs, run_unit: RunUnit<'_>) -> anyhow::Result<Source> {
     let seconds = a.seconds.unwrap_or(a.hours * 3600.0);
     if seconds.is_nan() || seconds <= 0.0 {
         return Err(
@@ -123,7 +159,7 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         None => None,
     };
     let product = input::product(&a.model)?;
-    let imx = core::ptr::eq(product.model, &imu_emu::isb::IMX5);
+    let protocol = crate::client::tool_protocol::of_product(&product).protocol();
     let internal = product.model.internal_rate_hz;
     if a.rate == 0 || !internal.is_multiple_of(a.rate) {
         return Err(crate::error::UsageError(format!(
@@ -132,54 +168,20 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
         ))
         .into());
     }
-    let outputs = (seconds * f64::from(a.rate)).round() as usize;
-    let aux = !imx && product.model.has(Capability::AuxAccel);
-    let mut phases = Phases::new(1.0 / f64::from(a.rate), outputs, if aux { 9 } else { 6 });
     let used = profile.copied().unwrap_or_else(|| product.sensor_profile());
-    let title;
-    if imx {
-        title = format!("IMX-5, seed {}, chain averaged at {} Hz", a.seed, a.rate);
-        let mut chain = SignalChain::new(product, a.seed);
-        chain.set_profile(profile);
-        chain.reset(product, a.seed);
-        chain.faults_mut().temperature_c = steady(&used, a.warming);
-        let mut cfg = ChainConfig::defaults(&product);
-        cfg.output_variant = OutputVariant::Average;
-        chain.configure(&cfg);
-        let every = internal / a.rate;
-        let dt_ns = 1_000_000_000 / u64::from(internal);
-        let mut t = 0u64;
-        for _ in 0..outputs {
-            for _ in 0..every {
-                t += dt_ns;
-                chain.tick(Instant::from_nanos(t));
-            }
-            let s = chain.output_with(false);
-            let g = s.gyro.map(f64::from);
-            let f = s.acc.map(f64::from);
-            phases.push(&[g[0], g[1], g[2], f[0], f[1], f[2]]);
-        }
-    } else {
-        title = format!(
-            "{}, seed {}, {} frames at {} Hz, average variant",
-            product.code(),
-            a.seed,
-            if aux {
-                "UDD (gyro, acc, aux acc)"
-            } else {
-                "GA"
-            },
-            a.rate
-        );
-        run_kernel(
-            product,
-            a,
-            profile,
-            steady(&used, a.warming),
-            outputs,
-            &mut phases,
-        )?;
-    }
+    let unit = Unit {
+        protocol,
+        product,
+        seed: a.seed,
+        profile,
+        temperature_c: steady(&used, a.warming),
+        rate: a.rate,
+        outputs: (seconds * f64::from(a.rate)).round() as usize,
+        // The IMX-5 has none (its chain gives gyro and acc).
+        aux: product.model.has(Capability::AuxAccel),
+    };
+    let mut phases = Phases::new(1.0 / f64::from(a.rate), unit.outputs, unit.channels());
+    let title = run_unit(&unit, &mut |y| phases.push(y))?;
     Ok(Source {
         title,
         profile: Some(used),
@@ -191,98 +193,6 @@ fn run_unit(a: &AllanArgs) -> anyhow::Result<Source> {
 /// `--warming`.
 fn steady(p: &SensorProfile, warming: bool) -> Option<f32> {
     (!warming).then_some(p.temperature.ambient_c + p.temperature.self_heating_c)
-}
-
-/// UDD types of the aux-carrying stream (ICD Table 5.14): gyro HR, acc
-/// HR, aux accelerometer.
-const AUX_UDD: [u8; 3] = [0x21, 0x23, 0x2F];
-
-/// A KERNEL device streaming at `a.rate`: `outputs` frames decoded. GA
-/// (gyro and acc), or on a model with an aux accelerometer a UDD of
-/// [`AUX_UDD`] (GA does not carry it).
-fn run_kernel(
-    product: Product,
-    a: &AllanArgs,
-    profile: Option<&'static SensorProfile>,
-    temperature: Option<f32>,
-    outputs: usize,
-    phases: &mut Phases,
-) -> anyhow::Result<()> {
-    use imu_emu::kernel::command::Command;
-    use imu_emu::kernel::formats::UDD;
-    use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
-    let cfg = PowerOn {
-        product,
-        boot: None,
-        seed: a.seed,
-    };
-    let mut dev =
-        Device::<UnitFlash, Kernel>::with_profile(cfg, profile, UnitFlash::new(), Instant::ZERO);
-    dev.chain_mut().faults_mut().temperature_c = temperature;
-    let period = dev.tick_period_ns();
-    let mut now = 0u64;
-    // Data_Rate (Table 5.24 ID 0x0012) and Output_Variant average (ID
-    // 0x03D0 = 1), then the UDD list (5.3.5) and the data command: the
-    // rate applies at the data command (5.3.1). In process the line is
-    // not paced (that is a board's job), so any rate fits. The average,
-    // as a datasheet's figures are read: the factory Instant variant
-    // samples the FIR's output and aliases its band's noise into the
-    // output's (its ARW reads higher: docs/sensors.md "Decimation").
-    let rate = u16::try_from(a.rate).context("allan --rate: at most 65535")?;
-    let aux = phases.channels() == AXES.len();
-    let format = if aux { UDD } else { 0x8F };
-    let udd = [AUX_UDD.len() as u8, AUX_UDD[0], AUX_UDD[1], AUX_UDD[2]];
-    let rate = rate.to_le_bytes();
-    let mut cmds = vec![
-        Command::SaveFlash {
-            id: 0x0012,
-            len: 2,
-            value: &rate,
-        },
-        Command::SaveFlash {
-            id: 0x03D0,
-            len: 1,
-            value: &[1],
-        },
-    ];
-    if aux {
-        cmds.extend([Command::UddConfig, Command::UddConfigMessage(&udd)]);
-    }
-    cmds.push(Command::Data(format));
-    let mut cmd = [0u8; 64];
-    for c in cmds {
-        let n = c.encode(&mut cmd).context("encoding a command")?;
-        dev.on_rx(&cmd[..n], Instant::from_nanos(now));
-    }
-    let mut buf = vec![0u8; 4096];
-    let mut rx = Box::new(Decoder::<512>::new());
-    let mut got = 0usize;
-    let mut y = vec![0.0; phases.channels()];
-    while got < outputs {
-        now += period;
-        dev.on_tick(Instant::from_nanos(now));
-        loop {
-            let n = dev.poll_tx(&mut buf);
-            if n == 0 {
-                break;
-            }
-            let mut input = &buf[..n];
-            while let Some(f) = rx.next_frame(&mut input) {
-                if f.msg_type != TYPE_DATA || f.id != format || got == outputs {
-                    continue;
-                }
-                let Some(d) = crate::client::decode::decode(f.id, f.payload, &product) else {
-                    continue;
-                };
-                for (v, name) in y.iter_mut().zip(AXES) {
-                    *v = d.get(name).unwrap_or(0.0);
-                }
-                phases.push(&y);
-                got += 1;
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The profile's sensor of channel `c` (gyro, acc, aux).
@@ -346,15 +256,17 @@ fn report(src: &Source, fits: &[Fit], seconds: f64) -> String {
     s
 }
 
-/// Runs `imu-emu allan`.
-pub fn run(a: &AllanArgs) -> anyhow::Result<()> {
+/// Runs `imu-emu allan`: a unit run in process by `unit` (which the
+/// program wires to the runner, the side that owns devices), or the
+/// recording `--input` names.
+pub fn run(a: &AllanArgs, unit: RunUnit<'_>) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let src = match &a.input {
         Some(path) => {
             let product = input::product(&a.model)?;
             input::read(path, a.format, &product, a.rate)?
         }
-        None => run_unit(a)?,
+        None => run_unit(a, unit)?,
     };
     let seconds = src.phases.n as f64 * src.phases.tau0;
     let cs = curves(&src.phases);

@@ -6,8 +6,25 @@
 
 use imu_emu::kernel::decode as kernel;
 use imu_emu::kernel::formats;
+use imu_emu::kernel::frame::{Decoder, TYPE_DATA};
 use imu_emu::kernel::{Field, Scales, Value};
 use imu_emu::model::Product;
+
+/// The IMU channels: gyro X Y Z (°/s), acc X Y Z (g), and on the
+/// K120/K220 the aux accelerometer X Y Z (g): the column names of the
+/// KERNEL's frames (`client record`), the order `imu-emu allan` reads them
+/// in.
+pub const AXES: [&str; 9] = [
+    "gyro_x",
+    "gyro_y",
+    "gyro_z",
+    "acc_x",
+    "acc_y",
+    "acc_z",
+    "aux_acc_x",
+    "aux_acc_y",
+    "aux_acc_z",
+];
 
 /// One decoded frame: its identifier and `(column, value)` pairs in
 /// payload order (physical units: deg/s, g, deg, °C, V, ns).
@@ -98,6 +115,57 @@ pub fn format_name(code: u8) -> String {
         return "UDD".to_owned();
     }
     formats::find(code).map_or_else(|| format!("{code:#04x}"), |f| f.name.to_owned())
+}
+
+/// The IMU samples of a raw KERNEL capture (`imu-emu allan --input`):
+/// the first data format with gyro and accelerometer values sets the
+/// stream (GA, GAm, GAA, GAAm, Orientation, Calibrated HR, or a UDD with
+/// gyro and acc types; the aux accelerometer too when the format has it),
+/// frames of other formats are skipped; each sample timed by the frames'
+/// own clock ([`super::DeviceClock`]: the UDD's IMU time, else the 2 kHz
+/// counter of GA and Calibrated HR). `product` gives the KG/KA scales of
+/// the low-resolution fields (Table 5.6).
+pub fn imu_samples(bytes: &[u8], product: &Product) -> super::tool_protocol::ImuSamples {
+    let mut rx = Box::new(Decoder::<4096>::new());
+    let mut input = bytes;
+    let mut stream: Option<(u8, usize)> = None;
+    let mut clock = super::DeviceClock::default();
+    let mut rows = Vec::new();
+    let mut skipped = 0usize;
+    while let Some(f) = rx.next_frame(&mut input) {
+        let d = (f.msg_type == TYPE_DATA)
+            .then(|| decode(f.id, f.payload, product))
+            .flatten();
+        let Some(d) = d else {
+            skipped += 1;
+            continue;
+        };
+        // Gyro and acc, and the aux accelerometer when the format has it.
+        let has = |names: &[&str]| names.iter().all(|n| d.get(n).is_some());
+        if stream.is_none() && has(&AXES[..6]) {
+            stream = Some((f.id, if has(&AXES) { 9 } else { 6 }));
+        }
+        let Some((_, channels)) = stream.filter(|s| s.0 == f.id) else {
+            skipped += 1;
+            continue;
+        };
+        if !has(&AXES[..channels]) {
+            skipped += 1;
+            continue;
+        }
+        let y = AXES[..channels]
+            .iter()
+            .map(|n| d.get(n).unwrap_or(0.0))
+            .collect();
+        rows.push((y, clock.time(&d)));
+    }
+    let name = stream.map_or("none".to_owned(), |(id, _)| {
+        formats::find(id).map_or_else(|| "UDD".to_owned(), |f| f.name.to_owned())
+    });
+    super::tool_protocol::ImuSamples {
+        rows,
+        what: format!("KERNEL {name} frames, {skipped} other frames skipped"),
+    }
 }
 
 #[cfg(test)]

@@ -523,6 +523,107 @@ pub fn decode(
     Ok((rec, d.errors()))
 }
 
+/// `client decode` of an ISB capture: its data-set packets as rows; said
+/// on stderr when the protocol was detected rather than given.
+pub(crate) fn decode_capture(c: super::tool_protocol::Capture<'_>) -> anyhow::Result<()> {
+    let what = || format!("decode {}", c.file.display());
+    if c.detected {
+        eprintln!(
+            "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb",
+            c.file.display()
+        );
+    }
+    let mut w = super::writer(c.out)?;
+    if c.rate.is_some() {
+        return Err(UsageError(
+            "decode --rate is for KERNEL frames: ISB sets carry their own time".into(),
+        )
+        .into());
+    }
+    let only = c.did.map(parse_set).transpose()?;
+    let (rec, errors) = decode(c.src, &what, &mut w, c.to, only)?;
+    w.flush()?;
+    if rec.rows == 0 && !c.empty {
+        bail!(
+            "{}: no ISB data set packet{} ({errors} packets failed their checksum): not an \
+             IMX-5's capture? (--protocol kernel for a KERNEL's)",
+            what(),
+            only.map_or(String::new(), |d| format!(" of set {d}"))
+        );
+    }
+    eprintln!(
+        "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
+        rec.rows, rec.skipped
+    );
+    Ok(())
+}
+
+/// The IMU samples of a raw ISB capture (`imu-emu allan --input`): whole
+/// DATA packets of DID_IMU, DID_IMU_RAW or DID_IMU_MAG (`imu_t`: rad/s,
+/// m/s²), or of DID_PIMU / DID_PIMU_MAG (`pimu_t`: Δθ rad and Δv m/s over
+/// `dt`, read as their means Δθ/dt, Δv/dt), the first of them seen
+/// setting the stream, in the KERNEL's units (°/s, g); each timed by its
+/// set's own `time`.
+pub fn imu_samples(bytes: &[u8]) -> super::tool_protocol::ImuSamples {
+    let mut rx = Box::new(Decoder::<MAX_PACKET>::new());
+    let mut input = bytes;
+    let mut stream: Option<u8> = None;
+    let mut rows = Vec::new();
+    let mut skipped = 0usize;
+    let deg = 180.0 / std::f64::consts::PI;
+    let g = f64::from(imu_emu::G);
+    while let Some(p) = rx.next_packet(&mut input) {
+        // A data set from its start (with or without the offset flag).
+        let data = (p.kind() == Some(PacketType::Data))
+            .then(|| p.offset_and_data())
+            .flatten()
+            .filter(|d| d.0 == 0)
+            .map_or(&[][..], |d| d.1);
+        let row = match p.did {
+            did::IMU | did::IMU_RAW | did::IMU_MAG => data
+                .get(..sets::imu::SIZE)
+                .and_then(|b| b.try_into().ok())
+                .map(|b| {
+                    let s = sets::Imu::decode(b);
+                    let y = [s.pqr, s.acc];
+                    (y, 1.0, s.time)
+                }),
+            did::PIMU | did::PIMU_MAG => data
+                .get(..sets::pimu::SIZE)
+                .and_then(|b| b.try_into().ok())
+                .map(|b| {
+                    let s = sets::Pimu::decode(b);
+                    ([s.theta, s.vel], 1.0 / f64::from(s.dt), s.time)
+                })
+                .filter(|r| r.1.is_finite() && r.1 > 0.0),
+            _ => None,
+        };
+        let Some(([w, a], per_s, time)) = row else {
+            skipped += 1;
+            continue;
+        };
+        if *stream.get_or_insert(p.did) != p.did {
+            skipped += 1;
+            continue;
+        }
+        let y = w
+            .iter()
+            .map(|v| f64::from(*v) * per_s * deg)
+            .chain(a.iter().map(|v| f64::from(*v) * per_s / g))
+            .collect();
+        rows.push((y, Some(time)));
+    }
+    let name = match stream {
+        Some(did::PIMU | did::PIMU_MAG) => "PIMU (Δθ/dt, Δv/dt)",
+        Some(_) => "IMU",
+        None => "no IMU",
+    };
+    super::tool_protocol::ImuSamples {
+        rows,
+        what: format!("ISB {name} packets, {skipped} other packets skipped"),
+    }
+}
+
 /// What `record` stops on.
 #[derive(Debug, Clone, Copy)]
 pub struct Until {

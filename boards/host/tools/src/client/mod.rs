@@ -23,6 +23,7 @@ pub mod decode;
 pub mod isb;
 pub mod nmea;
 pub mod plot;
+pub mod tool_protocol;
 
 use std::io::{IsTerminal as _, Read, Write};
 use std::path::PathBuf;
@@ -594,9 +595,15 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
     }
     let interrupted = interrupt_flag();
     let stop = || interrupted.load(std::sync::atomic::Ordering::Relaxed);
-    if args.protocol == Some(Protocol::Isb) {
-        return isb::run(&args, &mut out, &stop);
-    }
+    tool_protocol::of(args.protocol.unwrap_or_default()).client(&args, &mut out, &stop)
+}
+
+/// `imu-emu client CMD` on a KERNEL line (all but `decode` and `plot`).
+pub(crate) fn run_kernel(
+    args: &ClientArgs,
+    out: &mut dyn Write,
+    stop: &dyn Fn() -> bool,
+) -> anyhow::Result<()> {
     if matches!(args.cmd, ClientCmd::Reset | ClientCmd::FactoryReset) {
         return Err(UsageError(
             "reset and factory-reset are IMX-5 (--protocol isb) commands; a KERNEL resets by a \
@@ -605,7 +612,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         )
         .into());
     }
-    let mut link = Link::open(&args)?;
+    let mut link = Link::open(args)?;
     match &args.cmd {
         ClientCmd::Info => {
             let f = link.request(Command::GetDevInfo, command::GET_DEV_INFO, "GetDevInfo")?;
@@ -745,7 +752,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
                 rec = rec.with_rate(r);
             }
             rec.end_s = *duration;
-            let r = record(&mut link, &mut w, &mut rec, *frames, &stop);
+            let r = record(&mut link, &mut w, &mut rec, *frames, stop);
             // The stream is stopped even when recording failed; that
             // failure (a closed line) is the one reported.
             let stopped = match started {
@@ -812,45 +819,42 @@ fn decode_file(
         .read_to_end(&mut head)
         .with_context(what)?;
     let empty = head.is_empty();
-    let mut src = std::io::Cursor::new(head).chain(file_src);
-    let protocol = match args.protocol {
-        Some(p) => p,
-        None => {
-            let p = Protocol::detect(src.get_ref().0.get_ref()).unwrap_or(Protocol::Kernel);
-            if p == Protocol::Isb {
-                eprintln!(
-                    "imu-emu: {}: ISB packets (an IMX-5's capture): decoded as --protocol isb",
-                    file.display()
-                );
-            }
-            p
-        }
+    let (protocol, detected) = match args.protocol {
+        Some(p) => (p, false),
+        None => (Protocol::detect(&head).unwrap_or_default(), true),
     };
+    let mut src = std::io::Cursor::new(head).chain(file_src);
+    tool_protocol::of(protocol).decode(
+        args,
+        tool_protocol::Capture {
+            file,
+            src: &mut src,
+            empty,
+            detected,
+            out: o,
+            to,
+            did,
+            rate,
+        },
+    )
+}
+
+/// `client decode` of a KERNEL capture.
+pub(crate) fn decode_kernel(
+    args: &ClientArgs,
+    c: tool_protocol::Capture<'_>,
+) -> anyhow::Result<()> {
+    let tool_protocol::Capture {
+        file,
+        src,
+        out: o,
+        to,
+        did,
+        rate,
+        ..
+    } = c;
+    let what = || format!("decode {}", file.display());
     let mut w = writer(o)?;
-    if protocol == Protocol::Isb {
-        if rate.is_some() {
-            return Err(UsageError(
-                "decode --rate is for KERNEL frames: ISB sets carry their own time".into(),
-            )
-            .into());
-        }
-        let only = did.map(isb::parse_set).transpose()?;
-        let (rec, errors) = isb::decode(&mut src, &what, &mut w, to, only)?;
-        w.flush()?;
-        if rec.rows == 0 && !empty {
-            bail!(
-                "{}: no ISB data set packet{} ({errors} packets failed their checksum): not an \
-                 IMX-5's capture? (--protocol kernel for a KERNEL's)",
-                what(),
-                only.map_or(String::new(), |d| format!(" of set {d}"))
-            );
-        }
-        eprintln!(
-            "imu-emu: {} packets decoded, {errors} failed their checksum, {} skipped",
-            rec.rows, rec.skipped
-        );
-        return Ok(());
-    }
     if did.is_some() {
         return Err(UsageError("decode --did goes with --protocol isb".into()).into());
     }
@@ -858,7 +862,7 @@ fn decode_file(
         Recorder::new(to, args.model).with_rate(RateOf::Hz(rate.unwrap_or(DEFAULT_DECODE_RATE_HZ)));
     let mut d = Box::new(Decoder::<CAP>::new());
     let mut bytes = 0u64;
-    read_chunks(&mut src, &what, &mut |chunk| {
+    read_chunks(src, &what, &mut |chunk| {
         bytes += chunk.len() as u64;
         let mut input: &[u8] = chunk;
         while let Some(f) = d.next_frame(&mut input) {
