@@ -65,7 +65,8 @@ open(LIB, "w").write(lib.replace(anchor, anchor + MARK, 1))
 try:
     narrowed = 0
     spans = set()
-    for m in cargo(["-p", "imu-emu", "--lib"]):
+    # Both builds: `chain/fixed.rs` is compiled only in the fixed-point one.
+    for m in cargo(["-p", "imu-emu", "--lib"]) + cargo(["-p", "imu-emu", "--lib", "--features", "fixed-point"]):
         if (m.get("code") or {}).get("code") != "unreachable_pub":
             continue
         for s in m["spans"]:
