@@ -82,6 +82,24 @@ macro_rules! internal {
     )*};
 }
 
+/// Declares a codec façade: `pub mod $name` re-exports the listed items
+/// of the crate-private module `$inner` (declared beside it, from the
+/// file `$name.rs`). Inside the crate, and outside it with `internals`,
+/// `$name::` names every item of `$inner`, so the crate and its tests keep
+/// one path for each item whether or not it is in the public API.
+macro_rules! facade {
+    ($(#[$attr:meta])* pub mod $name:ident = $inner:ident { $($list:tt)* }) => {
+        $(#[$attr])*
+        pub mod $name {
+            pub use super::$inner::{$($list)*};
+            #[cfg(feature = "internals")]
+            pub use super::$inner::*;
+            #[cfg(not(feature = "internals"))]
+            pub(crate) use super::$inner::*;
+        }
+    };
+}
+
 // The board API.
 pub mod device;
 pub mod feed;

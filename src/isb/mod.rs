@@ -37,7 +37,18 @@ pub mod layout;
 pub mod message;
 pub mod nmea;
 pub mod packet;
-pub mod sets;
+
+#[path = "sets.rs"]
+mod sets_all;
+facade! {
+    /// The data sets' byte layouts a host tool reads (IMU, PIMU), their
+    /// typed decoders, the command sets it writes (SYS_CMD, BIT,
+    /// FLASH_CONFIG) and the little-endian accessors; the module's other
+    /// layouts and status bits are the personality's.
+    pub mod sets = sets_all {
+        bit, flash, imu, le, pimu, sys_cmd, Bit, Imu, Pimu, SystemCommand,
+    }
+}
 
 internal! {
     mod asce;
