@@ -34,9 +34,27 @@
 
 pub mod did;
 pub mod layout;
-pub mod message;
-pub mod nmea;
 pub mod packet;
+
+#[path = "message.rs"]
+mod message_all;
+facade! {
+    /// The requests a host tool sends (GET_DATA, SET_DATA) and the DATA
+    /// it reads; the device's side of them is the personality's.
+    pub mod message = message_all {
+        encode_data, encode_get, encode_set, GetRequest, MAX_DATA_PAYLOAD,
+    }
+}
+
+#[path = "nmea.rs"]
+mod nmea_all;
+facade! {
+    /// The NMEA commands the vendor tool sends and the checksum; the
+    /// device's input and `$INFO` reply are the personality's.
+    pub mod nmea = nmea_all {
+        checksum, Command, MAX_BODY,
+    }
+}
 
 #[path = "sets.rs"]
 mod sets_all;
