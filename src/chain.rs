@@ -245,7 +245,9 @@ impl ChainConfig {
         }
     }
 
-    /// The FIR design this configuration selects (`None` = off).
+    /// The FIR design this configuration selects (`None` = off); for the
+    /// crate's tests.
+    #[cfg(feature = "internals")]
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
     }
@@ -587,7 +589,7 @@ impl<I: Integrate> SignalChain<I> {
         *truth_frame = TruthFrame::Sensor;
         *cfg_ = cfg;
         *core_ = core;
-        fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
+        fir.reset(fir::design(cfg.lpf, cfg.internal_rate_hz), &arith::fir_row(&sensor));
         // A unit without the aux accelerometer does not filter its (zero)
         // channels; no output reads them (`Core::take`).
         fir.set_aux_live(has_aux);
@@ -610,6 +612,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The configuration in force.
+    #[cfg(feature = "internals")]
     pub fn config(&self) -> &ChainConfig {
         &self.cfg
     }
@@ -619,7 +622,7 @@ impl<I: Integrate> SignalChain<I> {
     #[inline(never)]
     pub fn configure(&mut self, cfg: &ChainConfig) {
         self.cfg = *cfg;
-        self.fir.set_design(cfg.fir_design());
+        self.fir.set_design(fir::design(cfg.lpf, cfg.internal_rate_hz));
         // The cascade starts in the steady state of the last FIR output
         // (exact for a steady signal).
         self.core.reconfigure(cfg, self.dt);
@@ -677,6 +680,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// Which axes the motion describes (default: the unit's own).
+    #[cfg(feature = "internals")]
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;
     }
@@ -709,20 +713,16 @@ impl<I: Integrate> SignalChain<I> {
 
     /// The error model, for reading or changing (changes apply at the next
     /// tick).
+    #[cfg(feature = "internals")]
     pub fn errors_mut(&mut self) -> &mut ErrorModel {
         self.errors_dirty = true;
         &mut self.errors
     }
 
     /// The error model in force.
+    #[cfg(feature = "internals")]
     pub fn errors(&self) -> &ErrorModel {
         &self.errors
-    }
-
-    /// The temperature model, for reading or changing.
-    pub fn temperature_mut(&mut self) -> &mut TemperatureModel {
-        self.errors_dirty = true;
-        &mut self.temp_model
     }
 
     /// Injectable faults.
@@ -743,22 +743,25 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The estimated gyro bias, carrier axes, °/s.
+    #[cfg(feature = "internals")]
     pub fn gyro_bias(&self) -> Vec3 {
         self.bias
     }
 
     /// Whether an initial alignment is running.
-    pub fn is_aligning(&self) -> bool {
+    pub(crate) fn is_aligning(&self) -> bool {
         matches!(self.ahrs, Ahrs::Aligning(_))
     }
 
     /// The attitude filter (tests switch its tilt correction).
+    #[cfg(feature = "internals")]
     pub fn attitude_mut(&mut self) -> &mut ChainAttitude {
         &mut self.core.attitude
     }
 
     /// Seconds the last [`SignalChain::output`] covered (its ticks × the
     /// tick period): Δθ = gyro × this in the incremental variant.
+    #[cfg(feature = "internals")]
     pub fn output_interval(&self) -> f32 {
         self.interval
     }
@@ -817,6 +820,7 @@ impl<I: Integrate> SignalChain<I> {
 
     /// One tick with an external motion source (a host's trajectory player)
     /// instead of the built-in motion.
+    #[cfg(feature = "internals")]
     pub fn tick_with(&mut self, now: Instant, source: &mut dyn MotionSource) {
         let truth = source.next(now, self.dt);
         self.process(&arith::truth_of(&truth));
@@ -925,6 +929,7 @@ impl<I: Integrate> SignalChain<I> {
     /// The output of this output tick: data per the output variant over the
     /// interval since the previous output, in carrier axes; restarts the
     /// interval. See [`Sample`] for units.
+    #[cfg(feature = "internals")]
     pub fn output(&mut self) -> Sample {
         self.output_with(true)
     }

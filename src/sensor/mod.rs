@@ -17,8 +17,17 @@ internal! {
     mod temperature;
 }
 
+pub use motion::{BuiltinMotion, Motion, Truth};
+// The error engines and the chain's motion seam: the crate's, and its
+// tests' with `internals`.
+#[cfg(feature = "internals")]
 pub use errors::{AxisErrors, ErrorModel, SensorErrors};
-pub use motion::{BuiltinMotion, Motion, MotionSource, Truth, TruthFrame, DEFAULT_LATITUDE_DEG};
+#[cfg(not(feature = "internals"))]
+pub(crate) use errors::{AxisErrors, ErrorModel, SensorErrors};
+#[cfg(feature = "internals")]
+pub use motion::{MotionSource, TruthFrame, DEFAULT_LATITUDE_DEG};
+#[cfg(not(feature = "internals"))]
+pub(crate) use motion::{MotionSource, TruthFrame, DEFAULT_LATITUDE_DEG};
 pub use profile::{SensorProfile, SensorSpec, TemperatureSpec};
 pub use rng::Rng;
 
