@@ -31,7 +31,7 @@
 //!   [`SignalChain::begin_alignment`], then after that many seconds of ticks
 //!   [`SignalChain::end_alignment`]; = 0 → [`SignalChain::skip_alignment`].
 //!   Formats without orientation call neither (the AHRS keeps its state).
-//! - At an output tick: [`SignalChain::output`] (covers the ticks since the
+//! - At an output tick: `SignalChain::output` (covers the ticks since the
 //!   previous output, then restarts the interval), then
 //!   [`SignalChain::health`], which the personality encodes (KERNEL: USW,
 //!   USW-extended and GetBIT in [`crate::kernel::status`]).
@@ -289,7 +289,7 @@ pub struct Health {
     /// The internal sensors' configuration failed.
     pub sensor_config_failure: bool,
     /// Gyro axes beyond the measurement range at any tick of the interval
-    /// of the last [`SignalChain::output`] or since.
+    /// of the last `SignalChain::output` or since.
     pub gyro_over_range: u8,
     /// Accelerometer axes beyond the measurement range, same interval.
     pub accel_over_range: u8,
@@ -759,7 +759,7 @@ impl<I: Integrate> SignalChain<I> {
         &mut self.core.attitude
     }
 
-    /// Seconds the last [`SignalChain::output`] covered (its ticks × the
+    /// Seconds the last `SignalChain::output` covered (its ticks × the
     /// tick period): Δθ = gyro × this in the incremental variant.
     #[cfg(feature = "internals")]
     pub fn output_interval(&self) -> f32 {
@@ -944,7 +944,7 @@ impl<I: Integrate> SignalChain<I> {
         self.sat_live = 0;
     }
 
-    /// [`SignalChain::output`], computing the orientation only if
+    /// `SignalChain::output`, computing the orientation only if
     /// `attitude` (the frame carries it): without, [`Sample::quat`] is the
     /// identity and [`Sample::euler`] zeros. Nothing else differs; the
     /// orientation has no state of its own to advance.
@@ -981,7 +981,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The health now. The over-range masks cover the interval of the
-    /// last [`SignalChain::output`] and the ticks since, so they read the
+    /// last `SignalChain::output` and the ticks since, so they read the
     /// same before or after `output()` at an output tick.
     pub fn health(&self) -> Health {
         let f = &self.faults;
