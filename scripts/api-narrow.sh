@@ -106,7 +106,13 @@ def definitions(name):
         for f in files:
             if f.endswith(".rs"):
                 path = os.path.join(root, f)
-                for i, t in enumerate(open(path).read().split("\n"), 1):
+                lines = open(path).read().split("\n")
+                for i, t in enumerate(lines, 1):
+                    # A re-export that is crate-private only without
+                    # `internals` (its public twin is the line above it)
+                    # stays so.
+                    if i > 1 and lines[i - 2].strip() == '#[cfg(not(feature = "internals"))]':
+                        continue
                     if item.search(t) or export.search(t):
                         yield path, i
 
