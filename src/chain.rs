@@ -204,9 +204,9 @@ use arith::Core;
 const RAD: f32 = 180.0 / core::f32::consts::PI;
 
 /// Saturation of the aux (high-g) accelerometer, g (product code `A90`).
-pub const AUX_RANGE_G: f32 = 90.0;
+pub(crate) const AUX_RANGE_G: f32 = 90.0;
 /// Supply voltage reported unless a fault overrides it, V.
-pub const NOMINAL_SUPPLY_V: f32 = 12.0;
+pub(crate) const NOMINAL_SUPPLY_V: f32 = 12.0;
 
 /// The chain's configuration, protocol neutral: each personality builds it
 /// from its own parameters (the KERNEL's Table 5.24 rows:
@@ -418,7 +418,7 @@ fn measure_sensors<T: Copy>(
 /// The Earth rate the AHRS assumes (module doc of [`crate::ahrs::alignment`]):
 /// `earth_enu(DEFAULT_LATITUDE_DEG)`, as a constant (a unit test pins the
 /// equality bit for bit).
-pub const EARTH_ASSUMED: Vec3 = [
+pub(crate) const EARTH_ASSUMED: Vec3 = [
     0.0,
     f32::from_bits(0x3844_2E90), // 4.6773406e-5 rad/s
     f32::from_bits(0x386A_A511), // 5.5943678e-5 rad/s
@@ -440,7 +440,7 @@ struct Outputs {
 /// build ([`crate::ahrs::attitude::Attitude`], or
 /// [`crate::ahrs::attitude::AttitudeFixed`] with the `fixed-point` feature;
 /// both have `set`, `set_tilt_correction`, `quat`, `euler_deg`).
-pub type ChainAttitude = arith::Attitude;
+pub(crate) type ChainAttitude = arith::Attitude;
 
 impl SignalChain {
     /// Power-on of `product` with every random process seeded by `seed`

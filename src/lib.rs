@@ -92,7 +92,9 @@ macro_rules! facade {
         $(#[$attr])*
         pub mod $name {
             pub use super::$inner::{$($list)*};
+            // (Unused when the list names every public item.)
             #[cfg(feature = "internals")]
+            #[allow(unused_imports)]
             pub use super::$inner::*;
             #[cfg(not(feature = "internals"))]
             pub(crate) use super::$inner::*;

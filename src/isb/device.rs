@@ -142,7 +142,7 @@ pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// (GPS1_SAT, 408 bytes) with an offset (+ 2 payload bytes + 8 of
 /// framing); the `$INFO` sentence is at most 200. The shell's TX queue is
 /// sized by it ([`Isb`]'s `TxBuffer`).
-pub const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
+pub(crate) const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
 
 /// An incomplete packet or sentence with no new byte for this long is
 /// dropped (as the KERNEL does with a frame cut short).

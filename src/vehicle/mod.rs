@@ -62,6 +62,12 @@ use crate::sensor::motion::{Motion, Truth};
 
 pub use crate::math::double::{Q4, V3};
 // The rotations the models use, from the crate's maths.
+#[cfg(feature = "internals")]
+pub use crate::math::double::{
+    add, body_rate_of_euler, cross, euler_from_quat, quat_conj, quat_from_euler, quat_from_rotvec,
+    quat_mul, quat_normalize, rotate, rotate_inv, rotvec_from_quat, scale, wrap_pi,
+};
+#[cfg(not(feature = "internals"))]
 pub(crate) use crate::math::double::{
     add, body_rate_of_euler, cross, euler_from_quat, quat_conj, quat_from_euler, quat_from_rotvec,
     quat_mul, quat_normalize, rotate, rotate_inv, rotvec_from_quat, scale, wrap_pi,
