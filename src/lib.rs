@@ -26,9 +26,12 @@
 //!
 //! **The codec façades**: what a host tool needs to speak each protocol —
 //! [`kernel`] ([`kernel::frame`], [`kernel::command`], [`kernel::params`],
-//! [`kernel::decode`]) and [`isb`] ([`isb::packet`], [`isb::message`],
-//! [`isb::did`], [`isb::sets`], [`isb::layout`]); [`framing`] is the
-//! scanner trait both decoders implement.
+//! [`kernel::decode`], [`kernel::formats`], [`kernel::rate`],
+//! [`kernel::model`]) and [`isb`] ([`isb::packet`], [`isb::message`],
+//! [`isb::did`], [`isb::sets`], [`isb::layout`], [`isb::nmea`]);
+//! [`framing`] is the scanner trait both decoders implement. Some of them
+//! (`params`, `message`, `nmea`, `sets`) re-export only what a host tool
+//! uses of a module whose other items are the personality's.
 //!
 //! ```
 //! use imu_emu::{Device, Instant, Product, RamNor};
@@ -47,7 +50,9 @@
 //! the AHRS), the maths, the Earth's fields, the line and each protocol's
 //! own modules are crate-private. The crate's own tests, benches and fuzz
 //! targets reach them with the `internals` feature, which makes them public
-//! modules; they are not an interface. `ARCHITECTURE.md` "The public API"
+//! modules (and the façades whole, and adds the few accessors only they
+//! read, such as `SignalChain::output` and `Isb::nav`); they are not an
+//! interface. `ARCHITECTURE.md` "The public API"
 //! lists it and counts it.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
