@@ -94,8 +94,7 @@ macro_rules! internal {
 /// one path for each item whether or not it is in the public API.
 macro_rules! facade {
     ($(#[$attr:meta])* pub mod $name:ident = $inner:ident { $($list:tt)* }) => {
-        $(#[$attr])*
-        pub mod $name {
+        $(#[$attr])* pub mod $name {
             pub use super::$inner::{$($list)*};
             // (Unused when the list names every public item.)
             #[cfg(feature = "internals")]

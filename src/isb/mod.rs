@@ -24,7 +24,7 @@
 
 //!
 //! The codec façade a host tool needs is [`packet`] (framing), [`message`]
-//! (the requests and replies), [`did`] (the data sets and their sizes),
+//! (the requests a host sends, the DATA it reads), [`did`] (the data sets and their sizes),
 //! [`layout`] (decoding by field name: the field tables and
 //! [`layout::read`]), [`sets`] (the data sets' layouts,
 //! their typed decoders and the command sets: SYS_CMD, BIT, FLASH_CONFIG),
