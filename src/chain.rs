@@ -31,7 +31,7 @@
 //!   [`SignalChain::begin_alignment`], then after that many seconds of ticks
 //!   [`SignalChain::end_alignment`]; = 0 → [`SignalChain::skip_alignment`].
 //!   Formats without orientation call neither (the AHRS keeps its state).
-//! - At an output tick: [`SignalChain::output`] (covers the ticks since the
+//! - At an output tick: `SignalChain::output` (covers the ticks since the
 //!   previous output, then restarts the interval), then
 //!   [`SignalChain::health`], which the personality encodes (KERNEL: USW,
 //!   USW-extended and GetBIT in [`crate::kernel::status`]).
@@ -204,9 +204,9 @@ use arith::Core;
 const RAD: f32 = 180.0 / core::f32::consts::PI;
 
 /// Saturation of the aux (high-g) accelerometer, g (product code `A90`).
-pub const AUX_RANGE_G: f32 = 90.0;
+pub(crate) const AUX_RANGE_G: f32 = 90.0;
 /// Supply voltage reported unless a fault overrides it, V.
-pub const NOMINAL_SUPPLY_V: f32 = 12.0;
+pub(crate) const NOMINAL_SUPPLY_V: f32 = 12.0;
 
 /// The chain's configuration, protocol neutral: each personality builds it
 /// from its own parameters (the KERNEL's Table 5.24 rows:
@@ -245,7 +245,9 @@ impl ChainConfig {
         }
     }
 
-    /// The FIR design this configuration selects (`None` = off).
+    /// The FIR design this configuration selects (`None` = off); for the
+    /// crate's tests.
+    #[cfg(feature = "internals")]
     pub fn fir_design(&self) -> Option<&'static FirDesign> {
         fir::design(self.lpf, self.internal_rate_hz)
     }
@@ -287,7 +289,7 @@ pub struct Health {
     /// The internal sensors' configuration failed.
     pub sensor_config_failure: bool,
     /// Gyro axes beyond the measurement range at any tick of the interval
-    /// of the last [`SignalChain::output`] or since.
+    /// of the last `SignalChain::output` or since.
     pub gyro_over_range: u8,
     /// Accelerometer axes beyond the measurement range, same interval.
     pub accel_over_range: u8,
@@ -416,7 +418,7 @@ fn measure_sensors<T: Copy>(
 /// The Earth rate the AHRS assumes (module doc of [`crate::ahrs::alignment`]):
 /// `earth_enu(DEFAULT_LATITUDE_DEG)`, as a constant (a unit test pins the
 /// equality bit for bit).
-pub const EARTH_ASSUMED: Vec3 = [
+pub(crate) const EARTH_ASSUMED: Vec3 = [
     0.0,
     f32::from_bits(0x3844_2E90), // 4.6773406e-5 rad/s
     f32::from_bits(0x386A_A511), // 5.5943678e-5 rad/s
@@ -438,7 +440,7 @@ struct Outputs {
 /// build ([`crate::ahrs::attitude::Attitude`], or
 /// [`crate::ahrs::attitude::AttitudeFixed`] with the `fixed-point` feature;
 /// both have `set`, `set_tilt_correction`, `quat`, `euler_deg`).
-pub type ChainAttitude = arith::Attitude;
+pub(crate) type ChainAttitude = arith::Attitude;
 
 impl SignalChain {
     /// Power-on of `product` with every random process seeded by `seed`
@@ -587,7 +589,7 @@ impl<I: Integrate> SignalChain<I> {
         *truth_frame = TruthFrame::Sensor;
         *cfg_ = cfg;
         *core_ = core;
-        fir.reset(cfg.fir_design(), &arith::fir_row(&sensor));
+        fir.reset(fir::design(cfg.lpf, cfg.internal_rate_hz), &arith::fir_row(&sensor));
         // A unit without the aux accelerometer does not filter its (zero)
         // channels; no output reads them (`Core::take`).
         fir.set_aux_live(has_aux);
@@ -610,6 +612,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The configuration in force.
+    #[cfg(feature = "internals")]
     pub fn config(&self) -> &ChainConfig {
         &self.cfg
     }
@@ -619,7 +622,7 @@ impl<I: Integrate> SignalChain<I> {
     #[inline(never)]
     pub fn configure(&mut self, cfg: &ChainConfig) {
         self.cfg = *cfg;
-        self.fir.set_design(cfg.fir_design());
+        self.fir.set_design(fir::design(cfg.lpf, cfg.internal_rate_hz));
         // The cascade starts in the steady state of the last FIR output
         // (exact for a steady signal).
         self.core.reconfigure(cfg, self.dt);
@@ -677,6 +680,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// Which axes the motion describes (default: the unit's own).
+    #[cfg(feature = "internals")]
     pub fn set_truth_frame(&mut self, frame: TruthFrame) {
         self.truth_frame = frame;
     }
@@ -709,20 +713,16 @@ impl<I: Integrate> SignalChain<I> {
 
     /// The error model, for reading or changing (changes apply at the next
     /// tick).
+    #[cfg(feature = "internals")]
     pub fn errors_mut(&mut self) -> &mut ErrorModel {
         self.errors_dirty = true;
         &mut self.errors
     }
 
     /// The error model in force.
+    #[cfg(feature = "internals")]
     pub fn errors(&self) -> &ErrorModel {
         &self.errors
-    }
-
-    /// The temperature model, for reading or changing.
-    pub fn temperature_mut(&mut self) -> &mut TemperatureModel {
-        self.errors_dirty = true;
-        &mut self.temp_model
     }
 
     /// Injectable faults.
@@ -743,22 +743,25 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The estimated gyro bias, carrier axes, °/s.
+    #[cfg(feature = "internals")]
     pub fn gyro_bias(&self) -> Vec3 {
         self.bias
     }
 
     /// Whether an initial alignment is running.
-    pub fn is_aligning(&self) -> bool {
+    pub(crate) fn is_aligning(&self) -> bool {
         matches!(self.ahrs, Ahrs::Aligning(_))
     }
 
     /// The attitude filter (tests switch its tilt correction).
+    #[cfg(feature = "internals")]
     pub fn attitude_mut(&mut self) -> &mut ChainAttitude {
         &mut self.core.attitude
     }
 
-    /// Seconds the last [`SignalChain::output`] covered (its ticks × the
+    /// Seconds the last `SignalChain::output` covered (its ticks × the
     /// tick period): Δθ = gyro × this in the incremental variant.
+    #[cfg(feature = "internals")]
     pub fn output_interval(&self) -> f32 {
         self.interval
     }
@@ -817,6 +820,7 @@ impl<I: Integrate> SignalChain<I> {
 
     /// One tick with an external motion source (a host's trajectory player)
     /// instead of the built-in motion.
+    #[cfg(feature = "internals")]
     pub fn tick_with(&mut self, now: Instant, source: &mut dyn MotionSource) {
         let truth = source.next(now, self.dt);
         self.process(&arith::truth_of(&truth));
@@ -925,6 +929,7 @@ impl<I: Integrate> SignalChain<I> {
     /// The output of this output tick: data per the output variant over the
     /// interval since the previous output, in carrier axes; restarts the
     /// interval. See [`Sample`] for units.
+    #[cfg(feature = "internals")]
     pub fn output(&mut self) -> Sample {
         self.output_with(true)
     }
@@ -939,7 +944,7 @@ impl<I: Integrate> SignalChain<I> {
         self.sat_live = 0;
     }
 
-    /// [`SignalChain::output`], computing the orientation only if
+    /// `SignalChain::output`, computing the orientation only if
     /// `attitude` (the frame carries it): without, [`Sample::quat`] is the
     /// identity and [`Sample::euler`] zeros. Nothing else differs; the
     /// orientation has no state of its own to advance.
@@ -976,7 +981,7 @@ impl<I: Integrate> SignalChain<I> {
     }
 
     /// The health now. The over-range masks cover the interval of the
-    /// last [`SignalChain::output`] and the ticks since, so they read the
+    /// last `SignalChain::output` and the ticks since, so they read the
     /// same before or after `output()` at an output tick.
     pub fn health(&self) -> Health {
         let f = &self.faults;

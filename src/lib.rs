@@ -26,9 +26,12 @@
 //!
 //! **The codec façades**: what a host tool needs to speak each protocol —
 //! [`kernel`] ([`kernel::frame`], [`kernel::command`], [`kernel::params`],
-//! [`kernel::decode`]) and [`isb`] ([`isb::packet`], [`isb::message`],
-//! [`isb::did`], [`isb::sets`], [`isb::layout`]); [`framing`] is the
-//! scanner trait both decoders implement.
+//! [`kernel::decode`], [`kernel::formats`], [`kernel::rate`],
+//! [`kernel::model`]) and [`isb`] ([`isb::packet`], [`isb::message`],
+//! [`isb::did`], [`isb::sets`], [`isb::layout`], [`isb::nmea`]);
+//! [`framing`] is the scanner trait both decoders implement. Some of them
+//! (`params`, `message`, `nmea`, `sets`) re-export only what a host tool
+//! uses of a module whose other items are the personality's.
 //!
 //! ```
 //! use imu_emu::{Device, Instant, Product, RamNor};
@@ -47,7 +50,9 @@
 //! the AHRS), the maths, the Earth's fields, the line and each protocol's
 //! own modules are crate-private. The crate's own tests, benches and fuzz
 //! targets reach them with the `internals` feature, which makes them public
-//! modules; they are not an interface. `ARCHITECTURE.md` "The public API"
+//! modules (and the façades whole, and adds the few accessors only they
+//! read, such as `SignalChain::output` and `Isb::nav`); they are not an
+//! interface. `ARCHITECTURE.md` "The public API"
 //! lists it and counts it.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
@@ -80,6 +85,25 @@ macro_rules! internal {
         #[cfg(feature = "internals")] pub mod $name;
         #[cfg(not(feature = "internals"))] pub(crate) mod $name;
     )*};
+}
+
+/// Declares a codec façade: `pub mod $name` re-exports the listed items
+/// of the crate-private module `$inner` (declared beside it, from the
+/// file `$name.rs`). Inside the crate, and outside it with `internals`,
+/// `$name::` names every item of `$inner`, so the crate and its tests keep
+/// one path for each item whether or not it is in the public API.
+macro_rules! facade {
+    ($(#[$attr:meta])* pub mod $name:ident = $inner:ident { $($list:tt)* }) => {
+        $(#[$attr])* pub mod $name {
+            pub use super::$inner::{$($list)*};
+            // (Unused when the list names every public item.)
+            #[cfg(feature = "internals")]
+            #[allow(unused_imports)]
+            pub use super::$inner::*;
+            #[cfg(not(feature = "internals"))]
+            pub(crate) use super::$inner::*;
+        }
+    };
 }
 
 // The board API.

@@ -108,7 +108,7 @@ pub struct Alignment {
 
 impl Alignment {
     /// A fresh alignment for ticks at `rate_hz` (≤ 25 500 Hz).
-    pub fn new(cfg: &AlignConfig, rate_hz: u32) -> Self {
+    pub(crate) fn new(cfg: &AlignConfig, rate_hz: u32) -> Self {
         let block_len = (rate_hz / 100).clamp(1, 255);
         let p0 = cfg.gyro_bias_rms * cfg.gyro_bias_rms;
         Alignment {
@@ -131,7 +131,7 @@ impl Alignment {
     }
 
     /// Ticks added so far.
-    pub fn ticks(&self) -> u32 {
+    pub(crate) fn ticks(&self) -> u32 {
         self.n
     }
 
@@ -184,7 +184,7 @@ impl Alignment {
     }
 
     /// The mean specific force so far, carrier axes, g.
-    pub fn mean_force(&self) -> Vec3 {
+    pub(crate) fn mean_force(&self) -> Vec3 {
         let inv = if self.n > 0 { 1.0 / self.n as f32 } else { 0.0 };
         [
             self.a_first[0] + self.a_sum[0] * inv,
@@ -209,7 +209,7 @@ impl Alignment {
     /// [`Alignment::finish`] with the levelled `attitude` and the Earth rate
     /// in its body axes (°/s) given (the fixed-point chain computes both in
     /// integers).
-    pub fn finish_at(&self, attitude: Quat, earth_dps: Vec3, cfg: &AlignConfig) -> AlignResult {
+    pub(crate) fn finish_at(&self, attitude: Quat, earth_dps: Vec3, cfg: &AlignConfig) -> AlignResult {
         let nb = self.n_blocks as f32;
         let mut std = [0.0; 3];
         if self.n_blocks >= 2 {
@@ -252,7 +252,7 @@ impl Alignment {
 }
 
 /// The heading-0 attitude whose up axis is along the specific force `f`.
-pub fn level_from(f: &Vec3) -> Quat {
+pub(crate) fn level_from(f: &Vec3) -> Quat {
     let n = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
     if n < 1e-6 {
         return crate::math::rotation::QUAT_IDENTITY;

@@ -26,20 +26,20 @@ use crate::time::Instant;
 const _: () = assert!(RATE_BITS == GYRO_BITS && FORCE_BITS == ACC_BITS);
 
 /// The FIR bank of this build.
-pub type Fir = FirBankFixed;
+pub(crate) type Fir = FirBankFixed;
 /// The attitude filter of this build.
 pub type Attitude = AttitudeFixed;
 /// The truth the core measures (scaled integers).
-pub type Truth = TruthFixed;
+pub(crate) type Truth = TruthFixed;
 /// One measurement (gyro, acc, aux acc), sensor axes, °/s·2^GYRO_BITS and
 /// g·2^ACC_BITS.
-pub type Sensor = [[i32; 3]; 3];
+pub(crate) type Sensor = [[i32; 3]; 3];
 /// A carrier-axes triad at the measurement's scale.
-pub type Triad = [i32; 3];
+pub(crate) type Triad = [i32; 3];
 
 /// The core (module doc).
 #[derive(Debug, Clone)]
-pub struct Core {
+pub(crate) struct Core {
     pub engines: [TriadEngineFixed; 3],
     pub motion: BuiltinMotionFixed,
     pub mounting: MountingFixed,
@@ -77,7 +77,7 @@ fn fir_units(s: &Sensor) -> [i32; CHANNELS] {
 }
 
 /// A measurement (gyro, acc, aux acc) as a FIR input row, in FIR units.
-pub fn fir_row(t: &[Vec3; 3]) -> [i32; CHANNELS] {
+pub(crate) fn fir_row(t: &[Vec3; 3]) -> [i32; CHANNELS] {
     fir_units(&[
         t[0].map(|v| to_fixed(v, GYRO_BITS)),
         t[1].map(|v| to_fixed(v, ACC_BITS)),
@@ -87,14 +87,14 @@ pub fn fir_row(t: &[Vec3; 3]) -> [i32; CHANNELS] {
 
 /// The FIR input of a measurement.
 #[inline(always)]
-pub fn fir_input(s: &Sensor) -> [i32; CHANNELS] {
+pub(crate) fn fir_input(s: &Sensor) -> [i32; CHANNELS] {
     fir_units(s)
 }
 
 /// The FIR's newest input row (FIR units: the last good measurement) as a
 /// measurement.
 #[inline]
-pub fn frozen(x: &[i32; CHANNELS]) -> Sensor {
+pub(crate) fn frozen(x: &[i32; CHANNELS]) -> Sensor {
     let (g, a) = (GYRO_BITS - 17, ACC_BITS - 20);
     [
         triad(x, 0).map(|v| v << g),
@@ -104,7 +104,7 @@ pub fn frozen(x: &[i32; CHANNELS]) -> Sensor {
 }
 
 /// The last measurement of the FIR's newest input row, °/s and g.
-pub fn sensor_of(x: &[i32; CHANNELS]) -> [Vec3; 3] {
+pub(crate) fn sensor_of(x: &[i32; CHANNELS]) -> [Vec3; 3] {
     [
         triad(x, 0).map(|v| scaled_f32(v, 17)),
         triad(x, 1).map(|v| scaled_f32(v, 20)),
@@ -121,26 +121,26 @@ pub fn truth_of(t: &TruthF32) -> Truth {
 /// The fixed-point truth is bounded where it is made (its integer scale
 /// holds ±4095 °/s, ±128 g): unchanged.
 #[inline(always)]
-pub fn bounded(t: &Truth) -> Truth {
+pub(crate) fn bounded(t: &Truth) -> Truth {
     *t
 }
 
 /// Gyro and force in the units of [`crate::dsp::integrals`] (the
 /// measurement's own).
 #[inline(always)]
-pub fn integral_units(g: &Triad, a: &Triad) -> ([i32; 3], [i32; 3]) {
+pub(crate) fn integral_units(g: &Triad, a: &Triad) -> ([i32; 3], [i32; 3]) {
     (*g, *a)
 }
 
 /// A carrier gyro triad in °/s for the alignment.
 #[inline(always)]
-pub fn gyro_dps(g: &Triad) -> Vec3 {
+pub(crate) fn gyro_dps(g: &Triad) -> Vec3 {
     g.map(|v| scaled_f32(v, GYRO_BITS))
 }
 
 /// A carrier acc triad in g for the alignment.
 #[inline(always)]
-pub fn acc_g(a: &Triad) -> Vec3 {
+pub(crate) fn acc_g(a: &Triad) -> Vec3 {
     a.map(|v| scaled_f32(v, ACC_BITS))
 }
 
@@ -154,14 +154,14 @@ fn aligning_level(al: &Alignment) -> crate::math::rotation::QuatQ30 {
 
 /// The levelled orientation of a running alignment: (quaternion, Euler
 /// angles in degrees).
-pub fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
+pub(crate) fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
     let q = aligning_level(al);
     (q.map(|v| scaled_f32(v, 30)), euler_deg_q30(&q))
 }
 
 impl Core {
     /// The core at power-on (or a placeholder) measuring `t0`.
-    pub fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
+    pub(crate) fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
         let x = fir_row(t0);
         let mounting = Mounting::from_angles_deg(cfg.alignment_angles_deg);
         Core {
@@ -182,19 +182,19 @@ impl Core {
 
     /// The error model was (re)configured: no temperature update pending.
     #[inline(always)]
-    pub fn errors_configured(&mut self) {
+    pub(crate) fn errors_configured(&mut self) {
         self.temp_pending = 0;
     }
 
     /// The temperature changed: update the nine axes, one a tick.
     #[inline(always)]
-    pub fn temperature_changed(&mut self, _e: &ErrorModel, _t: f32) {
+    pub(crate) fn temperature_changed(&mut self, _e: &ErrorModel, _t: f32) {
         self.temp_pending = 9;
     }
 
     /// Per tick: one axis's temperature terms (two soft-float products).
     #[inline]
-    pub fn temperature_step(&mut self, e: &ErrorModel, t: f32) {
+    pub(crate) fn temperature_step(&mut self, e: &ErrorModel, t: f32) {
         if self.temp_pending > 0 {
             self.temp_pending -= 1;
             let k = usize::from(self.temp_pending);
@@ -209,21 +209,21 @@ impl Core {
 
     /// The built-in motion's truth at this tick.
     #[inline(always)]
-    pub fn builtin_truth(&mut self, _now: Instant, _dt: f32) -> Truth {
+    pub(crate) fn builtin_truth(&mut self, _now: Instant, _dt: f32) -> Truth {
         self.motion.step()
     }
 
     /// Whether the built-in truth needs no [`bounded`] (which is the
     /// identity here: the fixed-point truth is clamped as it is made).
     #[inline(always)]
-    pub fn builtin_truth_bounded(&self) -> bool {
+    pub(crate) fn builtin_truth_bounded(&self) -> bool {
         true
     }
 
     /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits
     /// 0–2) and accelerometer (bits 3–5) axes beyond their range.
     #[inline(always)]
-    pub fn measure(
+    pub(crate) fn measure(
         &mut self,
         truth: &Truth,
         frame: TruthFrame,
@@ -242,7 +242,7 @@ impl Core {
 
     /// Gyro and acc of a measurement in carrier axes.
     #[inline(always)]
-    pub fn carrier(&self, s: &Sensor) -> (Triad, Triad) {
+    pub(crate) fn carrier(&self, s: &Sensor) -> (Triad, Triad) {
         (
             self.mounting.to_carrier(&s[0]),
             self.mounting.to_carrier(&s[1]),
@@ -252,14 +252,14 @@ impl Core {
     /// One attitude step on carrier gyro `g` and acc `a` (the bias is in
     /// the filter, [`Core::set_bias`]).
     #[inline(always)]
-    pub fn run_attitude(&mut self, g: &Triad, a: &Triad, _bias: &Vec3) {
+    pub(crate) fn run_attitude(&mut self, g: &Triad, a: &Triad, _bias: &Vec3) {
         self.attitude.update(g, a);
     }
 
     /// Ends the alignment `al`: its result, the attitude set from it
     /// (levelling and the Earth rate in integers, CORDIC: no soft-float
     /// trigonometry in this tick).
-    pub fn finish_alignment(&mut self, al: &Alignment, cfg: &AlignConfig) -> AlignResult {
+    pub(crate) fn finish_alignment(&mut self, al: &Alignment, cfg: &AlignConfig) -> AlignResult {
         let q = aligning_level(al);
         let w = quat_rotate_inv_q30(&q, &earth_assumed_fixed());
         let r = al.finish_at(
@@ -272,21 +272,21 @@ impl Core {
     }
 
     /// Levels the attitude at once from the last filtered accelerometer.
-    pub fn level_now(&mut self) {
+    pub(crate) fn level_now(&mut self) {
         let last = self.variant.last();
         let f = self.mounting.to_carrier(&triad(&last, 1));
         self.attitude.set_q30(level_q30(&f));
     }
 
     /// A new gyro bias estimate (°/s, carrier axes).
-    pub fn set_bias(&mut self, b: &Vec3, dt: f32) {
+    pub(crate) fn set_bias(&mut self, b: &Vec3, dt: f32) {
         self.attitude.set_bias(b, dt);
         self.bias_fir = b.map(|v| to_fixed(v, 17));
     }
 
     /// A new configuration: cascade in the steady state of the last output,
     /// mounting, an empty accumulator.
-    pub fn reconfigure(&mut self, cfg: &ChainConfig, dt: f32) {
+    pub(crate) fn reconfigure(&mut self, cfg: &ChainConfig, dt: f32) {
         let last = self.variant.last();
         self.cascade
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
@@ -296,14 +296,14 @@ impl Core {
     }
 
     /// Chooses a built-in motion.
-    pub fn set_motion(&mut self, m: Motion, dt: f32) {
+    pub(crate) fn set_motion(&mut self, m: Motion, dt: f32) {
         self.motion = BuiltinMotionFixed::new(m, dt);
     }
 
     /// The accumulated interval, carrier axes, in °/s and g, and its ticks;
     /// restarts the interval.
     #[inline]
-    pub fn take(&mut self, _bias: &Vec3, has_aux: bool) -> (Outputs, u32) {
+    pub(crate) fn take(&mut self, _bias: &Vec3, has_aux: bool) -> (Outputs, u32) {
         let v = self.variant.take();
         let m = &self.mounting;
         let f = |x: &[i32; CHANNELS], i: usize, k: u32| {

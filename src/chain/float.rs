@@ -19,19 +19,19 @@ use crate::sensor::rng::Rng;
 use crate::time::Instant;
 
 /// The FIR bank of this build.
-pub type Fir = FirBank;
+pub(crate) type Fir = FirBank;
 /// The attitude filter of this build.
 pub type Attitude = AttitudeFilter;
 /// The truth the core measures.
-pub type Truth = TruthF32;
+pub(crate) type Truth = TruthF32;
 /// One measurement (gyro, acc, aux acc), sensor axes, as a FIR row.
-pub type Sensor = [f32; CHANNELS];
+pub(crate) type Sensor = [f32; CHANNELS];
 /// A carrier-axes triad (°/s or g).
-pub type Triad = Vec3;
+pub(crate) type Triad = Vec3;
 
 /// The core (module doc).
 #[derive(Debug, Clone)]
-pub struct Core {
+pub(crate) struct Core {
     pub engines: [TriadEngine; 3],
     pub motion: BuiltinMotion,
     pub mounting: Mounting,
@@ -49,25 +49,25 @@ fn pack(s: &[Vec3; 3]) -> Sensor {
 
 /// A measurement (gyro, acc, aux acc) as a FIR input row.
 #[inline]
-pub fn fir_row(t: &[Vec3; 3]) -> Sensor {
+pub(crate) fn fir_row(t: &[Vec3; 3]) -> Sensor {
     pack(t)
 }
 
 /// The FIR input of a measurement.
 #[inline(always)]
-pub fn fir_input(s: &Sensor) -> Sensor {
+pub(crate) fn fir_input(s: &Sensor) -> Sensor {
     *s
 }
 
 /// The FIR's newest input row (the last measurement) as a measurement.
 #[inline(always)]
-pub fn frozen(last_input: &Sensor) -> Sensor {
+pub(crate) fn frozen(last_input: &Sensor) -> Sensor {
     *last_input
 }
 
 /// The last measurement of the FIR's newest input row, °/s and g.
 #[inline]
-pub fn sensor_of(x: &Sensor) -> [Vec3; 3] {
+pub(crate) fn sensor_of(x: &Sensor) -> [Vec3; 3] {
     [triad(x, 0), triad(x, 1), triad(x, 2)]
 }
 
@@ -81,31 +81,31 @@ pub fn truth_of(t: &TruthF32) -> Truth {
 /// ±128 g: [`TruthF32::bounded`]), so a value beyond `f32` saturates the
 /// sensor instead of turning into NaN.
 #[inline(always)]
-pub fn bounded(t: &Truth) -> Truth {
+pub(crate) fn bounded(t: &Truth) -> Truth {
     t.bounded()
 }
 
 /// Gyro and force in the units of [`crate::dsp::integrals`].
 #[inline(always)]
-pub fn integral_units(g: &Triad, a: &Triad) -> ([i32; 3], [i32; 3]) {
+pub(crate) fn integral_units(g: &Triad, a: &Triad) -> ([i32; 3], [i32; 3]) {
     integrals::quantize(g, a)
 }
 
 /// A carrier triad as °/s (gyro) or g (acc) for the alignment.
 #[inline(always)]
-pub fn gyro_dps(g: &Triad) -> Vec3 {
+pub(crate) fn gyro_dps(g: &Triad) -> Vec3 {
     *g
 }
 
 /// See [`gyro_dps`].
 #[inline(always)]
-pub fn acc_g(a: &Triad) -> Vec3 {
+pub(crate) fn acc_g(a: &Triad) -> Vec3 {
     *a
 }
 
 /// The levelled orientation of a running alignment: (quaternion, Euler
 /// angles in degrees).
-pub fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
+pub(crate) fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
     let q = al.level();
     let e = euler_from_quat(&q);
     (canonical(&q), [e[0] * RAD, e[1] * RAD, e[2] * RAD])
@@ -113,7 +113,7 @@ pub fn aligning_orientation(al: &Alignment) -> (Quat, Vec3) {
 
 impl Core {
     /// The core at power-on (or a placeholder) measuring `t0`.
-    pub fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
+    pub(crate) fn new(product: &Product, cfg: &ChainConfig, t0: &[Vec3; 3], dt: f32) -> Self {
         let x = fir_row(t0);
         #[allow(unused_mut)]
         let mut core = Core {
@@ -136,11 +136,11 @@ impl Core {
 
     /// The error model was (re)configured.
     #[inline(always)]
-    pub fn errors_configured(&mut self) {}
+    pub(crate) fn errors_configured(&mut self) {}
 
     /// The temperature changed to `t`: every axis at once.
     #[inline]
-    pub fn temperature_changed(&mut self, e: &ErrorModel, t: f32) {
+    pub(crate) fn temperature_changed(&mut self, e: &ErrorModel, t: f32) {
         let c = &mut self.engines;
         c[0].set_temperature(&e.gyro, t);
         c[1].set_temperature(&e.acc, t);
@@ -149,25 +149,25 @@ impl Core {
 
     /// Per tick: nothing left to update.
     #[inline(always)]
-    pub fn temperature_step(&mut self, _e: &ErrorModel, _t: f32) {}
+    pub(crate) fn temperature_step(&mut self, _e: &ErrorModel, _t: f32) {}
 
     /// The built-in motion's truth at this tick.
     #[inline(always)]
-    pub fn builtin_truth(&mut self, now: Instant, dt: f32) -> Truth {
+    pub(crate) fn builtin_truth(&mut self, now: Instant, dt: f32) -> Truth {
         self.motion.next(now, dt)
     }
 
     /// The built-in motion's truth needs no [`bounded`] (static, within
     /// the bounds).
     #[inline(always)]
-    pub fn builtin_truth_bounded(&self) -> bool {
+    pub(crate) fn builtin_truth_bounded(&self) -> bool {
         self.motion.static_and_bounded()
     }
 
     /// The sensors' measurement of `truth` (sensor axes) and the gyro (bits
     /// 0–2) and accelerometer (bits 3–5) axes beyond their range.
     #[inline(always)]
-    pub fn measure(
+    pub(crate) fn measure(
         &mut self,
         truth: &Truth,
         frame: TruthFrame,
@@ -187,7 +187,7 @@ impl Core {
 
     /// Gyro and acc of a measurement in carrier axes.
     #[inline(always)]
-    pub fn carrier(&self, s: &Sensor) -> (Triad, Triad) {
+    pub(crate) fn carrier(&self, s: &Sensor) -> (Triad, Triad) {
         (
             self.mounting.to_carrier(&triad(s, 0)),
             self.mounting.to_carrier(&triad(s, 1)),
@@ -196,20 +196,20 @@ impl Core {
 
     /// One attitude step on carrier gyro `g` and acc `a`, `bias` removed.
     #[inline(always)]
-    pub fn run_attitude(&mut self, g: &Triad, a: &Triad, bias: &Vec3) {
+    pub(crate) fn run_attitude(&mut self, g: &Triad, a: &Triad, bias: &Vec3) {
         let g = [g[0] - bias[0], g[1] - bias[1], g[2] - bias[2]];
         self.attitude.update(&g, a);
     }
 
     /// Ends the alignment `al`: its result, the attitude set from it.
-    pub fn finish_alignment(&mut self, al: &Alignment, cfg: &AlignConfig) -> AlignResult {
+    pub(crate) fn finish_alignment(&mut self, al: &Alignment, cfg: &AlignConfig) -> AlignResult {
         let r = al.finish(&EARTH_ASSUMED, cfg);
         self.attitude.set(r.attitude);
         r
     }
 
     /// Levels the attitude at once from the last filtered accelerometer.
-    pub fn level_now(&mut self) {
+    pub(crate) fn level_now(&mut self) {
         let last = self.variant.last();
         let f = self.mounting.to_carrier(&triad(&last, 1));
         self.attitude.set(level_from(&f));
@@ -217,11 +217,11 @@ impl Core {
 
     /// A new gyro bias estimate (°/s, carrier axes).
     #[inline(always)]
-    pub fn set_bias(&mut self, _b: &Vec3, _dt: f32) {}
+    pub(crate) fn set_bias(&mut self, _b: &Vec3, _dt: f32) {}
 
     /// A new configuration: mounting and an empty accumulator (the cascade
     /// is reconfigured by the caller).
-    pub fn reconfigure(&mut self, cfg: &ChainConfig, dt: f32) {
+    pub(crate) fn reconfigure(&mut self, cfg: &ChainConfig, dt: f32) {
         let last = self.variant.last();
         self.cascade
             .configure(&cfg.cascade, cfg.internal_rate_hz, &last);
@@ -230,14 +230,14 @@ impl Core {
     }
 
     /// Chooses a built-in motion.
-    pub fn set_motion(&mut self, m: Motion, dt: f32) {
+    pub(crate) fn set_motion(&mut self, m: Motion, dt: f32) {
         self.motion = BuiltinMotion::new(m, dt);
     }
 
     /// The accumulated interval, carrier axes, in °/s and g, and its ticks;
     /// restarts the interval.
     #[inline]
-    pub fn take(&mut self, bias: &Vec3, has_aux: bool) -> (Outputs, u32) {
+    pub(crate) fn take(&mut self, bias: &Vec3, has_aux: bool) -> (Outputs, u32) {
         let v = self.variant.take();
         let m = &self.mounting;
         let b = bias;

@@ -190,7 +190,7 @@ impl Section {
 }
 
 /// Most sections: Filter1 twice, Filter2 twice, Filter3.
-pub const MAX_SECTIONS: usize = 5;
+pub(crate) const MAX_SECTIONS: usize = 5;
 
 /// Slots of the per-channel state ([`Cascade`]): the cascade's input one
 /// and two ticks ago, then w[n−1], w[n−2] of Filter1 (twice) and Filter2

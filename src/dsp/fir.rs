@@ -85,10 +85,10 @@
 /// Largest order (Table 5.29).
 pub const MAX_ORDER: usize = 192;
 /// Input samples kept: the longest one-stage design (order 48) + 1.
-pub const RING: usize = 49;
+pub(crate) const RING: usize = 49;
 /// Pre-filter outputs kept: the longest span of a two-stage prototype
 /// (4 × 44) + 1.
-pub const MID_RING: usize = 177;
+pub(crate) const MID_RING: usize = 177;
 /// Channels filtered together: gyro X/Y/Z, acc X/Y/Z, aux acc X/Y/Z.
 pub const CHANNELS: usize = 9;
 
@@ -312,7 +312,7 @@ macro_rules! designs {
 }
 
 /// The pre-filter P of the two-stage designs: order 16, cutoff 0.05·f_s.
-pub static PRE: Stage = stage!(9, 16, 0.05);
+pub(crate) static PRE: Stage = stage!(9, 16, 0.05);
 
 designs! {
     FIR_16HZ_2K, 192, 16.0, 2000, 4, [23, 44, 0.04248138727458818];

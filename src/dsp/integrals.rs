@@ -60,13 +60,13 @@ use crate::math::rotation::Vec3;
 use crate::math::G;
 
 /// Fraction bits of the integrated gyro samples: 2¹⁹ per °/s.
-pub const RATE_BITS: u32 = 19;
+pub(crate) const RATE_BITS: u32 = 19;
 /// Fraction bits of the integrated accelerometer samples: 2²³ per g.
-pub const FORCE_BITS: u32 = 23;
+pub(crate) const FORCE_BITS: u32 = 23;
 
 /// Each cross-product term is divided by 2^CROSS_SHIFT (rounded) before it
 /// is summed (module doc).
-pub const CROSS_SHIFT: u32 = 20;
+pub(crate) const CROSS_SHIFT: u32 = 20;
 
 /// The cumulative integrals at one moment (a snapshot; module doc for the
 /// quantities). Keep two of them and pass them to [`window`].

@@ -9,7 +9,7 @@ use super::egm96::{COLS, ROWS, STEP_DEG, UNDULATION_M};
 /// EGM96 undulation N (m) at `lat_deg`, `lon_deg`, bilinear in the 2° grid.
 /// Latitude is clamped to ±90°, longitude wraps; a non-finite coordinate
 /// gives 0 (the ellipsoid), never NaN.
-pub fn undulation_m(lat_deg: f64, lon_deg: f64) -> f64 {
+pub(crate) fn undulation_m(lat_deg: f64, lon_deg: f64) -> f64 {
     if !lat_deg.is_finite() || !lon_deg.is_finite() {
         return 0.0;
     }

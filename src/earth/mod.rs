@@ -8,10 +8,10 @@
 //!
 //! Sources, resolution, errors and validity: docs/earth.md.
 
-pub mod egm96;
-pub mod geoid;
-pub mod wmm;
-pub mod wmm2025;
+pub(crate) mod egm96;
+pub(crate) mod geoid;
+pub(crate) mod wmm;
+pub(crate) mod wmm2025;
 
 use core::cell::Cell;
 

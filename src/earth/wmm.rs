@@ -60,7 +60,7 @@ const POLE_GUARD_DEG: f64 = 1e-4;
 /// the secular variation is linear and meant for those five years only);
 /// a non-finite input reads as latitude 0, longitude 0, height 0 or the
 /// epoch, so the result is always finite.
-pub fn field_ned_nt(lat_deg: f64, lon_deg: f64, h_m: f64, year: f64) -> [f64; 3] {
+pub(crate) fn field_ned_nt(lat_deg: f64, lon_deg: f64, h_m: f64, year: f64) -> [f64; 3] {
     let finite_or = |v: f64, d: f64| if v.is_finite() { v } else { d };
     let lat_deg = finite_or(lat_deg, 0.0).clamp(-90.0 + POLE_GUARD_DEG, 90.0 - POLE_GUARD_DEG);
     let lon = finite_or(lon_deg, 0.0).to_radians() as f32;

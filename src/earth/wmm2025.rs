@@ -5,20 +5,20 @@
 //! docs/earth.md "Magnetic field".
 
 /// The model's epoch, decimal year.
-pub const EPOCH: f64 = 2025.0;
+pub(crate) const EPOCH: f64 = 2025.0;
 /// The end of the model's validity, decimal year (exclusive).
-pub const VALID_UNTIL: f64 = 2030.0;
+pub(crate) const VALID_UNTIL: f64 = 2030.0;
 /// Highest degree and order.
-pub const N_MAX: usize = 12;
+pub(crate) const N_MAX: usize = 12;
 /// The geomagnetic reference radius, m (WMM2025 report, eq. 4).
-pub const RADIUS_M: f32 = 6_371_200.0;
+pub(crate) const RADIUS_M: f32 = 6_371_200.0;
 
 /// One row of `WMM.COF`: degree n, order m, the Schmidt semi-normalised
 /// Gauss coefficients g, h (nT) at the epoch and their secular variation
 /// ġ, ḣ (nT/year). `f32`: the synthesis is `f32` (docs/earth.md), and the
 /// file's 0.1 nT decimals are within 0.001 nT of their `f32`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Coef {
+pub(crate) struct Coef {
     /// Degree n.
     pub n: u8,
     /// Order m.
@@ -46,7 +46,7 @@ const fn c(n: u8, m: u8, g: f32, h: f32, g_dot: f32, h_dot: f32) -> Coef {
 
 /// The 90 rows, n = 1…12, m = 0…n, in the file's order.
 #[rustfmt::skip]
-pub static COEFS: [Coef; 90] = [
+pub(crate) static COEFS: [Coef; 90] = [
     c(1, 0, -29351.8, 0.0, 12.0, 0.0),
     c(1, 1, -1410.8, 4545.4, 9.7, -21.5),
     c(2, 0, -2556.6, 0.0, -11.6, 0.0),

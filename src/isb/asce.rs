@@ -16,67 +16,67 @@ use super::nmea_out::Line;
 
 /// The NMEA message IDs of SDK 2.7.1 (`data_sets.h` `NMEA_MSG_ID_*`;
 /// 1-based since SDK 2.x, 0 invalid).
-pub mod id {
+pub(crate) mod id {
     /// `$PIMU` (IMU).
-    pub const PIMU: u8 = 1;
+    pub(crate) const PIMU: u8 = 1;
     /// `$PPIMU` (PIMU).
-    pub const PPIMU: u8 = 2;
+    pub(crate) const PPIMU: u8 = 2;
     /// `$PRIMU` (IMU_RAW).
-    pub const PRIMU: u8 = 3;
+    pub(crate) const PRIMU: u8 = 3;
     /// `$PINS1` (INS_1).
-    pub const PINS1: u8 = 4;
+    pub(crate) const PINS1: u8 = 4;
     /// `$PINS2` (INS_2).
-    pub const PINS2: u8 = 5;
+    pub(crate) const PINS2: u8 = 5;
     /// `$PGPSP` (GPS1_POS, GPS1_VEL).
-    pub const PGPSP: u8 = 6;
+    pub(crate) const PGPSP: u8 = 6;
     /// `$GxGGA`.
-    pub const GGA: u8 = 7;
+    pub(crate) const GGA: u8 = 7;
     /// `$GxGLL`.
-    pub const GLL: u8 = 8;
+    pub(crate) const GLL: u8 = 8;
     /// `$GxGSA`.
-    pub const GSA: u8 = 9;
+    pub(crate) const GSA: u8 = 9;
     /// `$GxRMC`.
-    pub const RMC: u8 = 10;
+    pub(crate) const RMC: u8 = 10;
     /// `$GxZDA`.
-    pub const ZDA: u8 = 11;
+    pub(crate) const ZDA: u8 = 11;
     /// `$PASHR`.
-    pub const PASHR: u8 = 12;
+    pub(crate) const PASHR: u8 = 12;
     /// `$PSTRB` (no name: numeric only).
-    pub const PSTRB: u8 = 13;
+    pub(crate) const PSTRB: u8 = 13;
     /// `$INFO` (DEV_INFO).
-    pub const INFO: u8 = 14;
+    pub(crate) const INFO: u8 = 14;
     /// `$GxGSV` (GPS1_SAT).
-    pub const GSV: u8 = 15;
+    pub(crate) const GSV: u8 = 15;
     /// `$GxVTG`.
-    pub const VTG: u8 = 16;
+    pub(crate) const VTG: u8 = 16;
     /// `$INTEL`.
-    pub const INTEL: u8 = 17;
+    pub(crate) const INTEL: u8 = 17;
     /// `$POWGPS`.
-    pub const POWGPS: u8 = 18;
+    pub(crate) const POWGPS: u8 = 18;
     /// `$POWTLV`.
-    pub const POWTLV: u8 = 19;
+    pub(crate) const POWTLV: u8 = 19;
     /// Entries of the period table.
-    pub const COUNT: usize = 20;
+    pub(crate) const COUNT: usize = 20;
 }
 
 /// Pairs one `$ASCE` may carry; the rest is ignored.
-pub const MAX_PAIRS: usize = 20;
+pub(crate) const MAX_PAIRS: usize = 20;
 /// Options: the port mask.
-pub const OPT_PORT_MASK: u32 = 0xFF;
+pub(crate) const OPT_PORT_MASK: u32 = 0xFF;
 /// Options: persistent (saved as by `$PERS`).
-pub const OPT_PERSISTENT: u32 = 0x200;
+pub(crate) const OPT_PERSISTENT: u32 = 0x200;
 /// Options: the speed filter field (1 on, 2 off).
-pub const OPT_SPEED_FILTER_SHIFT: u32 = 10;
+pub(crate) const OPT_SPEED_FILTER_SHIFT: u32 = 10;
 /// The emulated line's port bit (`ser0`: the emulator's one line).
-pub const PORT_SER0: u32 = 0x01;
+pub(crate) const PORT_SER0: u32 = 0x01;
 /// GSV band filter numbers: 3840 + constellation × 16 + band bits.
-pub const GSV_FILTER_BASE: i64 = 3840;
+pub(crate) const GSV_FILTER_BASE: i64 = 3840;
 /// GSV constellations (`GSV_GROUPS` order of [`super::nmea_out`]).
-pub const GSV_CONSTELLATIONS: usize = 6;
+pub(crate) const GSV_CONSTELLATIONS: usize = 6;
 
 /// What one `$ASCE` did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Applied {
+pub(crate) struct Applied {
     /// Pairs taken.
     pub pairs: u8,
     /// Pairs dropped (unknown name, out-of-range ID, over [`MAX_PAIRS`],
@@ -89,7 +89,7 @@ pub struct Applied {
 /// The NMEA stream table of the port (bits and periods per ID) and the
 /// global settings `$ASCE` also writes (GSV masks, speed filter).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Table {
+pub(crate) struct Table {
     /// Bit `id` set: the sentence is on (period 0: once).
     pub bits: u32,
     /// Period multiple per ID.
@@ -106,25 +106,25 @@ pub const IMAGE_LEN: usize = 32;
 
 impl Table {
     /// Whether ID `i` is on.
-    pub fn on(&self, i: u8) -> bool {
+    pub(crate) fn on(&self, i: u8) -> bool {
         usize::from(i) < id::COUNT && self.bits & (1 << i) != 0
     }
 
     /// Turns every stream off (stops; the GSV masks and filter stay).
-    pub fn stop(&mut self) {
+    pub(crate) fn stop(&mut self) {
         self.bits = 0;
         self.periods = [0; id::COUNT];
     }
 
     /// A one-shot went out: its bit clears.
-    pub fn clear(&mut self, i: u8) {
+    pub(crate) fn clear(&mut self, i: u8) {
         if usize::from(i) < id::COUNT {
             self.bits &= !(1 << i);
         }
     }
 
     /// The persistent image (one-shots are not kept).
-    pub fn to_image(&self) -> [u8; IMAGE_LEN] {
+    pub(crate) fn to_image(self) -> [u8; IMAGE_LEN] {
         let mut b = [0u8; IMAGE_LEN];
         let mut bits = self.bits;
         for (i, p) in self.periods.iter().enumerate() {
@@ -140,7 +140,7 @@ impl Table {
     }
 
     /// Of a persistent image.
-    pub fn from_image(b: &[u8; IMAGE_LEN]) -> Self {
+    pub(crate) fn from_image(b: &[u8; IMAGE_LEN]) -> Self {
         let mut t = Table {
             bits: u32::from_le_bytes([b[0], b[1], b[2], b[3]]) & ((1 << id::COUNT) - 1),
             speed_filter: b[30] & 1 != 0,
@@ -153,7 +153,7 @@ impl Table {
 
     /// The reply to `$ASCE*14`: `$ASCE,0` then `,id,period` for every ID on
     /// with a period > 0, ascending; into `out`.
-    pub fn reply(&self, out: &mut Line) -> core::fmt::Result {
+    pub(crate) fn reply(&self, out: &mut Line) -> core::fmt::Result {
         out.write_str("ASCE,0")?;
         for i in 0..id::COUNT as u8 {
             let p = self.periods[usize::from(i)];
@@ -166,7 +166,7 @@ impl Table {
 
     /// Applies the fields after `ASCE` (`body` = the bytes between `$` and
     /// `*`, starting `ASCE,`) as the release does (module doc).
-    pub fn apply(&mut self, body: &[u8]) -> Applied {
+    pub(crate) fn apply(&mut self, body: &[u8]) -> Applied {
         let mut a = Applied::default();
         let mut fields = body.split(|&b| b == b',');
         let _name = fields.next();
@@ -258,7 +258,7 @@ crate::data_set! {
 impl Table {
     /// The table as `nmea_msgs_t` (decision: options 0, then the IDs on
     /// with a period > 0, ascending, as the `$ASCE*14` reply lists them).
-    pub fn to_msgs(&self) -> [u8; nmea_msgs::SIZE] {
+    pub(crate) fn to_msgs(self) -> [u8; nmea_msgs::SIZE] {
         let mut b = [0u8; nmea_msgs::SIZE];
         let mut at = nmea_msgs::MSGS;
         for i in 1..id::COUNT as u8 {
@@ -274,7 +274,7 @@ impl Table {
 
     /// A write of `nmea_msgs_t`: the options and pairs applied as an
     /// `$ASCE` with them would be (decision), up to the first ID 0.
-    pub fn apply_msgs(&mut self, b: &[u8; nmea_msgs::SIZE]) -> Applied {
+    pub(crate) fn apply_msgs(&mut self, b: &[u8; nmea_msgs::SIZE]) -> Applied {
         let options = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
         let mut body: heapless::String<160> = heapless::String::new();
         let _ = write!(body, "ASCE,{options}");

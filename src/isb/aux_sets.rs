@@ -29,12 +29,12 @@ crate::data_set! {
 }
 
 /// Length of `gps_version_t.swVersion`.
-pub const GPS_SW_VERSION_LEN: usize = 30;
+pub(crate) const GPS_SW_VERSION_LEN: usize = 30;
 /// Length of `gps_version_t.hwVersion`.
-pub const GPS_HW_VERSION_LEN: usize = 10;
+pub(crate) const GPS_HW_VERSION_LEN: usize = 10;
 /// `GPS_VER_NUM_EXTENSIONS`: entries of `gps_version_t.extension`, each
 /// a 30-byte string (`gps_extension_ver_t`).
-pub const GPS_VER_NUM_EXTENSIONS: usize = 6;
+pub(crate) const GPS_VER_NUM_EXTENSIONS: usize = 6;
 
 crate::data_set! {
     /// `gps_version_t`, 220 bytes: DID_GPS1_VERSION, the receiver's version
@@ -51,7 +51,7 @@ crate::data_set! {
 }
 
 /// A NUL-padded fixed string field of `s` (cut to `N` bytes).
-pub const fn padded<const N: usize>(s: &str) -> [u8; N] {
+pub(crate) const fn padded<const N: usize>(s: &str) -> [u8; N] {
     let b = s.as_bytes();
     let mut out = [0u8; N];
     let mut i = 0;
@@ -65,7 +65,7 @@ pub const fn padded<const N: usize>(s: &str) -> [u8; N] {
 /// The emulated receiver's version strings (`docs/isb-data-sets.md`
 /// "GPS1_VERSION": the emulator's choice, in the form a u-blox receiver
 /// reports them).
-pub const RECEIVER_VERSION: GpsVersion = GpsVersion {
+pub(crate) const RECEIVER_VERSION: GpsVersion = GpsVersion {
     sw_version: padded("EXT CORE 1.00 (emulated)"),
     hw_version: padded("00190000"),
     extension: [
@@ -129,7 +129,7 @@ crate::data_set! {
 }
 
 /// `MAX_NUM_SAT_SIGNALS`: entries of `gps_sig_t.sig`.
-pub const MAX_NUM_SAT_SIGNALS: usize = 100;
+pub(crate) const MAX_NUM_SAT_SIGNALS: usize = 100;
 
 crate::data_set! {
     /// `gps_sig_t`, 708 bytes: DID_GPS1_SIG, the signals the receiver
@@ -146,18 +146,18 @@ crate::data_set! {
 }
 
 /// `gps_sig_sv_t.status` (`eSatSigStatus`).
-pub mod sig_status {
+pub(crate) mod sig_status {
     /// Health good.
-    pub const HEALTH_GOOD: u16 = 0x0001;
+    pub(crate) const HEALTH_GOOD: u16 = 0x0001;
     /// Signal used in the solution.
-    pub const USED_IN_SOLUTION: u16 = 0x0004;
+    pub(crate) const USED_IN_SOLUTION: u16 = 0x0004;
 }
 
 /// GPS1_SIG of the satellites of a GPS1_SAT (`docs/isb-data-sets.md`
 /// "GPS1_SIG"): one L1 C/A signal (sigId 0) per satellite, with its
 /// constellation, number and C/N0; quality the satellite's signal quality;
 /// healthy and used when the satellite is.
-pub fn gps_sig_of(sat: &super::nav_sets::GpsSat) -> GpsSig {
+pub(crate) fn gps_sig_of(sat: &super::nav_sets::GpsSat) -> GpsSig {
     let mut sig = [GpsSigSv::default(); MAX_NUM_SAT_SIGNALS];
     let n = (sat.num_sats as usize).min(sat.sat.len());
     for (s, sv) in sig.iter_mut().zip(sat.sat.iter().take(n)) {
@@ -239,10 +239,10 @@ crate::data_set! {
 }
 
 /// `NUM_SERIAL_PORTS`: entries of `port_monitor_t.port`.
-pub const NUM_SERIAL_PORTS: usize = 6;
+pub(crate) const NUM_SERIAL_PORTS: usize = 6;
 
 /// `ePortMonPortType` of a UART, in `portInfo`'s high nibble.
-pub const PORT_TYPE_UART: u8 = 1 << 4;
+pub(crate) const PORT_TYPE_UART: u8 = 1 << 4;
 
 crate::data_set! {
     /// `port_monitor_t`, 223 bytes: DID_PORT_MONITOR, byte counts and
@@ -257,11 +257,11 @@ crate::data_set! {
 }
 
 /// RMC bits of these sets (`RMC_BITS_*`, `data_sets.h`).
-pub mod rmc_aux {
+pub(crate) mod rmc_aux {
     /// DID_IMU3_RAW.
-    pub const BITS_IMU3_RAW: u64 = 0x0000_0100_0000_0000;
+    pub(crate) const BITS_IMU3_RAW: u64 = 0x0000_0100_0000_0000;
     /// DID_GPS1_SIG ("1s").
-    pub const BITS_GPS1_SIG: u64 = 0x0000_0400_0000_0000;
+    pub(crate) const BITS_GPS1_SIG: u64 = 0x0000_0400_0000_0000;
 }
 
 #[cfg(test)]

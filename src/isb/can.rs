@@ -6,7 +6,7 @@
 //! are kept, persisted and served as the release does.
 
 /// `NUM_CIDS`: CAN message IDs of the release (INS time … roll rate).
-pub const NUM_CIDS: usize = 27;
+pub(crate) const NUM_CIDS: usize = 27;
 
 crate::data_set! {
     /// `can_config_t`, 168 bytes (`PACKED`): DID_CAN_CONFIG.
@@ -26,11 +26,11 @@ crate::data_set! {
 /// Factory bus rate, kbit/s (the emulator's choice: the SDK gives no
 /// default; 500 kbit/s is the common automotive rate and in the header's
 /// list).
-pub const FACTORY_BAUDRATE_KBPS: u16 = 500;
+pub(crate) const FACTORY_BAUDRATE_KBPS: u16 = 500;
 
 /// The factory settings (`docs/isb-data-sets.md` "CAN_CONFIG": the SDK
 /// gives none): every message off, addresses 0, [`FACTORY_BAUDRATE_KBPS`].
-pub const FACTORY: CanConfig = CanConfig {
+pub(crate) const FACTORY: CanConfig = CanConfig {
     can_period_mult: [0; NUM_CIDS],
     can_transmit_address: [0; NUM_CIDS],
     can_baudrate_kbps: FACTORY_BAUDRATE_KBPS,

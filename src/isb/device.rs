@@ -142,7 +142,7 @@ pub const MAX_RUNNING: usize = did::DATA_SETS.len();
 /// (GPS1_SAT, 408 bytes) with an offset (+ 2 payload bytes + 8 of
 /// framing); the `$INFO` sentence is at most 200. The shell's TX queue is
 /// sized by it ([`Isb`]'s `TxBuffer`).
-pub const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
+pub(crate) const MAX_FRAME: usize = did::MAX_SIZE + 2 + 8;
 
 /// An incomplete packet or sentence with no new byte for this long is
 /// dropped (as the KERNEL does with a frame cut short).
@@ -416,14 +416,22 @@ impl Personality for Isb {
 }
 
 impl Isb {
-    /// FLASH_CONFIG as the device holds it now.
+    /// FLASH_CONFIG as the device holds it now (for the crate's tests).
+    #[cfg(feature = "internals")]
     pub fn flash_config(&self) -> &FlashConfig {
         &self.st.cfg
     }
 
-    /// The navigation state (INS phases, errors, faults).
+    /// The navigation state (INS phases, errors, faults), for the crate's
+    /// tests and probes.
+    #[cfg(feature = "internals")]
     pub fn nav(&self) -> &NavState {
         &self.st.nav
+    }
+
+    /// The navigation faults in force ([`Isb::set_nav_faults`]).
+    pub fn nav_faults(&self) -> NavFaults {
+        self.st.nav.faults()
     }
 
     /// Injects or clears navigation faults (GPS outage, magnetic
@@ -439,19 +447,16 @@ impl Isb {
         self.st.gps_ns_at_zero = gps_ns_at_zero;
     }
 
-    /// The `$ASCE` table in force.
-    pub fn nmea_table(&self) -> &asce::Table {
-        &self.st.nmea.table
-    }
-
     /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
-    /// missing periods, more than 20 pairs).
+    /// missing periods, more than 20 pairs); for the crate's tests.
+    #[cfg(feature = "internals")]
     pub fn asce_rejected(&self) -> u32 {
         self.st.nmea.rejected
     }
 
     /// Sets the receiver's times to first fix from a cold and from a warm
-    /// start (from the next power-on or reset).
+    /// start (from the next power-on or reset); for the crate's tests.
+    #[cfg(feature = "internals")]
     pub fn set_start_times(&mut self, t: StartTimes) {
         self.st.start_times = t;
     }
@@ -464,7 +469,9 @@ impl Isb {
         self.st.nav.set_enabled(on);
     }
 
-    /// DIDs streaming now, in the order they were started.
+    /// DIDs streaming now, in the order they were started (for the
+    /// crate's tests).
+    #[cfg(feature = "internals")]
     pub fn streams(&self) -> impl Iterator<Item = u8> + '_ {
         self.st.streams.iter().map(|s| s.did)
     }

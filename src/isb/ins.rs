@@ -12,7 +12,7 @@
 
 pub mod filter;
 pub mod mech;
-pub mod status;
+pub(crate) mod status;
 
 use core::cell::Cell;
 
@@ -38,26 +38,26 @@ use mech::{Increment, Nominal};
 pub use status::Phase;
 
 /// The receiver error models' step, ms.
-pub const STEP_MS: u32 = 20;
+pub(crate) const STEP_MS: u32 = 20;
 /// Coarse alignment after power-on (solution "aligning" until then): the
 /// accelerometers and magnetometer are averaged over it, s.
-pub const ALIGN_S: f64 = 5.0;
+pub(crate) const ALIGN_S: f64 = 5.0;
 /// GNSS time to first fix from a cold start (no `lastLla`), s: a u-blox
 /// class receiver's cold-start TTFF.
-pub const COLD_START_S: f64 = 30.0;
+pub(crate) const COLD_START_S: f64 = 30.0;
 /// GNSS time to first fix from a warm start (`lastLla` and its week saved
 /// by an earlier NAV: position and time known), s.
-pub const WARM_START_S: f64 = 10.0;
+pub(crate) const WARM_START_S: f64 = 10.0;
 /// `lastLla` is rewritten when the INS has moved this far from it and
 /// `lastLlaUpdateDistance` is 0 (its factory value), m.
-pub const LAST_LLA_DEFAULT_DISTANCE_M: f64 = 1000.0;
+pub(crate) const LAST_LLA_DEFAULT_DISTANCE_M: f64 = 1000.0;
 /// The covariance is propagated at least this often, s (the mechanisation
 /// runs every navigation period; the covariance needs less).
-pub const PROPAGATE_S: f64 = 0.020;
+pub(crate) const PROPAGATE_S: f64 = 0.020;
 
 /// One Gauss–Markov figure: standard deviation and correlation time.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Gm {
+pub(crate) struct Gm {
     /// Standard deviation.
     pub sigma: f64,
     /// Correlation time, s.
@@ -65,93 +65,93 @@ pub struct Gm {
 }
 
 /// GNSS position error, north/east, m (1σ per axis: hAcc ≈ 1.4 m).
-pub const GNSS_POS_H: Gm = Gm {
+pub(crate) const GNSS_POS_H: Gm = Gm {
     sigma: 1.0,
     tau_s: 30.0,
 };
 /// GNSS position error, down, m.
-pub const GNSS_POS_V: Gm = Gm {
+pub(crate) const GNSS_POS_V: Gm = Gm {
     sigma: 1.5,
     tau_s: 30.0,
 };
 /// GNSS velocity error per NED axis, m/s.
-pub const GNSS_VEL: Gm = Gm {
+pub(crate) const GNSS_VEL: Gm = Gm {
     sigma: 0.05,
     tau_s: 1.0,
 };
 /// Magnetometer noise, normalized units (1σ per axis: 0.2 % of the local
 /// field).
-pub const MAG_NOISE: f64 = 0.002;
+pub(crate) const MAG_NOISE: f64 = 0.002;
 /// Barometer noise, kPa (1σ: 2 Pa ≈ 0.17 m).
-pub const BARO_NOISE_KPA: f64 = 0.002;
+pub(crate) const BARO_NOISE_KPA: f64 = 0.002;
 /// Relative humidity the barometer reports, %.
-pub const HUMIDITY: f32 = 40.0;
+pub(crate) const HUMIDITY: f32 = 40.0;
 /// Satellites the receiver uses with a fix.
-pub const SATS: u8 = 12;
+pub(crate) const SATS: u8 = 12;
 /// Reported accuracies and DOP with a fix.
-pub const H_ACC_M: f32 = 1.4;
+pub(crate) const H_ACC_M: f32 = 1.4;
 /// Vertical accuracy, m.
-pub const V_ACC_M: f32 = 1.5;
+pub(crate) const V_ACC_M: f32 = 1.5;
 /// Speed accuracy, m/s.
-pub const S_ACC_MPS: f32 = 0.09;
+pub(crate) const S_ACC_MPS: f32 = 0.09;
 /// Position DOP.
-pub const P_DOP: f32 = 1.2;
+pub(crate) const P_DOP: f32 = 1.2;
 /// Mean C/N0, dBHz.
-pub const CNO_MEAN: f32 = 42.0;
+pub(crate) const CNO_MEAN: f32 = 42.0;
 /// The GPS satellites (PRNs) of the constellation model: the [`SATS`]
 /// GPS1_SAT lists while the receiver has a fix (`docs/isb.md` "GPS1_SAT").
 pub const SAT_PRNS: [u8; SATS as usize] = [2, 5, 7, 9, 13, 15, 18, 20, 24, 27, 29, 30];
 /// Their elevations, degrees (all above a receiver's 10° mask).
-pub const SAT_ELEV_DEG: [i8; SATS as usize] = [15, 72, 38, 22, 63, 46, 30, 80, 55, 25, 41, 58];
+pub(crate) const SAT_ELEV_DEG: [i8; SATS as usize] = [15, 72, 38, 22, 63, 46, 30, 80, 55, 25, 41, 58];
 /// Azimuths: the seed's bearing of the first satellite plus this spacing
 /// per satellite, degrees.
-pub const SAT_AZIM_STEP_DEG: i16 = 30;
+pub(crate) const SAT_AZIM_STEP_DEG: i16 = 30;
 /// Largest C/N0 spread of a satellite from [`CNO_MEAN`], dBHz (drawn from
 /// the seed in ± pairs, so the mean is exactly [`CNO_MEAN`]).
-pub const SAT_CNO_SPREAD: i32 = 4;
+pub(crate) const SAT_CNO_SPREAD: i32 = 4;
 /// `gps_sat_sv_t.status` of a satellite in the solution: carrier locked,
 /// used, healthy.
-pub const SAT_STATUS_USED: u16 =
+pub(crate) const SAT_STATUS_USED: u16 =
     sat_status::QUALITY_CARRIER_LOCKED | sat_status::USED_IN_SOLUTION | sat_status::HEALTH_GOOD;
 
 /// A magnetic disturbance adds this field (normalized units, NED).
-pub const MAG_DISTURBANCE: [f64; 3] = [0.6, -0.4, 0.3];
+pub(crate) const MAG_DISTURBANCE: [f64; 3] = [0.6, -0.4, 0.3];
 
 /// The filter's measurement noise (1σ) of the barometer's height, m: the
 /// emulated barometer's 2 Pa noise is 0.17 m; the rest allows for the
 /// height an ISA barometer misreads in weather the model does not have.
-pub const BARO_SIGMA_M: f32 = 0.5;
+pub(crate) const BARO_SIGMA_M: f32 = 0.5;
 /// The filter's measurement noise (1σ) of a magnetometer heading, rad (1°:
 /// the emulated magnetometer's noise over the horizontal field at mid
 /// latitudes is 0.3°, plus residual calibration).
-pub const MAG_HEADING_SIGMA: f32 = 0.017_45;
+pub(crate) const MAG_HEADING_SIGMA: f32 = 0.017_45;
 /// While no GNSS fix was ever had (AHRS), the filter assumes the unit's
 /// mean velocity is zero with this 1σ (a pseudo-measurement at each
 /// receiver epoch), m/s: what levels an AHRS's attitude.
-pub const AHRS_VEL_SIGMA: f32 = 0.5;
+pub(crate) const AHRS_VEL_SIGMA: f32 = 0.5;
 /// A magnetometer sample whose magnitude differs from the one learnt in
 /// alignment by more than this fraction is interference (not fused).
-pub const MAG_NORM_TOLERANCE: f64 = 0.10;
+pub(crate) const MAG_NORM_TOLERANCE: f64 = 0.10;
 /// … or whose dip angle differs by more than this, rad (5°).
-pub const MAG_DIP_TOLERANCE: f64 = 0.087;
+pub(crate) const MAG_DIP_TOLERANCE: f64 = 0.087;
 /// A magnetometer heading whose residual exceeds this many standard
 /// deviations of its prediction is not fused.
-pub const MAG_GATE: f32 = 5.0;
+pub(crate) const MAG_GATE: f32 = 5.0;
 /// With a heading σ above [`status::HDG_COARSE_RAD`] and the GNSS
 /// horizontal speed above this, the heading is set from the course over
 /// ground (single antenna: heading needs motion), m/s.
-pub const GPS_HEADING_MIN_SPEED: f64 = 5.0;
+pub(crate) const GPS_HEADING_MIN_SPEED: f64 = 5.0;
 /// The declination is evaluated again after this long, s (at 250 m/s that
 /// is 2.5 km, where the declination changes by well under 0.1°).
-pub const DECLINATION_EVERY_S: f64 = 10.0;
+pub(crate) const DECLINATION_EVERY_S: f64 = 10.0;
 /// The heading σ after it was set from the course over ground, rad (5°).
-pub const GPS_HEADING_SIGMA: f32 = 0.087;
+pub(crate) const GPS_HEADING_SIGMA: f32 = 0.087;
 /// `sysCfgBits`: no magnetometer fusion (`SYS_CFG_BITS_DISABLE_MAGNETOMETER_FUSION`).
-pub const SYS_CFG_NO_MAG_FUSION: u32 = 0x1000;
+pub(crate) const SYS_CFG_NO_MAG_FUSION: u32 = 0x1000;
 /// `sysCfgBits`: no barometer fusion.
-pub const SYS_CFG_NO_BARO_FUSION: u32 = 0x2000;
+pub(crate) const SYS_CFG_NO_BARO_FUSION: u32 = 0x2000;
 /// `sysCfgBits`: no GPS1 fusion.
-pub const SYS_CFG_NO_GPS1_FUSION: u32 = 0x4000;
+pub(crate) const SYS_CFG_NO_GPS1_FUSION: u32 = 0x4000;
 
 /// Faults injected from outside (the host's control socket).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -217,7 +217,7 @@ impl Default for StartTimes {
 
 /// A receiver fix: the antenna's position (deg, deg, m) and NED velocity
 /// (m/s).
-pub type Fix = ([f64; 3], [f64; 3]);
+pub(crate) type Fix = ([f64; 3], [f64; 3]);
 
 /// What the receiver reports of a fix (GPS1_POS): the antenna's position
 /// (deg, deg, m above the ellipsoid), NED velocity (m/s), ECEF position
@@ -422,7 +422,7 @@ fn gm_coefficients(g: &Gm, dt: f64) -> (f64, f64) {
 /// random walk; its bias instability B as a bias random walk reaching B in
 /// [`BIAS_WALK_S`] (plus the profile's rate random walk); the turn-on
 /// biases as the initial bias σ.
-pub fn noise_of(profile: &SensorProfile) -> (ProcessNoise, f32, f32) {
+pub(crate) fn noise_of(profile: &SensorProfile) -> (ProcessNoise, f32, f32) {
     let g = crate::math::G;
     let d2r = core::f32::consts::PI / 180.0;
     let (gy, ac) = (&profile.gyro, &profile.acc);
@@ -457,7 +457,7 @@ fn epoch_of(t_s: f64, gps_dt_s: f64) -> u64 {
 
 /// The time over which the bias random walk of [`noise_of`] reaches the
 /// profile's bias instability (plus temperature drift), s.
-pub const BIAS_WALK_S: f32 = 100.0;
+pub(crate) const BIAS_WALK_S: f32 = 100.0;
 
 impl NavState {
     /// Power-on state for `seed` (receiver errors drawn at their steady
@@ -518,12 +518,12 @@ impl NavState {
 
     /// Sets the date the magnetometer reads the field at (decimal year,
     /// UTC: [`GpsTime::decimal_year`] of the unit's GPS clock).
-    pub fn set_year(&mut self, year: f64) {
+    pub(crate) fn set_year(&mut self, year: f64) {
         self.year = year;
     }
 
     /// The sensor profile the filter is tuned for (the unit's own).
-    pub fn set_profile(&mut self, profile: &SensorProfile) {
+    pub(crate) fn set_profile(&mut self, profile: &SensorProfile) {
         let (q, bg0, ba0) = noise_of(profile);
         self.q = q;
         self.bg0 = bg0;
@@ -551,7 +551,7 @@ impl NavState {
     /// image serves whose processor cannot afford the filter
     /// (`docs/navigation.md` "Firmware cost": the RP2040). On again, the
     /// INS starts aligning.
-    pub fn set_enabled(&mut self, on: bool) {
+    pub(crate) fn set_enabled(&mut self, on: bool) {
         match (on, self.phase) {
             (false, _) => {
                 self.phase = Phase::Off;
@@ -568,7 +568,7 @@ impl NavState {
     }
 
     /// The receiver's time to first fix for this power-on, s.
-    pub fn ttff_s(&self) -> f64 {
+    pub(crate) fn ttff_s(&self) -> f64 {
         if self.warm {
             self.start.warm_s
         } else {
@@ -582,12 +582,12 @@ impl NavState {
     }
 
     /// The faults in force.
-    pub fn faults(&self) -> NavFaults {
+    pub(crate) fn faults(&self) -> NavFaults {
         self.faults
     }
 
     /// Sets the injected faults (they act from the next step).
-    pub fn set_faults(&mut self, f: NavFaults) {
+    pub(crate) fn set_faults(&mut self, f: NavFaults) {
         self.faults = f;
     }
 
@@ -597,7 +597,7 @@ impl NavState {
     }
 
     /// Whether GPS time is known (a fix was had since power-on).
-    pub fn gps_time_valid(&self) -> bool {
+    pub(crate) fn gps_time_valid(&self) -> bool {
         self.ever_fixed
     }
 
@@ -619,7 +619,7 @@ impl NavState {
 
     /// A position to save as `lastLla` now (the INS moved far enough from
     /// the saved one, or none was saved), taken once.
-    pub fn take_last_lla(&mut self) -> Option<[f64; 3]> {
+    pub(crate) fn take_last_lla(&mut self) -> Option<[f64; 3]> {
         self.save_lla.take()
     }
 
@@ -727,7 +727,7 @@ impl NavState {
     /// configuration `cfg` comes with the epoch: the INS reads nothing of
     /// it between epochs (its parse on every period was a tick's margin on
     /// the M4F).
-    pub fn navigate_truth(
+    pub(crate) fn navigate_truth(
         &mut self,
         t_s: f64,
         inc: &Increment,
@@ -828,7 +828,7 @@ impl NavState {
     /// navigation periods; whatever is left when the next period begins
     /// is done then, so the result does not depend on how the work is
     /// spread. Returns whether there was any.
-    pub fn work(&mut self) -> bool {
+    pub(crate) fn work(&mut self) -> bool {
         if self.prop_due {
             self.prop_due = false;
             self.propagate();
@@ -1216,13 +1216,13 @@ impl NavState {
     }
 
     /// Marks a magnetometer recalibration as running or not.
-    pub fn set_mag_recalibrating(&mut self, on: bool) {
+    pub(crate) fn set_mag_recalibrating(&mut self, on: bool) {
         self.mag_recal = on;
     }
 
     /// The magnetometer reading `m` (body axes) levelled with the INS's
     /// own roll and pitch: north-ish, east-ish, down components.
-    pub fn mag_levelled(&self, m: &[f32; 3]) -> [f64; 3] {
+    pub(crate) fn mag_levelled(&self, m: &[f32; 3]) -> [f64; 3] {
         let e = euler_from_quat(&self.nom.q);
         rotate(&quat_from_euler(e[0], e[1], 0.0), &m.map(f64::from))
     }
@@ -1230,14 +1230,14 @@ impl NavState {
     /// A recalibration's result: the field's magnitude and dip (rad) the
     /// magnetometer's readings are checked against from now on (what
     /// alignment learnt until then).
-    pub fn set_mag_reference(&mut self, norm: f64, dip: f64) {
+    pub(crate) fn set_mag_reference(&mut self, norm: f64, dip: f64) {
         if norm.is_finite() && norm > 0.0 && dip.is_finite() {
             self.mag_ref = Some((norm, dip));
         }
     }
 
     /// The navigation bits of `hdwStatus` now.
-    pub fn hdw_bits(&self) -> u32 {
+    pub(crate) fn hdw_bits(&self) -> u32 {
         let mut h = 0;
         if self.fixed {
             h |= hdw_nav::GPS_SATELLITE_RX_VALID | hdw_nav::GPS_PPS_TIMESYNC;
@@ -1339,7 +1339,7 @@ impl NavState {
     /// The filter's attitude 1σ as roll, pitch and heading, rad: the tilt
     /// σ (the rms of the north and east attitude errors' σ, whatever the
     /// heading) for roll and pitch, the down error's σ for heading.
-    pub fn attitude_sigma_rad(&self) -> [f32; 3] {
+    pub(crate) fn attitude_sigma_rad(&self) -> [f32; 3] {
         let (n, e, d) = (
             self.kf.sigma(ATT),
             self.kf.sigma(ATT + 1),
@@ -1429,7 +1429,7 @@ impl NavState {
     /// from a bearing drawn from the seed, C/N0 [`CNO_MEAN`] ± a seed-drawn
     /// pair offset (mean exactly [`CNO_MEAN`]); without a fix (before the
     /// first, during an outage) no satellites.
-    pub fn gps_sat(&self, t: &GpsTime) -> GpsSat {
+    pub(crate) fn gps_sat(&self, t: &GpsTime) -> GpsSat {
         let mut sat = [GpsSatSv::default(); MAX_NUM_SATELLITES];
         let n = if self.fixed { usize::from(SATS) } else { 0 };
         let mut r = Rng::new(self.seed ^ 0x4753_4154);
@@ -1516,7 +1516,7 @@ pub fn isa_height_m(p: f64) -> f64 {
 /// A decimal year of GPS seconds since the GPS epoch (1980-01-06 =
 /// 1980.014; 365.25-day years, within a day: what a field model's secular
 /// variation needs).
-pub fn decimal_year(gps_s: f64) -> f64 {
+pub(crate) fn decimal_year(gps_s: f64) -> f64 {
     1980.0 + 5.0 / 366.0 + gps_s / (365.25 * 86_400.0)
 }
 
@@ -1527,7 +1527,7 @@ pub fn decimal_year(gps_s: f64) -> f64 {
 /// `insRotation` within ±2π rad on every axis (so none is NaN or infinite:
 /// each goes into every INS and GPS position). A SET that would store
 /// anything else is refused (NACK).
-pub fn flash_nav_valid(image: &[u8]) -> bool {
+pub(crate) fn flash_nav_valid(image: &[u8]) -> bool {
     use super::sets::{flash, le};
     let within = |off: usize, limit: f32| {
         le::f32x3(image, off)
@@ -1542,7 +1542,7 @@ pub fn flash_nav_valid(image: &[u8]) -> bool {
 
 /// The largest lever arm (`insOffset`, `gps1AntOffset`) a FLASH_CONFIG may
 /// hold, m, per axis: beyond any vehicle an IMX rides on.
-pub const MAX_LEVER_ARM_M: f32 = 100.0;
+pub(crate) const MAX_LEVER_ARM_M: f32 = 100.0;
 
 /// The positions and the GPS period of [`flash_nav_valid`].
 fn flash_lla_valid(image: &[u8]) -> bool {
@@ -1593,7 +1593,7 @@ pub fn ins2(h: &InsHeader, s: &Solution) -> Ins2 {
 }
 
 /// INS_3 of `s`: INS_2 plus the MSL height.
-pub fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
+pub(crate) fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
     Ins3 {
         ins2: ins2(h, s),
         msl: (s.lla[2] - geoid_undulation_m(s.lla[0], s.lla[1])) as f32,
@@ -1601,7 +1601,7 @@ pub fn ins3(h: &InsHeader, s: &Solution) -> Ins3 {
 }
 
 /// INS_4 of `s`: ECEF.
-pub fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
+pub(crate) fn ins4(h: &InsHeader, s: &Solution) -> Ins4 {
     let qe2n = quat_e2n(s.lla[0], s.lla[1]);
     Ins4 {
         header: *h,
@@ -1651,7 +1651,7 @@ pub fn gps_pos(t: &GpsTime, report: Option<&GnssReport>, tow_offset: f64) -> Gps
 }
 
 /// GPS1_VEL of a receiver epoch (ECEF velocity).
-pub fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
+pub(crate) fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
     match fix {
         Some((lla, v)) => GpsVel {
             time_of_week_ms: t.tow_ms(),
@@ -1667,13 +1667,13 @@ pub fn gps_vel(t: &GpsTime, fix: Option<([f64; 3], [f64; 3])>) -> GpsVel {
 }
 
 /// MAGNETOMETER at `time` (s since boot).
-pub fn magnetometer(time: f64, mag: [f32; 3]) -> Magnetometer {
+pub(crate) fn magnetometer(time: f64, mag: [f32; 3]) -> Magnetometer {
     Magnetometer { time, mag }
 }
 
 /// BAROMETER at `time` (s since boot) for pressure `p` kPa and
 /// temperature `temp` °C: `mslBar` by the SDK's `baro2msl`.
-pub fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
+pub(crate) fn barometer(time: f64, p: f32, temp: f32) -> Barometer {
     Barometer {
         time,
         bar: p,

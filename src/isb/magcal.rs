@@ -20,15 +20,15 @@ use libm::{asin, atan2, sqrt};
 use super::aux_sets::mag_cal_state as st;
 
 /// `insStatus` MAG_RECALIBRATING (`eInsStatusFlags`).
-pub const INS_STATUS_MAG_RECALIBRATING: u32 = 0x0040_0000;
+pub(crate) const INS_STATUS_MAG_RECALIBRATING: u32 = 0x0040_0000;
 /// `hdwStatus` MAG_RECAL_COMPLETE (`eHdwStatusFlags`).
-pub const HDW_STATUS_MAG_RECAL_COMPLETE: u32 = 0x0000_4000;
+pub(crate) const HDW_STATUS_MAG_RECAL_COMPLETE: u32 = 0x0000_4000;
 /// Bearing sectors per axis (10° each).
-pub const SECTORS: u32 = 36;
+pub(crate) const SECTORS: u32 = 36;
 
 /// One recalibration (module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Recal {
+pub(crate) struct Recal {
     /// `eMagCalState` as MAG_CAL reads it: 0, 200 running, 201 done.
     state: u32,
     /// The command that started it (1 multi-axis, 2 single-axis).
@@ -45,7 +45,7 @@ impl Recal {
     /// A `state` written by a host: 1 or 2 start a recalibration (a
     /// running one starts over), 101 ends one without a result; any other
     /// value changes nothing.
-    pub fn command(&mut self, state: u32) {
+    pub(crate) fn command(&mut self, state: u32) {
         match state {
             st::MULTI_AXIS | st::SINGLE_AXIS => {
                 *self = Recal {
@@ -60,22 +60,22 @@ impl Recal {
     }
 
     /// Whether it runs.
-    pub fn running(&self) -> bool {
+    pub(crate) fn running(&self) -> bool {
         self.state == st::RECAL_RUNNING
     }
 
     /// Whether the last one finished (until the next command or reset).
-    pub fn complete(&self) -> bool {
+    pub(crate) fn complete(&self) -> bool {
         self.state == st::RECAL_COMPLETE
     }
 
     /// MAG_CAL `state`.
-    pub fn state(&self) -> u32 {
+    pub(crate) fn state(&self) -> u32 {
         self.state
     }
 
     /// MAG_CAL `progress`, % (100 once done, 0 when none ran).
-    pub fn progress(&self) -> f32 {
+    pub(crate) fn progress(&self) -> f32 {
         match self.state {
             st::RECAL_COMPLETE => 100.0,
             st::RECAL_RUNNING => self.coverage() * 100.0,
@@ -100,7 +100,7 @@ impl Recal {
     /// magnitude and dip summed; when the coverage is whole the
     /// recalibration ends with its result, the mean magnitude and dip
     /// (rad), returned once.
-    pub fn feed(&mut self, m: &[f32; 3], level: &[f64; 3]) -> Option<(f64, f64)> {
+    pub(crate) fn feed(&mut self, m: &[f32; 3], level: &[f64; 3]) -> Option<(f64, f64)> {
         if !self.running() {
             return None;
         }

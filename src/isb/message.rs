@@ -10,10 +10,10 @@ use super::did::{self, Class, DataSet};
 use super::packet::{self, Packet, PacketType, FLAG_OFFSET};
 
 /// GET_DATA payload length: `u16 did, u16 size, u16 offset, u16 period`.
-pub const GET_PAYLOAD_LEN: usize = 8;
+pub(crate) const GET_PAYLOAD_LEN: usize = 8;
 /// ACK / NACK payload length: `u8 rx_flags, u8 rx_did, u16 pkt_counter,
 /// u8 id, u16 size, u16 offset`.
-pub const ACK_PAYLOAD_LEN: usize = 9;
+pub(crate) const ACK_PAYLOAD_LEN: usize = 9;
 /// A SET_DATA leaving fewer bytes than this between its offset and the end
 /// of the struct is dropped without an ACK (the SDK's rule, protocol-facts.md).
 pub const MIN_SET_ROOM: u16 = 4;
@@ -173,7 +173,7 @@ impl AckInfo {
     }
 
     /// The payload bytes.
-    pub fn encode(&self) -> [u8; ACK_PAYLOAD_LEN] {
+    pub(crate) fn encode(&self) -> [u8; ACK_PAYLOAD_LEN] {
         let mut b = [0u8; ACK_PAYLOAD_LEN];
         b[0] = self.rx_flags;
         b[1] = self.rx_did;
@@ -215,7 +215,7 @@ impl<'a> SetRequest<'a> {
     /// `docs/isb-nmea.md` §7) in `p`; `None` if `p` is neither or its
     /// offset flag is set on a payload shorter than the offset (decision:
     /// dropped without a reply, as the SDK drops a malformed packet).
-    pub fn parse(p: &Packet<'a>) -> Option<Self> {
+    pub(crate) fn parse(p: &Packet<'a>) -> Option<Self> {
         if !matches!(p.kind(), Some(PacketType::SetData | PacketType::Data)) {
             return None;
         }

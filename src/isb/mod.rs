@@ -24,7 +24,7 @@
 
 //!
 //! The codec façade a host tool needs is [`packet`] (framing), [`message`]
-//! (the requests and replies), [`did`] (the data sets and their sizes),
+//! (the requests a host sends, the DATA it reads), [`did`] (the data sets and their sizes),
 //! [`layout`] (decoding by field name: the field tables and
 //! [`layout::read`]), [`sets`] (the data sets' layouts,
 //! their typed decoders and the command sets: SYS_CMD, BIT, FLASH_CONFIG),
@@ -34,10 +34,40 @@
 
 pub mod did;
 pub mod layout;
-pub mod message;
-pub mod nmea;
 pub mod packet;
-pub mod sets;
+
+#[path = "message.rs"]
+mod message_all;
+facade! {
+    /// The requests a host tool sends (GET_DATA, SET_DATA) and the DATA
+    /// it reads; the device's side of them is the personality's.
+    pub mod message = message_all {
+        encode_data, encode_get, encode_set, GetRequest, MAX_DATA_PAYLOAD,
+    }
+}
+
+#[path = "nmea.rs"]
+mod nmea_all;
+facade! {
+    /// The NMEA commands the vendor tool sends and the checksum; the
+    /// device's input and `$INFO` reply are the personality's.
+    pub mod nmea = nmea_all {
+        checksum, Command, MAX_BODY,
+    }
+}
+
+#[path = "sets.rs"]
+mod sets_all;
+facade! {
+    /// The data sets' byte layouts a host tool reads (IMU, PIMU), their
+    /// typed decoders, the command sets it writes (SYS_CMD, BIT,
+    /// FLASH_CONFIG with its factory image) and the little-endian
+    /// accessors; the module's other
+    /// layouts and status bits are the personality's.
+    pub mod sets = sets_all {
+        bit, flash, imu, le, pimu, sys_cmd, Bit, FlashConfig, Imu, Pimu, SystemCommand,
+    }
+}
 
 internal! {
     mod asce;

@@ -23,20 +23,20 @@ pub const DEFAULT_LON_DEG: f64 = crate::vehicle::DEFAULT_LONGITUDE_DEG;
 pub const DEFAULT_HEIGHT_M: f64 = 62.494_064;
 
 /// WGS84 semi-major axis, m.
-pub const WGS84_A: f64 = 6_378_137.0;
+pub(crate) const WGS84_A: f64 = 6_378_137.0;
 /// WGS84 first eccentricity squared.
-pub const WGS84_E2: f64 = 0.006_694_379_990_141;
+pub(crate) const WGS84_E2: f64 = 0.006_694_379_990_141;
 /// The SDK's flat-earth radius for INS_1.ned (111 120 m per degree).
-pub const NED_RADIUS_M: f64 = 6_366_707.019_5;
+pub(crate) const NED_RADIUS_M: f64 = 6_366_707.019_5;
 /// Seconds in a GPS week.
-pub const WEEK_S: u64 = 604_800;
+pub(crate) const WEEK_S: u64 = 604_800;
 /// GPS − UTC, s (`C_GPS_LEAP_SECONDS`).
-pub const LEAP_SECONDS: u8 = 18;
+pub(crate) const LEAP_SECONDS: u8 = 18;
 /// Unix time of the GPS epoch 1980-01-06 00:00:00.
 pub const GPS_EPOCH_UNIX_S: u64 = 315_964_800;
 /// GPS time at device instant 0 when a board sets none: 2026-01-01
 /// 00:00:00 UTC (Unix 1 767 225 600) as GPS seconds (+18 leap seconds).
-pub const DEFAULT_GPS_S_AT_ZERO: u64 = 1_767_225_600 - GPS_EPOCH_UNIX_S + LEAP_SECONDS as u64;
+pub(crate) const DEFAULT_GPS_S_AT_ZERO: u64 = 1_767_225_600 - GPS_EPOCH_UNIX_S + LEAP_SECONDS as u64;
 
 /// What the navigation outputs are built from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,7 +94,7 @@ pub fn ecef_of(lla: &[f64; 3]) -> [f64; 3] {
 
 /// A small NED displacement (m) added to a position (deg, deg, m), with
 /// the WGS84 radii of curvature.
-pub fn lla_plus_ned(lla: &[f64; 3], d: &[f64; 3]) -> [f64; 3] {
+pub(crate) fn lla_plus_ned(lla: &[f64; 3], d: &[f64; 3]) -> [f64; 3] {
     let (sl, cl) = sincos(lla[0].to_radians());
     let s2 = sl * sl;
     let rn = WGS84_A / sqrt(1.0 - WGS84_E2 * s2);
@@ -135,11 +135,11 @@ impl GpsTime {
         }
     }
     /// Time of week, s.
-    pub fn tow_s(&self) -> f64 {
+    pub(crate) fn tow_s(&self) -> f64 {
         self.tow_ns as f64 / 1e9
     }
     /// Time of week, ms (truncated: the epoch of the ms it falls in).
-    pub const fn tow_ms(&self) -> u32 {
+    pub(crate) const fn tow_ms(&self) -> u32 {
         (self.tow_ns / 1_000_000) as u32
     }
     /// The UTC date as a decimal year (GPS − [`LEAP_SECONDS`]): what the

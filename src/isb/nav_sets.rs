@@ -304,19 +304,19 @@ crate::data_set! {
 /// `insStatus` bits (`eInsStatusFlags`, `data_sets.h`).
 pub mod ins_status {
     /// Heading usable, outside spec.
-    pub const HDG_ALIGN_COARSE: u32 = 0x0000_0001;
+    pub(crate) const HDG_ALIGN_COARSE: u32 = 0x0000_0001;
     /// Velocity usable, outside spec.
-    pub const VEL_ALIGN_COARSE: u32 = 0x0000_0002;
+    pub(crate) const VEL_ALIGN_COARSE: u32 = 0x0000_0002;
     /// Position usable, outside spec.
-    pub const POS_ALIGN_COARSE: u32 = 0x0000_0004;
+    pub(crate) const POS_ALIGN_COARSE: u32 = 0x0000_0004;
     /// Heading within spec.
-    pub const HDG_ALIGN_FINE: u32 = 0x0000_0010;
+    pub(crate) const HDG_ALIGN_FINE: u32 = 0x0000_0010;
     /// Velocity within spec.
-    pub const VEL_ALIGN_FINE: u32 = 0x0000_0020;
+    pub(crate) const VEL_ALIGN_FINE: u32 = 0x0000_0020;
     /// Position within spec.
-    pub const POS_ALIGN_FINE: u32 = 0x0000_0040;
+    pub(crate) const POS_ALIGN_FINE: u32 = 0x0000_0040;
     /// Heading from GPS (motion or dual antenna).
-    pub const GPS_AIDING_HEADING: u32 = 0x0000_0080;
+    pub(crate) const GPS_AIDING_HEADING: u32 = 0x0000_0080;
     /// Position aided by GPS.
     pub const GPS_AIDING_POS: u32 = 0x0000_0100;
     /// A GPS update just entered the solution (the position may step).
@@ -334,15 +334,15 @@ pub mod ins_status {
     /// Solution: off.
     pub const SOLUTION_OFF: u32 = 0;
     /// Solution: aligning.
-    pub const SOLUTION_ALIGNING: u32 = 1;
+    pub(crate) const SOLUTION_ALIGNING: u32 = 1;
     /// Solution: NAV, good.
-    pub const SOLUTION_NAV: u32 = 3;
+    pub(crate) const SOLUTION_NAV: u32 = 3;
     /// Solution: NAV, high variance.
-    pub const SOLUTION_NAV_HIGH_VARIANCE: u32 = 4;
+    pub(crate) const SOLUTION_NAV_HIGH_VARIANCE: u32 = 4;
     /// Solution: AHRS, good.
     pub const SOLUTION_AHRS: u32 = 5;
     /// Solution: AHRS, high variance.
-    pub const SOLUTION_AHRS_HIGH_VARIANCE: u32 = 6;
+    pub(crate) const SOLUTION_AHRS_HIGH_VARIANCE: u32 = 6;
     /// Magnetic interference, or bad or no calibration.
     pub const MAG_INTERFERENCE_OR_BAD_CAL: u32 = 0x0080_0000;
     /// Shift of the GPS fix field (`eGpsNavFixStatus << 24`).
@@ -394,7 +394,7 @@ pub mod gps_status {
     /// Fix type: none.
     pub const FIX_NONE: u32 = 0;
     /// Fix type: 3D.
-    pub const FIX_3D: u32 = 3;
+    pub(crate) const FIX_3D: u32 = 3;
     /// Within the DOP and accuracy limits.
     pub const FIX_OK: u32 = 0x0001_0000;
     /// Time synchronised by PPS.
@@ -407,7 +407,7 @@ pub mod sat_status {
     /// and carrier locked).
     pub const QUALITY_MASK: u16 = 0x0007;
     /// Quality 7: code and carrier locked (the highest of 5-7).
-    pub const QUALITY_CARRIER_LOCKED: u16 = 7;
+    pub(crate) const QUALITY_CARRIER_LOCKED: u16 = 7;
     /// Used in the solution.
     pub const USED_IN_SOLUTION: u16 = 0x0008;
     /// Health field mask.
@@ -422,13 +422,13 @@ pub mod sat_status {
 /// `RMC_BITS_*`, `RMC_PRESET_*`).
 pub mod rmc_nav {
     /// DID_INS_1.
-    pub const BITS_INS1: u64 = 0x1;
+    pub(crate) const BITS_INS1: u64 = 0x1;
     /// DID_INS_2.
     pub const BITS_INS2: u64 = 0x2;
     /// DID_INS_3.
-    pub const BITS_INS3: u64 = 0x4;
+    pub(crate) const BITS_INS3: u64 = 0x4;
     /// DID_INS_4.
-    pub const BITS_INS4: u64 = 0x8;
+    pub(crate) const BITS_INS4: u64 = 0x8;
     /// DID_BAROMETER.
     pub const BITS_BAROMETER: u64 = 0x40;
     /// DID_MAGNETOMETER.
@@ -438,15 +438,15 @@ pub mod rmc_nav {
     /// DID_GPS1_SAT.
     pub const BITS_GPS1_SAT: u64 = 0x4000;
     /// DID_GPS1_RCVR_POS.
-    pub const BITS_GPS1_RCVR_POS: u64 = 0x40_0000;
+    pub(crate) const BITS_GPS1_RCVR_POS: u64 = 0x40_0000;
     /// DID_GPS1_VEL.
     pub const BITS_GPS1_VEL: u64 = 0x10_0000;
     /// DID_INL2_NED_SIGMA (DID_INL2_STATES has no RMC bit).
-    pub const BITS_INL2_NED_SIGMA: u64 = 0x800_0000;
+    pub(crate) const BITS_INL2_NED_SIGMA: u64 = 0x800_0000;
     /// DID_IMU_MAG.
     pub const BITS_IMU_MAG: u64 = 0x4_0000_0000;
     /// DID_PIMU_MAG.
-    pub const BITS_PIMU_MAG: u64 = 0x8_0000_0000;
+    pub(crate) const BITS_PIMU_MAG: u64 = 0x8_0000_0000;
     /// `RMC_BITS_INTERNAL_PPD`, set in every PPD preset.
     pub const BITS_INTERNAL_PPD: u64 = 0x4000_0000_0000_0000;
     /// `RMC_PRESET_IMX_PPD_NO_IMU`.
@@ -460,5 +460,5 @@ pub mod rmc_nav {
     pub const PRESET_INS: u64 = 0x8000_0000_0000_0402;
     /// `RMC_PRESET_PPD_NAV_PERIOD_MULT_MS`: INS_2 every 100 ms in a PPD
     /// preset (the older SDKs' multiple 25 × 4 ms; `docs/isb.md`).
-    pub const PPD_NAV_PERIOD_MS: u32 = 100;
+    pub(crate) const PPD_NAV_PERIOD_MS: u32 = 100;
 }

@@ -256,7 +256,7 @@ impl<const CAP: usize> Input<CAP> {
     }
 
     /// ISB candidates the decoder dropped (bad checksum or size).
-    pub fn isb_errors(&self) -> u32 {
+    pub(crate) fn isb_errors(&self) -> u32 {
         self.isb.errors()
     }
 

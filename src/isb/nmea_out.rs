@@ -21,11 +21,11 @@ use crate::math::double::rotate_inv;
 
 /// `NMEA_BUFFER_SIZE` (`data_sets.h`): the longest sentence, CR LF
 /// included.
-pub const MAX_SENTENCE: usize = 256;
+pub(crate) const MAX_SENTENCE: usize = 256;
 
 /// Talker of GGA, GLL, GSA, RMC, ZDA, VTG: several constellations (the
 /// release's default `$GN`).
-pub const TALKER: &str = "GN";
+pub(crate) const TALKER: &str = "GN";
 
 /// `C_RAD2DEG` as the SDK writes it (`ISConstants.h`: 57.29578).
 const RAD2DEG: f64 = 57.295_78;
@@ -49,7 +49,7 @@ impl Default for Line {
 
 impl Line {
     /// An empty sentence (`$` written).
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let mut buf = [0u8; MAX_SENTENCE];
         buf[0] = b'$';
         Line { buf, len: 1 }
@@ -57,7 +57,7 @@ impl Line {
 
     /// Appends `*`, the checksum of the body in upper-case hex and CR LF;
     /// the whole sentence, or `None` if it does not fit.
-    pub fn finish(&mut self) -> Option<&[u8]> {
+    pub(crate) fn finish(&mut self) -> Option<&[u8]> {
         let sum = checksum(self.buf.get(1..self.len)?);
         write!(self, "*{sum:02X}\r\n").ok()?;
         self.buf.get(..self.len)
@@ -78,7 +78,7 @@ impl Write for Line {
 /// UTC of a GPS time: `(hour, minute, second, millisecond)` of the day
 /// and `(year, month, day)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Utc {
+pub(crate) struct Utc {
     /// Hours, 0-23.
     pub hour: u32,
     /// Minutes.
@@ -101,7 +101,7 @@ const GPS_EPOCH_DAYS: i64 = 3657;
 /// UTC of GPS `week`, `tow_ms`, GPS − UTC `leap_s` (the SDK's
 /// `time_conversion.cpp`: time of day = time of week − leap seconds,
 /// wrapped within the week; the date from the whole count of days).
-pub fn utc_of(week: u32, tow_ms: u32, leap_s: u8) -> Utc {
+pub(crate) fn utc_of(week: u32, tow_ms: u32, leap_s: u8) -> Utc {
     const WEEK_MS: i64 = 604_800_000;
     const DAY_MS: i64 = 86_400_000;
     let tow = (i64::from(tow_ms) - i64::from(leap_s) * 1000).rem_euclid(WEEK_MS);
@@ -160,7 +160,7 @@ fn put_lat_lon(l: &mut Line, lat: f64, lon: f64) -> core::fmt::Result {
 }
 
 /// Fix type of a `gps_pos_t.status` word (bits 8-12).
-pub fn fix_type(status: u32) -> u32 {
+pub(crate) fn fix_type(status: u32) -> u32 {
     (status >> 8) & 0x1F
 }
 
@@ -183,7 +183,7 @@ fn utc_of_pos(p: &GpsPos) -> Utc {
 
 /// `$PIMU` (or `$PRIMU` with `raw`) of an IMU record: time (3 dp), pqr (4
 /// dp), acc (3 dp).
-pub fn pimu(l: &mut Line, m: &Imu, raw: bool) -> core::fmt::Result {
+pub(crate) fn pimu(l: &mut Line, m: &Imu, raw: bool) -> core::fmt::Result {
     let [p, q, r] = m.pqr;
     let [x, y, z] = m.acc;
     write!(
@@ -195,7 +195,7 @@ pub fn pimu(l: &mut Line, m: &Imu, raw: bool) -> core::fmt::Result {
 }
 
 /// `$PPIMU` of a PIMU record: time (3 dp), Δθ (4 dp), Δv (4 dp), dt (3 dp).
-pub fn ppimu(l: &mut Line, m: &Pimu) -> core::fmt::Result {
+pub(crate) fn ppimu(l: &mut Line, m: &Pimu) -> core::fmt::Result {
     let [a, b, c] = m.theta;
     let [x, y, z] = m.vel;
     write!(
@@ -206,7 +206,7 @@ pub fn ppimu(l: &mut Line, m: &Pimu) -> core::fmt::Result {
 }
 
 /// `$PINS1` of INS_1.
-pub fn pins1(l: &mut Line, s: &Ins1) -> core::fmt::Result {
+pub(crate) fn pins1(l: &mut Line, s: &Ins1) -> core::fmt::Result {
     let h = &s.header;
     let [r, p, y] = s.theta;
     let [u, v, w] = s.uvw;
@@ -219,7 +219,7 @@ pub fn pins1(l: &mut Line, s: &Ins1) -> core::fmt::Result {
 }
 
 /// `$PINS2` of INS_2.
-pub fn pins2(l: &mut Line, s: &Ins2) -> core::fmt::Result {
+pub(crate) fn pins2(l: &mut Line, s: &Ins2) -> core::fmt::Result {
     let h = &s.header;
     let [qw, qx, qy, qz] = s.qn2b;
     let [u, v, w] = s.uvw;
@@ -231,7 +231,7 @@ pub fn pins2(l: &mut Line, s: &Ins2) -> core::fmt::Result {
 }
 
 /// `$PGPSP` of GPS1_POS and GPS1_VEL.
-pub fn pgpsp(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
+pub(crate) fn pgpsp(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
     let [x, y, z] = v.vel;
     write!(
         l,
@@ -255,7 +255,7 @@ pub fn pgpsp(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
 
 /// `$GNGGA` of GPS1_POS: pDop in the HDOP slot, MSL and the geoid
 /// separation HAE − MSL.
-pub fn gga(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
+pub(crate) fn gga(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
     write!(l, "{TALKER}GGA,")?;
     put_utc(l, &utc_of_pos(p), true)?;
     l.write_char(',')?;
@@ -273,7 +273,7 @@ pub fn gga(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
 
 /// `$GNGLL` of GPS1_POS: position (empty without a fix type), UTC, `A` if
 /// the week is past 2269 (time validity, not the fix).
-pub fn gll(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
+pub(crate) fn gll(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
     write!(l, "{TALKER}GLL,")?;
     if fix_type(p.status) == 0 {
         l.write_str(",,,")?;
@@ -287,7 +287,7 @@ pub fn gll(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
 
 /// `$GNGSA` of GPS1_POS and GPS1_SAT: the first 12 listed satellites,
 /// then pDop, hAcc, vAcc (the release's choice of fields, 1 dp).
-pub fn gsa(l: &mut Line, p: &GpsPos, s: &GpsSat) -> core::fmt::Result {
+pub(crate) fn gsa(l: &mut Line, p: &GpsPos, s: &GpsSat) -> core::fmt::Result {
     let fix = match fix_type(p.status) {
         2 => 2,
         3 | 8 | 9 | 10 | 11 | 12 => 3,
@@ -306,7 +306,7 @@ pub fn gsa(l: &mut Line, p: &GpsPos, s: &GpsSat) -> core::fmt::Result {
 
 /// Horizontal NED velocity of GPS1_VEL at the fix's position (ECEF rotated
 /// to NED; as is when the NMEA-sourced flag 0x8000 is set).
-pub fn vel_ne(p: &GpsPos, v: &GpsVel) -> (f64, f64) {
+pub(crate) fn vel_ne(p: &GpsPos, v: &GpsVel) -> (f64, f64) {
     if v.status & 0x8000 != 0 {
         return (f64::from(v.vel[0]), f64::from(v.vel[1]));
     }
@@ -317,14 +317,14 @@ pub fn vel_ne(p: &GpsPos, v: &GpsVel) -> (f64, f64) {
 
 /// Course over ground, degrees (−180…180, never wrapped) and 2-D speed,
 /// m/s.
-pub fn course_speed(vn: f64, ve: f64) -> (f64, f64) {
+pub(crate) fn course_speed(vn: f64, ve: f64) -> (f64, f64) {
     (libm::atan2(ve, vn) * RAD2DEG, libm::sqrt(vn * vn + ve * ve))
 }
 
 /// `$GNRMC`: UTC without decimals, status, position, knots, course, date
 /// `ddmmyy`, |magnetic variation| with E/W (`mag_decl_rad`: FLASH_CONFIG
 /// `magDeclination`); no mode field.
-pub fn rmc(
+pub(crate) fn rmc(
     l: &mut Line,
     p: &GpsPos,
     course_deg: f64,
@@ -351,7 +351,7 @@ pub fn rmc(
 }
 
 /// `$GNVTG`: course (true), empty magnetic course, knots, km/h, mode.
-pub fn vtg(l: &mut Line, p: &GpsPos, course_deg: f64, speed_mps: f64) -> core::fmt::Result {
+pub(crate) fn vtg(l: &mut Line, p: &GpsPos, course_deg: f64, speed_mps: f64) -> core::fmt::Result {
     let mode = match fix_type(p.status) {
         2 | 3 => 'A',
         1 | 4 => 'E',
@@ -367,7 +367,7 @@ pub fn vtg(l: &mut Line, p: &GpsPos, course_deg: f64, speed_mps: f64) -> core::f
 }
 
 /// `$GNZDA`: UTC, day, month, year, zone 00 00.
-pub fn zda(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
+pub(crate) fn zda(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
     let u = utc_of_pos(p);
     write!(l, "{TALKER}ZDA,")?;
     put_utc(l, &u, true)?;
@@ -377,7 +377,7 @@ pub fn zda(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
 /// `$PASHR`: UTC of the fix, heading (yaw, −180…180), roll and pitch
 /// (signed), heave 0, attitude σ (`sigma_rad`: roll, pitch, heading), GPS
 /// quality from the INS fix field, INS 1 with a NAV/AHRS/VRS solution.
-pub fn pashr(l: &mut Line, p: &GpsPos, ins: &Ins1, sigma_rad: [f32; 3]) -> core::fmt::Result {
+pub(crate) fn pashr(l: &mut Line, p: &GpsPos, ins: &Ins1, sigma_rad: [f32; 3]) -> core::fmt::Result {
     let d = |x: f32| f64::from(x) * RAD2DEG;
     let [r, pi, y] = ins.theta;
     let [sr, sp, sy] = sigma_rad;
@@ -406,7 +406,7 @@ pub fn pashr(l: &mut Line, p: &GpsPos, ins: &Ins1, sigma_rad: [f32; 3]) -> core:
 }
 
 /// `$PSTRB` of STROBE_IN_TIME: week, time of week ms, pin, count.
-pub fn pstrb(l: &mut Line, s: &StrobeInTime) -> core::fmt::Result {
+pub(crate) fn pstrb(l: &mut Line, s: &StrobeInTime) -> core::fmt::Result {
     write!(
         l,
         "PSTRB,{},{},{},{}",
@@ -429,14 +429,14 @@ fn powgps_fields(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
 }
 
 /// `$POWGPS` of GPS1_POS.
-pub fn powgps(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
+pub(crate) fn powgps(l: &mut Line, p: &GpsPos) -> core::fmt::Result {
     l.write_str("POWGPS,")?;
     powgps_fields(l, p)
 }
 
 /// `$POWTLV`: the POWGPS fields, position, HAE and MSL (3 dp), then of the
 /// raw GPS1_VEL vector |(x, y)|, z and atan2(y, x) (3 dp).
-pub fn powtlv(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
+pub(crate) fn powtlv(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
     l.write_str("POWTLV,")?;
     powgps_fields(l, p)?;
     let [x, y, z] = v.vel.map(f64::from);
@@ -455,7 +455,7 @@ pub fn powtlv(l: &mut Line, p: &GpsPos, v: &GpsVel) -> core::fmt::Result {
 /// `$INTEL`: `KIM`, firmware version, time of week s, week, leapS, 0.000,
 /// 0.000, 0, the GPS1_VEL vector, the cached NED velocity (north, east,
 /// down 0).
-pub fn intel(
+pub(crate) fn intel(
     l: &mut Line,
     fw: [u8; 4],
     p: &GpsPos,
@@ -481,7 +481,7 @@ pub fn intel(
 
 /// GSV constellations in the release's order, with their talker and
 /// `gnssId`s (SBAS prints inside `GP`, as PRN − 87).
-pub const GSV_GROUPS: [(&str, &[u8]); 6] = [
+pub(crate) const GSV_GROUPS: [(&str, &[u8]); 6] = [
     ("GP", &[1, 2]),
     ("GA", &[3]),
     ("GB", &[4]),
@@ -494,7 +494,7 @@ pub const GSV_GROUPS: [(&str, &[u8]); 6] = [
 /// constellation whose mask (`masks[group]`, band bit 0x1 = first band)
 /// is set; only satellites with C/N0 ≠ 0; up to four per sentence; elev,
 /// azim, C/N0 empty when 0), each handed to `out`.
-pub fn gsv(s: &GpsSat, masks: &[u8; 6], mut out: impl FnMut(&[u8])) {
+pub(crate) fn gsv(s: &GpsSat, masks: &[u8; 6], mut out: impl FnMut(&[u8])) {
     let n = (s.num_sats as usize).min(s.sat.len());
     let sats = &s.sat[..n];
     for (g, (talker, ids)) in GSV_GROUPS.iter().enumerate() {

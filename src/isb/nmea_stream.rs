@@ -23,7 +23,7 @@ use super::sets::{DevInfo, Imu, Pimu, StrobeInTime};
 
 /// Where a sentence's source epoch comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Clock {
+pub(crate) enum Clock {
     /// The navigation period.
     Nav,
     /// The IMU sample period.
@@ -41,7 +41,7 @@ pub enum Clock {
 }
 
 /// The source clock of ID `i`.
-pub const fn clock_of(i: u8) -> Clock {
+pub(crate) const fn clock_of(i: u8) -> Clock {
     match i {
         id::PIMU | id::PPIMU | id::PINS1 | id::PINS2 => Clock::Nav,
         id::PRIMU => Clock::Imu,
@@ -66,7 +66,7 @@ pub const fn clock_of(i: u8) -> Clock {
 /// The source epochs that begin at this tick: for each clock, `Some(index)`
 /// of the epoch starting now.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Epochs {
+pub(crate) struct Epochs {
     /// Navigation period index.
     pub nav: Option<u64>,
     /// IMU sample period index.
@@ -98,7 +98,7 @@ const FILTER_LEN: usize = 5;
 /// The port's NMEA state: the table, the receiver-epoch counters, the
 /// speed filter, counts.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct NmeaStreams {
+pub(crate) struct NmeaStreams {
     /// The `$ASCE` table.
     pub table: Table,
     /// `$ASCE` pairs dropped since power-on (unknown or out-of-range IDs,
@@ -115,7 +115,7 @@ pub struct NmeaStreams {
 
 /// The data sets a set of due sentences prints, decoded from the very
 /// bytes the ISB packets carry.
-pub struct Snapshot {
+pub(crate) struct Snapshot {
     /// GPS1_POS.
     pub pos: GpsPos,
     /// GPS1_VEL.
@@ -157,7 +157,7 @@ fn decode<T, const N: usize>(
 impl Snapshot {
     /// The data sets the IDs of `due` print, read through `fetch` (the
     /// device's data set bytes now); unread ones are zeros.
-    pub fn fill(
+    pub(crate) fn fill(
         due: u32,
         mag_decl_rad: f32,
         att_sigma_rad: [f32; 3],
@@ -214,13 +214,13 @@ impl Snapshot {
 
 impl NmeaStreams {
     /// Whether any periodic sentence is on (the device is streaming).
-    pub fn streaming(&self) -> bool {
+    pub(crate) fn streaming(&self) -> bool {
         (1..id::COUNT as u8)
             .any(|i| self.table.on(i) && !matches!(clock_of(i), Clock::Strobe | Clock::Never))
     }
 
     /// The IDs (bit `id`) due at the epochs `e`.
-    pub fn due(&self, e: &Epochs) -> u32 {
+    pub(crate) fn due(&self, e: &Epochs) -> u32 {
         let mut due = 0;
         for i in 1..id::COUNT as u8 {
             if !self.table.on(i) {
@@ -241,7 +241,7 @@ impl NmeaStreams {
     /// clock, ticks `tick_ns` apart; `grids` = ticks per navigation period,
     /// IMU period and ms; `gps_ns` the receiver epoch): the ticks until the
     /// first sentence due, into [`NmeaStreams::next_in`].
-    pub fn plan(&mut self, ticks: u64, ns: u64, tick_ns: u64, grids: [u64; 3], gps_ns: u64) {
+    pub(crate) fn plan(&mut self, ticks: u64, ns: u64, tick_ns: u64, grids: [u64; 3], gps_ns: u64) {
         let mut next: Option<u64> = None;
         for i in 1..id::COUNT as u8 {
             if !self.table.on(i) {
@@ -270,7 +270,7 @@ impl NmeaStreams {
     }
 
     /// The IDs due on a strobe (PSTRB when on).
-    pub fn due_on_strobe(&self) -> u32 {
+    pub(crate) fn due_on_strobe(&self) -> u32 {
         if self.table.on(id::PSTRB) {
             1 << id::PSTRB
         } else {
@@ -299,7 +299,7 @@ impl NmeaStreams {
 
     /// Writes the sentences of `due` (ID order) from `s`, each handed to
     /// `send`; one-shots (period 0) go off.
-    pub fn render(&mut self, due: u32, s: &Snapshot, mut send: impl FnMut(&[u8])) {
+    pub(crate) fn render(&mut self, due: u32, s: &Snapshot, mut send: impl FnMut(&[u8])) {
         let (vn, ve) = out::vel_ne(&s.pos, &s.vel);
         let (course, raw_speed) = out::course_speed(vn, ve);
         let needs_speed = due & (1 << id::RMC | 1 << id::VTG) != 0;

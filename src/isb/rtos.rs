@@ -6,9 +6,9 @@
 //! figure (`docs/isb-data-sets.md` says what each field holds).
 
 /// `MAX_TASK_NAME_LEN`: bytes of `rtos_task_t.name`.
-pub const MAX_TASK_NAME_LEN: usize = 12;
+pub(crate) const MAX_TASK_NAME_LEN: usize = 12;
 /// `RTOS_NUM_TASKS`: entries of `rtos_info_t.task` (`eRtosTask`).
-pub const RTOS_NUM_TASKS: usize = 6;
+pub(crate) const RTOS_NUM_TASKS: usize = 6;
 
 crate::data_set! {
     /// `rtos_task_t`, 60 bytes: one task of DID_RTOS_INFO.
@@ -68,12 +68,12 @@ crate::data_set! {
 /// The task names, by `eRtosTask` (the emulator's spelling of the
 /// header's enum: the release's own strings are in its firmware, not in
 /// the SDK).
-pub const TASK_NAMES: [&str; RTOS_NUM_TASKS] = ["SAMPLE", "NAV", "COMM", "MAINT", "IDLE", "TIMER"];
+pub(crate) const TASK_NAMES: [&str; RTOS_NUM_TASKS] = ["SAMPLE", "NAV", "COMM", "MAINT", "IDLE", "TIMER"];
 
 /// Where the emulated unit's work stands: each period it runs at (ms) and
 /// the device tick it last ran at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Schedule {
+pub(crate) struct Schedule {
     /// Ticks per second (the unit's internal rate).
     pub rate_hz: u32,
     /// Ticks since boot.
@@ -110,7 +110,7 @@ impl Schedule {
 /// period, comm = the 1 ms grid the streams count in (served on every
 /// tick), maint = the aiding models' step; idle and timer have no
 /// counterpart (name only). No heap: the heap words read 0.
-pub fn rtos_info(s: &Schedule) -> RtosInfo {
+pub(crate) fn rtos_info(s: &Schedule) -> RtosInfo {
     let periods = [s.imu_dt_ms, s.nav_dt_ms, 1, s.step_ms, 0, 0];
     let mut task = [RtosTask::default(); RTOS_NUM_TASKS];
     for (k, t) in task.iter_mut().enumerate() {

@@ -100,17 +100,17 @@ crate::data_set! {
     /// `eIsHardwareType` IMX.
     pub const HARDWARE_TYPE_IMX: u8 = 3;
     /// `eHdwRunStates` application.
-    pub const RUN_STATE_APP: u8 = 2;
+    pub(crate) const RUN_STATE_APP: u8 = 2;
     /// Protocol version 2.1.0.0 (protocol-facts.md: the SDK 2.7.1 speaks it and
     /// accepts a device only with `protocolVer[0] == 2`).
     pub const PROTOCOL_2_1: [u8; 4] = [2, 1, 0, 0];
     /// Firmware 2.7.1.0: the IMX-5 firmware released with SDK 2.7.1 (each
     /// SDK release ships the IMX-5 firmware of its own version,
     /// `IS_IMX-5_vX.Y.Z…hex`: the SDK's release page; docs/isb.md).
-    pub const FIRMWARE_2_7_1: [u8; 4] = [2, 7, 1, 0];
+    pub(crate) const FIRMWARE_2_7_1: [u8; 4] = [2, 7, 1, 0];
     /// `buildNumber` reported with it (the 2.7.1 build number is not
     /// public; the emulator's choice, docs/isb.md).
-    pub const BUILD_NUMBER_2_7_1: u32 = 1;
+    pub(crate) const BUILD_NUMBER_2_7_1: u32 = 1;
 }
 
 impl DevInfo {
@@ -203,7 +203,7 @@ pub mod imu_status {
     /// Gyro saturation.
     pub const SATURATION_GYR: u32 = 0x4000_0000;
     /// Accelerometer saturation.
-    pub const SATURATION_ACC: u32 = 0x8000_0000;
+    pub(crate) const SATURATION_ACC: u32 = 0x8000_0000;
 }
 
 /// `sys_params_t.hdwStatus` bits (protocol-facts.md "ISB"; `data_sets.h`
@@ -218,7 +218,7 @@ pub mod hdw_status {
     /// Gyro saturation.
     pub const SATURATION_GYR: u32 = 0x0000_0100;
     /// Accelerometer saturation.
-    pub const SATURATION_ACC: u32 = 0x0000_0200;
+    pub(crate) const SATURATION_ACC: u32 = 0x0000_0200;
     /// Saturation mask (gyro, accel, mag, baro).
     pub const SATURATION_MASK: u32 = 0x0000_0F00;
     /// A system reset is required for proper function (e.g. after a
@@ -227,13 +227,13 @@ pub mod hdw_status {
     /// A flash write is staged or in progress.
     pub const FLASH_WRITE_PENDING: u32 = 0x0000_8000;
     /// Transmit buffer limited.
-    pub const ERR_COM_TX_LIMITED: u32 = 0x0001_0000;
+    pub(crate) const ERR_COM_TX_LIMITED: u32 = 0x0001_0000;
     /// Receive buffer overrun.
     pub const ERR_COM_RX_OVERRUN: u32 = 0x0002_0000;
     /// Parse error count field (4 bits).
-    pub const COM_PARSE_ERR_COUNT_MASK: u32 = 0x00F0_0000;
+    pub(crate) const COM_PARSE_ERR_COUNT_MASK: u32 = 0x00F0_0000;
     /// Shift of the parse error count field.
-    pub const COM_PARSE_ERR_COUNT_SHIFT: u32 = 20;
+    pub(crate) const COM_PARSE_ERR_COUNT_SHIFT: u32 = 20;
     /// BIT running.
     pub const BIT_RUNNING: u32 = 0x0100_0000;
     /// BIT passed.
@@ -253,7 +253,7 @@ pub mod hdw_status {
 
     /// `status` with the parse error count field set to `count`
     /// (saturating at 15).
-    pub const fn with_parse_errors(status: u32, count: u32) -> u32 {
+    pub(crate) const fn with_parse_errors(status: u32, count: u32) -> u32 {
         let c = if count > 15 { 15 } else { count };
         (status & !COM_PARSE_ERR_COUNT_MASK) | (c << COM_PARSE_ERR_COUNT_SHIFT)
     }
@@ -274,9 +274,9 @@ crate::data_set! {
     /// DID_PIMU stream.
     pub const BITS_PIMU: u64 = 0x20;
     /// DID_STROBE_IN_TIME on each strobe input event.
-    pub const BITS_STROBE_IN_TIME: u64 = 0x2_0000;
+    pub(crate) const BITS_STROBE_IN_TIME: u64 = 0x2_0000;
     /// DID_IMU_RAW stream.
-    pub const BITS_IMU_RAW: u64 = 0x200_0000_0000;
+    pub(crate) const BITS_IMU_RAW: u64 = 0x200_0000_0000;
     /// `bits` is a preset.
     pub const BITS_PRESET: u64 = 0x8000_0000_0000_0000;
     /// The PPD preset bits of SDK 2.7 (protocol-facts.md; the protocol page's
@@ -297,7 +297,7 @@ crate::data_set! {
     /// OR the new bits into the current ones instead of replacing them.
     pub const OPTIONS_PRESERVE_CTRL: u32 = 0x100;
     /// Save the port's streams to flash (they resume after reset).
-    pub const OPTIONS_PERSISTENT: u32 = 0x200;
+    pub(crate) const OPTIONS_PERSISTENT: u32 = 0x200;
 }
 
 crate::data_set! {
@@ -626,12 +626,12 @@ impl FlashConfig {
     }
 
     /// `u32` field at `off` (a [`flash`] offset).
-    pub fn u32_at(&self, off: usize) -> u32 {
+    pub(crate) fn u32_at(&self, off: usize) -> u32 {
         le::u32(&self.0, off)
     }
 
     /// `key`.
-    pub fn key(&self) -> u32 {
+    pub(crate) fn key(&self) -> u32 {
         self.u32_at(flash::KEY)
     }
     /// `startupImuDtMs`.

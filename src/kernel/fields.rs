@@ -6,19 +6,19 @@ use crate::model::Product;
 use crate::sensor::Sample;
 
 /// LSB per deg/s of the high-resolution rate fields (Tables 5.7–5.12: deg/s·10⁵).
-pub const RATE_HR_SCALE: u32 = 100_000;
+pub(crate) const RATE_HR_SCALE: u32 = 100_000;
 /// LSB per g of the high-resolution acceleration fields (Tables 5.7–5.12: g·10⁶).
-pub const ACC_HR_SCALE: u32 = 1_000_000;
+pub(crate) const ACC_HR_SCALE: u32 = 1_000_000;
 /// LSB per degree of the 16-bit angles (Tables 5.5, 5.9: deg·100).
-pub const ANGLE_SCALE: u32 = 100;
+pub(crate) const ANGLE_SCALE: u32 = 100;
 /// LSB per degree of the 32-bit angles (Table 5.10: deg·1000).
-pub const ANGLE_HR_SCALE: u32 = 1000;
+pub(crate) const ANGLE_HR_SCALE: u32 = 1000;
 /// LSB per unit of the quaternion components (Table 5.9: ·10⁴).
-pub const QUAT_SCALE: u32 = 10_000;
+pub(crate) const QUAT_SCALE: u32 = 10_000;
 /// LSB per °C of the temperature (Tables 5.5–5.12, UDD 0x52: °C·10).
-pub const TEMPERATURE_SCALE: u32 = 10;
+pub(crate) const TEMPERATURE_SCALE: u32 = 10;
 /// LSB per volt of the supply voltage (UDD 0x50: VDC·100).
-pub const VOLTAGE_SCALE: u32 = 100;
+pub(crate) const VOLTAGE_SCALE: u32 = 100;
 
 /// Everything an output frame can carry at one output instant.
 #[derive(Debug, Clone, Copy)]
@@ -235,17 +235,17 @@ fn sat_signed_int(x: f32, k: u32, lo_limit: u32, hi_limit: u32) -> i32 {
 }
 
 /// `x · k`, rounded (see [`scale_round`]), saturated at the i32 limits.
-pub fn sat_i32(x: f32, k: u32) -> i32 {
+pub(crate) fn sat_i32(x: f32, k: u32) -> i32 {
     sat_signed(x, k, 1 << 31, i32::MAX as u32)
 }
 
 /// `x · k`, rounded (see [`scale_round`]), saturated at the i16 limits.
-pub fn sat_i16(x: f32, k: u32) -> i16 {
+pub(crate) fn sat_i16(x: f32, k: u32) -> i16 {
     sat_signed(x, k, 1 << 15, i16::MAX as u32) as i16
 }
 
 /// `x · k`, rounded (see [`scale_round`]), saturated at the u16 limits.
-pub fn sat_u16(x: f32, k: u32) -> u16 {
+pub(crate) fn sat_u16(x: f32, k: u32) -> u16 {
     sat_signed(x, k, 0, u32::from(u16::MAX)) as u16
 }
 

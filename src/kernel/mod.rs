@@ -12,7 +12,18 @@ pub mod decode;
 pub mod formats;
 pub mod frame;
 pub mod model;
-pub mod params;
+
+#[path = "params.rs"]
+mod params_all;
+facade! {
+    /// The parameter table (ICD 5.24) a host tool reads and writes by
+    /// name or ID, the baud-rate codes and the factory block; the named
+    /// rows the device applies are the personality's.
+    pub mod params = params_all {
+        baud_rate, factory_block, find, Apply, Block, DefaultValue, Kind, ParamError,
+        ParamSpec, Rule, BAUD_RATE, BAUD_RATES, DATA_RATE, PARAMS,
+    }
+}
 pub mod rate;
 
 internal! {

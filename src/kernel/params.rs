@@ -149,7 +149,7 @@ pub const DATA_RATE: ParamSpec = row(
 );
 /// Initial_Alignment_Time, s. Default 2 s per ICD 5.3.1 (Table 5.24 says 0:
 /// erratum, the prose wins); 30 s is "the largest possible value" (5.3.1).
-pub const INITIAL_ALIGNMENT_TIME: ParamSpec = row(
+pub(crate) const INITIAL_ALIGNMENT_TIME: ParamSpec = row(
     "Initial_Alignment_Time",
     0x0014,
     U16,
@@ -165,7 +165,7 @@ pub const ALIGNMENT_ANGLES: ParamSpec = row(
     Rule::AlignmentAngles,
 );
 /// Sensors_Measurement_Range (read-only; set from the product code).
-pub const SENSORS_MEASUREMENT_RANGE: ParamSpec = row(
+pub(crate) const SENSORS_MEASUREMENT_RANGE: ParamSpec = row(
     "Sensors_Measurement_Range",
     0x028F,
     U8,
@@ -173,7 +173,7 @@ pub const SENSORS_MEASUREMENT_RANGE: ParamSpec = row(
     Rule::ReadOnly,
 );
 /// Auto_Start: 0 off, else a Table 5.16 format code (section 6).
-pub const AUTO_START: ParamSpec = row("Auto_Start", 0x03A9, U8, Int(0), Rule::AutoStart);
+pub(crate) const AUTO_START: ParamSpec = row("Auto_Start", 0x03A9, U8, Int(0), Rule::AutoStart);
 /// Baud_Rate code 0x00..0x10 (see [`baud_rate`]).
 pub const BAUD_RATE: ParamSpec = ParamSpec {
     apply: Apply::CommitOrPowerCycle,
@@ -185,16 +185,16 @@ pub const OUTPUT_VARIANT: ParamSpec = row("Output_Variant", 0x03D0, U8, Int(0), 
 /// Default 4 (262 Hz): the shortest FIR delay, available on every model.
 pub const LPF_BANDWIDTH: ParamSpec = row("LPF_Bandwidth", 0x03D7, U8, Int(4), Rule::Lpf);
 /// Min_Vinp_Threshold, VDC·100.
-pub const MIN_VINP_THRESHOLD: ParamSpec =
+pub(crate) const MIN_VINP_THRESHOLD: ParamSpec =
     row("Min_Vinp_Threshold", 0x03DA, U16, Int(400), Rule::Any);
 /// Max_Vinp_Threshold, VDC·100.
-pub const MAX_VINP_THRESHOLD: ParamSpec =
+pub(crate) const MAX_VINP_THRESHOLD: ParamSpec =
     row("Max_Vinp_Threshold", 0x03DC, U16, Int(3000), Rule::Any);
 /// Average_Output_Data: 0 instant, 1 averaged.
 pub const AVERAGE_OUTPUT_DATA: ParamSpec =
     row("Average_Output_Data", 0x03E1, U8, Int(0), Rule::Range(0, 1));
 /// TOV_Control: 0 off, 1 TOV output on (4.1.4); exclusive with EXTRIG.
-pub const TOV_CONTROL: ParamSpec = row(
+pub(crate) const TOV_CONTROL: ParamSpec = row(
     "TOV_Control",
     0x0499,
     U8,
@@ -205,7 +205,7 @@ pub const TOV_CONTROL: ParamSpec = row(
     },
 );
 /// Trigger_Control: 0 off, 1 EXTRIG on (4.1.3); only on EXTRIG models.
-pub const TRIGGER_CONTROL: ParamSpec = row(
+pub(crate) const TRIGGER_CONTROL: ParamSpec = row(
     "Trigger_Control",
     0x05FA,
     U8,
@@ -216,15 +216,15 @@ pub const TRIGGER_CONTROL: ParamSpec = row(
     },
 );
 /// Polarity of EXTRIG: 0 negative (default), 1 positive.
-pub const POLARITY: ParamSpec = row("Polarity", 0x05FB, U8, Int(0), Rule::Range(0, 1));
+pub(crate) const POLARITY: ParamSpec = row("Polarity", 0x05FB, U8, Int(0), Rule::Range(0, 1));
 /// Hold-off_Time, ms.
-pub const HOLD_OFF_TIME: ParamSpec = row("Hold-off_Time", 0x05FE, U16, Int(0), Rule::Any);
+pub(crate) const HOLD_OFF_TIME: ParamSpec = row("Hold-off_Time", 0x05FE, U16, Int(0), Rule::Any);
 /// Motion_Type (AHRS tuning).
-pub const MOTION_TYPE: ParamSpec = row("Motion_Type", 0x0412, U8, Int(0), Rule::Any);
+pub(crate) const MOTION_TYPE: ParamSpec = row("Motion_Type", 0x0412, U8, Int(0), Rule::Any);
 /// ZUPT: 0 averaging, 1 Kalman-filter alignment (5.7).
 pub const ZUPT: ParamSpec = row("ZUPT", 0x0413, U8, Int(0), Rule::Range(0, 1));
 /// Align_Gyro_STD_Threshold, °/s (5.7).
-pub const ALIGN_GYRO_STD_THRESHOLD: ParamSpec = row(
+pub(crate) const ALIGN_GYRO_STD_THRESHOLD: ParamSpec = row(
     "Align_Gyro_STD_Threshold",
     0x0414,
     F32,
@@ -234,7 +234,7 @@ pub const ALIGN_GYRO_STD_THRESHOLD: ParamSpec = row(
 /// Filter mask: 0x01 Filter1², 0x02 Filter2², 0x04 Filter3 (5.8).
 pub const FILTER: ParamSpec = row("Filter", 0x0451, U8, Int(0), Rule::Range(0, 7));
 /// Tau of Filter3, s.
-pub const TAU: ParamSpec = row("Tau", 0x046A, F32, Float(0.01), Rule::Positive);
+pub(crate) const TAU: ParamSpec = row("Tau", 0x046A, F32, Float(0.01), Rule::Positive);
 
 /// Every parameter of Table 5.24.
 pub static PARAMS: &[ParamSpec] = &[
@@ -467,13 +467,13 @@ pub fn factory_block(product: &Product) -> Block {
 }
 
 /// Writes what the product fixes (the read-only measurement range).
-pub fn set_product_facts(block: &mut Block, product: &Product) {
+pub(crate) fn set_product_facts(block: &mut Block, product: &Product) {
     block[usize::from(SENSORS_MEASUREMENT_RANGE.id)] = product.measurement_range();
 }
 
 /// Repairs a block read from flash for `product`: every parameter that does
 /// not validate (e.g. flash written by another model) gets its default.
-pub fn sanitize(block: &mut Block, product: &Product) {
+pub(crate) fn sanitize(block: &mut Block, product: &Product) {
     for p in PARAMS {
         if matches!(p.rule, Rule::ReadOnly | Rule::Unsupported) {
             continue;

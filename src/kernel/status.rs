@@ -17,9 +17,9 @@ pub mod usw {
     pub const TEMPERATURE: u16 = 1 << 14;
     /// Extended: initial alignment complete (Table 5.27 bit 0; clear only
     /// while aligning).
-    pub const EXT_ALIGNED: u16 = 1 << 0;
+    pub(crate) const EXT_ALIGNED: u16 = 1 << 0;
     /// Extended: gyro bias estimation failed (bit 1).
-    pub const EXT_BIAS_FAILED: u16 = 1 << 1;
+    pub(crate) const EXT_BIAS_FAILED: u16 = 1 << 1;
 }
 
 /// GetBIT payload bits (Table 5.18): byte 0 bits 0–1 the accelerometer
@@ -27,9 +27,9 @@ pub mod usw {
 /// (1 = failed); byte 1 bits 4–5 (payload bits 12–13) the flash check (1 =
 /// failed).
 mod bit {
-    pub const ACCEL_FAILED: u8 = 0x01;
-    pub const GYRO_FAILED: u8 = 0x04;
-    pub const FLASH_FAILED: u8 = 0x10;
+    pub(crate) const ACCEL_FAILED: u8 = 0x01;
+    pub(crate) const GYRO_FAILED: u8 = 0x04;
+    pub(crate) const FLASH_FAILED: u8 = 0x10;
 }
 
 /// The status words of one moment, as the KERNEL reports them.
@@ -74,7 +74,7 @@ pub fn usw(h: &Health) -> u16 {
 
 /// The extended USW (Table 5.27): bit 0 initial alignment complete (set
 /// unless an alignment is running), bit 1 gyro bias estimation failed.
-pub fn usw_ext(h: &Health) -> u16 {
+pub(crate) fn usw_ext(h: &Health) -> u16 {
     let mut w = 0;
     if !h.aligning {
         w |= usw::EXT_ALIGNED;
@@ -86,7 +86,7 @@ pub fn usw_ext(h: &Health) -> u16 {
 }
 
 /// The GetBIT payload (Table 5.18), 4 bytes.
-pub fn bit(h: &Health) -> [u8; 4] {
+pub(crate) fn bit(h: &Health) -> [u8; 4] {
     let mut b = [0u8; 4];
     if h.accel_bit_failed {
         b[0] |= bit::ACCEL_FAILED;

@@ -114,10 +114,10 @@ pub static UDD_TYPES: &[UddType] = &[
 
 /// Factory UDD configuration: IMU time, gyro HR, accel HR, temperature, USW
 /// — all starred, so valid on every model (emulator decision).
-pub const DEFAULT_CONFIG: &[u8] = &[0x02, 0x21, 0x23, 0x52, 0x53];
+pub(crate) const DEFAULT_CONFIG: &[u8] = &[0x02, 0x21, 0x23, 0x52, 0x53];
 
 /// A UDD configuration: the ordered type codes.
-pub type Config = heapless::Vec<u8, UDD_MAX_TYPES>;
+pub(crate) type Config = heapless::Vec<u8, UDD_MAX_TYPES>;
 
 /// The row of a type code.
 pub fn find(code: u8) -> Option<&'static UddType> {
@@ -143,7 +143,7 @@ pub fn payload_len(types: &[u8]) -> usize {
 }
 
 /// Writes `types` (at most [`UDD_MAX_TYPES`]) to the block's UDD region.
-pub fn write_config(block: &mut Block, types: &[u8]) {
+pub(crate) fn write_config(block: &mut Block, types: &[u8]) {
     let n = types.len().min(UDD_MAX_TYPES);
     let region = &mut block[UDD_CONFIG_OFFSET..UDD_CONFIG_OFFSET + 1 + UDD_MAX_TYPES];
     region.fill(0);
@@ -153,7 +153,7 @@ pub fn write_config(block: &mut Block, types: &[u8]) {
 
 /// Reads the block's UDD configuration; `None` if it is not a valid one for
 /// `product`.
-pub fn read_config(block: &Block, product: &Product) -> Option<Config> {
+pub(crate) fn read_config(block: &Block, product: &Product) -> Option<Config> {
     let n = usize::from(block[UDD_CONFIG_OFFSET]);
     if n == 0 || n > UDD_MAX_TYPES {
         return None;
@@ -166,18 +166,18 @@ pub fn read_config(block: &Block, product: &Product) -> Option<Config> {
 }
 
 /// Table 5.21 bit 0: the message's structure is wrong (length ≠ 1 + N).
-pub const ERR_STRUCTURE: u8 = 0x01;
+pub(crate) const ERR_STRUCTURE: u8 = 0x01;
 /// Table 5.21 bit 1: the data is wrong (N = 0 or N > 16).
-pub const ERR_DATA: u8 = 0x02;
+pub(crate) const ERR_DATA: u8 = 0x02;
 /// Table 5.21 bit 2: wrong types ordered (see the bitmap).
-pub const ERR_TYPES: u8 = 0x04;
+pub(crate) const ERR_TYPES: u8 = 0x04;
 /// Table 5.21 bit 3: too large for the data rate at this baud rate; the rate
 /// was lowered.
-pub const ERR_RATE: u8 = 0x08;
+pub(crate) const ERR_RATE: u8 = 0x08;
 
 /// The outcome of checking a config message (Table 5.19 payload).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Checked {
+pub(crate) enum Checked {
     /// Accepted: the new configuration.
     Ok(Config),
     /// Refused: Table 5.21 bits 0–2 and the wrong-type bitmap.
@@ -190,7 +190,7 @@ pub enum Checked {
 }
 
 /// Checks a Table 5.19 payload `N, list…` for `product`.
-pub fn check(payload: &[u8], product: &Product) -> Checked {
+pub(crate) fn check(payload: &[u8], product: &Product) -> Checked {
     let Some((&n, list)) = payload.split_first() else {
         return Checked::Refused {
             errors: ERR_STRUCTURE,
@@ -231,7 +231,7 @@ pub fn check(payload: &[u8], product: &Product) -> Checked {
 /// The 8-byte reply to a config message (Table 5.20 as corrected in
 /// `docs/protocol-facts.md`): checksum of the received message (0 if refused), error bits,
 /// wrong-type bitmap, maximum data rate (u16), reserved.
-pub fn config_reply(checksum: u16, errors: u8, wrong_types: u16, max_rate: u16) -> [u8; 8] {
+pub(crate) fn config_reply(checksum: u16, errors: u8, wrong_types: u16, max_rate: u16) -> [u8; 8] {
     let c = checksum.to_le_bytes();
     let w = wrong_types.to_le_bytes();
     let r = max_rate.to_le_bytes();

@@ -138,7 +138,7 @@ pub enum Queued {
 
 impl Queued {
     /// When the queued frame's last bit leaves the line, if it was queued.
-    pub fn end(self) -> Option<Instant> {
+    pub(crate) fn end(self) -> Option<Instant> {
         match self {
             Queued::Yes(end) => Some(end),
             _ => None,
@@ -187,7 +187,7 @@ impl<B: TxBuffer> Line<B> {
     /// nothing); a frame that does not fit is dropped whole and counted.
     /// `now` is the device's latest time (the line cannot have started
     /// before it).
-    pub fn push_frame(
+    pub(crate) fn push_frame(
         &mut self,
         n: usize,
         now: Instant,
@@ -211,28 +211,28 @@ impl<B: TxBuffer> Line<B> {
     }
 
     /// Bytes queued.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.tx.len
     }
 
     /// Whether nothing is queued.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.tx.len == 0
     }
 
     /// Frames dropped because the queue was full.
-    pub fn dropped(&self) -> u32 {
+    pub(crate) fn dropped(&self) -> u32 {
         self.dropped
     }
 
     /// The line rate the device runs at, bit/s.
-    pub fn rate(&self) -> u32 {
+    pub(crate) fn rate(&self) -> u32 {
         self.rate
     }
 
     /// Sets the rate the device models from now on (wire time, and the
     /// rate a personality's rate rule reads).
-    pub fn set_rate(&mut self, bps: u32) {
+    pub(crate) fn set_rate(&mut self, bps: u32) {
         self.rate = bps.max(1);
         self.byte_time_ps = byte_time_ps(self.rate);
     }
@@ -240,7 +240,7 @@ impl<B: TxBuffer> Line<B> {
     /// Switches to `bps` after the bytes queued so far: the model's rate
     /// changes now, the board is told (an event) once it has taken those
     /// bytes.
-    pub fn switch_rate_after_queued(&mut self, bps: u32) {
+    pub(crate) fn switch_rate_after_queued(&mut self, bps: u32) {
         self.set_rate(bps);
         self.switch = Some((self.rate, self.tx.len));
     }

@@ -14,7 +14,7 @@ const POW10: [f64; 23] = [
 /// |exp| ≤ 22), within a few ulps beyond (module docs: why not
 /// `str::parse::<f64>`). `None` for anything else (`inf`, `NaN`, a header
 /// word).
-pub fn parse(s: &str) -> Option<f64> {
+pub(crate) fn parse(s: &str) -> Option<f64> {
     let b = s.as_bytes();
     let (neg, mut i) = match b.first() {
         Some(b'-') => (true, 1),

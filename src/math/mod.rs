@@ -17,7 +17,7 @@ pub mod decimal;
 pub mod double;
 pub mod fixed;
 pub mod rotation;
-pub mod trig;
+pub(crate) mod trig;
 pub mod units;
 
 pub use rotation::{Mat3, Quat, Vec3};

@@ -27,9 +27,9 @@ pub type Mat3 = [[f32; 3]; 3];
 pub type Quat = [f32; 4];
 
 /// The identity quaternion.
-pub const QUAT_IDENTITY: Quat = [1.0, 0.0, 0.0, 0.0];
+pub(crate) const QUAT_IDENTITY: Quat = [1.0, 0.0, 0.0, 0.0];
 /// The identity matrix.
-pub const MAT3_IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+pub(crate) const MAT3_IDENTITY: Mat3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// `m · v`.
 #[inline]
@@ -43,7 +43,7 @@ pub fn mat_vec(m: &Mat3, v: &Vec3) -> Vec3 {
 
 /// `mᵀ · v`.
 #[inline]
-pub fn mat_t_vec(m: &Mat3, v: &Vec3) -> Vec3 {
+pub(crate) fn mat_t_vec(m: &Mat3, v: &Vec3) -> Vec3 {
     [
         m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
         m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
@@ -107,7 +107,7 @@ pub fn quat_conj(q: &Quat) -> Quat {
 /// Rotates `v` by `q`: `q ⊗ (0, v) ⊗ q*` (object → reference for an
 /// attitude quaternion).
 #[inline]
-pub fn quat_rotate(q: &Quat, v: &Vec3) -> Vec3 {
+pub(crate) fn quat_rotate(q: &Quat, v: &Vec3) -> Vec3 {
     // v + 2 q0 (u × v) + 2 u × (u × v), u = vector part.
     let u = [q[1], q[2], q[3]];
     let t = cross(&u, v);
@@ -122,7 +122,7 @@ pub fn quat_rotate(q: &Quat, v: &Vec3) -> Vec3 {
 
 /// Rotates `v` by `q*` (reference → object).
 #[inline]
-pub fn quat_rotate_inv(q: &Quat, v: &Vec3) -> Vec3 {
+pub(crate) fn quat_rotate_inv(q: &Quat, v: &Vec3) -> Vec3 {
     quat_rotate(&quat_conj(q), v)
 }
 
@@ -234,7 +234,7 @@ impl QuatIntegrator {
 /// series (truncation below 1e-11); beyond, e.g. an absurd rate such as
 /// 1e6 °/s at 2 kHz (8.7 rad a tick), the series diverges, the attitude
 /// would grow to ∞ and NaN, and every measured axis with it.
-pub const SERIES_MAX_N2: f32 = 0.01;
+pub(crate) const SERIES_MAX_N2: f32 = 0.01;
 
 impl QuatIntegrator {
     /// `q ← q ⊗ exp(a/2)` for any rotation vector, with trigonometry, in
@@ -246,7 +246,7 @@ impl QuatIntegrator {
     /// a unit attitude. A non-finite step leaves the attitude unchanged (no
     /// turn is defined). Restarts the compensation.
     #[cold]
-    pub fn rotate_large(&mut self, a: &Vec3) {
+    pub(crate) fn rotate_large(&mut self, a: &Vec3) {
         if !(a[0].is_finite() && a[1].is_finite() && a[2].is_finite()) {
             return;
         }
@@ -422,7 +422,7 @@ pub fn quat_from_euler(heading: f32, pitch: f32, roll: f32) -> Quat {
 /// `q` or `−q`, whichever has q0 ≥ 0 — the same rotation in the form (C.6)
 /// produces.
 #[inline]
-pub fn canonical(q: &Quat) -> Quat {
+pub(crate) fn canonical(q: &Quat) -> Quat {
     if q[0] < 0.0 {
         [-q[0], -q[1], -q[2], -q[3]]
     } else {
@@ -431,7 +431,7 @@ pub fn canonical(q: &Quat) -> Quat {
 }
 
 /// `a` wrapped into [0, 2π).
-pub fn wrap_2pi(a: f32) -> f32 {
+pub(crate) fn wrap_2pi(a: f32) -> f32 {
     const TAU: f32 = core::f32::consts::TAU;
     let mut a = small_rem(a, TAU);
     if a < 0.0 {

@@ -68,20 +68,20 @@ use libm::sqrtf;
 pub use super::profile::{arw_to_density, vrw_to_density};
 
 /// Reference temperature of the temperature coefficients, °C.
-pub const REFERENCE_TEMPERATURE_C: f32 = 25.0;
+pub(crate) const REFERENCE_TEMPERATURE_C: f32 = 25.0;
 
 /// Gauss–Markov terms of the flicker bias (module doc "Flicker").
-pub const FLICKER_TERMS: usize = 6;
+pub(crate) const FLICKER_TERMS: usize = 6;
 /// Corner (correlation) time of flicker term k, s: 10^k.
 pub const FLICKER_CORNERS_S: [f32; FLICKER_TERMS] = [1.0, 10.0, 100.0, 1e3, 1e4, 1e5];
 /// Ticks between the steps of flicker term k: 16·8^k.
-pub const FLICKER_PERIOD_TICKS: [u32; FLICKER_TERMS] = [16, 128, 1024, 8192, 65_536, 524_288];
+pub(crate) const FLICKER_PERIOD_TICKS: [u32; FLICKER_TERMS] = [16, 128, 1024, 8192, 65_536, 524_288];
 /// Ticks between the steps of the rate random walk.
-pub const RANDOM_WALK_PERIOD_TICKS: u32 = 16;
+pub(crate) const RANDOM_WALK_PERIOD_TICKS: u32 = 16;
 /// The tick (mod 16) of the random walk's step.
 const RANDOM_WALK_PHASE: u32 = 8;
 /// σ of each flicker term / B: √(ln 10 / π).
-pub const FLICKER_SIGMA_PER_BIAS_INSTABILITY: f32 = 0.856_105;
+pub(crate) const FLICKER_SIGMA_PER_BIAS_INSTABILITY: f32 = 0.856_105;
 
 /// Error parameters of one axis, in the sensor's output unit (°/s for a
 /// gyro, g for an accelerometer).
@@ -147,7 +147,7 @@ impl SensorErrors {
     /// then the misalignments, then the signs of the non-linearity and
     /// g-sensitivity (last, so that a seed draws the same unit as before
     /// these terms existed).
-    pub fn draw(spec: &SensorSpec, rng: &mut Rng) -> Self {
+    pub(crate) fn draw(spec: &SensorSpec, rng: &mut Rng) -> Self {
         let mut s = SensorErrors {
             range: spec.range,
             resolution: spec.resolution,

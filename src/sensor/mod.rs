@@ -17,8 +17,17 @@ internal! {
     mod temperature;
 }
 
+pub use motion::{BuiltinMotion, Motion, Truth};
+// The error engines and the chain's motion seam: the crate's, and its
+// tests' with `internals`.
+#[cfg(feature = "internals")]
 pub use errors::{AxisErrors, ErrorModel, SensorErrors};
-pub use motion::{BuiltinMotion, Motion, MotionSource, Truth, TruthFrame, DEFAULT_LATITUDE_DEG};
+#[cfg(not(feature = "internals"))]
+pub(crate) use errors::{AxisErrors, ErrorModel, SensorErrors};
+#[cfg(feature = "internals")]
+pub use motion::{MotionSource, TruthFrame, DEFAULT_LATITUDE_DEG};
+#[cfg(not(feature = "internals"))]
+pub(crate) use motion::{MotionSource, TruthFrame, DEFAULT_LATITUDE_DEG};
 pub use profile::{SensorProfile, SensorSpec, TemperatureSpec};
 pub use rng::Rng;
 
@@ -32,7 +41,7 @@ pub use rng::Rng;
 /// *divided by the interval* (5.3.6: "divided by the time step of data
 /// output"), so the units stay °/s and g in every variant and the encoders
 /// need not know the variant. `gyro · T` is Δθ in degrees and `acc · T` is
-/// Δv in g·s (T = [`crate::chain::SignalChain::output_interval`]) for a
+/// Δv in g·s (T = `SignalChain::output_interval`) for a
 /// host that wants Table 5.15's "deg·KG" / "g·s·KA" literally.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {

@@ -34,9 +34,9 @@ use crate::math::{cosf, sinf};
 use crate::time::Instant;
 
 /// Earth rotation rate, °/h (sidereal, 15.041 °/h).
-pub const EARTH_RATE_DEG_PER_H: f32 = 15.041;
+pub(crate) const EARTH_RATE_DEG_PER_H: f32 = 15.041;
 /// Earth rotation rate, rad/s.
-pub const EARTH_RATE_RAD_S: f32 = EARTH_RATE_DEG_PER_H / 3600.0 * DEG;
+pub(crate) const EARTH_RATE_RAD_S: f32 = EARTH_RATE_DEG_PER_H / 3600.0 * DEG;
 /// Latitude of the default site, degrees north: the Newlyn Tidal
 /// Observatory, Cornwall (50° 06.1′ N, docs/motion.md "The built-in
 /// site"), where WGS84 normal gravity equals the ICD's g a few metres above
@@ -64,10 +64,10 @@ pub struct Truth {
 /// a rate beyond it). The fixed-point build's truth stops at ±4095 °/s
 /// (`RATE_TRUTH_LIMIT`, still beyond the IMX-5's range, so the flag sees
 /// it; docs/sensors.md "Fixed point").
-pub const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
+pub(crate) const TRUTH_RATE_LIMIT_DPS: f32 = 8192.0;
 /// Largest specific force handed to the sensor model, g: 128, beyond every
 /// accelerometer range.
-pub const TRUTH_FORCE_LIMIT_G: f32 = 128.0;
+pub(crate) const TRUTH_FORCE_LIMIT_G: f32 = 128.0;
 
 impl Truth {
     /// The truth as the sensor model takes it: each rate clamped to
@@ -197,7 +197,7 @@ impl Default for Motion {
 }
 
 /// Earth rate in ENU at latitude `lat_deg`, rad/s.
-pub fn earth_enu(lat_deg: f32) -> Vec3 {
+pub(crate) fn earth_enu(lat_deg: f32) -> Vec3 {
     let lat = lat_deg * DEG;
     [
         0.0,
@@ -357,7 +357,7 @@ pub struct BuiltinMotion {
 
 /// Latitude and heading of a motion's site, degrees (a replayed sample:
 /// [`DEFAULT_LATITUDE_DEG`], heading 0).
-pub fn site(motion: &Motion) -> (f32, f32) {
+pub(crate) fn site(motion: &Motion) -> (f32, f32) {
     match *motion {
         Motion::Static {
             lat_deg,

@@ -19,7 +19,7 @@ pub struct Rng {
 }
 
 /// √3 / 65536: scales the centred sum of four 16-bit uniforms to unit variance.
-pub const IRWIN_HALL_SCALE: f32 = 1.732_050_8 / 65_536.0;
+pub(crate) const IRWIN_HALL_SCALE: f32 = 1.732_050_8 / 65_536.0;
 
 impl Rng {
     /// A generator whose state is derived from `seed` with SplitMix64 (so

@@ -14,16 +14,16 @@ use super::profile::TemperatureSpec;
 use libm::expf;
 
 /// The model is advanced once every this many ticks.
-pub const UPDATE_TICKS: u32 = 64;
+pub(crate) const UPDATE_TICKS: u32 = 64;
 
 /// Operating temperature range of the KERNEL family, °C: outside it the chain
 /// reports over-temperature (`Health::over_temperature`; KERNEL USW bit 14). (−40…+85 °C, the industrial range the
 /// KERNEL datasheets give.)
-pub const OPERATING_RANGE_C: (f32, f32) = (-40.0, 85.0);
+pub(crate) const OPERATING_RANGE_C: (f32, f32) = (-40.0, 85.0);
 
 /// Warm-up model of the sensor temperature.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TemperatureModel {
+pub(crate) struct TemperatureModel {
     /// Ambient temperature, °C (the temperature at power-on).
     pub ambient_c: f32,
     /// Steady-state rise above ambient from self-heating, °C.
@@ -48,7 +48,7 @@ impl Default for TemperatureModel {
 
 impl TemperatureModel {
     /// The model of a profile's [`TemperatureSpec`] (cold: at ambient).
-    pub fn from_spec(spec: &TemperatureSpec) -> Self {
+    pub(crate) fn from_spec(spec: &TemperatureSpec) -> Self {
         TemperatureModel {
             ambient_c: spec.ambient_c,
             self_heating_c: spec.self_heating_c,
@@ -58,13 +58,13 @@ impl TemperatureModel {
     }
 
     /// The modelled temperature now, °C.
-    pub fn temperature_c(&self) -> f32 {
+    pub(crate) fn temperature_c(&self) -> f32 {
         self.ambient_c + self.rise
     }
 
     /// Sets the step [`TemperatureModel::step`] takes to `seconds` (after
     /// any change of the parameters).
-    pub fn prepare(&mut self, seconds: f32) {
+    pub(crate) fn prepare(&mut self, seconds: f32) {
         self.k = if self.time_constant_s > 0.0 {
             1.0 - expf(-seconds / self.time_constant_s)
         } else {
@@ -74,7 +74,7 @@ impl TemperatureModel {
 
     /// Advances the model by the prepared step (exact for a first-order lag).
     #[inline]
-    pub fn step(&mut self) {
+    pub(crate) fn step(&mut self) {
         self.rise += (self.self_heating_c - self.rise) * self.k;
     }
 }

@@ -38,9 +38,21 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod fullstate;
-pub mod script;
-pub mod strapdown;
-pub mod wgs84;
+
+#[path = "script.rs"]
+mod script_all;
+facade! {
+    /// Manoeuvre scripts: the parser and the player a board runs; the
+    /// limits a script is checked against stay inside.
+    pub mod script = script_all {
+        is_script, Manoeuvre, Manoeuvres, Script, ScriptError, ScriptErrorKind, Segment, Start,
+    }
+}
+
+internal! {
+    mod strapdown;
+    mod wgs84;
+}
 
 pub use fullstate::{FullStateLayout, FullStateRow, RowError};
 pub use script::{Manoeuvre, Manoeuvres, Script, ScriptError, Segment, Start};
@@ -48,10 +60,17 @@ pub use strapdown::Strapdown;
 
 use crate::sensor::motion::{Motion, Truth};
 
+pub use crate::math::double::{Q4, V3};
+// The rotations the models use, from the crate's maths.
+#[cfg(feature = "internals")]
 pub use crate::math::double::{
-    add, body_rate_of_euler, cross, dcm_from_quat, euler_from_quat, quat_conj, quat_from_dcm,
-    quat_from_euler, quat_from_rotvec, quat_mul, quat_normalize, rotate, rotate_inv,
-    rotvec_from_quat, scale, wrap_pi, Q4, V3,
+    add, body_rate_of_euler, cross, euler_from_quat, quat_conj, quat_from_euler, quat_from_rotvec,
+    quat_mul, quat_normalize, rotate, rotate_inv, rotvec_from_quat, scale, wrap_pi,
+};
+#[cfg(not(feature = "internals"))]
+pub(crate) use crate::math::double::{
+    add, body_rate_of_euler, cross, euler_from_quat, quat_conj, quat_from_euler, quat_from_rotvec,
+    quat_mul, quat_normalize, rotate, rotate_inv, rotvec_from_quat, scale, wrap_pi,
 };
 
 /// g in m/s² as the ICD defines it (Table 5.5 note 1): the unit of the
@@ -275,6 +294,7 @@ pub fn housing_enu_to_body_ned(q_eh: &Q4) -> Q4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::double::{dcm_from_quat, quat_from_dcm};
     use crate::math::rotation::quat_from_euler as quat_from_euler_c;
 
     fn close(a: &V3, b: &V3, tol: f64) -> bool {

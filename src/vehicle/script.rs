@@ -37,18 +37,18 @@ use libm::{atan, cos, sin, tan};
 use super::{body_rate_of_euler, quat_from_euler, wgs84, wrap_pi, Motion6, VehicleState, V3};
 
 /// Segments a script holds at most.
-pub const MAX_SEGMENTS: usize = 64;
+pub(crate) const MAX_SEGMENTS: usize = 64;
 /// Rate of the path angle's change in `climb`/`descend`, °/s.
-pub const PITCH_RATE_DPS: f64 = 3.0;
+pub(crate) const PITCH_RATE_DPS: f64 = 3.0;
 /// Roll rate into and out of a coordinated turn, °/s.
-pub const ROLL_RATE_DPS: f64 = 10.0;
+pub(crate) const ROLL_RATE_DPS: f64 = 10.0;
 /// Largest bank of a coordinated turn, degrees.
-pub const MAX_BANK_DEG: f64 = 80.0;
+pub(crate) const MAX_BANK_DEG: f64 = 80.0;
 /// Below this speed, m/s, a coordinated turn turns flat (the bank formula
 /// divides by the speed).
-pub const MIN_COORD_SPEED: f64 = 1.0;
+pub(crate) const MIN_COORD_SPEED: f64 = 1.0;
 /// Largest speed, m/s.
-pub const MAX_SPEED: f64 = 3000.0;
+pub(crate) const MAX_SPEED: f64 = 3000.0;
 /// Standard gravity, m/s², for the coordinated turn's bank (its
 /// definition, not the vehicle's gravity).
 const G0: f64 = 9.806_65;

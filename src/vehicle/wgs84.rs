@@ -20,27 +20,27 @@
 use libm::{cos, sin, sqrt};
 
 /// Semi-major axis a, m (TR8350.2 Table 3.1).
-pub const A: f64 = 6_378_137.0;
+pub(crate) const A: f64 = 6_378_137.0;
 /// Reciprocal of the flattening 1/f (TR8350.2 Table 3.1).
-pub const INV_F: f64 = 298.257_223_563;
+pub(crate) const INV_F: f64 = 298.257_223_563;
 /// Flattening f.
-pub const F: f64 = 1.0 / INV_F;
+pub(crate) const F: f64 = 1.0 / INV_F;
 /// Angular velocity of the Earth ω, rad/s (TR8350.2 Table 3.1).
-pub const OMEGA_IE: f64 = 7.292_115e-5;
+pub(crate) const OMEGA_IE: f64 = 7.292_115e-5;
 /// Earth's gravitational constant GM (atmosphere included), m³/s²
 /// (TR8350.2 Table 3.1).
 pub const GM: f64 = 3.986_004_418e14;
 /// First eccentricity squared e² (TR8350.2 Table 3.3).
-pub const E2: f64 = 6.694_379_990_14e-3;
+pub(crate) const E2: f64 = 6.694_379_990_14e-3;
 /// Normal gravity at the equator γe, m/s² (TR8350.2 Table 3.4).
-pub const GAMMA_E: f64 = 9.780_325_335_9;
+pub(crate) const GAMMA_E: f64 = 9.780_325_335_9;
 /// Normal gravity at the poles γp, m/s² (TR8350.2 Table 3.4).
 pub const GAMMA_P: f64 = 9.832_184_937_8;
 /// Normal gravity formula constant k = (b γp − a γe) / (a γe) (TR8350.2
 /// Table 3.4).
-pub const K: f64 = 0.001_931_852_652_41;
+pub(crate) const K: f64 = 0.001_931_852_652_41;
 /// m = ω² a² b / GM (TR8350.2 Table 3.4).
-pub const M: f64 = 0.003_449_786_506_84;
+pub(crate) const M: f64 = 0.003_449_786_506_84;
 
 /// Normal gravity γ at geodetic latitude `lat` (rad) and height `h` (m)
 /// above the ellipsoid, m/s²: Somigliana's formula on the ellipsoid
@@ -50,7 +50,7 @@ pub const M: f64 = 0.003_449_786_506_84;
 /// The magnitude of the normal gravity vector, taken along the ellipsoidal
 /// normal (the NED down axis); the small deflection of the normal gravity
 /// vector above the ellipsoid (< 1e-6 rad below 10 km) is neglected.
-pub fn normal_gravity(lat: f64, h: f64) -> f64 {
+pub(crate) fn normal_gravity(lat: f64, h: f64) -> f64 {
     let s2 = sin(lat) * sin(lat);
     let g0 = GAMMA_E * (1.0 + K * s2) / sqrt(1.0 - E2 * s2);
     g0 * (1.0 - 2.0 / A * (1.0 + F + M - 2.0 * F * s2) * h + 3.0 * h * h / (A * A))
@@ -67,7 +67,7 @@ pub fn radii(lat: f64) -> (f64, f64) {
 /// d(radii)/d(lat) at `lat`: (dM/dφ, dN/dφ), m/rad — what the derivative of
 /// the NED velocity of a position given in latitude, longitude and height
 /// needs (the full-state interpolation).
-pub fn radii_slope(lat: f64) -> (f64, f64) {
+pub(crate) fn radii_slope(lat: f64) -> (f64, f64) {
     let (s, c) = (sin(lat), cos(lat));
     let w2 = 1.0 - E2 * s * s;
     let w = sqrt(w2);
@@ -78,14 +78,14 @@ pub fn radii_slope(lat: f64) -> (f64, f64) {
 
 /// The Earth's rate in the NED frame at latitude `lat`, rad/s:
 /// `ω (cos φ, 0, −sin φ)`.
-pub fn earth_rate_ned(lat: f64) -> [f64; 3] {
+pub(crate) fn earth_rate_ned(lat: f64) -> [f64; 3] {
     [OMEGA_IE * cos(lat), 0.0, -OMEGA_IE * sin(lat)]
 }
 
 /// The transport rate (rotation of the NED frame over the ellipsoid) at
 /// latitude `lat`, height `h` and NED velocity `v`, rad/s:
 /// `(vE/(N+h), −vN/(M+h), −vE tan φ/(N+h))`.
-pub fn transport_rate_ned(lat: f64, h: f64, v: &[f64; 3]) -> [f64; 3] {
+pub(crate) fn transport_rate_ned(lat: f64, h: f64, v: &[f64; 3]) -> [f64; 3] {
     let (m, n) = radii(lat);
     let (s, c) = (sin(lat), cos(lat));
     [v[1] / (n + h), -v[0] / (m + h), -v[1] * s / (c * (n + h))]
@@ -95,7 +95,7 @@ pub fn transport_rate_ned(lat: f64, h: f64, v: &[f64; 3]) -> [f64; 3] {
 /// equals `g` (m/s²), m: the site of the built-in motions, whose specific
 /// force at rest is exactly the ICD's 1 g (docs/motion.md, "The built-in
 /// motions").
-pub fn height_of_gravity(lat: f64, g: f64) -> f64 {
+pub(crate) fn height_of_gravity(lat: f64, g: f64) -> f64 {
     // Newton on γ(h) − g; γ is nearly linear in h (three steps reach the
     // f64 resolution).
     let mut h = 0.0;

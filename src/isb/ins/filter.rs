@@ -36,13 +36,13 @@ pub const N: usize = 15;
 /// Index of the position error (north, east, down).
 pub const POS: usize = 0;
 /// Index of the velocity error.
-pub const VEL: usize = 3;
+pub(crate) const VEL: usize = 3;
 /// Index of the attitude error.
-pub const ATT: usize = 6;
+pub(crate) const ATT: usize = 6;
 /// Index of the gyro bias error.
-pub const BG: usize = 9;
+pub(crate) const BG: usize = 9;
 /// Index of the accelerometer bias error.
-pub const BA: usize = 12;
+pub(crate) const BA: usize = 12;
 
 /// The process noise of the filter, per second (spectral densities).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,20 +106,20 @@ impl Filter {
     }
 
     /// The standard deviation of state `i`.
-    pub fn sigma(&self, i: usize) -> f32 {
+    pub(crate) fn sigma(&self, i: usize) -> f32 {
         sqrtf(self.p[i % N][i % N].max(0.0))
     }
 
     /// Resets the covariance of states `i..i+3` to `sigma` (uncorrelated
     /// with the rest): a state set from a measurement.
-    pub fn reset3(&mut self, i: usize, sigma: [f32; 3]) {
+    pub(crate) fn reset3(&mut self, i: usize, sigma: [f32; 3]) {
         for (k, s) in sigma.iter().enumerate() {
             self.reset1(i + k, *s);
         }
     }
 
     /// Resets the covariance of state `i` to `sigma`, uncorrelated.
-    pub fn reset1(&mut self, i: usize, sigma: f32) {
+    pub(crate) fn reset1(&mut self, i: usize, sigma: f32) {
         let r = i % N;
         for j in 0..N {
             self.p[r][j] = 0.0;

@@ -40,9 +40,9 @@ use crate::math::double::{
 /// The anchor of [`Earth`] is moved to the position when the latitude is
 /// further from it than this, rad (64 m; a propagation interval at 250 m/s
 /// moves 5 m).
-pub const ANCHOR_LAT_RAD: f64 = 1e-5;
+pub(crate) const ANCHOR_LAT_RAD: f64 = 1e-5;
 /// … or the height, m.
-pub const ANCHOR_H_M: f64 = 10.0;
+pub(crate) const ANCHOR_H_M: f64 = 10.0;
 
 /// The Earth's terms at an anchor position (WGS84, the formulas of
 /// [`wgs84`]).
@@ -68,7 +68,7 @@ pub struct Earth {
 
 impl Earth {
     /// At latitude `lat` (rad), height `h` (m).
-    pub fn at(lat: f64, h: f64) -> Earth {
+    pub(crate) fn at(lat: f64, h: f64) -> Earth {
         let (sl, cl) = (sin(lat), cos(lat));
         let s2 = sl * sl;
         let w = sqrt(1.0 - wgs84::E2 * s2);
@@ -147,7 +147,7 @@ impl Nominal {
     /// Moves the anchor of `Nominal::earth` to the position, and scales
     /// the attitude back to unit length (the periods since the last call
     /// left it within 10⁻⁹ of one: `turn`).
-    pub fn refresh(&mut self) {
+    pub(crate) fn refresh(&mut self) {
         self.earth = Earth::at(self.lat, self.h);
         self.q = quat_normalize(&self.q);
     }
@@ -169,7 +169,7 @@ impl Nominal {
     }
 
     /// Position as latitude °, longitude °, height m.
-    pub fn lla(&self) -> [f64; 3] {
+    pub(crate) fn lla(&self) -> [f64; 3] {
         [self.lat.to_degrees(), self.lon.to_degrees(), self.h]
     }
 
@@ -231,7 +231,7 @@ impl Nominal {
     }
 
     /// Moves the position by a small NED displacement `d` (m).
-    pub fn move_ned(&mut self, d: &V3) {
+    pub(crate) fn move_ned(&mut self, d: &V3) {
         let e = self.earth();
         let (_, cl) = self.sin_cos_lat(&e);
         let dlat = d[0] / (e.rm + self.h);
@@ -243,7 +243,7 @@ impl Nominal {
     /// Adds an estimated error state `dx` (position NED m, velocity m/s,
     /// attitude rad in NED, gyro bias rad/s, accelerometer bias m/s²):
     /// the truth is the estimate plus the error.
-    pub fn correct(&mut self, dx: &[f32; super::filter::N]) {
+    pub(crate) fn correct(&mut self, dx: &[f32; super::filter::N]) {
         let g = |i: usize| [0, 1, 2].map(|k| f64::from(dx[i + k]));
         self.move_ned(&g(super::filter::POS));
         self.v = add(&self.v, &g(super::filter::VEL));

@@ -20,19 +20,19 @@ use super::filter::{Filter, ATT, POS, VEL};
 use crate::isb::nav_sets::ins_status::*;
 
 /// Heading σ below which the heading is fine, rad (1°).
-pub const HDG_FINE_RAD: f32 = 0.017_45;
+pub(crate) const HDG_FINE_RAD: f32 = 0.017_45;
 /// Heading σ below which the heading is usable (coarse), rad (10°).
-pub const HDG_COARSE_RAD: f32 = 0.174_5;
+pub(crate) const HDG_COARSE_RAD: f32 = 0.174_5;
 /// Roll/pitch σ above which an AHRS reports high variance, rad (2°).
-pub const TILT_HIGH_VAR_RAD: f32 = 0.034_9;
+pub(crate) const TILT_HIGH_VAR_RAD: f32 = 0.034_9;
 /// Horizontal velocity σ below which the velocity is fine, m/s.
-pub const VEL_FINE_MPS: f32 = 0.5;
+pub(crate) const VEL_FINE_MPS: f32 = 0.5;
 /// … usable (coarse), m/s.
-pub const VEL_COARSE_MPS: f32 = 5.0;
+pub(crate) const VEL_COARSE_MPS: f32 = 5.0;
 /// Horizontal position σ below which the position is fine, m.
-pub const POS_FINE_M: f32 = 5.0;
+pub(crate) const POS_FINE_M: f32 = 5.0;
 /// … usable (coarse), m.
-pub const POS_COARSE_M: f32 = 500.0;
+pub(crate) const POS_COARSE_M: f32 = 500.0;
 
 /// The phase of the INS after power-on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,7 +50,7 @@ pub enum Phase {
 }
 
 /// What `insStatus` is made of.
-pub struct Inputs<'a> {
+pub(crate) struct Inputs<'a> {
     /// The phase.
     pub phase: Phase,
     /// The filter (its covariance).

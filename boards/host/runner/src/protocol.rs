@@ -138,7 +138,7 @@ impl HostProtocol for Isb {
     }
 
     fn nav_fault(&mut self, change: NavFault) -> Result<(), String> {
-        let mut f = self.nav().faults();
+        let mut f = self.nav_faults();
         match change {
             NavFault::Gps(on) => f.gps_off = !on,
             NavFault::Mag(on) => f.mag_disturbed = on,
@@ -213,6 +213,6 @@ mod tests {
         assert!(e.contains("--protocol isb"), "{e}");
         let mut i = Device::<_, Isb>::new(cfg(Product::imx5()), flash(), Instant::ZERO);
         i.personality_mut().nav_fault(NavFault::Gps(false)).unwrap();
-        assert!(i.personality().nav().faults().gps_off);
+        assert!(i.personality().nav_faults().gps_off);
     }
 }

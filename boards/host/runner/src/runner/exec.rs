@@ -248,7 +248,7 @@ mod tests {
         let mut p = port::<Isb>();
         let nav = control::Command::NavFault(control::NavFault::Gps(false));
         assert_eq!(p.apply(&mut imx, nav, at), Ok(String::new()));
-        assert!(imx.personality().nav().faults().gps_off);
+        assert!(imx.personality().nav_faults().gps_off);
     }
 
     /// `motion …` replaces a script; `truth` names the source playing.
