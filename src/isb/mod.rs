@@ -62,8 +62,8 @@ facade! {
     /// The data sets' byte layouts a host tool reads (IMU, PIMU), their
     /// typed decoders, the command sets it writes (SYS_CMD, BIT,
     /// FLASH_CONFIG with its factory image) and the little-endian
-    /// accessors; the module's other
-    /// layouts and status bits are the personality's.
+    /// accessors; the module's other layouts and status bits are the
+    /// personality's.
     pub mod sets = sets_all {
         bit, flash, imu, le, pimu, sys_cmd, Bit, FlashConfig, Imu, Pimu, SystemCommand,
     }
