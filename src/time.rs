@@ -1,7 +1,22 @@
 //! Time as the core sees it: nanoseconds on the board's monotonic clock.
 //!
 //! The core never reads a clock; every call that needs time receives an
-//! [`Instant`] from the board (sans-IO: see the crate front page).
+//! [`Instant`] from the board (sans-IO: see the crate front page). GPS
+//! time, which a board may give a personality, is counted from the GPS
+//! epoch ([`gps_s_of_unix`]).
+
+/// Unix time of the GPS epoch, 1980-01-06 00:00:00 UTC.
+pub const GPS_EPOCH_UNIX_S: u64 = 315_964_800;
+
+/// GPS − UTC, s: 18 since 2017-01-01 (the IMX-5 SDK's
+/// `C_GPS_LEAP_SECONDS`, docs/isb.md).
+pub(crate) const LEAP_SECONDS: u8 = 18;
+
+/// GPS seconds since the GPS epoch of a UTC Unix time, with today's
+/// [`LEAP_SECONDS`] (a time before the epoch reads as the epoch).
+pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
+    unix_s.saturating_sub(GPS_EPOCH_UNIX_S) + LEAP_SECONDS as u64
+}
 
 /// A point in time, in nanoseconds since an epoch the board chooses (usually
 /// the moment it powered the device on). Monotonic: boards never go back.

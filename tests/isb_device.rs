@@ -1377,7 +1377,7 @@ fn the_magnetometer_reads_the_field_at_the_vehicle_and_the_gps_date() {
     let unix_s: u64 = 1_877_688_000;
     b.dev
         .personality_mut()
-        .set_gps_time((unix_s - nav::GPS_EPOCH_UNIX_S + 18) * 1_000_000_000);
+        .set_gps_time((unix_s - imu_emu::time::GPS_EPOCH_UNIX_S + 18) * 1_000_000_000);
     let period = b.dev.tick_period_ns();
     b.send(&get(did::MAGNETOMETER, 1));
     let mut mags = Vec::new();

@@ -87,5 +87,4 @@ internal! {
 pub use device::{Isb, RX_IDLE_ABANDON_NS};
 pub use ins::NavFaults;
 pub use model::IMX5;
-pub use nav::{gps_s_of_unix, GPS_EPOCH_UNIX_S};
 pub use nav_sets::Ins2;

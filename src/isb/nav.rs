@@ -30,10 +30,7 @@ pub(crate) const WGS84_E2: f64 = 0.006_694_379_990_141;
 pub(crate) const NED_RADIUS_M: f64 = 6_366_707.019_5;
 /// Seconds in a GPS week.
 pub(crate) const WEEK_S: u64 = 604_800;
-/// GPS − UTC, s (`C_GPS_LEAP_SECONDS`).
-pub(crate) const LEAP_SECONDS: u8 = 18;
-/// Unix time of the GPS epoch 1980-01-06 00:00:00.
-pub const GPS_EPOCH_UNIX_S: u64 = 315_964_800;
+pub(crate) use crate::time::{GPS_EPOCH_UNIX_S, LEAP_SECONDS};
 /// GPS time at device instant 0 when a board sets none: 2026-01-01
 /// 00:00:00 UTC (Unix 1 767 225 600) as GPS seconds (+18 leap seconds).
 pub(crate) const DEFAULT_GPS_S_AT_ZERO: u64 = 1_767_225_600 - GPS_EPOCH_UNIX_S + LEAP_SECONDS as u64;
@@ -149,11 +146,6 @@ impl GpsTime {
         let unix_s = gps_s + GPS_EPOCH_UNIX_S - u64::from(LEAP_SECONDS);
         crate::earth::decimal_year_of_unix_s(unix_s as i64)
     }
-}
-
-/// GPS seconds since the GPS epoch of a UTC Unix time (`leap` = GPS − UTC).
-pub const fn gps_s_of_unix(unix_s: u64) -> u64 {
-    unix_s.saturating_sub(GPS_EPOCH_UNIX_S) + LEAP_SECONDS as u64
 }
 
 #[cfg(test)]

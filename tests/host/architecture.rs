@@ -268,22 +268,14 @@ fn the_protocol_choice_and_the_usage_error_import_nothing() {
 /// What differs between the protocols is `runner::protocol::HostProtocol`:
 /// the rest of the runner matches on no protocol and names none of the
 /// core's — only the protocols' own pieces do (the KERNEL's monitor, the
-/// live decoders), the in-process virtual KERNEL, the units `allan` runs
-/// in process and GPS time; the
-/// program turns the choice into a type in `cli` only.
+/// live decoders), the in-process virtual KERNEL and the units `allan`
+/// runs in process; the program turns the choice into a type in `cli` only.
 #[test]
 fn one_trait_holds_what_differs_between_the_protocols() {
     let [_, runner, host] = crates();
     assert_eq!(naming(&runner, "Protocol::"), set(&["protocol"]));
     assert_eq!(naming(&host, "Protocol::"), set(&["cli"]));
-    let per_protocol = set(&[
-        "protocol",
-        "monitor",
-        "web",
-        "virtual_device",
-        "clock",
-        "unit",
-    ]);
+    let per_protocol = set(&["protocol", "monitor", "web", "virtual_device", "unit"]);
     for needle in ["imu_emu::kernel", "imu_emu::isb"] {
         let named = naming(&runner, needle);
         let bad: Vec<_> = named.difference(&per_protocol).collect();

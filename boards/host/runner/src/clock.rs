@@ -170,7 +170,7 @@ pub fn gps_s_at_power_on(gps_time: Option<u64>) -> u64 {
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_secs())
     });
-    imu_emu::isb::gps_s_of_unix(unix)
+    imu_emu::time::gps_s_of_unix(unix)
 }
 
 #[cfg(test)]

@@ -432,7 +432,7 @@ fn parse_gps_time(s: &str) -> Result<u64, String> {
         .duration_since(std::time::UNIX_EPOCH)
         .map_err(|_| format!("{s}: before 1970"))?
         .as_secs();
-    if unix < imu_emu::isb::GPS_EPOCH_UNIX_S {
+    if unix < imu_emu::time::GPS_EPOCH_UNIX_S {
         return Err(format!("{s}: before the GPS epoch 1980-01-06"));
     }
     Ok(unix)
