@@ -8,13 +8,15 @@ data set, ``src/isb/``).
     scripts/isb-layouts.py [--binary PATH] [--check]
 
 ``--check`` writes nothing and exits 1 when a committed copy differs from
-what the dump gives (``python/tests/test_isb_layouts.py`` runs the same
+what the dump gives, or when a hand-written note of the docs gives a field
+the dump names at another offset (``python/tests/test_isb_layouts.py`` runs the same
 comparison). The binary: ``--binary``, else ``$IMU_EMU_BIN``, else
 ``target/debug/imu-emu`` under ``$CARGO_TARGET_DIR`` or the repository.
 """
 
 import argparse
 import json
+import re
 import os
 import subprocess
 import sys
@@ -111,9 +113,10 @@ def render_docs_part(layouts):
         "unit, as the `data_set!` declarations in `src/isb/` give them. Fields",
         "no host reads by name (reserved bytes, `wheelConfig`'s transform, the",
         "strings of GPS1_VERSION, the satellites and signals after the first)",
-        "are in the hand-written sections around this one. FLASH_CONFIG also",
-        "shows each field's factory value, read from the factory image the unit",
-        "restores.",
+        "are in the hand-written sections around this one; where those give a",
+        "field this part names, `scripts/isb-layouts.py --check` holds their",
+        "offsets to it. FLASH_CONFIG also shows each field's factory value, read",
+        "from the factory image the unit restores.",
     ]
     for s in layouts["data_sets"]:
         out += [
@@ -146,6 +149,40 @@ def render_docs(layouts, text):
     return head + render_docs_part(layouts) + tail
 
 
+STRUCT_HEAD = re.compile(r"`(\w+_t)`\s+\(\d+ B")
+AT_OFFSET = re.compile(r"\b(\w+)(?:\[\d+\])? @(\d+)")
+
+
+def note_offsets(layouts, text):
+    """Where the hand-written notes of ``docs/isb-data-sets.md`` (outside
+    the generated part) give a field of a served struct at an offset
+    (```gps_sat_t` (408 B): u32 numSats @4``) that the dump names too:
+    ``(struct, field, noted offset, dumped offset)`` for each. A note's
+    struct is the last ```name_t` (N B`` before the offset in its
+    paragraph or list item; fields of nested structs, whose offsets are
+    relative, carry other names than the dump's and are not compared."""
+    fields = {}
+    for s in layouts["data_sets"]:
+        for f in s["fields"]:
+            fields.setdefault(s["struct"], {})[f["name"]] = f["offset"]
+    head, rest = text.split(BEGIN, 1)
+    notes = head + rest.split(END, 1)[1]
+    found = []
+    for block in re.split(r"\n(?=- |\n)", notes):
+        struct, pos = None, 0
+        marks = sorted(
+            [(m.start(), "head", m) for m in STRUCT_HEAD.finditer(block)]
+            + [(m.start(), "at", m) for m in AT_OFFSET.finditer(block)],
+            key=lambda x: x[0],
+        )
+        for _, kind, m in marks:
+            if kind == "head":
+                struct = m.group(1)
+            elif struct in fields and m.group(1) in fields[struct]:
+                found.append((struct, m.group(1), int(m.group(2)), fields[struct][m.group(1)]))
+    return found
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--binary", help="the imu-emu binary")
@@ -157,10 +194,13 @@ def main():
         DOCS: render_docs(layouts, DOCS.read_text(encoding="utf-8")),
     }
     stale = [p for p, t in want.items() if not p.exists() or p.read_text(encoding="utf-8") != t]
+    wrong = [n for n in note_offsets(layouts, DOCS.read_text(encoding="utf-8")) if n[2] != n[3]]
+    for struct, field, noted, dumped in wrong:
+        print("docs/isb-data-sets.md notes %s.%s @%d; the declaration has it at %d" % (struct, field, noted, dumped))
     if a.check:
         for p in stale:
             print("%s differs from `imu-emu isb-layouts --json`: run scripts/isb-layouts.py" % p.relative_to(ROOT))
-        sys.exit(1 if stale else 0)
+        sys.exit(1 if stale or wrong else 0)
     for p in stale:
         p.write_text(want[p], encoding="utf-8")
         print("wrote", p.relative_to(ROOT))

@@ -36,6 +36,16 @@ class LayoutsTest(unittest.TestCase):
             docs, gen.render_docs(layouts, docs), "docs/isb-data-sets.md is stale: run scripts/isb-layouts.py"
         )
 
+    def test_the_notes_offsets_are_the_declarations(self):
+        # The docs' hand-written notes describe whole structs; where they
+        # give a field the declaration names, the offsets agree.
+        gen = _generator()
+        layouts = gen.dump(imu_emu.find_binary())
+        docs = (ROOT / "docs" / "isb-data-sets.md").read_text(encoding="utf-8")
+        noted = gen.note_offsets(layouts, docs)
+        self.assertGreaterEqual(len(noted), 20)
+        self.assertEqual([n for n in noted if n[2] != n[3]], [])
+
     def test_the_installed_table_is_the_dump(self):
         # What the package decodes with (installed or from the clone).
         layouts = _generator().dump(imu_emu.find_binary())
