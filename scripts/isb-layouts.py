@@ -169,7 +169,7 @@ def note_offsets(layouts, text):
     notes = head + rest.split(END, 1)[1]
     found = []
     for block in re.split(r"\n(?=- |\n)", notes):
-        struct, pos = None, 0
+        struct = None
         marks = sorted(
             [(m.start(), "head", m) for m in STRUCT_HEAD.finditer(block)]
             + [(m.start(), "at", m) for m in AT_OFFSET.finditer(block)],
